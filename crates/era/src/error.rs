@@ -1,0 +1,144 @@
+//! Typed errors of the numeric core.
+//!
+//! Every variant carries the offending values so that a front end can print a message a
+//! user can act on ("Hankel needs 401 Markov samples, the data has 320"). Variants are
+//! split into *input* problems (bad data or impossible parameters: a CLI exits 2) and
+//! *numerical* failures (a decomposition did not converge: exit 1); see
+//! [`EraError::is_input_error`].
+
+use thiserror::Error;
+
+/// Everything that can go wrong in the numeric core.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum EraError {
+    /// The frequency vector is empty or too short to define a spacing.
+    #[error("need at least 2 frequency lines, got {lines}")]
+    TooFewLines {
+        /// Lines supplied.
+        lines: usize,
+    },
+    /// The first line is not 0 Hz (DESIGN.md §1: the pipeline needs `f_0 = 0`).
+    #[error("frequencies must start at 0 Hz, the first line is {first_hz} Hz")]
+    FirstLineNotZero {
+        /// The first frequency, Hz.
+        first_hz: f64,
+    },
+    /// Frequencies are not uniformly spaced.
+    #[error(
+        "frequencies are not uniformly spaced: line {line} is {found_hz} Hz, expected {expected_hz} Hz (spacing {spacing_hz} Hz)"
+    )]
+    NonUniformFrequencies {
+        /// 0-based line index.
+        line: usize,
+        /// Frequency found, Hz.
+        found_hz: f64,
+        /// Frequency expected from the spacing of the first two lines, Hz.
+        expected_hz: f64,
+        /// Spacing of the first two lines, Hz.
+        spacing_hz: f64,
+    },
+    /// A frequency or FRF value is NaN or infinite.
+    #[error("non-finite value in {what} at output {output}, input {input}, line {line}")]
+    NonFinite {
+        /// Which array.
+        what: &'static str,
+        /// 1-based output (0 for the frequency vector).
+        output: usize,
+        /// 1-based input (0 for the frequency vector).
+        input: usize,
+        /// 0-based line.
+        line: usize,
+    },
+    /// Array sizes do not agree.
+    #[error("inconsistent shapes: {what}: expected {expected}, got {got}")]
+    ShapeMismatch {
+        /// What was being checked.
+        what: String,
+        /// Expected size.
+        expected: usize,
+        /// Actual size.
+        got: usize,
+    },
+    /// Every FRF value is zero: there is nothing to identify.
+    #[error("every FRF value is zero: there is nothing to identify")]
+    AllZero,
+    /// An option is outside its allowed range.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter (flag) name, e.g. `states`.
+        name: &'static str,
+        /// The value given, as text.
+        value: String,
+        /// Why it is invalid.
+        reason: String,
+    },
+    /// The Hankel matrix asks for more Markov samples than the data has.
+    #[error(
+        "the Hankel matrix needs {needed} Markov samples (states {states} x hankel-factor {hankel_factor}, plus the direct term), the data gives {available}: lower --hankel-factor or --states, or pad with --pad-to"
+    )]
+    NotEnoughMarkovSamples {
+        /// Samples needed.
+        needed: usize,
+        /// Samples available.
+        available: usize,
+        /// Requested states.
+        states: usize,
+        /// Requested Hankel factor.
+        hankel_factor: usize,
+    },
+    /// The Hankel matrix is smaller than the requested model order (thesis §1.8 error,
+    /// "increase the length of the time series").
+    #[error(
+        "the Hankel matrix is {rows} x {cols}: it has only {available} singular values, fewer than the {states} states requested; increase --hankel-factor"
+    )]
+    HankelTooSmall {
+        /// Rows of H0.
+        rows: usize,
+        /// Columns of H0.
+        cols: usize,
+        /// min(rows, cols).
+        available: usize,
+        /// Requested states.
+        states: usize,
+    },
+    /// The data's Hankel matrix has numerical rank below the requested order.
+    #[error(
+        "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower --states"
+    )]
+    RankDeficient {
+        /// Numerical rank.
+        rank: usize,
+        /// Requested states.
+        states: usize,
+        /// Threshold used.
+        threshold: f64,
+    },
+    /// A discrete pole has no real logarithm (on or near the negative real axis, or zero).
+    #[error(
+        "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep --time-domain discrete"
+    )]
+    NoRealLogarithm {
+        /// Real part of the pole.
+        re: f64,
+        /// Imaginary part of the pole.
+        im: f64,
+    },
+    /// The model could not be converted reliably (e.g. defective eigenvectors).
+    #[error("{0}")]
+    Conversion(String),
+    /// A dense decomposition failed to converge.
+    #[error("numerical failure: {0}")]
+    Numerical(String),
+}
+
+impl EraError {
+    /// True for problems with the caller's data or parameters (exit code 2 in the CLI),
+    /// false for internal numerical failures (exit code 1).
+    pub fn is_input_error(&self) -> bool {
+        !matches!(self, EraError::Numerical(_))
+    }
+}
+
+/// Result alias of the core.
+pub type Result<T> = std::result::Result<T, EraError>;

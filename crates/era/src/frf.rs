@@ -1,0 +1,278 @@
+//! Frequency response data: the input of the pipeline (DESIGN.md §1 and §4).
+
+use crate::error::{EraError, Result};
+use num_complex::Complex64;
+
+/// What an FRF measures per unit force.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    /// Acceleration per unit force (accelerance, e.g. (in/s²)/lbf).
+    Acceleration,
+    /// Velocity per unit force (mobility).
+    Velocity,
+    /// Displacement per unit force (receptance).
+    Displacement,
+}
+
+impl Quantity {
+    /// The quantity after one integration (`G/(jω)`), or `None` past displacement.
+    pub fn integrated(self) -> Option<Quantity> {
+        match self {
+            Quantity::Acceleration => Some(Quantity::Velocity),
+            Quantity::Velocity => Some(Quantity::Displacement),
+            Quantity::Displacement => None,
+        }
+    }
+
+    /// Lower-case name as used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Acceleration => "acceleration",
+            Quantity::Velocity => "velocity",
+            Quantity::Displacement => "displacement",
+        }
+    }
+
+    /// Parses `acceleration`, `velocity` or `displacement` (case-insensitive).
+    pub fn parse(text: &str) -> Option<Quantity> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "acceleration" | "accel" => Some(Quantity::Acceleration),
+            "velocity" | "vel" => Some(Quantity::Velocity),
+            "displacement" | "disp" => Some(Quantity::Displacement),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for Quantity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Measured (or simulated) FRFs `G[i][j](f_k)` of a structure with `q` outputs and `p`
+/// inputs, at uniformly spaced lines `f_k = k·Δf` starting at 0 Hz.
+///
+/// Public axis order is `[output][input][line]` (DESIGN.md §4); the values are stored in
+/// exactly that order, so [`FrfData::pair`] is one contiguous slice per output/input
+/// pair, which is what the FFT of the next stage wants.
+///
+/// Construct with [`FrfData::new`], which validates everything the pipeline relies on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfData {
+    frequency_hz: Vec<f64>,
+    outputs: usize,
+    inputs: usize,
+    values: Vec<Complex64>,
+    quantity: Quantity,
+}
+
+/// Relative tolerance on the spacing of the frequency lines (analyzers print 6–10
+/// significant digits).
+pub const FREQUENCY_SPACING_TOLERANCE: f64 = 1e-6;
+
+impl FrfData {
+    /// Validates and wraps FRFs.
+    ///
+    /// `values[(i·p + j)·L + k]` is output `i`, input `j`, line `k`.
+    ///
+    /// # Errors
+    /// [`EraError::TooFewLines`], [`EraError::FirstLineNotZero`],
+    /// [`EraError::NonUniformFrequencies`] (relative tolerance
+    /// [`FREQUENCY_SPACING_TOLERANCE`] of the spacing), [`EraError::NonFinite`],
+    /// [`EraError::ShapeMismatch`] when `values.len() != q·p·L` or `q` or `p` is 0.
+    pub fn new(
+        frequency_hz: Vec<f64>,
+        outputs: usize,
+        inputs: usize,
+        values: Vec<Complex64>,
+        quantity: Quantity,
+    ) -> Result<Self> {
+        let lines = frequency_hz.len();
+        if outputs == 0 || inputs == 0 {
+            return Err(EraError::ShapeMismatch {
+                what: "number of outputs and inputs (at least 1 each)".into(),
+                expected: 1,
+                got: outputs.min(inputs),
+            });
+        }
+        if values.len() != outputs * inputs * lines {
+            return Err(EraError::ShapeMismatch {
+                what: format!("FRF values for {outputs} outputs x {inputs} inputs x {lines} lines"),
+                expected: outputs * inputs * lines,
+                got: values.len(),
+            });
+        }
+        validate_frequencies(&frequency_hz)?;
+        for (index, value) in values.iter().enumerate() {
+            if !value.re.is_finite() || !value.im.is_finite() {
+                let pair = index / lines;
+                return Err(EraError::NonFinite {
+                    what: "FRF",
+                    output: pair / inputs + 1,
+                    input: pair % inputs + 1,
+                    line: index % lines,
+                });
+            }
+        }
+        Ok(FrfData { frequency_hz, outputs, inputs, values, quantity })
+    }
+
+    /// Builds from a function of (output, input, line), all 0-based.
+    pub fn from_fn(
+        frequency_hz: Vec<f64>,
+        outputs: usize,
+        inputs: usize,
+        quantity: Quantity,
+        mut value: impl FnMut(usize, usize, usize) -> Complex64,
+    ) -> Result<Self> {
+        let lines = frequency_hz.len();
+        let mut values = Vec::with_capacity(outputs * inputs * lines);
+        for i in 0..outputs {
+            for j in 0..inputs {
+                for k in 0..lines {
+                    values.push(value(i, j, k));
+                }
+            }
+        }
+        Self::new(frequency_hz, outputs, inputs, values, quantity)
+    }
+
+    /// Number of outputs (sensors), `q`.
+    pub fn outputs(&self) -> usize {
+        self.outputs
+    }
+    /// Number of inputs (actuators), `p`.
+    pub fn inputs(&self) -> usize {
+        self.inputs
+    }
+    /// Number of frequency lines, `L`.
+    pub fn lines(&self) -> usize {
+        self.frequency_hz.len()
+    }
+    /// The frequency lines, Hz.
+    pub fn frequency_hz(&self) -> &[f64] {
+        &self.frequency_hz
+    }
+    /// Line spacing Δf, Hz (from the first two lines).
+    pub fn spacing_hz(&self) -> f64 {
+        self.frequency_hz[1] - self.frequency_hz[0]
+    }
+    /// What the FRFs measure per unit force.
+    pub fn quantity(&self) -> Quantity {
+        self.quantity
+    }
+    /// All values, `[output][input][line]`.
+    pub fn values(&self) -> &[Complex64] {
+        &self.values
+    }
+    /// The FRF of output `i` from input `j` (0-based) over all lines.
+    ///
+    /// # Panics
+    /// If `i` or `j` is out of range.
+    #[track_caller]
+    pub fn pair(&self, output: usize, input: usize) -> &[Complex64] {
+        assert!(output < self.outputs && input < self.inputs, "pair out of range");
+        let lines = self.lines();
+        let start = (output * self.inputs + input) * lines;
+        &self.values[start..start + lines]
+    }
+    /// True when every value is exactly zero.
+    pub fn is_all_zero(&self) -> bool {
+        self.values.iter().all(|v| v.re == 0.0 && v.im == 0.0)
+    }
+    /// Returns the same data with another quantity tag (no conversion).
+    pub fn with_quantity(mut self, quantity: Quantity) -> Self {
+        self.quantity = quantity;
+        self
+    }
+}
+
+/// Checks that lines start at 0 Hz and are uniform (DESIGN.md §1).
+pub fn validate_frequencies(frequency_hz: &[f64]) -> Result<()> {
+    let lines = frequency_hz.len();
+    for (line, f) in frequency_hz.iter().enumerate() {
+        if !f.is_finite() {
+            return Err(EraError::NonFinite { what: "frequency", output: 0, input: 0, line });
+        }
+    }
+    if lines < 2 {
+        return Err(EraError::TooFewLines { lines });
+    }
+    if frequency_hz[0] != 0.0 {
+        return Err(EraError::FirstLineNotZero { first_hz: frequency_hz[0] });
+    }
+    let spacing = frequency_hz[1];
+    if spacing <= 0.0 {
+        return Err(EraError::NonUniformFrequencies {
+            line: 1,
+            found_hz: spacing,
+            expected_hz: f64::NAN,
+            spacing_hz: spacing,
+        });
+    }
+    for (line, f) in frequency_hz.iter().enumerate() {
+        let expected = line as f64 * spacing;
+        if (f - expected).abs() > FREQUENCY_SPACING_TOLERANCE * spacing {
+            return Err(EraError::NonUniformFrequencies {
+                line,
+                found_hz: *f,
+                expected_hz: expected,
+                spacing_hz: spacing,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `n` uniformly spaced lines `0, Δf, …, (n-1)Δf`.
+pub fn uniform_lines(lines: usize, spacing_hz: f64) -> Vec<f64> {
+    (0..lines).map(|k| k as f64 * spacing_hz).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ones(lines: usize) -> Vec<Complex64> {
+        vec![Complex64::new(1.0, 0.0); lines]
+    }
+
+    #[test]
+    fn accepts_uniform_lines_from_zero() {
+        let f = uniform_lines(5, 0.025);
+        let d = FrfData::new(f, 1, 1, ones(5), Quantity::Velocity).unwrap();
+        assert_eq!(d.lines(), 5);
+        assert!((d.spacing_hz() - 0.025).abs() < 1e-15);
+    }
+
+    #[test]
+    fn rejects_nonzero_start_and_nonuniform_spacing() {
+        let err = FrfData::new(vec![1.0, 2.0, 3.0], 1, 1, ones(3), Quantity::Velocity);
+        assert!(matches!(err, Err(EraError::FirstLineNotZero { .. })));
+        let err = FrfData::new(vec![0.0, 1.0, 2.5], 1, 1, ones(3), Quantity::Velocity);
+        assert!(matches!(err, Err(EraError::NonUniformFrequencies { line: 2, .. })));
+    }
+
+    #[test]
+    fn rejects_nan_and_bad_shape() {
+        let mut v = ones(6);
+        v[4] = Complex64::new(f64::NAN, 0.0);
+        let err = FrfData::new(uniform_lines(3, 1.0), 1, 2, v, Quantity::Velocity);
+        assert_eq!(
+            err,
+            Err(EraError::NonFinite { what: "FRF", output: 1, input: 2, line: 1 })
+        );
+        let err = FrfData::new(uniform_lines(3, 1.0), 2, 2, ones(6), Quantity::Velocity);
+        assert!(matches!(err, Err(EraError::ShapeMismatch { expected: 12, got: 6, .. })));
+    }
+
+    #[test]
+    fn pair_is_output_major() {
+        let d = FrfData::from_fn(uniform_lines(2, 1.0), 2, 3, Quantity::Velocity, |i, j, k| {
+            Complex64::new((10 * i + j) as f64, k as f64)
+        })
+        .unwrap();
+        assert_eq!(d.pair(1, 2)[1], Complex64::new(12.0, 1.0));
+    }
+}

@@ -1,0 +1,220 @@
+//! FRF → impulse response → Markov parameters (DESIGN.md §1.5).
+//!
+//! Each FRF of `N` lines (0 … Nyquist) is extended to a Hermitian spectrum of
+//! `n = 2(N − 1)` points and inverse-transformed *with* the `1/n` factor, exactly as
+//! MATLAB's `h = real(ifft(mirror(G)))` of the thesis. Taking the real part there discards
+//! the imaginary parts of the DC and Nyquist lines (which a mirror cannot make
+//! Hermitian); here those are set to zero before a real inverse FFT (`realfft`), which
+//! is the same thing. Sample `h[k]` is the Markov block `Y_k`: `Y_0` is the direct term
+//! and `Y_k = C A^(k-1) B` for `k ≥ 1`.
+
+use crate::error::{EraError, Result};
+use crate::frf::FrfData;
+use num_complex::Complex64;
+use realfft::RealFftPlanner;
+
+/// A sequence of q×p Markov blocks `Y_0, Y_1, …, Y_(K-1)`.
+///
+/// Storage is "woven" per input: for input `j`, the values `Y_k[i][j]` run output-fastest,
+/// then sample (`data[j·K·q + k·q + i]`). One block-Hankel column is then one contiguous
+/// slice, which is what makes [`crate::hankel`] a sequence of copies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkovSequence {
+    outputs: usize,
+    inputs: usize,
+    samples: usize,
+    data: Vec<f64>,
+}
+
+impl MarkovSequence {
+    /// All-zero sequence.
+    pub fn zeros(outputs: usize, inputs: usize, samples: usize) -> Self {
+        MarkovSequence { outputs, inputs, samples, data: vec![0.0; outputs * inputs * samples] }
+    }
+
+    /// Builds from one time series per output/input pair, pairs in `[output][input]`
+    /// order, each of the same length.
+    ///
+    /// # Panics
+    /// If the number of series is not `outputs·inputs` or their lengths differ.
+    #[track_caller]
+    pub fn from_pair_series(outputs: usize, inputs: usize, series: &[Vec<f64>]) -> Self {
+        assert_eq!(series.len(), outputs * inputs, "one series per pair");
+        let samples = series.first().map_or(0, Vec::len);
+        let mut m = Self::zeros(outputs, inputs, samples);
+        for i in 0..outputs {
+            for j in 0..inputs {
+                let s = &series[i * inputs + j];
+                assert_eq!(s.len(), samples, "series lengths differ");
+                for (k, v) in s.iter().enumerate() {
+                    m.set(k, i, j, *v);
+                }
+            }
+        }
+        m
+    }
+
+    /// Builds from a function of (sample, output, input).
+    pub fn from_fn(
+        outputs: usize,
+        inputs: usize,
+        samples: usize,
+        mut value: impl FnMut(usize, usize, usize) -> f64,
+    ) -> Self {
+        let mut m = Self::zeros(outputs, inputs, samples);
+        for k in 0..samples {
+            for i in 0..outputs {
+                for j in 0..inputs {
+                    m.set(k, i, j, value(k, i, j));
+                }
+            }
+        }
+        m
+    }
+
+    /// Outputs `q`.
+    pub fn outputs(&self) -> usize {
+        self.outputs
+    }
+    /// Inputs `p`.
+    pub fn inputs(&self) -> usize {
+        self.inputs
+    }
+    /// Number of samples `K` (blocks `Y_0 … Y_(K-1)`).
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+    /// `Y_k[i][j]`.
+    #[inline]
+    pub fn get(&self, sample: usize, output: usize, input: usize) -> f64 {
+        self.data[(input * self.samples + sample) * self.outputs + output]
+    }
+    /// Sets `Y_k[i][j]`.
+    #[inline]
+    pub fn set(&mut self, sample: usize, output: usize, input: usize, value: f64) {
+        self.data[(input * self.samples + sample) * self.outputs + output] = value;
+    }
+    /// For input `j`, the samples `first .. first+count` of all outputs, output-fastest:
+    /// one block-Hankel column.
+    #[inline]
+    pub fn input_run(&self, input: usize, first: usize, count: usize) -> &[f64] {
+        let start = (input * self.samples + first) * self.outputs;
+        &self.data[start..start + count * self.outputs]
+    }
+    /// Time series of one pair.
+    pub fn pair_series(&self, output: usize, input: usize) -> Vec<f64> {
+        (0..self.samples).map(|k| self.get(k, output, input)).collect()
+    }
+    /// The q×p block `Y_k` as row-major nested vectors.
+    pub fn block(&self, sample: usize) -> Vec<Vec<f64>> {
+        (0..self.outputs)
+            .map(|i| (0..self.inputs).map(|j| self.get(sample, i, j)).collect())
+            .collect()
+    }
+}
+
+/// Impulse responses of every pair, `[output][input]` order, each of `2(N−1)` samples,
+/// by a real inverse FFT with the `1/n` factor (MATLAB `real(ifft(mirror(G)))`).
+///
+/// # Errors
+/// [`EraError::TooFewLines`] for fewer than 2 lines (cannot happen for a valid
+/// [`FrfData`]).
+pub fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
+    let lines = frf.lines();
+    if lines < 2 {
+        return Err(EraError::TooFewLines { lines });
+    }
+    let n = 2 * (lines - 1);
+    let mut planner = RealFftPlanner::<f64>::new();
+    let c2r = planner.plan_fft_inverse(n);
+    let mut spectrum = c2r.make_input_vec();
+    let mut scratch = c2r.make_scratch_vec();
+    let scale = 1.0 / n as f64;
+    let mut out = Vec::with_capacity(frf.outputs() * frf.inputs());
+    for i in 0..frf.outputs() {
+        for j in 0..frf.inputs() {
+            spectrum.copy_from_slice(frf.pair(i, j));
+            spectrum[0].im = 0.0;
+            spectrum[lines - 1].im = 0.0;
+            let mut h = c2r.make_output_vec();
+            c2r.process_with_scratch(&mut spectrum, &mut h, &mut scratch)
+                .map_err(|e| EraError::Numerical(format!("inverse FFT: {e}")))?;
+            h.iter_mut().for_each(|v| *v *= scale);
+            out.push(h);
+        }
+    }
+    Ok(out)
+}
+
+/// Naive O(n²) reference of [`impulse_responses`]: builds the mirrored spectrum
+/// `X = [G_0 … G_(N-1), conj(G_(N-2)) … conj(G_1)]` and evaluates
+/// `h[t] = Re( (1/n) Σ_k X[k] e^(+2πi·kt/n) )` directly.
+pub fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
+    let lines = frf.lines();
+    let n = 2 * (lines - 1);
+    let twiddle: Vec<Complex64> = (0..n)
+        .map(|m| Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * m as f64 / n as f64))
+        .collect();
+    let mut out = Vec::new();
+    for i in 0..frf.outputs() {
+        for j in 0..frf.inputs() {
+            let g = frf.pair(i, j);
+            let mut x = g.to_vec();
+            for k in (1..lines - 1).rev() {
+                x.push(g[k].conj());
+            }
+            let h = (0..n)
+                .map(|t| {
+                    let mut acc = Complex64::new(0.0, 0.0);
+                    for (k, xk) in x.iter().enumerate() {
+                        acc += xk * twiddle[(k * t) % n];
+                    }
+                    acc.re / n as f64
+                })
+                .collect();
+            out.push(h);
+        }
+    }
+    out
+}
+
+/// Markov parameters of the FRFs: [`impulse_responses`] woven into a [`MarkovSequence`].
+pub fn markov_from_frf(frf: &FrfData) -> Result<MarkovSequence> {
+    let series = impulse_responses(frf)?;
+    Ok(MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frf::{uniform_lines, Quantity};
+
+    #[test]
+    fn fft_path_equals_naive_mirror_ifft() {
+        // Arbitrary complex data, including non-real DC and Nyquist lines.
+        let d = FrfData::from_fn(uniform_lines(17, 0.5), 2, 3, Quantity::Velocity, |i, j, k| {
+            let x = (i * 31 + j * 7 + k * 13) as f64;
+            Complex64::new(x.sin(), (1.7 * x).cos())
+        })
+        .unwrap();
+        let fast = impulse_responses(&d).unwrap();
+        let slow = impulse_responses_naive(&d);
+        for (a, b) in fast.iter().zip(&slow) {
+            assert_eq!(a.len(), 32);
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() < 1e-14, "{x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn constant_spectrum_is_a_unit_impulse() {
+        let d = FrfData::from_fn(uniform_lines(5, 1.0), 1, 1, Quantity::Velocity, |_, _, _| {
+            Complex64::new(1.0, 0.0)
+        })
+        .unwrap();
+        let h = impulse_responses(&d).unwrap().remove(0);
+        assert!((h[0] - 1.0).abs() < 1e-15);
+        assert!(h[1..].iter().all(|v| v.abs() < 1e-15));
+    }
+}

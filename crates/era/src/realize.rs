@@ -1,0 +1,244 @@
+//! Realization by singular value decomposition (DESIGN.md §1.8–1.9; thesis `mimoera`,
+//! Appendix J.1.3; Juang & Pappa, 1985).
+//!
+//! With `H0 = U S Vᵀ` and the `n` largest singular values kept, the balanced realization
+//! is
+//!
+//! ```text
+//! A = S_n^(-1/2) U_nᵀ H1 V_n S_n^(-1/2)
+//! B = first p columns of S_n^(1/2) V_nᵀ
+//! C = first q rows of U_n S_n^(1/2)
+//! D = 0 (thesis) or Y_0
+//! ```
+//!
+//! [`realize`] uses `faer`'s thin SVD; [`realize_naive`] forms the Hankels element by
+//! element, takes the full SVD and multiplies with plain loops. It is the reference every
+//! faster path is tested against.
+
+use crate::error::{EraError, Result};
+use crate::hankel::{self, ThesisHankel};
+use crate::markov::MarkovSequence;
+use crate::statespace::{StateSpace, TimeDomain};
+use faer::Mat;
+
+/// What the model's `D` is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DirectTerm {
+    /// `D = 0`, as in the thesis.
+    #[default]
+    Zero,
+    /// `D = Y_0`, the time-zero Markov block.
+    FirstMarkov,
+}
+
+/// Options of the realization step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct RealizeOptions {
+    /// Model order `n` (thesis `ns`).
+    pub states: usize,
+    /// Hankel factor `lh`: `M = ns·lh` Markov samples feed the Hankel.
+    pub hankel_factor: usize,
+    /// `D` of the model.
+    pub direct_term: DirectTerm,
+}
+
+impl RealizeOptions {
+    /// Options with `D = 0`.
+    pub fn new(states: usize, hankel_factor: usize) -> Self {
+        RealizeOptions { states, hankel_factor, direct_term: DirectTerm::Zero }
+    }
+}
+
+/// A warning that does not stop the run.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RealizeWarning {
+    /// Fewer than `2·ns` singular values (thesis: "increase length of time series").
+    FewSingularValues {
+        /// Singular values available.
+        available: usize,
+        /// Requested states.
+        states: usize,
+    },
+    /// The Hankel reaches past half of the circular impulse response, where the inverse
+    /// FFT wraps around.
+    PastHalfPeriod {
+        /// Last Markov index used.
+        last_sample: usize,
+        /// Samples of the impulse response.
+        samples: usize,
+    },
+}
+
+impl std::fmt::Display for RealizeWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RealizeWarning::FewSingularValues { available, states } => write!(
+                f,
+                "the Hankel matrix has {available} singular values, fewer than 2 x {states} states: increase --hankel-factor"
+            ),
+            RealizeWarning::PastHalfPeriod { last_sample, samples } => write!(
+                f,
+                "the Hankel uses Markov samples up to {last_sample} of a {samples}-sample circular impulse response: samples past the half wrap around; pad with --pad-to or lower --hankel-factor"
+            ),
+        }
+    }
+}
+
+/// A realized model with its diagnostics.
+#[derive(Debug, Clone)]
+pub struct Realization {
+    /// The discrete model, `Ts` that of the Markov sequence.
+    pub model: StateSpace,
+    /// All singular values of `H0`, largest first.
+    pub singular_values: Vec<f64>,
+    /// Rows and columns of `H0`.
+    pub hankel_size: (usize, usize),
+    /// Warnings of §1.8.
+    pub warnings: Vec<RealizeWarning>,
+}
+
+/// Checks the options against the data before any heavy work.
+fn plan(markov: &MarkovSequence, options: &RealizeOptions) -> Result<(ThesisHankel, Vec<RealizeWarning>)> {
+    if options.states == 0 {
+        return Err(EraError::InvalidParameter {
+            name: "states",
+            value: "0".into(),
+            reason: "the model needs at least one state".into(),
+        });
+    }
+    if options.hankel_factor == 0 {
+        return Err(EraError::InvalidParameter {
+            name: "hankel-factor",
+            value: "0".into(),
+            reason: "must be at least 1".into(),
+        });
+    }
+    let shapes = ThesisHankel::new(options.states, options.hankel_factor)?;
+    if shapes.samples_needed() > markov.samples() {
+        return Err(EraError::NotEnoughMarkovSamples {
+            needed: shapes.samples_needed(),
+            available: markov.samples(),
+            states: options.states,
+            hankel_factor: options.hankel_factor,
+        });
+    }
+    let rows = shapes.h0.block_rows * markov.outputs();
+    let cols = shapes.h0.block_cols * markov.inputs();
+    let available = rows.min(cols);
+    if available < options.states {
+        return Err(EraError::HankelTooSmall { rows, cols, available, states: options.states });
+    }
+    let mut warnings = Vec::new();
+    if available < 2 * options.states {
+        warnings.push(RealizeWarning::FewSingularValues { available, states: options.states });
+    }
+    if shapes.h1.last_sample() > markov.samples() / 2 {
+        warnings.push(RealizeWarning::PastHalfPeriod {
+            last_sample: shapes.h1.last_sample(),
+            samples: markov.samples(),
+        });
+    }
+    Ok((shapes, warnings))
+}
+
+/// Numerical rank of a singular-value list: values above `max(rows, cols)·ε·σ₁`.
+pub fn numerical_rank(singular_values: &[f64], rows: usize, cols: usize) -> (usize, f64) {
+    let threshold = singular_values.first().copied().unwrap_or(0.0) * rows.max(cols) as f64 * f64::EPSILON;
+    (singular_values.iter().filter(|s| **s > threshold).count(), threshold)
+}
+
+fn check_rank(singular_values: &[f64], rows: usize, cols: usize, states: usize) -> Result<()> {
+    let (rank, threshold) = numerical_rank(singular_values, rows, cols);
+    if rank < states {
+        return Err(EraError::RankDeficient { rank, states, threshold });
+    }
+    Ok(())
+}
+
+fn direct_term(markov: &MarkovSequence, which: DirectTerm) -> Mat<f64> {
+    let (q, p) = (markov.outputs(), markov.inputs());
+    match which {
+        DirectTerm::Zero => Mat::zeros(q, p),
+        DirectTerm::FirstMarkov => Mat::from_fn(q, p, |i, j| markov.get(0, i, j)),
+    }
+}
+
+/// ERA on a Markov sequence with samples `sample_time_s` apart (DESIGN.md §1.7–1.9).
+///
+/// # Errors
+/// [`EraError::InvalidParameter`], [`EraError::NotEnoughMarkovSamples`],
+/// [`EraError::HankelTooSmall`] (§1.8 error), [`EraError::RankDeficient`] when the data's
+/// Hankel has numerical rank below `states`, [`EraError::Numerical`] when the SVD fails.
+pub fn realize(markov: &MarkovSequence, sample_time_s: f64, options: &RealizeOptions) -> Result<Realization> {
+    let (shapes, warnings) = plan(markov, options)?;
+    let h0 = hankel::build(markov, shapes.h0)?;
+    let svd = h0.thin_svd().map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
+    let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
+    check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
+    let n = options.states;
+    let (q, p) = (markov.outputs(), markov.inputs());
+    let un = svd.U().subcols(0, n);
+    let vn = svd.V().subcols(0, n);
+    let h1 = hankel::build(markov, shapes.h1)?;
+    let ut_h1_v = un.transpose() * (&h1 * vn);
+    let root: Vec<f64> = singular_values[..n].iter().map(|s| s.sqrt()).collect();
+    let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
+    let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
+    let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
+    let d = direct_term(markov, options.direct_term);
+    Ok(Realization {
+        model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
+        singular_values,
+        hankel_size: (h0.nrows(), h0.ncols()),
+        warnings,
+    })
+}
+
+/// Reference of [`realize`]: element-wise Hankels, the *full* SVD, and the products of
+/// §1.9 as plain loops. Slow on purpose; for tests and benchmarks.
+///
+/// # Errors
+/// As [`realize`].
+pub fn realize_naive(markov: &MarkovSequence, sample_time_s: f64, options: &RealizeOptions) -> Result<Realization> {
+    let (shapes, warnings) = plan(markov, options)?;
+    let h0 = hankel::build_naive(markov, shapes.h0)?;
+    let h1 = hankel::build_naive(markov, shapes.h1)?;
+    let svd = h0.svd().map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
+    let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
+    check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
+    let n = options.states;
+    let (q, p) = (markov.outputs(), markov.inputs());
+    let (u, v) = (svd.U(), svd.V());
+    let (rows, cols) = (h1.nrows(), h1.ncols());
+    // T = H1 V_n, then A' = U_nᵀ T, by loops.
+    let mut t = vec![0.0; rows * n];
+    for r in 0..rows {
+        for k in 0..n {
+            let mut acc = 0.0;
+            for c in 0..cols {
+                acc += h1[(r, c)] * v[(c, k)];
+            }
+            t[r * n + k] = acc;
+        }
+    }
+    let mut a = Mat::<f64>::zeros(n, n);
+    for i in 0..n {
+        for k in 0..n {
+            let mut acc = 0.0;
+            for r in 0..rows {
+                acc += u[(r, i)] * t[r * n + k];
+            }
+            a[(i, k)] = acc / (singular_values[i].sqrt() * singular_values[k].sqrt());
+        }
+    }
+    let b = Mat::from_fn(n, p, |r, j| singular_values[r].sqrt() * v[(j, r)]);
+    let c = Mat::from_fn(q, n, |i, r| u[(i, r)] * singular_values[r].sqrt());
+    let d = direct_term(markov, options.direct_term);
+    Ok(Realization {
+        model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
+        singular_values,
+        hankel_size: (h0.nrows(), h0.ncols()),
+        warnings,
+    })
+}
