@@ -1,9 +1,54 @@
+//! # era — the Eigensystem Realization Algorithm for lightly damped structures
+//!
+//! Measured frequency response functions (FRFs) in, a state-space model `(A, B, C, D)`,
+//! its Hankel singular values, modal parameters and fit out. The pipeline restates the
+//! thesis's `frffilt` (Woods 1994, §III.2 and Appendix J; Juang & Pappa 1985), as
+//! DESIGN.md §1 lists it:
+//!
+//! 1. [`preprocess`]: integrate `ni` times, `G ← G/(j2πf)`; pad to `ndpts + 1` lines;
+//!    sample time `Ts = 1/(2Δf(N−1))`; zero the first `nz` lines.
+//! 2. [`markov`]: the Hermitian extension of each FRF, inverse-FFT'd with the `1/n`
+//!    factor, gives the Markov blocks `Y_k = C A^(k−1) B`.
+//! 3. [`filter`]: optional zero-phase Butterworth low-pass on the impulse responses.
+//! 4. [`hankel`]: `H0[r][c] = Y_(1+r+c)`, `H1[r][c] = Y_(2+r+c)`, `m − 1` blocks each way,
+//!    `m = M/2`, `M = ns·lh` rounded down to a multiple of 4.
+//! 5. [`realize`]: `H0 = U S Vᵀ`; `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`,
+//!    `C = E_qᵀ U S^(½)`.
+//! 6. [`statespace`]: `d2c` (zero-order-hold inverse, `log`) and `c2d` (`exp`).
+//! 7. [`modal`]: `s = ln(z)/Ts`; frequency `|s|/2π`, damping `−Re s/|s|`, shapes `Cφ`,
+//!    participations `ψB`.
+//! 8. [`response`]: the model's FRF through its modal form, and the per-pair fit.
+//!
+//! [`identify::identify`] runs them all; [`identify::identify_naive`] runs the naive
+//! reference of every stage. [`sim`] holds the truth model of Table 5.2 and seeded
+//! synthetic structures.
+//!
+//! ```
+//! use era::identify::{identify, EraOptions};
+//! use era::sim::truth_model_frf;
+//!
+//! let frf = truth_model_frf(None).unwrap();
+//! let found = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
+//! let first = &found.modal.modes[0];
+//! assert!((first.frequency_hz - 1748.64).abs() < 0.01);
+//! ```
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod filter;
 pub mod frf;
 pub mod hankel;
+pub mod identify;
 pub mod markov;
+pub mod modal;
 pub mod preprocess;
 pub mod realize;
+pub mod response;
+pub mod sim;
 pub mod statespace;
+
 pub use error::{EraError, Result};
+pub use frf::{FrfData, Quantity};
+pub use identify::{identify, EraOptions, Identification, ModelDomain};
+pub use num_complex::Complex64;
+pub use statespace::{StateSpace, TimeDomain};

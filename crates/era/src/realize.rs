@@ -33,7 +33,6 @@ pub enum DirectTerm {
 
 /// Options of the realization step.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[non_exhaustive]
 pub struct RealizeOptions {
     /// Model order `n` (thesis `ns`).
     pub states: usize,

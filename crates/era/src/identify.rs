@@ -1,0 +1,193 @@
+//! The whole pipeline of DESIGN.md §1 (the thesis's `frffilt`): FRFs in, a model, its
+//! singular values, modes and fit out.
+
+use crate::error::{EraError, Result};
+use crate::filter::LowPass;
+use crate::frf::FrfData;
+use crate::markov::{impulse_responses, impulse_responses_naive, MarkovSequence};
+use crate::modal::{modal_parameters_of, ModalForm, ModalParameters};
+use crate::preprocess::{integrate, preprocess, zero_leading_lines};
+use crate::realize::{realize, realize_naive, DirectTerm, Realization, RealizeOptions};
+use crate::response::{fit_metrics, frequency_response_naive, FitReport, HessenbergForm};
+use crate::statespace::StateSpace;
+use std::time::Instant;
+
+/// Model returned (thesis `cord`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ModelDomain {
+    /// The discrete model ERA gives (thesis `cord = 2`).
+    #[default]
+    Discrete,
+    /// Its zero-order-hold inverse (thesis `cord = 1`).
+    Continuous,
+}
+
+/// Every parameter of the pipeline (DESIGN.md §1 table).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EraOptions {
+    /// Model order (thesis `ns`).
+    pub states: usize,
+    /// Hankel factor (thesis `lh`).
+    pub hankel_factor: usize,
+    /// Integrations of the FRFs (thesis `ni`).
+    pub integrations: usize,
+    /// Zero-phase Butterworth `(order, cut-off Hz)` on the impulse responses (thesis
+    /// `ford`, `Hzbreak`); `None` for no filter.
+    pub lowpass: Option<(usize, f64)>,
+    /// Leading lines set to zero (thesis `nz`).
+    pub zero_lines: usize,
+    /// Pad to `pad_to + 1` lines; 0 for none (thesis `ndpts`).
+    pub pad_to: usize,
+    /// Model returned (thesis `cord`).
+    pub domain: ModelDomain,
+    /// `D = 0` or `Y_0`.
+    pub direct_term: DirectTerm,
+}
+
+impl EraOptions {
+    /// Options with the thesis's defaults for everything but the order and Hankel factor.
+    pub fn new(states: usize, hankel_factor: usize) -> Self {
+        EraOptions {
+            states,
+            hankel_factor,
+            integrations: 0,
+            lowpass: None,
+            zero_lines: 0,
+            pad_to: 0,
+            domain: ModelDomain::Discrete,
+            direct_term: DirectTerm::Zero,
+        }
+    }
+    /// The thesis's DTA settings (Appendix J): `ns 80, lh 5, ni 1, nz 3, ndpts 1024`.
+    pub fn thesis_dta() -> Self {
+        EraOptions { integrations: 1, zero_lines: 3, pad_to: 1024, ..Self::new(80, 5) }
+    }
+    /// The thesis's truth-model settings (Appendix J.2.2): `ns 8, lh 4, ni 0, nz 0,
+    /// ndpts 1024`.
+    pub fn thesis_truth_model() -> Self {
+        EraOptions { pad_to: 1024, ..Self::new(8, 4) }
+    }
+}
+
+/// Wall time of each stage, seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StageTimings {
+    /// Integration, padding, zeroing.
+    pub preprocess: f64,
+    /// Inverse FFT (and filter) to Markov parameters.
+    pub markov: f64,
+    /// Hankel construction, SVD and realization products.
+    pub hankel_svd: f64,
+    /// Continuous conversion when asked.
+    pub realize: f64,
+    /// Eigendecomposition and modal parameters.
+    pub modes: f64,
+    /// Model FRF and fit metrics.
+    pub fit: f64,
+}
+
+/// Everything `identify` found.
+#[derive(Debug, Clone)]
+pub struct Identification {
+    /// The identified model (discrete, or continuous on request).
+    pub model: StateSpace,
+    /// The realization diagnostics (singular values, Hankel size, warnings); its model
+    /// is the discrete one.
+    pub realization: Realization,
+    /// Modes and real poles.
+    pub modal: ModalParameters,
+    /// Fit against the processed measurement.
+    pub fit: FitReport,
+    /// The measurement after the same integrations, on its own lines: what the fit and
+    /// plots compare against.
+    pub processed: FrfData,
+    /// Sample time of the impulse responses, s.
+    pub sample_time_s: f64,
+    /// Stage times.
+    pub timings: StageTimings,
+}
+
+/// Which implementation of each stage to use.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Path {
+    Fast,
+    Naive,
+}
+
+/// Runs DESIGN.md §1 on `frf`.
+///
+/// # Errors
+/// [`EraError::AllZero`] when there is nothing to identify, and every error of the
+/// stages (invalid parameters, too few samples, rank deficiency, numerical failure).
+pub fn identify(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
+    run(frf, options, Path::Fast)
+}
+
+/// [`identify`] with the naive reference of every stage: DFT by definition, element-wise
+/// Hankels, full SVD, loop products, a dense solve per line for the fit.
+///
+/// # Errors
+/// As [`identify`].
+pub fn identify_naive(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
+    run(frf, options, Path::Naive)
+}
+
+fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification> {
+    if frf.is_all_zero() {
+        return Err(EraError::AllZero);
+    }
+    let mut timings = StageTimings::default();
+    let mut clock = Instant::now();
+    let mut lap = |slot: &mut f64| {
+        *slot = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+    };
+
+    let pre = preprocess(frf, options.integrations, options.pad_to, options.zero_lines)?;
+    if pre.frf.is_all_zero() {
+        return Err(EraError::AllZero);
+    }
+    lap(&mut timings.preprocess);
+
+    let mut series = match path {
+        Path::Fast => impulse_responses(&pre.frf)?,
+        Path::Naive => impulse_responses_naive(&pre.frf),
+    };
+    if let Some((order, cutoff_hz)) = options.lowpass {
+        let filter = LowPass::design(order, cutoff_hz, pre.sample_time_s)?;
+        for s in series.iter_mut() {
+            *s = filter.apply(s)?;
+        }
+    }
+    let markov = MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series);
+    lap(&mut timings.markov);
+
+    let realize_options = RealizeOptions { direct_term: options.direct_term, ..RealizeOptions::new(options.states, options.hankel_factor) };
+    let realization = match path {
+        Path::Fast => realize(&markov, pre.sample_time_s, &realize_options)?,
+        Path::Naive => realize_naive(&markov, pre.sample_time_s, &realize_options)?,
+    };
+    lap(&mut timings.hankel_svd);
+
+    let model = match options.domain {
+        ModelDomain::Discrete => realization.model.clone(),
+        ModelDomain::Continuous => realization.model.d2c()?,
+    };
+    lap(&mut timings.realize);
+
+    let form = ModalForm::new(&model)?;
+    let modal = modal_parameters_of(&form, model.domain);
+    lap(&mut timings.modes);
+
+    let processed = integrate(frf, options.integrations)?;
+    let measured = zero_leading_lines(&processed, options.zero_lines);
+    let response = match path {
+        Path::Fast => HessenbergForm::new(&model).response(measured.frequency_hz()),
+        Path::Naive => frequency_response_naive(&model, measured.frequency_hz()),
+    };
+    let first_line = options.zero_lines.max(usize::from(options.integrations > 0));
+    let fit = fit_metrics(&measured, &response, first_line);
+    lap(&mut timings.fit);
+
+    Ok(Identification { model, realization, modal, fit, processed, sample_time_s: pre.sample_time_s, timings })
+}
