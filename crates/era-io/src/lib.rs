@@ -1,1 +1,48 @@
+//! File formats of `era`: one module per format.
+//!
+//! - [`csv`]: our self-describing FRF CSV (DESIGN.md §4), read and written;
+//! - [`model_json`]: `model.json` and `fit.json`;
+//! - [`atomic`]: every write goes to a temporary file in the destination folder and is
+//!   renamed into place, so a failed run never leaves a half-written file.
+//!
+//! Errors name the file, and where it applies the line and column.
 
+pub mod atomic;
+pub mod csv;
+pub mod model_json;
+
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// A problem with a file.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum IoError {
+    /// The file could not be opened, read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The content is malformed.
+    #[error("{path}: {location}{message}")]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// "line 12, column H2_1_re: " or empty.
+        location: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl IoError {
+    pub(crate) fn format(path: impl Into<PathBuf>, location: impl Into<String>, message: impl Into<String>) -> Self {
+        IoError::Format { path: path.into(), location: location.into(), message: message.into() }
+    }
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        IoError::Io { path: path.into(), source }
+    }
+}

@@ -1,0 +1,298 @@
+//! The FRF CSV of DESIGN.md §4.
+//!
+//! ```text
+//! # quantity: acceleration
+//! # force_unit: lbf
+//! # response_unit: in/s^2
+//! frequency_hz,H1_1_re,H1_1_im,H2_1_re,H2_1_im,...
+//! 0,0.0,0.0,...
+//! ```
+//!
+//! `Hi_j` is output `i` from input `j`, 1-based; columns may come in any order, and every
+//! pair of `1..q × 1..p` must be present with both parts. Rows are parsed with the `csv`
+//! crate; everything else (metadata, column map, checks) is here so that each error can
+//! name the file, the line and the column.
+
+use crate::atomic::write_atomic;
+use crate::IoError;
+use era::{Complex64, EraError, FrfData, Quantity};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// An FRF file's data and metadata.
+#[derive(Debug, Clone)]
+pub struct FrfFile {
+    /// The FRFs.
+    pub frf: FrfData,
+    /// Whether the file said what quantity it holds (otherwise the default was used).
+    pub quantity_given: bool,
+    /// Every `# key: value` line, keys lower-case.
+    pub metadata: BTreeMap<String, String>,
+}
+
+/// Which part of a complex value a column holds.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Part {
+    Re,
+    Im,
+}
+
+fn parse_column(name: &str) -> Option<(usize, usize, Part)> {
+    let rest = name.strip_prefix('H').or_else(|| name.strip_prefix('h'))?;
+    let (pair, part) = rest.rsplit_once('_')?;
+    let part = match part.to_ascii_lowercase().as_str() {
+        "re" => Part::Re,
+        "im" => Part::Im,
+        _ => return None,
+    };
+    let (i, j) = pair.split_once('_')?;
+    let (i, j) = (i.parse::<usize>().ok()?, j.parse::<usize>().ok()?);
+    (i >= 1 && j >= 1).then_some((i, j, part))
+}
+
+/// Reads an FRF CSV. Without a `# quantity:` line the FRFs are tagged
+/// `default_quantity`.
+///
+/// # Errors
+/// [`IoError::Io`] when the file cannot be read; [`IoError::Format`] naming the line and
+/// column for a missing or unknown column, a non-numeric cell, NaN or infinity, a short
+/// row, non-uniform frequencies or a first line other than 0 Hz.
+pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, IoError> {
+    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    let fail = |line: usize, column: &str, message: String| {
+        let location = if column.is_empty() { format!("line {line}: ") } else { format!("line {line}, column {column}: ") };
+        IoError::format(path, location, message)
+    };
+
+    // Metadata lines, then the header.
+    let mut metadata = BTreeMap::new();
+    let mut header_line = 0;
+    for (index, line) in text.lines().enumerate() {
+        let trimmed = line.trim();
+        if trimmed.is_empty() {
+            continue;
+        }
+        if let Some(meta) = trimmed.strip_prefix('#') {
+            if let Some((key, value)) = meta.split_once(':') {
+                metadata.insert(key.trim().to_ascii_lowercase(), value.trim().to_string());
+            }
+            continue;
+        }
+        header_line = index + 1;
+        break;
+    }
+    if header_line == 0 {
+        return Err(IoError::format(path, "", "no header line (expected frequency_hz,H1_1_re,H1_1_im,...)"));
+    }
+    let quantity = match metadata.get("quantity") {
+        Some(q) => Quantity::parse(q).ok_or_else(|| {
+            IoError::format(path, "", format!("unknown quantity '{q}' (acceleration, velocity or displacement)"))
+        })?,
+        None => default_quantity,
+    };
+
+    let mut reader = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .comment(Some(b'#'))
+        .flexible(true)
+        .trim(::csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let mut records = reader.records();
+    let header = loop {
+        match records.next() {
+            Some(Ok(r)) if r.iter().all(str::is_empty) => continue,
+            Some(Ok(r)) => break r,
+            Some(Err(e)) => return Err(fail(header_line, "", format!("cannot read the header: {e}"))),
+            None => return Err(IoError::format(path, "", "no header line")),
+        }
+    };
+    let names: Vec<String> = header.iter().map(str::to_string).collect();
+    let mut frequency_col = None;
+    let mut columns: BTreeMap<(usize, usize, u8), usize> = BTreeMap::new();
+    let (mut q, mut p) = (0, 0);
+    for (c, name) in names.iter().enumerate() {
+        if name.eq_ignore_ascii_case("frequency_hz") {
+            if frequency_col.replace(c).is_some() {
+                return Err(fail(header_line, name, "duplicate column".into()));
+            }
+            continue;
+        }
+        let Some((i, j, part)) = parse_column(name) else {
+            return Err(fail(header_line, name, "unknown column (expected frequency_hz or Hi_j_re / Hi_j_im)".into()));
+        };
+        if columns.insert((i, j, u8::from(part == Part::Im)), c).is_some() {
+            return Err(fail(header_line, name, "duplicate column".into()));
+        }
+        q = q.max(i);
+        p = p.max(j);
+    }
+    let Some(frequency_col) = frequency_col else {
+        return Err(fail(header_line, "frequency_hz", "missing column".into()));
+    };
+    let mut missing = Vec::new();
+    for i in 1..=q {
+        for j in 1..=p {
+            for (part, suffix) in [(0u8, "re"), (1u8, "im")] {
+                if !columns.contains_key(&(i, j, part)) {
+                    missing.push(format!("H{i}_{j}_{suffix}"));
+                }
+            }
+        }
+    }
+    if q == 0 {
+        return Err(fail(header_line, "", "no FRF columns (expected H1_1_re, H1_1_im, ...)".into()));
+    }
+    if !missing.is_empty() {
+        return Err(fail(header_line, "", format!("missing column(s) for a {q}x{p} set: {}", missing.join(", "))));
+    }
+
+    // Rows.
+    let mut frequency_hz = Vec::new();
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    let mut line_of_row = Vec::new();
+    for record in records {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line() as usize);
+            fail(line, "", format!("{e}"))
+        })?;
+        let line = record.position().map_or(0, |p| p.line() as usize);
+        if record.iter().all(str::is_empty) {
+            continue;
+        }
+        if record.len() != names.len() {
+            return Err(fail(line, "", format!("{} cells, the header has {}", record.len(), names.len())));
+        }
+        let mut values = Vec::with_capacity(names.len());
+        for (c, cell) in record.iter().enumerate() {
+            let v: f64 = cell
+                .parse()
+                .map_err(|_| fail(line, &names[c], format!("'{cell}' is not a number")))?;
+            if !v.is_finite() {
+                return Err(fail(line, &names[c], format!("{cell} is not a finite number")));
+            }
+            values.push(v);
+        }
+        frequency_hz.push(values[frequency_col]);
+        rows.push(values);
+        line_of_row.push(line);
+    }
+    if rows.is_empty() {
+        return Err(IoError::format(path, "", "no data rows"));
+    }
+
+    let lines = rows.len();
+    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+    for i in 1..=q {
+        for j in 1..=p {
+            let (re, im) = (columns[&(i, j, 0)], columns[&(i, j, 1)]);
+            for (k, row) in rows.iter().enumerate() {
+                values[((i - 1) * p + (j - 1)) * lines + k] = Complex64::new(row[re], row[im]);
+            }
+        }
+    }
+    let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
+        EraError::NonUniformFrequencies { line, .. } | EraError::NonFinite { line, .. } => {
+            fail(line_of_row[line], "frequency_hz", e.to_string())
+        }
+        EraError::FirstLineNotZero { .. } => fail(line_of_row[0], "frequency_hz", e.to_string()),
+        other => IoError::format(path, "", other.to_string()),
+    })?;
+    Ok(FrfFile { frf, quantity_given: metadata.contains_key("quantity"), metadata })
+}
+
+/// Formats FRFs as CSV text: metadata lines (`quantity` first, then `extra`), the header
+/// with pairs output-fastest (`H1_1, H2_1, …, H1_2, …`), full-precision values.
+pub fn format_frf_csv(frf: &FrfData, extra: &[(&str, &str)]) -> String {
+    let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+    let mut out = String::with_capacity(lines * q * p * 48);
+    let _ = writeln!(out, "# quantity: {}", frf.quantity());
+    for (k, v) in extra {
+        let _ = writeln!(out, "# {k}: {v}");
+    }
+    out.push_str("frequency_hz");
+    for j in 1..=p {
+        for i in 1..=q {
+            let _ = write!(out, ",H{i}_{j}_re,H{i}_{j}_im");
+        }
+    }
+    out.push('\n');
+    for k in 0..lines {
+        let _ = write!(out, "{}", frf.frequency_hz()[k]);
+        for j in 0..p {
+            for i in 0..q {
+                let v = frf.pair(i, j)[k];
+                let _ = write!(out, ",{:e},{:e}", v.re, v.im);
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Writes FRFs as CSV, atomically.
+///
+/// # Errors
+/// [`IoError::Io`] naming the file when it cannot be written.
+pub fn write_frf_csv(path: &Path, frf: &FrfData, extra: &[(&str, &str)]) -> Result<(), IoError> {
+    write_atomic(path, format_frf_csv(frf, extra).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use era::frf::uniform_lines;
+
+    fn sample() -> FrfData {
+        FrfData::from_fn(uniform_lines(4, 0.025), 2, 3, Quantity::Velocity, |i, j, k| {
+            Complex64::new(0.1 * (i + 1) as f64 + k as f64 / 3.0, -(j as f64) * 1e-7 / 7.0)
+        })
+        .unwrap()
+    }
+
+    fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> std::path::PathBuf {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("f.csv");
+        write_frf_csv(&p, &sample(), &[("force_unit", "lbf")]).unwrap();
+        let back = read_frf_csv(&p, Quantity::Acceleration).unwrap();
+        assert_eq!(back.frf, sample());
+        assert!(back.quantity_given);
+        assert_eq!(back.metadata["force_unit"], "lbf");
+    }
+
+    #[test]
+    fn any_column_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(&dir, "a.csv", "H1_1_im,frequency_hz,H1_1_re\n2,0,1\n4,1,3\n");
+        let f = read_frf_csv(&p, Quantity::Displacement).unwrap();
+        assert_eq!(f.frf.pair(0, 0)[1], Complex64::new(3.0, 4.0));
+        assert!(!f.quantity_given);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let cases = [
+            ("missing.csv", "frequency_hz,H1_1_re,H1_1_im,H1_2_re\n0,1,1,1\n", "missing column(s) for a 1x2 set: H1_2_im"),
+            ("text.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,abc,1\n", "line 3, column H1_1_re: 'abc' is not a number"),
+            ("nan.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,NaN\n", "line 2, column H1_1_im: NaN is not a finite number"),
+            ("uneven.csv", "# quantity: velocity\nfrequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,1,1\n2.5,1,1\n", "line 5, column frequency_hz: frequencies are not uniformly spaced"),
+            ("start.csv", "frequency_hz,H1_1_re,H1_1_im\n1,1,1\n2,1,1\n", "line 2, column frequency_hz: frequencies must start at 0 Hz"),
+            ("short.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1\n", "line 2: 2 cells, the header has 3"),
+            ("nofreq.csv", "H1_1_re,H1_1_im\n0,1\n", "column frequency_hz: missing column"),
+            ("quantity.csv", "# quantity: jerk\nfrequency_hz,H1_1_re,H1_1_im\n0,1,1\n", "unknown quantity 'jerk'"),
+        ];
+        for (name, text, expected) in cases {
+            let p = write(&dir, name, text);
+            let err = read_frf_csv(&p, Quantity::Velocity).unwrap_err().to_string();
+            assert!(err.contains(name) && err.contains(expected), "{name}: {err}");
+        }
+    }
+}

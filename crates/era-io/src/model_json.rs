@@ -1,0 +1,353 @@
+//! `model.json` and `fit.json` (DESIGN.md §4).
+//!
+//! `model.json`: `outputs`, `inputs`, `states`, `time_domain` (`"discrete"` or
+//! `"continuous"`), `sample_time_s` (null when continuous), `a`, `b`, `c`, `d` (row-major
+//! nested arrays), `singular_values` (all of them), `modes` (one per complex pair,
+//! positive imaginary part, by frequency: `frequency_hz`, `damping_ratio`,
+//! `eigenvalue_re`, `eigenvalue_im`, plus `shape_re/_im` = `Cφ` and
+//! `participation_re/_im` = `ψB`), `real_poles`, `parameters` (every flag), `hankel`
+//! (size and path), `warnings`, and `timings_s` when timings were asked for.
+
+use crate::atomic::write_atomic;
+use crate::IoError;
+use era::identify::{Identification, StageTimings};
+use era::modal::{ModalParameters, Mode};
+use era::response::FitReport;
+use era::{StateSpace, TimeDomain};
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One mode as stored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModeJson {
+    /// Hz.
+    pub frequency_hz: f64,
+    /// Fraction.
+    pub damping_ratio: f64,
+    /// Real part of the eigenvalue of `A`.
+    pub eigenvalue_re: f64,
+    /// Imaginary part of the eigenvalue of `A` (positive).
+    pub eigenvalue_im: f64,
+    /// `Re(Cφ)`, largest entry scaled to 1.
+    #[serde(default)]
+    pub shape_re: Vec<f64>,
+    /// `Im(Cφ)`.
+    #[serde(default)]
+    pub shape_im: Vec<f64>,
+    /// `Re(ψB)`.
+    #[serde(default)]
+    pub participation_re: Vec<f64>,
+    /// `Im(ψB)`.
+    #[serde(default)]
+    pub participation_im: Vec<f64>,
+}
+
+impl ModeJson {
+    /// From a library mode.
+    pub fn from_mode(m: &Mode) -> Self {
+        ModeJson {
+            frequency_hz: m.frequency_hz,
+            damping_ratio: m.damping_ratio,
+            eigenvalue_re: m.eigenvalue.re,
+            eigenvalue_im: m.eigenvalue.im,
+            shape_re: m.shape.iter().map(|c| c.re).collect(),
+            shape_im: m.shape.iter().map(|c| c.im).collect(),
+            participation_re: m.participation.iter().map(|c| c.re).collect(),
+            participation_im: m.participation.iter().map(|c| c.im).collect(),
+        }
+    }
+}
+
+/// A real pole as stored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RealPoleJson {
+    /// Eigenvalue of `A`.
+    pub eigenvalue: f64,
+    /// `|s|/2π`, Hz.
+    pub frequency_hz: f64,
+}
+
+/// Size and path of the Hankel step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HankelJson {
+    /// Rows of `H0`.
+    pub rows: usize,
+    /// Columns of `H0`.
+    pub cols: usize,
+    /// `"dense"` (thin SVD of the formed Hankel).
+    pub path: String,
+}
+
+/// `model.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelJson {
+    /// `q`.
+    pub outputs: usize,
+    /// `p`.
+    pub inputs: usize,
+    /// `n`.
+    pub states: usize,
+    /// `"discrete"` or `"continuous"`.
+    pub time_domain: String,
+    /// Sample time, s; null for a continuous model.
+    pub sample_time_s: Option<f64>,
+    /// n×n, row-major.
+    pub a: Vec<Vec<f64>>,
+    /// n×p.
+    pub b: Vec<Vec<f64>>,
+    /// q×n.
+    pub c: Vec<Vec<f64>>,
+    /// q×p.
+    pub d: Vec<Vec<f64>>,
+    /// All singular values of `H0`, largest first.
+    pub singular_values: Vec<f64>,
+    /// Modes by frequency.
+    pub modes: Vec<ModeJson>,
+    /// Real poles.
+    pub real_poles: Vec<RealPoleJson>,
+    /// Every parameter of the run, by flag name.
+    pub parameters: BTreeMap<String, serde_json::Value>,
+    /// Hankel size and path.
+    pub hankel: HankelJson,
+    /// Warnings of the run.
+    #[serde(default)]
+    pub warnings: Vec<String>,
+    /// Stage wall times, s, when asked for.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub timings_s: Option<BTreeMap<String, f64>>,
+}
+
+/// Row-major nested vectors of a matrix.
+pub fn rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect()).collect()
+}
+
+fn matrix(name: &str, rows: &[Vec<f64>], nrows: usize, ncols: usize) -> Result<Mat<f64>, String> {
+    if rows.len() != nrows || rows.iter().any(|r| r.len() != ncols) {
+        return Err(format!("matrix {name} must be {nrows}x{ncols}"));
+    }
+    Ok(Mat::from_fn(nrows, ncols, |i, j| rows[i][j]))
+}
+
+/// Modes and real poles as stored.
+pub fn modal_json(modal: &ModalParameters) -> (Vec<ModeJson>, Vec<RealPoleJson>) {
+    (
+        modal.modes.iter().map(ModeJson::from_mode).collect(),
+        modal
+            .real_poles
+            .iter()
+            .map(|r| RealPoleJson { eigenvalue: r.eigenvalue, frequency_hz: r.frequency_hz })
+            .collect(),
+    )
+}
+
+/// Stage timings by name (`read` and `write` are added by the caller).
+pub fn timings_map(t: &StageTimings) -> BTreeMap<String, f64> {
+    [
+        ("preprocess", t.preprocess),
+        ("markov", t.markov),
+        ("hankel_svd", t.hankel_svd),
+        ("realize", t.realize),
+        ("modes", t.modes),
+        ("fit", t.fit),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+impl ModelJson {
+    /// From an identification and the parameters that produced it.
+    pub fn from_identification(
+        found: &Identification,
+        parameters: BTreeMap<String, serde_json::Value>,
+        timings_s: Option<BTreeMap<String, f64>>,
+    ) -> Self {
+        let m = &found.model;
+        let (modes, real_poles) = modal_json(&found.modal);
+        ModelJson {
+            outputs: m.outputs(),
+            inputs: m.inputs(),
+            states: m.states(),
+            time_domain: match m.domain {
+                TimeDomain::Discrete { .. } => "discrete".into(),
+                TimeDomain::Continuous => "continuous".into(),
+            },
+            sample_time_s: m.sample_time_s(),
+            a: rows(&m.a),
+            b: rows(&m.b),
+            c: rows(&m.c),
+            d: rows(&m.d),
+            singular_values: found.realization.singular_values.clone(),
+            modes,
+            real_poles,
+            parameters,
+            hankel: HankelJson {
+                rows: found.realization.hankel_size.0,
+                cols: found.realization.hankel_size.1,
+                path: "dense".into(),
+            },
+            warnings: found.realization.warnings.iter().map(ToString::to_string).collect(),
+            timings_s,
+        }
+    }
+
+    /// The state-space model stored.
+    ///
+    /// # Errors
+    /// A message when shapes disagree or the time domain is unknown.
+    pub fn state_space(&self) -> Result<StateSpace, String> {
+        let (n, p, q) = (self.states, self.inputs, self.outputs);
+        let domain = match (self.time_domain.as_str(), self.sample_time_s) {
+            ("discrete", Some(ts)) if ts > 0.0 => TimeDomain::Discrete { sample_time_s: ts },
+            ("discrete", _) => return Err("a discrete model needs a positive sample_time_s".into()),
+            ("continuous", _) => TimeDomain::Continuous,
+            (other, _) => return Err(format!("unknown time_domain '{other}'")),
+        };
+        Ok(StateSpace::new(
+            matrix("a", &self.a, n, n)?,
+            matrix("b", &self.b, n, p)?,
+            matrix("c", &self.c, q, n)?,
+            matrix("d", &self.d, q, p)?,
+            domain,
+        ))
+    }
+
+    /// Reads `model.json`.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the file and the JSON line for unreadable or malformed files.
+    pub fn read(path: &Path) -> Result<Self, IoError> {
+        let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+        let model: ModelJson = serde_json::from_str(&text)
+            .map_err(|e| IoError::format(path, format!("line {}: ", e.line()), e.to_string()))?;
+        model.state_space().map_err(|e| IoError::format(path, "", e))?;
+        Ok(model)
+    }
+
+    /// Writes `model.json` atomically.
+    ///
+    /// # Errors
+    /// [`IoError::Io`] naming the file.
+    pub fn write(&self, path: &Path) -> Result<(), IoError> {
+        write_json(path, self)
+    }
+}
+
+/// One pair in `fit.json` (1-based indices).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PairFitJson {
+    /// 1-based output.
+    pub output: usize,
+    /// 1-based input.
+    pub input: usize,
+    /// Collocated pair.
+    pub collocated: bool,
+    /// `‖G_meas − G_model‖₂ / ‖G_meas‖₂`.
+    pub relative_error: Option<f64>,
+    /// RMS log-magnitude error, dB.
+    pub rms_log_magnitude_db: Option<f64>,
+}
+
+/// `fit.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitJson {
+    /// First line of the band (0-based).
+    pub first_line: usize,
+    /// Lines compared.
+    pub lines: usize,
+    /// Per pair.
+    pub pairs: Vec<PairFitJson>,
+    /// Mean over collocated pairs.
+    pub collocated_mean_relative_error: Option<f64>,
+    /// Mean over non-collocated pairs.
+    pub noncollocated_mean_relative_error: Option<f64>,
+    /// Mean RMS log-magnitude error over collocated pairs, dB.
+    pub collocated_mean_db: Option<f64>,
+    /// Mean RMS log-magnitude error over non-collocated pairs, dB.
+    pub noncollocated_mean_db: Option<f64>,
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+impl FitJson {
+    /// From the library's report.
+    pub fn from_report(r: &FitReport) -> Self {
+        FitJson {
+            first_line: r.first_line,
+            lines: r.lines,
+            pairs: r
+                .pairs
+                .iter()
+                .map(|p| PairFitJson {
+                    output: p.output + 1,
+                    input: p.input + 1,
+                    collocated: p.collocated,
+                    relative_error: finite(p.relative_error),
+                    rms_log_magnitude_db: finite(p.rms_log_magnitude_db),
+                })
+                .collect(),
+            collocated_mean_relative_error: r.collocated_mean_relative_error,
+            noncollocated_mean_relative_error: r.noncollocated_mean_relative_error,
+            collocated_mean_db: r.collocated_mean_db,
+            noncollocated_mean_db: r.noncollocated_mean_db,
+        }
+    }
+
+    /// Writes `fit.json` atomically.
+    ///
+    /// # Errors
+    /// [`IoError::Io`] naming the file.
+    pub fn write(&self, path: &Path) -> Result<(), IoError> {
+        write_json(path, self)
+    }
+}
+
+/// Pretty JSON, atomically.
+///
+/// # Errors
+/// [`IoError::Io`] naming the file.
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), IoError> {
+    let mut text = serde_json::to_string_pretty(value)
+        .map_err(|e| IoError::format(path, "", format!("cannot serialise: {e}")))?;
+    text.push('\n');
+    write_atomic(path, text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use era::identify::{identify, EraOptions};
+    use era::sim::truth_model_frf;
+
+    #[test]
+    fn model_json_round_trips_the_state_space() {
+        let found = identify(&truth_model_frf(None).unwrap(), &EraOptions::thesis_truth_model()).unwrap();
+        let mut params = BTreeMap::new();
+        params.insert("states".to_string(), serde_json::json!(8));
+        let json = ModelJson::from_identification(&found, params, None);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.json");
+        json.write(&path).unwrap();
+        let back = ModelJson::read(&path).unwrap();
+        assert_eq!(back, json);
+        assert_eq!(back.state_space().unwrap(), found.model);
+        assert_eq!(back.modes.len(), 4);
+        assert_eq!(back.singular_values.len(), 45);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("timings_s"));
+    }
+
+    #[test]
+    fn malformed_model_json_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.json");
+        std::fs::write(&path, "{\"outputs\": 1,\n \"inputs\": }").unwrap();
+        let err = ModelJson::read(&path).unwrap_err().to_string();
+        assert!(err.contains("bad.json") && err.contains("line 2"), "{err}");
+    }
+}
