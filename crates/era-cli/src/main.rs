@@ -1,1 +1,65 @@
-fn main() {}
+//! The `era` command line: arguments → validated options → library calls → output.
+//!
+//! Exit codes: 0 success, 2 bad input or usage (the message names the file, line,
+//! flag or value), 1 internal failure. No panic reaches the user: one is caught and
+//! reported as an internal error.
+
+mod args;
+mod demo;
+mod identify;
+mod report;
+mod simulate;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+/// A problem with what the user asked for (a flag, a value, a path): exit code 2.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// Shorthand for returning a [`UsageError`].
+pub fn usage<T>(message: impl Into<String>) -> anyhow::Result<T> {
+    Err(UsageError(message.into()).into())
+}
+
+/// 2 when any cause is the user's (bad data, bad flag, unreadable or unwritable file),
+/// 1 otherwise.
+fn exit_code(err: &anyhow::Error) -> u8 {
+    for cause in err.chain() {
+        if let Some(e) = cause.downcast_ref::<era::EraError>() {
+            return if e.is_input_error() { 2 } else { 1 };
+        }
+        if cause.downcast_ref::<era_io::IoError>().is_some() || cause.downcast_ref::<UsageError>().is_some() {
+            return 2;
+        }
+    }
+    1
+}
+
+fn main() -> ExitCode {
+    let cli = args::Cli::parse();
+    std::panic::set_hook(Box::new(|info| {
+        eprintln!("era: internal error: {info}");
+    }));
+    let result = std::panic::catch_unwind(|| match &cli.command {
+        args::Command::Demo(a) => demo::run(a),
+        args::Command::Identify(a) => identify::run(a),
+        args::Command::Simulate(a) => simulate::run(a),
+    });
+    match result {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(err)) => {
+            eprintln!("era: error: {err:#}");
+            ExitCode::from(exit_code(&err))
+        }
+        Err(_) => ExitCode::from(1),
+    }
+}

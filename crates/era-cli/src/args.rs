@@ -1,0 +1,193 @@
+//! Command-line arguments (clap). Flags follow DESIGN.md §1's table.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// era — identify state-space models and modal parameters of lightly damped structures
+/// from frequency response functions with the Eigensystem Realization Algorithm.
+#[derive(Debug, Parser)]
+#[command(name = "era", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// The thesis's truth-model validation (Table 5.2): truth, ERA without noise, ERA with
+    /// noise, side by side.
+    Demo(DemoArgs),
+    /// Identify a model from an FRF file (DESIGN.md §1).
+    Identify(IdentifyArgs),
+    /// Write synthetic FRFs: the truth model or a seeded modal structure.
+    Simulate(SimulateArgs),
+}
+
+/// Flags every verb has.
+#[derive(Debug, Args, Clone)]
+pub struct CommonArgs {
+    /// Print machine-readable JSON on stdout (human text then goes to stderr).
+    #[arg(long)]
+    pub json: bool,
+    /// Print the wall time of each stage (also in the JSON, under timings_s).
+    #[arg(long)]
+    pub timings: bool,
+    /// Print nothing but errors (and the JSON with --json).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Seed of the noise generator (MINSTD; the Octave peer's run_truth(seed) draws the
+    /// same noise).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Noise RMS as a fraction of each FRF's RMS (0.15 = the thesis's 15 %).
+    #[arg(long, default_value_t = 0.15)]
+    pub noise: f64,
+    /// Folder for the FRFs (CSV), both models and fits (model.json, fit.json).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TimeDomainArg {
+    Discrete,
+    Continuous,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DirectTermArg {
+    /// D = 0, as in the thesis.
+    Zero,
+    /// D = Y_0, the time-zero Markov block.
+    Markov0,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum QuantityArg {
+    Acceleration,
+    Velocity,
+    Displacement,
+}
+
+impl From<QuantityArg> for era::Quantity {
+    fn from(q: QuantityArg) -> Self {
+        match q {
+            QuantityArg::Acceleration => era::Quantity::Acceleration,
+            QuantityArg::Velocity => era::Quantity::Velocity,
+            QuantityArg::Displacement => era::Quantity::Displacement,
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct IdentifyArgs {
+    /// FRF file (CSV, DESIGN.md §4).
+    pub file: PathBuf,
+    /// Model order: first-order states (thesis ns). Two per mode.
+    #[arg(long)]
+    pub states: usize,
+    /// M = states × hankel-factor Markov samples go into the Hankel matrix (thesis lh).
+    #[arg(long, default_value_t = 5)]
+    pub hankel_factor: usize,
+    /// Integrations applied to the FRFs (thesis ni): 1 turns acceleration into velocity.
+    #[arg(long, default_value_t = 0)]
+    pub integrations: usize,
+    /// Zero-phase Butterworth low-pass on the impulse responses, cut-off in Hz (thesis
+    /// Hzbreak); off when absent.
+    #[arg(long, value_name = "HZ")]
+    pub lowpass_hz: Option<f64>,
+    /// Order of that filter (thesis ford).
+    #[arg(long, default_value_t = 4, requires = "lowpass_hz")]
+    pub lowpass_order: usize,
+    /// Leading FRF lines set to zero (thesis nz).
+    #[arg(long, default_value_t = 0)]
+    pub zero_lines: usize,
+    /// Pad with zero lines to pad-to + 1 lines; 0 = no padding (thesis ndpts).
+    #[arg(long, default_value_t = 0)]
+    pub pad_to: usize,
+    /// Model returned (thesis cord).
+    #[arg(long, value_enum, default_value_t = TimeDomainArg::Discrete)]
+    pub time_domain: TimeDomainArg,
+    /// The model's D matrix.
+    #[arg(long, value_enum, default_value_t = DirectTermArg::Zero)]
+    pub direct_term: DirectTermArg,
+    /// Quantity of the FRFs when the file does not say (a "# quantity:" line).
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Folder for model.json and fit.json (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    #[command(subcommand)]
+    pub model: SimulateModel,
+}
+
+/// Flags of both simulators.
+#[derive(Debug, Args)]
+pub struct SimulateCommon {
+    /// FRF CSV to write.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Noise RMS as a fraction of each FRF's RMS (0 = none, 0.15 = 15 %).
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Seed of the noise (and of the modal structure).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum SimulateModel {
+    /// The thesis's 4-mass truth model: 3×3 displacement FRFs, 1025 lines 0…12.8 kHz.
+    TruthModel(SimulateCommon),
+    /// A seeded lightly damped structure with real normal modes (DESIGN.md §3).
+    Modal(ModalArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ModalArgs {
+    /// Outputs (sensors).
+    #[arg(long, default_value_t = 8)]
+    pub outputs: usize,
+    /// Inputs (actuators).
+    #[arg(long, default_value_t = 8)]
+    pub inputs: usize,
+    /// Number of modes.
+    #[arg(long, default_value_t = 40)]
+    pub modes: usize,
+    /// Lowest natural frequency, Hz.
+    #[arg(long, default_value_t = 0.5)]
+    pub fmin: f64,
+    /// Highest natural frequency, Hz.
+    #[arg(long, default_value_t = 14.0)]
+    pub fmax: f64,
+    /// Damping ratio range MIN..MAX, fractions (0.005..0.02 = 0.5 to 2 %).
+    #[arg(long, default_value = "0.005..0.02")]
+    pub damping: String,
+    /// Number of lines, from 0 Hz.
+    #[arg(long, default_value_t = 801)]
+    pub lines: usize,
+    /// Line spacing, Hz.
+    #[arg(long, default_value_t = 0.025)]
+    pub df: f64,
+    /// What the FRFs measure per unit force.
+    #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
+    pub quantity: QuantityArg,
+    /// Input shapes equal output shapes (square, reciprocal set like the DTA's).
+    #[arg(long)]
+    pub collocated: bool,
+    #[command(flatten)]
+    pub sim: SimulateCommon,
+}

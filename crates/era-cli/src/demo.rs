@@ -1,0 +1,140 @@
+//! `era demo`: the embedded default. The thesis's truth model (Table 5.2) identified
+//! with the thesis settings, without and with noise, beside the exact truth.
+
+use crate::args::DemoArgs;
+use crate::identify::prepare_out_dir;
+use crate::report::{parameter_echo, parameters, print_json, timings_table, Human};
+use crate::usage;
+use anyhow::Context;
+use era::identify::{identify, EraOptions, Identification};
+use era::modal::{modal_parameters, Mode};
+use era::sim::{truth_model, truth_model_frf};
+use era_io::csv::write_frf_csv;
+use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson};
+use serde_json::json;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// Table 5.2 as printed in the thesis: ERA fit with noise (f Hz, ζ %), for reference.
+const THESIS_ERA_NOISY: [(f64, f64); 4] = [(1747.70, 4.98), (5031.66, 4.28), (7708.31, 5.31), (9457.83, 6.03)];
+
+fn max_errors(truth: &[Mode], found: &[Mode]) -> serde_json::Value {
+    if truth.len() != found.len() {
+        return json!({"modes_found": found.len(), "modes_expected": truth.len()});
+    }
+    let df = truth.iter().zip(found).map(|(t, f)| (t.frequency_hz - f.frequency_hz).abs()).fold(0.0, f64::max);
+    let dz = truth.iter().zip(found).map(|(t, f)| (t.damping_ratio - f.damping_ratio).abs()).fold(0.0, f64::max);
+    json!({"max_frequency_error_hz": df, "max_damping_ratio_error": dz})
+}
+
+fn cell(mode: Option<&Mode>) -> String {
+    mode.map_or(format!("{:>10} {:>7}", "-", "-"), |m| format!("{:>10.2} {:>7.2}", m.frequency_hz, 100.0 * m.damping_ratio))
+}
+
+pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    if !(a.noise.is_finite() && a.noise >= 0.0) {
+        return usage(format!("--noise {}: must be a fraction >= 0 (0.15 for 15 %)", a.noise));
+    }
+    if let Some(dir) = &a.out {
+        prepare_out_dir(dir)?;
+    }
+    let options = EraOptions::thesis_truth_model();
+    human.print("era demo: the thesis's truth model (Woods 1994, section 4.2, Table 5.2)\n");
+    human.print("  4 masses, 3 force inputs, 3 displacement outputs; ZOH at 25 600 Hz, 1025 lines 0..12 800 Hz\n");
+    human.print(&parameter_echo(&options));
+
+    let truth = modal_parameters(&truth_model())?.modes;
+    let clean_frf = truth_model_frf(None)?;
+    let noisy_frf = truth_model_frf(Some((a.noise, a.seed)))?;
+    let run_one = |frf: &era::FrfData, label: &str| -> anyhow::Result<Identification> {
+        identify(frf, &options).with_context(|| format!("identifying the truth model ({label})"))
+    };
+    let clean = run_one(&clean_frf, "no noise")?;
+    let noisy = run_one(&noisy_frf, "noisy")?;
+
+    let pct = 100.0 * a.noise;
+    let mut t = String::new();
+    let _ = writeln!(t, "\nTable 5.2: f in Hz, zeta in %");
+    let _ = writeln!(
+        t,
+        "{:>4} | {:^18} | {:^18} | {:^18} | {:^16}",
+        "mode",
+        "truth",
+        "ERA, no noise",
+        format!("ERA, {pct:.0} % noise"),
+        "noisy - truth"
+    );
+    let _ = writeln!(t, "{:>4} | {:>10} {:>7} | {:>10} {:>7} | {:>10} {:>7} | {:>8} {:>7}", "", "f", "zeta", "f", "zeta", "f", "zeta", "df", "dzeta");
+    for (k, m) in truth.iter().enumerate() {
+        let n = noisy.modal.modes.get(k);
+        let diff = n.map_or(String::from("-"), |n| {
+            format!("{:>8.2} {:>7.2}", n.frequency_hz - m.frequency_hz, 100.0 * (n.damping_ratio - m.damping_ratio))
+        });
+        let _ = writeln!(t, "{:>4} | {} | {} | {} | {}", k + 1, cell(Some(m)), cell(clean.modal.modes.get(k)), cell(n), diff);
+    }
+    let err = |found: &Identification| max_errors(&truth, &found.modal.modes);
+    let (e0, e1) = (err(&clean), err(&noisy));
+    let show = |e: &serde_json::Value| match (e["max_frequency_error_hz"].as_f64(), e["max_damping_ratio_error"].as_f64()) {
+        (Some(f), Some(z)) => format!("max |df| = {f:.3e} Hz, max |dzeta| = {z:.3e}"),
+        _ => format!("{e}"),
+    };
+    let _ = writeln!(t, "\nno noise: {}", show(&e0));
+    let _ = writeln!(t, "{pct:.0} % noise (seed {}): {}", a.seed, show(&e1));
+    let _ = write!(t, "thesis (1994), ERA with 15 % noise:");
+    for (f, z) in THESIS_ERA_NOISY {
+        let _ = write!(t, "  {f:.2} / {z:.2}");
+    }
+    let _ = writeln!(t, "\n(the noisy column depends on the noise draw; scripts/octave_peer.sh compare SEED runs the thesis routines on the same draw)");
+    human.print(&t);
+
+    let mut timing_json = serde_json::Map::new();
+    if a.common.timings {
+        for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
+            let map = timings_map(&found.timings);
+            human.print(&format!("\n{label}:"));
+            human.print(&timings_table(&map));
+            timing_json.insert(label.into(), json!(map));
+        }
+    }
+
+    if let Some(dir) = &a.out {
+        let clock = Instant::now();
+        let seed = a.seed.to_string();
+        let noise = a.noise.to_string();
+        write_frf_csv(&dir.join("truth_frf.csv"), &clean_frf, &[("source", "era demo"), ("noise_fraction", "0")])?;
+        write_frf_csv(
+            &dir.join("truth_frf_noisy.csv"),
+            &noisy_frf,
+            &[("source", "era demo"), ("noise_fraction", &noise), ("seed", &seed)],
+        )?;
+        for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
+            let sub = dir.join(label);
+            prepare_out_dir(&sub)?;
+            ModelJson::from_identification(found, parameters(&options), None).write(&sub.join("model.json"))?;
+            FitJson::from_report(&found.fit).write(&sub.join("fit.json"))?;
+        }
+        human.print(&format!(
+            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, {0}/no_noise/{{model,fit}}.json, {0}/noisy/{{model,fit}}.json ({1:.3} s)\n",
+            dir.display(),
+            clock.elapsed().as_secs_f64()
+        ));
+    }
+
+    if a.common.json {
+        let modes = |v: &[Mode]| v.iter().map(ModeJson::from_mode).collect::<Vec<_>>();
+        let mut out = json!({
+            "truth": modes(&truth),
+            "no_noise": modes(&clean.modal.modes),
+            "noisy": modes(&noisy.modal.modes),
+            "noise": {"fraction": a.noise, "seed": a.seed},
+            "errors": {"no_noise": e0, "noisy": e1},
+            "parameters": parameters(&options),
+        });
+        if a.common.timings {
+            out["timings_s"] = serde_json::Value::Object(timing_json);
+        }
+        print_json(&out)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,107 @@
+//! `era identify FILE`: the pipeline of DESIGN.md §1 on an FRF file.
+
+use crate::args::{DirectTermArg, IdentifyArgs, TimeDomainArg};
+use crate::report::{identification_summary, parameter_echo, parameters, print_json, timings_table, Human};
+use crate::usage;
+use anyhow::Context;
+use era::identify::{identify, EraOptions, ModelDomain};
+use era::realize::DirectTerm;
+use era::Quantity;
+use era_io::csv::read_frf_csv;
+use era_io::model_json::{timings_map, FitJson, ModelJson};
+use std::path::Path;
+use std::time::Instant;
+
+/// Options from flags, with the checks clap cannot do.
+pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
+    if a.states == 0 {
+        return usage("--states 0: the model needs at least one state");
+    }
+    if a.hankel_factor == 0 {
+        return usage("--hankel-factor 0: must be at least 1");
+    }
+    let lowpass = match a.lowpass_hz {
+        Some(hz) if !(hz.is_finite() && hz > 0.0) => return usage(format!("--lowpass-hz {hz}: must be a positive frequency")),
+        Some(hz) => Some((a.lowpass_order, hz)),
+        None => None,
+    };
+    Ok(EraOptions {
+        states: a.states,
+        hankel_factor: a.hankel_factor,
+        integrations: a.integrations,
+        lowpass,
+        zero_lines: a.zero_lines,
+        pad_to: a.pad_to,
+        domain: match a.time_domain {
+            TimeDomainArg::Discrete => ModelDomain::Discrete,
+            TimeDomainArg::Continuous => ModelDomain::Continuous,
+        },
+        direct_term: match a.direct_term {
+            DirectTermArg::Zero => DirectTerm::Zero,
+            DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
+        },
+    })
+}
+
+/// Creates `--out DIR` and checks that it takes files, before any long work.
+pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::UsageError(format!("--out {}: cannot create the folder: {e}", dir.display())))?;
+    let probe = dir.join(format!(".era-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| crate::UsageError(format!("--out {}: cannot write there: {e}", dir.display())))?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    let opts = options(a)?;
+    if let Some(dir) = &a.out {
+        prepare_out_dir(dir)?;
+    }
+    let clock = Instant::now();
+    let default_quantity = a.quantity.map(Quantity::from).unwrap_or(Quantity::Acceleration);
+    let file = read_frf_csv(&a.file, default_quantity).with_context(|| format!("reading {}", a.file.display()))?;
+    let read_s = clock.elapsed().as_secs_f64();
+    let mut frf = file.frf;
+    if let Some(q) = a.quantity {
+        frf = frf.with_quantity(q.into());
+    }
+    let last = frf.frequency_hz()[frf.lines() - 1];
+    human.print(&format!(
+        "era identify {}\n  {} outputs x {} inputs, {} lines, 0 .. {last} Hz at {} Hz, {}{}\n",
+        a.file.display(),
+        frf.outputs(),
+        frf.inputs(),
+        frf.lines(),
+        frf.spacing_hz(),
+        frf.quantity(),
+        if file.quantity_given || a.quantity.is_some() { "" } else { " (assumed: the file has no '# quantity:' line; set --quantity)" },
+    ));
+    human.print(&parameter_echo(&opts));
+
+    let found = identify(&frf, &opts).with_context(|| format!("identifying {}", a.file.display()))?;
+    human.print(&identification_summary(&found, opts.states));
+
+    let mut timings = timings_map(&found.timings);
+    timings.insert("read".into(), read_s);
+    let mut model = ModelJson::from_identification(&found, parameters(&opts), None);
+    let fit = FitJson::from_report(&found.fit);
+    if let Some(dir) = &a.out {
+        let clock = Instant::now();
+        model.write(&dir.join("model.json"))?;
+        fit.write(&dir.join("fit.json"))?;
+        timings.insert("write".into(), clock.elapsed().as_secs_f64());
+        human.print(&format!("\nwrote {} and {}\n", dir.join("model.json").display(), dir.join("fit.json").display()));
+    }
+    if a.common.timings {
+        human.print(&timings_table(&timings));
+        model.timings_s = Some(timings);
+        if let Some(dir) = &a.out {
+            model.write(&dir.join("model.json"))?;
+        }
+    }
+    if a.common.json {
+        print_json(&model)?;
+    }
+    Ok(())
+}

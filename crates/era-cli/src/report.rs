@@ -1,0 +1,148 @@
+//! Human-readable output: the parameter echo (like the thesis's `parm.m`), modal and fit
+//! tables, timings. Human text goes to stdout, or to stderr when `--json` owns stdout;
+//! `--quiet` silences it.
+
+use crate::args::CommonArgs;
+use era::identify::{EraOptions, Identification, ModelDomain};
+use era::realize::DirectTerm;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Where human text goes.
+pub struct Human {
+    to_stderr: bool,
+    quiet: bool,
+}
+
+impl Human {
+    pub fn new(common: &CommonArgs) -> Self {
+        Human { to_stderr: common.json, quiet: common.quiet }
+    }
+    pub fn print(&self, text: &str) {
+        if self.quiet {
+            return;
+        }
+        if self.to_stderr {
+            eprint!("{text}");
+        } else {
+            print!("{text}");
+        }
+    }
+}
+
+/// Prints JSON on stdout.
+pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}
+
+/// Every parameter by its JSON name (DESIGN.md §1 table).
+pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
+    use serde_json::json;
+    let mut m = BTreeMap::new();
+    m.insert("states".into(), json!(o.states));
+    m.insert("hankel_factor".into(), json!(o.hankel_factor));
+    m.insert("integrations".into(), json!(o.integrations));
+    m.insert("lowpass_order".into(), json!(o.lowpass.map(|l| l.0)));
+    m.insert("lowpass_hz".into(), json!(o.lowpass.map(|l| l.1)));
+    m.insert("zero_lines".into(), json!(o.zero_lines));
+    m.insert("pad_to".into(), json!(o.pad_to));
+    m.insert(
+        "time_domain".into(),
+        json!(match o.domain {
+            ModelDomain::Discrete => "discrete",
+            ModelDomain::Continuous => "continuous",
+        }),
+    );
+    m.insert(
+        "direct_term".into(),
+        json!(match o.direct_term {
+            DirectTerm::Zero => "zero",
+            DirectTerm::FirstMarkov => "markov0",
+        }),
+    );
+    m
+}
+
+/// The parameter echo printed before a run.
+pub fn parameter_echo(o: &EraOptions) -> String {
+    let markov = o.states * o.hankel_factor / 4 * 4;
+    let lowpass = match o.lowpass {
+        Some((order, hz)) => format!("order {order}, {hz} Hz (zero phase)"),
+        None => "off".into(),
+    };
+    let mut s = String::new();
+    let _ = writeln!(s, "ERA parameters");
+    let _ = writeln!(s, "  states (ns)             {}", o.states);
+    let _ = writeln!(s, "  hankel factor (lh)      {}  (M = {markov} Markov samples)", o.hankel_factor);
+    let _ = writeln!(s, "  integrations (ni)       {}", o.integrations);
+    let _ = writeln!(s, "  low-pass (ford, Hz)     {lowpass}");
+    let _ = writeln!(s, "  zero lines (nz)         {}", o.zero_lines);
+    let pad = if o.pad_to == 0 { "none".to_string() } else { format!("{} lines", o.pad_to + 1) };
+    let _ = writeln!(s, "  pad to (ndpts)          {} ({pad})", o.pad_to);
+    let domain = match o.domain {
+        ModelDomain::Discrete => "discrete",
+        ModelDomain::Continuous => "continuous",
+    };
+    let _ = writeln!(s, "  time domain (cord)      {domain}");
+    let d = match o.direct_term {
+        DirectTerm::Zero => "zero",
+        DirectTerm::FirstMarkov => "Y0",
+    };
+    let _ = writeln!(s, "  direct term D           {d}");
+    s
+}
+
+/// Singular values, modes, real poles, fit and warnings of one identification.
+pub fn identification_summary(found: &Identification, states: usize) -> String {
+    let mut s = String::new();
+    let sv = &found.realization.singular_values;
+    let (rows, cols) = found.realization.hankel_size;
+    let _ = writeln!(s, "\nHankel H0 {rows} x {cols}, sample time {:.6e} s", found.sample_time_s);
+    let _ = write!(s, "singular values: s1 = {:.4e}, s{states} = {:.4e}", sv[0], sv[states - 1]);
+    if let Some(next) = sv.get(states) {
+        let _ = write!(s, ", s{} = {:.4e} (s{}/s{states} = {:.2e})", states + 1, next, states + 1, next / sv[states - 1]);
+    }
+    let _ = writeln!(s);
+    let modes = &found.modal.modes;
+    let _ = writeln!(s, "\n{} modes{}", modes.len(), if found.modal.real_poles.is_empty() { String::new() } else { format!(", {} real poles", found.modal.real_poles.len()) });
+    let _ = writeln!(s, "{:>5} {:>14} {:>10}", "mode", "f (Hz)", "zeta (%)");
+    for (k, m) in modes.iter().enumerate() {
+        let _ = writeln!(s, "{:>5} {:>14.4} {:>10.4}", k + 1, m.frequency_hz, 100.0 * m.damping_ratio);
+    }
+    for r in &found.modal.real_poles {
+        let _ = writeln!(s, "  real pole {:+.6e} ({:.4} Hz)", r.eigenvalue, r.frequency_hz);
+    }
+    let fit = &found.fit;
+    let fmt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3e}"));
+    let fdb = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+    let _ = writeln!(
+        s,
+        "\nfit over {} lines from line {} ({} FRFs): relative error collocated {}, non-collocated {}; RMS log-magnitude error collocated {} dB, non-collocated {} dB",
+        fit.lines,
+        fit.first_line,
+        found.processed.quantity(),
+        fmt(fit.collocated_mean_relative_error),
+        fmt(fit.noncollocated_mean_relative_error),
+        fdb(fit.collocated_mean_db),
+        fdb(fit.noncollocated_mean_db),
+    );
+    for w in &found.realization.warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    s
+}
+
+/// Timing table.
+pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
+    let order = ["read", "preprocess", "markov", "hankel_svd", "realize", "modes", "fit", "write"];
+    let mut s = String::from("\ntimings (s)\n");
+    for key in order {
+        if let Some(v) = t.get(key) {
+            let _ = writeln!(s, "  {key:<11} {v:.6}");
+        }
+    }
+    let total: f64 = t.values().sum();
+    let _ = writeln!(s, "  {:<11} {total:.6}", "total");
+    s
+}
