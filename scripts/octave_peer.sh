@@ -3,7 +3,7 @@
 # on the truth model, and either stores its results as golden test data or puts them
 # beside `era demo` for the same noise seed.
 #
-#   scripts/octave_peer.sh golden [SEED]    # writes crates/era/tests/golden/octave_truth_*.csv
+#   scripts/octave_peer.sh golden [SEED]    # writes crates/era/tests/golden/octave_{truth_*,dta_eigs}.csv
 #   scripts/octave_peer.sh compare [SEED]   # Table 5.2 from both, side by side
 #
 # Needs Octave: apt-get install -y --no-install-recommends octave octave-control octave-signal
@@ -26,7 +26,11 @@ case "$mode" in
       { echo "# Octave peer run_truth($seed), $(octave --version 2>/dev/null | head -1); made by scripts/octave_peer.sh"
         cat "$work/results/truth_$f.csv"; } > "$dest/octave_truth_${f}_seed$seed.csv"
     done
-    echo "wrote $dest/octave_truth_{modes,eigs,sv}_seed$seed.csv"
+    cp "$here/scripts/octave_dta_eigs.m" "$work/"
+    (cd "$work" && octave --no-gui -q -H --eval "octave_dta_eigs('dta_eigs.csv');" > "$work/dta.log" 2>&1)
+    { echo "# Octave peer frffilt on mkdta() (seed 987654321), thesis DTA settings, $(octave --version 2>/dev/null | head -1); made by scripts/octave_peer.sh"
+      cat "$work/dta_eigs.csv"; } > "$dest/octave_dta_eigs.csv"
+    echo "wrote $dest/octave_truth_{modes,eigs,sv}_seed$seed.csv and octave_dta_eigs.csv"
     ;;
   compare)
     echo "== Octave peer (run_truth($seed)) =="

@@ -3,10 +3,10 @@
 
 mod common;
 
-use common::worst_match;
+use common::{read_csv, worst_match};
 use era::identify::{identify, identify_naive, EraOptions};
 use era::sim::{ModalSpec, ModalStructure};
-use era::Quantity;
+use era::{Complex64, Quantity};
 
 #[test]
 fn dta_like_set_fast_equals_naive_reference() {
@@ -23,17 +23,36 @@ fn dta_like_set_fast_equals_naive_reference() {
     for (a, b) in fast.realization.singular_values.iter().zip(&naive.realization.singular_values) {
         assert!((a - b).abs() <= 1e-12 * s1);
     }
-    // The model is the structure: every true mode within 0.5 % in frequency (the peer's
-    // README reports the same for the Octave routines).
+    // Against the thesis routines run by the Octave peer on the same set
+    // (scripts/octave_peer.sh golden): same eigenvalues.
+    // First line "sample_time_s,Ts", then "re_z,im_z" and one eigenvalue per row.
+    let (first, rows) = read_csv("octave_dta_eigs.csv");
+    let peer: Vec<Complex64> = rows[1..]
+        .iter()
+        .map(|r| Complex64::new(r[0].parse().unwrap(), r[1].parse().unwrap()))
+        .collect();
+    let ts: f64 = first[1].parse().unwrap();
+    assert_eq!(ts, fast.sample_time_s);
+    let err = worst_match(&peer, &fast.model.poles().unwrap());
+    assert!(err <= 1e-8, "eigenvalues differ from the Octave peer by {err:e}");
+
+    // One-to-one against the true modes: 39 of 40 within 0.5 % in frequency. At ns = 80
+    // the thesis algorithm merges a near-coincident pair (7.0335 / 7.0343 Hz) and spends
+    // the last pole pair on a 20.9 Hz, 35 %-damped computational mode, as the peer does.
+    let mut left: Vec<f64> = fast.modal.modes.iter().map(|m| m.frequency_hz).collect();
     let mut matched = 0;
     for f_true in &structure.frequencies_hz {
-        let nearest = fast
-            .modal
-            .modes
+        let best = left
             .iter()
-            .map(|m| (m.frequency_hz - f_true).abs() / f_true)
-            .fold(f64::INFINITY, f64::min);
-        matched += usize::from(nearest < 0.005);
+            .enumerate()
+            .map(|(k, f)| (k, (f - f_true).abs() / f_true))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((k, d)) = best {
+            if d < 0.005 {
+                matched += 1;
+                left.swap_remove(k);
+            }
+        }
     }
-    assert_eq!(matched, 40, "true modes found within 0.5 %");
+    assert!(matched >= 39, "only {matched} of 40 true modes matched one-to-one within 0.5 %");
 }
