@@ -44,7 +44,7 @@ pub struct DemoArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Noise RMS as a fraction of each FRF's RMS (0.15 = the thesis's 15 %).
-    #[arg(long, default_value_t = 0.15)]
+    #[arg(long, default_value_t = 0.15, allow_negative_numbers = true)]
     pub noise: f64,
     /// Folder for the FRFs (CSV), both models and fits (model.json, fit.json).
     #[arg(long, value_name = "DIR")]
@@ -99,7 +99,7 @@ pub struct IdentifyArgs {
     pub integrations: usize,
     /// Zero-phase Butterworth low-pass on the impulse responses, cut-off in Hz (thesis
     /// Hzbreak); off when absent.
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     pub lowpass_hz: Option<f64>,
     /// Order of that filter (thesis ford).
     #[arg(long, default_value_t = 4, requires = "lowpass_hz")]
@@ -139,7 +139,7 @@ pub struct SimulateCommon {
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
     /// Noise RMS as a fraction of each FRF's RMS (0 = none, 0.15 = 15 %).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub noise: f64,
     /// Seed of the noise (and of the modal structure).
     #[arg(long, default_value_t = 1)]
@@ -168,10 +168,10 @@ pub struct ModalArgs {
     #[arg(long, default_value_t = 40)]
     pub modes: usize,
     /// Lowest natural frequency, Hz.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub fmin: f64,
     /// Highest natural frequency, Hz.
-    #[arg(long, default_value_t = 14.0)]
+    #[arg(long, default_value_t = 14.0, allow_negative_numbers = true)]
     pub fmax: f64,
     /// Damping ratio range MIN..MAX, fractions (0.005..0.02 = 0.5 to 2 %).
     #[arg(long, default_value = "0.005..0.02")]
@@ -180,7 +180,7 @@ pub struct ModalArgs {
     #[arg(long, default_value_t = 801)]
     pub lines: usize,
     /// Line spacing, Hz.
-    #[arg(long, default_value_t = 0.025)]
+    #[arg(long, default_value_t = 0.025, allow_negative_numbers = true)]
     pub df: f64,
     /// What the FRFs measure per unit force.
     #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
