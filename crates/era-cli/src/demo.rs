@@ -16,25 +16,43 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 /// Table 5.2 as printed in the thesis: ERA fit with noise (f Hz, ζ %), for reference.
-const THESIS_ERA_NOISY: [(f64, f64); 4] = [(1747.70, 4.98), (5031.66, 4.28), (7708.31, 5.31), (9457.83, 6.03)];
+const THESIS_ERA_NOISY: [(f64, f64); 4] = [
+    (1747.70, 4.98),
+    (5031.66, 4.28),
+    (7708.31, 5.31),
+    (9457.83, 6.03),
+];
 
 fn max_errors(truth: &[Mode], found: &[Mode]) -> serde_json::Value {
     if truth.len() != found.len() {
         return json!({"modes_found": found.len(), "modes_expected": truth.len()});
     }
-    let df = truth.iter().zip(found).map(|(t, f)| (t.frequency_hz - f.frequency_hz).abs()).fold(0.0, f64::max);
-    let dz = truth.iter().zip(found).map(|(t, f)| (t.damping_ratio - f.damping_ratio).abs()).fold(0.0, f64::max);
+    let df = truth
+        .iter()
+        .zip(found)
+        .map(|(t, f)| (t.frequency_hz - f.frequency_hz).abs())
+        .fold(0.0, f64::max);
+    let dz = truth
+        .iter()
+        .zip(found)
+        .map(|(t, f)| (t.damping_ratio - f.damping_ratio).abs())
+        .fold(0.0, f64::max);
     json!({"max_frequency_error_hz": df, "max_damping_ratio_error": dz})
 }
 
 fn cell(mode: Option<&Mode>) -> String {
-    mode.map_or(format!("{:>10} {:>7}", "-", "-"), |m| format!("{:>10.2} {:>7.2}", m.frequency_hz, 100.0 * m.damping_ratio))
+    mode.map_or(format!("{:>10} {:>7}", "-", "-"), |m| {
+        format!("{:>10.2} {:>7.2}", m.frequency_hz, 100.0 * m.damping_ratio)
+    })
 }
 
 pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     if !(a.noise.is_finite() && a.noise >= 0.0) {
-        return usage(format!("--noise {}: must be a fraction >= 0 (0.15 for 15 %)", a.noise));
+        return usage(format!(
+            "--noise {}: must be a fraction >= 0 (0.15 for 15 %)",
+            a.noise
+        ));
     }
     if let Some(dir) = &a.out {
         prepare_out_dir(dir)?;
@@ -65,17 +83,36 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
         format!("ERA, {pct:.0} % noise"),
         "noisy - truth"
     );
-    let _ = writeln!(t, "{:>4} | {:>10} {:>7} | {:>10} {:>7} | {:>10} {:>7} | {:>8} {:>7}", "", "f", "zeta", "f", "zeta", "f", "zeta", "df", "dzeta");
+    let _ = writeln!(
+        t,
+        "{:>4} | {:>10} {:>7} | {:>10} {:>7} | {:>10} {:>7} | {:>8} {:>7}",
+        "", "f", "zeta", "f", "zeta", "f", "zeta", "df", "dzeta"
+    );
     for (k, m) in truth.iter().enumerate() {
         let n = noisy.modal.modes.get(k);
         let diff = n.map_or(String::from("-"), |n| {
-            format!("{:>8.2} {:>7.2}", n.frequency_hz - m.frequency_hz, 100.0 * (n.damping_ratio - m.damping_ratio))
+            format!(
+                "{:>8.2} {:>7.2}",
+                n.frequency_hz - m.frequency_hz,
+                100.0 * (n.damping_ratio - m.damping_ratio)
+            )
         });
-        let _ = writeln!(t, "{:>4} | {} | {} | {} | {}", k + 1, cell(Some(m)), cell(clean.modal.modes.get(k)), cell(n), diff);
+        let _ = writeln!(
+            t,
+            "{:>4} | {} | {} | {} | {}",
+            k + 1,
+            cell(Some(m)),
+            cell(clean.modal.modes.get(k)),
+            cell(n),
+            diff
+        );
     }
     let err = |found: &Identification| max_errors(&truth, &found.modal.modes);
     let (e0, e1) = (err(&clean), err(&noisy));
-    let show = |e: &serde_json::Value| match (e["max_frequency_error_hz"].as_f64(), e["max_damping_ratio_error"].as_f64()) {
+    let show = |e: &serde_json::Value| match (
+        e["max_frequency_error_hz"].as_f64(),
+        e["max_damping_ratio_error"].as_f64(),
+    ) {
         (Some(f), Some(z)) => format!("max |df| = {f:.3e} Hz, max |dzeta| = {z:.3e}"),
         _ => format!("{e}"),
     };
@@ -102,16 +139,25 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
         let clock = Instant::now();
         let seed = a.seed.to_string();
         let noise = a.noise.to_string();
-        write_frf_csv(&dir.join("truth_frf.csv"), &clean_frf, &[("source", "era demo"), ("noise_fraction", "0")])?;
+        write_frf_csv(
+            &dir.join("truth_frf.csv"),
+            &clean_frf,
+            &[("source", "era demo"), ("noise_fraction", "0")],
+        )?;
         write_frf_csv(
             &dir.join("truth_frf_noisy.csv"),
             &noisy_frf,
-            &[("source", "era demo"), ("noise_fraction", &noise), ("seed", &seed)],
+            &[
+                ("source", "era demo"),
+                ("noise_fraction", &noise),
+                ("seed", &seed),
+            ],
         )?;
         for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
             let sub = dir.join(label);
             prepare_out_dir(&sub)?;
-            ModelJson::from_identification(found, parameters(&options), None).write(&sub.join("model.json"))?;
+            ModelJson::from_identification(found, parameters(&options), None)
+                .write(&sub.join("model.json"))?;
             FitJson::from_report(&found.fit).write(&sub.join("fit.json"))?;
         }
         human.print(&format!(

@@ -1,7 +1,9 @@
 //! `era identify FILE`: the pipeline of DESIGN.md §1 on an FRF file.
 
 use crate::args::{DirectTermArg, IdentifyArgs, TimeDomainArg};
-use crate::report::{identification_summary, parameter_echo, parameters, print_json, timings_table, Human};
+use crate::report::{
+    identification_summary, parameter_echo, parameters, print_json, timings_table, Human,
+};
 use crate::usage;
 use anyhow::Context;
 use era::identify::{identify, EraOptions, ModelDomain};
@@ -21,7 +23,9 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
         return usage("--hankel-factor 0: must be at least 1");
     }
     let lowpass = match a.lowpass_hz {
-        Some(hz) if !(hz.is_finite() && hz > 0.0) => return usage(format!("--lowpass-hz {hz}: must be a positive frequency")),
+        Some(hz) if !(hz.is_finite() && hz > 0.0) => {
+            return usage(format!("--lowpass-hz {hz}: must be a positive frequency"))
+        }
         Some(hz) => Some((a.lowpass_order, hz)),
         None => None,
     };
@@ -45,9 +49,16 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
 
 /// Creates `--out DIR` and checks that it takes files, before any long work.
 pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| crate::UsageError(format!("--out {}: cannot create the folder: {e}", dir.display())))?;
+    std::fs::create_dir_all(dir).map_err(|e| {
+        crate::UsageError(format!(
+            "--out {}: cannot create the folder: {e}",
+            dir.display()
+        ))
+    })?;
     let probe = dir.join(format!(".era-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| crate::UsageError(format!("--out {}: cannot write there: {e}", dir.display())))?;
+    std::fs::write(&probe, b"").map_err(|e| {
+        crate::UsageError(format!("--out {}: cannot write there: {e}", dir.display()))
+    })?;
     let _ = std::fs::remove_file(probe);
     Ok(())
 }
@@ -59,8 +70,12 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         prepare_out_dir(dir)?;
     }
     let clock = Instant::now();
-    let default_quantity = a.quantity.map(Quantity::from).unwrap_or(Quantity::Acceleration);
-    let file = read_frf_csv(&a.file, default_quantity).with_context(|| format!("reading {}", a.file.display()))?;
+    let default_quantity = a
+        .quantity
+        .map(Quantity::from)
+        .unwrap_or(Quantity::Acceleration);
+    let file = read_frf_csv(&a.file, default_quantity)
+        .with_context(|| format!("reading {}", a.file.display()))?;
     let read_s = clock.elapsed().as_secs_f64();
     let mut frf = file.frf;
     if let Some(q) = a.quantity {
@@ -75,11 +90,16 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         frf.lines(),
         frf.spacing_hz(),
         frf.quantity(),
-        if file.quantity_given || a.quantity.is_some() { "" } else { " (assumed: the file has no '# quantity:' line; set --quantity)" },
+        if file.quantity_given || a.quantity.is_some() {
+            ""
+        } else {
+            " (assumed: the file has no '# quantity:' line; set --quantity)"
+        },
     ));
     human.print(&parameter_echo(&opts));
 
-    let found = identify(&frf, &opts).with_context(|| format!("identifying {}", a.file.display()))?;
+    let found =
+        identify(&frf, &opts).with_context(|| format!("identifying {}", a.file.display()))?;
     human.print(&identification_summary(&found, opts.states));
 
     let mut timings = timings_map(&found.timings);
@@ -91,7 +111,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         model.write(&dir.join("model.json"))?;
         fit.write(&dir.join("fit.json"))?;
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
-        human.print(&format!("\nwrote {} and {}\n", dir.join("model.json").display(), dir.join("fit.json").display()));
+        human.print(&format!(
+            "\nwrote {} and {}\n",
+            dir.join("model.json").display(),
+            dir.join("fit.json").display()
+        ));
     }
     if a.common.timings {
         human.print(&timings_table(&timings));

@@ -37,7 +37,9 @@ fn exit_code(err: &anyhow::Error) -> u8 {
         if let Some(e) = cause.downcast_ref::<era::EraError>() {
             return if e.is_input_error() { 2 } else { 1 };
         }
-        if cause.downcast_ref::<era_io::IoError>().is_some() || cause.downcast_ref::<UsageError>().is_some() {
+        if cause.downcast_ref::<era_io::IoError>().is_some()
+            || cause.downcast_ref::<UsageError>().is_some()
+        {
             return 2;
         }
     }

@@ -16,7 +16,10 @@ pub struct Human {
 
 impl Human {
     pub fn new(common: &CommonArgs) -> Self {
-        Human { to_stderr: common.json, quiet: common.quiet }
+        Human {
+            to_stderr: common.json,
+            quiet: common.quiet,
+        }
     }
     pub fn print(&self, text: &str) {
         if self.quiet {
@@ -74,11 +77,19 @@ pub fn parameter_echo(o: &EraOptions) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "ERA parameters");
     let _ = writeln!(s, "  states (ns)             {}", o.states);
-    let _ = writeln!(s, "  hankel factor (lh)      {}  (M = {markov} Markov samples)", o.hankel_factor);
+    let _ = writeln!(
+        s,
+        "  hankel factor (lh)      {}  (M = {markov} Markov samples)",
+        o.hankel_factor
+    );
     let _ = writeln!(s, "  integrations (ni)       {}", o.integrations);
     let _ = writeln!(s, "  low-pass (ford, Hz)     {lowpass}");
     let _ = writeln!(s, "  zero lines (nz)         {}", o.zero_lines);
-    let pad = if o.pad_to == 0 { "none".to_string() } else { format!("{} lines", o.pad_to + 1) };
+    let pad = if o.pad_to == 0 {
+        "none".to_string()
+    } else {
+        format!("{} lines", o.pad_to + 1)
+    };
     let _ = writeln!(s, "  pad to (ndpts)          {} ({pad})", o.pad_to);
     let domain = match o.domain {
         ModelDomain::Discrete => "discrete",
@@ -98,20 +109,55 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
     let mut s = String::new();
     let sv = &found.realization.singular_values;
     let (rows, cols) = found.realization.hankel_size;
-    let _ = writeln!(s, "\nHankel H0 {rows} x {cols}, sample time {:.6e} s", found.sample_time_s);
-    let _ = write!(s, "singular values: s1 = {:.4e}, s{states} = {:.4e}", sv[0], sv[states - 1]);
+    let _ = writeln!(
+        s,
+        "\nHankel H0 {rows} x {cols}, sample time {:.6e} s",
+        found.sample_time_s
+    );
+    let _ = write!(
+        s,
+        "singular values: s1 = {:.4e}, s{states} = {:.4e}",
+        sv[0],
+        sv[states - 1]
+    );
     if let Some(next) = sv.get(states) {
-        let _ = write!(s, ", s{} = {:.4e} (s{}/s{states} = {:.2e})", states + 1, next, states + 1, next / sv[states - 1]);
+        let _ = write!(
+            s,
+            ", s{} = {:.4e} (s{}/s{states} = {:.2e})",
+            states + 1,
+            next,
+            states + 1,
+            next / sv[states - 1]
+        );
     }
     let _ = writeln!(s);
     let modes = &found.modal.modes;
-    let _ = writeln!(s, "\n{} modes{}", modes.len(), if found.modal.real_poles.is_empty() { String::new() } else { format!(", {} real poles", found.modal.real_poles.len()) });
+    let _ = writeln!(
+        s,
+        "\n{} modes{}",
+        modes.len(),
+        if found.modal.real_poles.is_empty() {
+            String::new()
+        } else {
+            format!(", {} real poles", found.modal.real_poles.len())
+        }
+    );
     let _ = writeln!(s, "{:>5} {:>14} {:>10}", "mode", "f (Hz)", "zeta (%)");
     for (k, m) in modes.iter().enumerate() {
-        let _ = writeln!(s, "{:>5} {:>14.4} {:>10.4}", k + 1, m.frequency_hz, 100.0 * m.damping_ratio);
+        let _ = writeln!(
+            s,
+            "{:>5} {:>14.4} {:>10.4}",
+            k + 1,
+            m.frequency_hz,
+            100.0 * m.damping_ratio
+        );
     }
     for r in &found.modal.real_poles {
-        let _ = writeln!(s, "  real pole {:+.6e} ({:.4} Hz)", r.eigenvalue, r.frequency_hz);
+        let _ = writeln!(
+            s,
+            "  real pole {:+.6e} ({:.4} Hz)",
+            r.eigenvalue, r.frequency_hz
+        );
     }
     let fit = &found.fit;
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3e}"));
@@ -135,7 +181,16 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
 
 /// Timing table.
 pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
-    let order = ["read", "preprocess", "markov", "hankel_svd", "realize", "modes", "fit", "write"];
+    let order = [
+        "read",
+        "preprocess",
+        "markov",
+        "hankel_svd",
+        "realize",
+        "modes",
+        "fit",
+        "write",
+    ];
     let mut s = String::from("\ntimings (s)\n");
     for key in order {
         if let Some(v) = t.get(key) {

@@ -10,7 +10,9 @@ use serde_json::json;
 
 fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
     let Some((lo, hi)) = text.split_once("..") else {
-        return usage(format!("--damping {text}: expected MIN..MAX, e.g. 0.005..0.02"));
+        return usage(format!(
+            "--damping {text}: expected MIN..MAX, e.g. 0.005..0.02"
+        ));
     };
     match (lo.trim().parse::<f64>(), hi.trim().parse::<f64>()) {
         (Ok(lo), Ok(hi)) => Ok((lo, hi)),
@@ -20,12 +22,19 @@ fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
 
 fn check_noise(noise: f64) -> anyhow::Result<()> {
     if !(noise.is_finite() && noise >= 0.0) {
-        return usage(format!("--noise {noise}: must be a fraction >= 0 (0.15 for 15 %)"));
+        return usage(format!(
+            "--noise {noise}: must be a fraction >= 0 (0.15 for 15 %)"
+        ));
     }
     Ok(())
 }
 
-fn finish(sim: &SimulateCommon, frf: &FrfData, extra: &[(&str, &str)], summary: serde_json::Value) -> anyhow::Result<()> {
+fn finish(
+    sim: &SimulateCommon,
+    frf: &FrfData,
+    extra: &[(&str, &str)],
+    summary: serde_json::Value,
+) -> anyhow::Result<()> {
     let human = Human::new(&sim.common);
     let seed = sim.seed.to_string();
     let noise = sim.noise.to_string();
@@ -41,7 +50,11 @@ fn finish(sim: &SimulateCommon, frf: &FrfData, extra: &[(&str, &str)], summary: 
         frf.lines(),
         frf.spacing_hz(),
         frf.quantity(),
-        if sim.noise > 0.0 { format!(", {} % noise (seed {})", 100.0 * sim.noise, sim.seed) } else { String::new() },
+        if sim.noise > 0.0 {
+            format!(", {} % noise (seed {})", 100.0 * sim.noise, sim.seed)
+        } else {
+            String::new()
+        },
     ));
     if sim.common.json {
         print_json(&summary)?;
@@ -54,17 +67,33 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
     let noise = (sim.noise > 0.0).then_some((sim.noise, sim.seed));
     let frf = truth_model_frf(noise)?;
     let modal = era::modal::modal_parameters(&era::sim::truth_model())?;
-    let modes: Vec<_> = modal.modes.iter().map(|m| json!({"frequency_hz": m.frequency_hz, "damping_ratio": m.damping_ratio})).collect();
+    let modes: Vec<_> = modal
+        .modes
+        .iter()
+        .map(|m| json!({"frequency_hz": m.frequency_hz, "damping_ratio": m.damping_ratio}))
+        .collect();
     let summary = json!({"file": sim.out, "model": "truth-model", "outputs": 3, "inputs": 3, "lines": frf.lines(),
         "spacing_hz": frf.spacing_hz(), "quantity": "displacement", "noise": sim.noise, "seed": sim.seed, "modes": modes});
-    finish(sim, &frf, &[("force_unit", "lbf"), ("response_unit", "in"), ("source", "era simulate truth-model")], summary)
+    finish(
+        sim,
+        &frf,
+        &[
+            ("force_unit", "lbf"),
+            ("response_unit", "in"),
+            ("source", "era simulate truth-model"),
+        ],
+        summary,
+    )
 }
 
 fn modal(a: &ModalArgs) -> anyhow::Result<()> {
     check_noise(a.sim.noise)?;
     let (damping_min, damping_max) = parse_range(&a.damping)?;
     if a.collocated && a.outputs != a.inputs {
-        return usage(format!("--collocated needs as many outputs as inputs, got {} x {}", a.outputs, a.inputs));
+        return usage(format!(
+            "--collocated needs as many outputs as inputs, got {} x {}",
+            a.outputs, a.inputs
+        ));
     }
     if a.fmax >= a.df * (a.lines.saturating_sub(1)) as f64 {
         return usage(format!(

@@ -23,31 +23,60 @@ fn expect_input_error(args: &[&str], needle: &str) {
     let out = era().args(args).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(stderr.contains(needle), "{args:?}: expected '{needle}' in: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{args:?}: expected '{needle}' in: {stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
 }
 
-const TABLE_5_2_TRUTH: [(f64, f64); 4] = [(1748.64, 5.02), (5031.80, 4.22), (7709.75, 5.22), (9458.39, 6.03)];
+const TABLE_5_2_TRUTH: [(f64, f64); 4] = [
+    (1748.64, 5.02),
+    (5031.80, 4.22),
+    (7709.75, 5.22),
+    (9458.39, 6.03),
+];
 
 #[test]
 fn demo_prints_table_5_2_and_json_agrees() {
     let out = era().arg("demo").output().unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("Table 5.2") && text.contains("1748.64") && text.contains("9458.39"), "{text}");
+    assert!(
+        text.contains("Table 5.2") && text.contains("1748.64") && text.contains("9458.39"),
+        "{text}"
+    );
 
-    let out = era().args(["demo", "--json", "--timings"]).output().unwrap();
+    let out = era()
+        .args(["demo", "--json", "--timings"])
+        .output()
+        .unwrap();
     assert!(out.status.success());
     let v = json_of(&out);
     for key in ["truth", "no_noise", "noisy"] {
         assert_eq!(v[key].as_array().unwrap().len(), 4, "{key}");
     }
-    for (mode, (f, z)) in v["no_noise"].as_array().unwrap().iter().zip(TABLE_5_2_TRUTH) {
+    for (mode, (f, z)) in v["no_noise"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(TABLE_5_2_TRUTH)
+    {
         assert!((mode["frequency_hz"].as_f64().unwrap() - f).abs() < 0.01);
         assert!((mode["damping_ratio"].as_f64().unwrap() - z / 100.0).abs() < 1e-4);
     }
-    assert!(v["errors"]["no_noise"]["max_frequency_error_hz"].as_f64().unwrap() < 0.01);
-    assert!(v["errors"]["noisy"]["max_frequency_error_hz"].as_f64().unwrap() > 0.0);
+    assert!(
+        v["errors"]["no_noise"]["max_frequency_error_hz"]
+            .as_f64()
+            .unwrap()
+            < 0.01
+    );
+    assert!(
+        v["errors"]["noisy"]["max_frequency_error_hz"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
     assert_eq!(v["noise"]["seed"], 1);
     assert!(v["timings_s"]["noisy"]["hankel_svd"].as_f64().is_some());
     // Human text went to stderr, stdout is JSON only.
@@ -56,8 +85,18 @@ fn demo_prints_table_5_2_and_json_agrees() {
 
 #[test]
 fn demo_seed_changes_only_the_noisy_column() {
-    let a = json_of(&era().args(["demo", "--json", "--seed", "7"]).output().unwrap());
-    let b = json_of(&era().args(["demo", "--json", "--seed", "8"]).output().unwrap());
+    let a = json_of(
+        &era()
+            .args(["demo", "--json", "--seed", "7"])
+            .output()
+            .unwrap(),
+    );
+    let b = json_of(
+        &era()
+            .args(["demo", "--json", "--seed", "8"])
+            .output()
+            .unwrap(),
+    );
     assert_eq!(a["no_noise"], b["no_noise"]);
     assert_ne!(a["noisy"], b["noisy"]);
 }
@@ -66,8 +105,19 @@ fn demo_seed_changes_only_the_noisy_column() {
 fn demo_out_writes_frfs_models_and_fits() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    era().args(["demo", "-q", "--out"]).arg(&out).assert().success();
-    for f in ["truth_frf.csv", "truth_frf_noisy.csv", "no_noise/model.json", "no_noise/fit.json", "noisy/model.json", "noisy/fit.json"] {
+    era()
+        .args(["demo", "-q", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    for f in [
+        "truth_frf.csv",
+        "truth_frf_noisy.csv",
+        "no_noise/model.json",
+        "no_noise/fit.json",
+        "noisy/model.json",
+        "noisy/fit.json",
+    ] {
         assert!(out.join(f).is_file(), "{f}");
     }
 }
@@ -76,16 +126,34 @@ fn demo_out_writes_frfs_models_and_fits() {
 fn simulate_then_identify_the_truth_model() {
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("truth.csv");
-    era().args(["simulate", "truth-model", "-q", "--out"]).arg(&frf).assert().success();
+    era()
+        .args(["simulate", "truth-model", "-q", "--out"])
+        .arg(&frf)
+        .assert()
+        .success();
     let out_dir = dir.path().join("out");
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(["--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "--json", "--timings", "--out"])
+        .args([
+            "--states",
+            "8",
+            "--hankel-factor",
+            "4",
+            "--pad-to",
+            "1024",
+            "--json",
+            "--timings",
+            "--out",
+        ])
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json_of(&out);
     assert_eq!(v["states"], 8);
     assert_eq!(v["time_domain"], "discrete");
@@ -96,12 +164,24 @@ fn simulate_then_identify_the_truth_model() {
         assert!((mode["frequency_hz"].as_f64().unwrap() - f).abs() < 0.01);
         assert!((mode["damping_ratio"].as_f64().unwrap() - z / 100.0).abs() < 1e-4);
     }
-    for stage in ["read", "preprocess", "markov", "hankel_svd", "realize", "modes", "fit", "write"] {
+    for stage in [
+        "read",
+        "preprocess",
+        "markov",
+        "hankel_svd",
+        "realize",
+        "modes",
+        "fit",
+        "write",
+    ] {
         assert!(v["timings_s"][stage].as_f64().is_some(), "{stage}");
     }
-    let model: Value = serde_json::from_str(&std::fs::read_to_string(out_dir.join("model.json")).unwrap()).unwrap();
+    let model: Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("model.json")).unwrap())
+            .unwrap();
     assert_eq!(model["modes"], v["modes"]);
-    let fit: Value = serde_json::from_str(&std::fs::read_to_string(out_dir.join("fit.json")).unwrap()).unwrap();
+    let fit: Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("fit.json")).unwrap()).unwrap();
     assert_eq!(fit["pairs"].as_array().unwrap().len(), 9);
     assert!(fit["collocated_mean_relative_error"].as_f64().unwrap() < 1e-9);
 }
@@ -111,23 +191,63 @@ fn continuous_model_from_a_noisy_modal_set() {
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("modal.csv");
     era()
-        .args(["simulate", "modal", "-q", "--outputs", "3", "--inputs", "2", "--modes", "4", "--fmin", "2", "--fmax", "8"])
-        .args(["--lines", "401", "--df", "0.05", "--quantity", "velocity", "--noise", "0.01", "--seed", "3", "--out"])
+        .args([
+            "simulate",
+            "modal",
+            "-q",
+            "--outputs",
+            "3",
+            "--inputs",
+            "2",
+            "--modes",
+            "4",
+            "--fmin",
+            "2",
+            "--fmax",
+            "8",
+        ])
+        .args([
+            "--lines",
+            "401",
+            "--df",
+            "0.05",
+            "--quantity",
+            "velocity",
+            "--noise",
+            "0.01",
+            "--seed",
+            "3",
+            "--out",
+        ])
         .arg(&frf)
         .assert()
         .success();
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(["--states", "8", "--hankel-factor", "10", "--time-domain", "continuous", "--json"])
+        .args([
+            "--states",
+            "8",
+            "--hankel-factor",
+            "10",
+            "--time-domain",
+            "continuous",
+            "--json",
+        ])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json_of(&out);
     assert_eq!(v["time_domain"], "continuous");
     assert!(v["sample_time_s"].is_null());
     let modes = v["modes"].as_array().unwrap();
-    assert!(modes.iter().all(|m| (1.5..8.5).contains(&m["frequency_hz"].as_f64().unwrap())));
+    assert!(modes
+        .iter()
+        .all(|m| (1.5..8.5).contains(&m["frequency_hz"].as_f64().unwrap())));
 }
 
 #[test]
@@ -135,11 +255,31 @@ fn bad_csv_files_exit_2_naming_the_problem() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let cases = [
-        ("missing.csv", "frequency_hz,H1_1_re,H1_1_im,H2_1_re\n0,1,1,1\n1,1,1,1\n", "missing column(s) for a 2x1 set: H2_1_im"),
-        ("text.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,x1,1\n", "line 3, column H1_1_re: 'x1' is not a number"),
-        ("nan.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,NaN,1\n", "line 3, column H1_1_re: NaN is not a finite number"),
-        ("uneven.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,1,1\n3,1,1\n", "line 4, column frequency_hz: frequencies are not uniformly spaced"),
-        ("offset.csv", "frequency_hz,H1_1_re,H1_1_im\n5,1,1\n6,1,1\n", "frequencies must start at 0 Hz"),
+        (
+            "missing.csv",
+            "frequency_hz,H1_1_re,H1_1_im,H2_1_re\n0,1,1,1\n1,1,1,1\n",
+            "missing column(s) for a 2x1 set: H2_1_im",
+        ),
+        (
+            "text.csv",
+            "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,x1,1\n",
+            "line 3, column H1_1_re: 'x1' is not a number",
+        ),
+        (
+            "nan.csv",
+            "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,NaN,1\n",
+            "line 3, column H1_1_re: NaN is not a finite number",
+        ),
+        (
+            "uneven.csv",
+            "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,1,1\n3,1,1\n",
+            "line 4, column frequency_hz: frequencies are not uniformly spaced",
+        ),
+        (
+            "offset.csv",
+            "frequency_hz,H1_1_re,H1_1_im\n5,1,1\n6,1,1\n",
+            "frequencies must start at 0 Hz",
+        ),
     ];
     for (name, text, needle) in cases {
         let p = write(d, name, text);
@@ -152,39 +292,132 @@ fn bad_csv_files_exit_2_naming_the_problem() {
 fn impossible_requests_exit_2() {
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("truth.csv");
-    era().args(["simulate", "truth-model", "-q", "--out"]).arg(&frf).assert().success();
+    era()
+        .args(["simulate", "truth-model", "-q", "--out"])
+        .arg(&frf)
+        .assert()
+        .success();
     let f = frf.to_str().unwrap();
-    expect_input_error(&["identify", f, "--states", "12", "--hankel-factor", "4"], "the data supports only 8 states");
-    expect_input_error(&["identify", f, "--states", "8", "--hankel-factor", "300"], "Markov samples");
-    expect_input_error(&["identify", f, "--states", "8", "--integrations", "1"], "cannot be integrated");
-    expect_input_error(&["identify", f, "--states", "8", "--lowpass-hz", "-3"], "--lowpass-hz -3");
+    expect_input_error(
+        &["identify", f, "--states", "12", "--hankel-factor", "4"],
+        "the data supports only 8 states",
+    );
+    expect_input_error(
+        &["identify", f, "--states", "8", "--hankel-factor", "300"],
+        "Markov samples",
+    );
+    expect_input_error(
+        &["identify", f, "--states", "8", "--integrations", "1"],
+        "cannot be integrated",
+    );
+    expect_input_error(
+        &["identify", f, "--states", "8", "--lowpass-hz", "-3"],
+        "--lowpass-hz -3",
+    );
     expect_input_error(&["identify", f, "--states", "0"], "--states 0");
-    expect_input_error(&["identify", f, "--states", "eight"], "invalid value 'eight'");
+    expect_input_error(
+        &["identify", f, "--states", "eight"],
+        "invalid value 'eight'",
+    );
     expect_input_error(&["identify", f, "--sates", "8"], "unexpected argument");
 
-    let zeros = write(dir.path(), "zeros.csv", "frequency_hz,H1_1_re,H1_1_im\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n");
-    expect_input_error(&["identify", zeros.to_str().unwrap(), "--states", "2", "--hankel-factor", "1"], "every FRF value is zero");
+    let zeros = write(
+        dir.path(),
+        "zeros.csv",
+        "frequency_hz,H1_1_re,H1_1_im\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n",
+    );
+    expect_input_error(
+        &[
+            "identify",
+            zeros.to_str().unwrap(),
+            "--states",
+            "2",
+            "--hankel-factor",
+            "1",
+        ],
+        "every FRF value is zero",
+    );
 
-    expect_input_error(&["identify", "/no/such/frf.csv", "--states", "2"], "/no/such/frf.csv");
+    expect_input_error(
+        &["identify", "/no/such/frf.csv", "--states", "2"],
+        "/no/such/frf.csv",
+    );
 
     // --out below a regular file cannot be created, whoever runs the test.
     let blocker = write(dir.path(), "blocker", "");
     let out = blocker.join("sub");
-    expect_input_error(&["identify", f, "--states", "8", "--hankel-factor", "4", "--out", out.to_str().unwrap()], "--out");
+    expect_input_error(
+        &[
+            "identify",
+            f,
+            "--states",
+            "8",
+            "--hankel-factor",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "--out",
+    );
     expect_input_error(&["demo", "--out", out.to_str().unwrap()], "--out");
-    expect_input_error(&["simulate", "truth-model", "--out", out.join("x.csv").to_str().unwrap()], "x.csv");
+    expect_input_error(
+        &[
+            "simulate",
+            "truth-model",
+            "--out",
+            out.join("x.csv").to_str().unwrap(),
+        ],
+        "x.csv",
+    );
     expect_input_error(&["demo", "--noise", "-1"], "--noise -1");
-    expect_input_error(&["simulate", "modal", "--collocated", "--outputs", "3", "--inputs", "2", "--out", "x.csv"], "--collocated");
-    expect_input_error(&["simulate", "modal", "--damping", "0.01-0.02", "--out", "x.csv"], "--damping");
+    expect_input_error(
+        &[
+            "simulate",
+            "modal",
+            "--collocated",
+            "--outputs",
+            "3",
+            "--inputs",
+            "2",
+            "--out",
+            "x.csv",
+        ],
+        "--collocated",
+    );
+    expect_input_error(
+        &[
+            "simulate",
+            "modal",
+            "--damping",
+            "0.01-0.02",
+            "--out",
+            "x.csv",
+        ],
+        "--damping",
+    );
 }
 
 #[test]
 fn a_failed_run_leaves_no_file_behind() {
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("truth.csv");
-    era().args(["simulate", "truth-model", "-q", "--out"]).arg(&frf).assert().success();
+    era()
+        .args(["simulate", "truth-model", "-q", "--out"])
+        .arg(&frf)
+        .assert()
+        .success();
     let out_dir = dir.path().join("out");
-    let out = era().arg("identify").arg(&frf).args(["--states", "12", "--out"]).arg(&out_dir).output().unwrap();
+    let out = era()
+        .arg("identify")
+        .arg(&frf)
+        .args(["--states", "12", "--out"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
-    assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "no model.json from a failed run");
+    assert_eq!(
+        std::fs::read_dir(&out_dir).unwrap().count(),
+        0,
+        "no model.json from a failed run"
+    );
 }

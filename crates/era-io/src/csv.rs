@@ -61,7 +61,11 @@ fn parse_column(name: &str) -> Option<(usize, usize, Part)> {
 pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
     let fail = |line: usize, column: &str, message: String| {
-        let location = if column.is_empty() { format!("line {line}: ") } else { format!("line {line}, column {column}: ") };
+        let location = if column.is_empty() {
+            format!("line {line}: ")
+        } else {
+            format!("line {line}, column {column}: ")
+        };
         IoError::format(path, location, message)
     };
 
@@ -83,11 +87,19 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
         break;
     }
     if header_line == 0 {
-        return Err(IoError::format(path, "", "no header line (expected frequency_hz,H1_1_re,H1_1_im,...)"));
+        return Err(IoError::format(
+            path,
+            "",
+            "no header line (expected frequency_hz,H1_1_re,H1_1_im,...)",
+        ));
     }
     let quantity = match metadata.get("quantity") {
         Some(q) => Quantity::parse(q).ok_or_else(|| {
-            IoError::format(path, "", format!("unknown quantity '{q}' (acceleration, velocity or displacement)"))
+            IoError::format(
+                path,
+                "",
+                format!("unknown quantity '{q}' (acceleration, velocity or displacement)"),
+            )
         })?,
         None => default_quantity,
     };
@@ -103,7 +115,13 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
         match records.next() {
             Some(Ok(r)) if r.iter().all(str::is_empty) => continue,
             Some(Ok(r)) => break r,
-            Some(Err(e)) => return Err(fail(header_line, "", format!("cannot read the header: {e}"))),
+            Some(Err(e)) => {
+                return Err(fail(
+                    header_line,
+                    "",
+                    format!("cannot read the header: {e}"),
+                ))
+            }
             None => return Err(IoError::format(path, "", "no header line")),
         }
     };
@@ -119,9 +137,16 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
             continue;
         }
         let Some((i, j, part)) = parse_column(name) else {
-            return Err(fail(header_line, name, "unknown column (expected frequency_hz or Hi_j_re / Hi_j_im)".into()));
+            return Err(fail(
+                header_line,
+                name,
+                "unknown column (expected frequency_hz or Hi_j_re / Hi_j_im)".into(),
+            ));
         };
-        if columns.insert((i, j, u8::from(part == Part::Im)), c).is_some() {
+        if columns
+            .insert((i, j, u8::from(part == Part::Im)), c)
+            .is_some()
+        {
             return Err(fail(header_line, name, "duplicate column".into()));
         }
         q = q.max(i);
@@ -141,10 +166,21 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
         }
     }
     if q == 0 {
-        return Err(fail(header_line, "", "no FRF columns (expected H1_1_re, H1_1_im, ...)".into()));
+        return Err(fail(
+            header_line,
+            "",
+            "no FRF columns (expected H1_1_re, H1_1_im, ...)".into(),
+        ));
     }
     if !missing.is_empty() {
-        return Err(fail(header_line, "", format!("missing column(s) for a {q}x{p} set: {}", missing.join(", "))));
+        return Err(fail(
+            header_line,
+            "",
+            format!(
+                "missing column(s) for a {q}x{p} set: {}",
+                missing.join(", ")
+            ),
+        ));
     }
 
     // Rows.
@@ -161,7 +197,11 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
             continue;
         }
         if record.len() != names.len() {
-            return Err(fail(line, "", format!("{} cells, the header has {}", record.len(), names.len())));
+            return Err(fail(
+                line,
+                "",
+                format!("{} cells, the header has {}", record.len(), names.len()),
+            ));
         }
         let mut values = Vec::with_capacity(names.len());
         for (c, cell) in record.iter().enumerate() {
@@ -169,7 +209,11 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
                 .parse()
                 .map_err(|_| fail(line, &names[c], format!("'{cell}' is not a number")))?;
             if !v.is_finite() {
-                return Err(fail(line, &names[c], format!("{cell} is not a finite number")));
+                return Err(fail(
+                    line,
+                    &names[c],
+                    format!("{cell} is not a finite number"),
+                ));
             }
             values.push(v);
         }
@@ -198,7 +242,11 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
         EraError::FirstLineNotZero { .. } => fail(line_of_row[0], "frequency_hz", e.to_string()),
         other => IoError::format(path, "", other.to_string()),
     })?;
-    Ok(FrfFile { frf, quantity_given: metadata.contains_key("quantity"), metadata })
+    Ok(FrfFile {
+        frf,
+        quantity_given: metadata.contains_key("quantity"),
+        metadata,
+    })
 }
 
 /// Formats FRFs as CSV text: metadata lines (`quantity` first, then `extra`), the header
@@ -244,9 +292,18 @@ mod tests {
     use era::frf::uniform_lines;
 
     fn sample() -> FrfData {
-        FrfData::from_fn(uniform_lines(4, 0.025), 2, 3, Quantity::Velocity, |i, j, k| {
-            Complex64::new(0.1 * (i + 1) as f64 + k as f64 / 3.0, -(j as f64) * 1e-7 / 7.0)
-        })
+        FrfData::from_fn(
+            uniform_lines(4, 0.025),
+            2,
+            3,
+            Quantity::Velocity,
+            |i, j, k| {
+                Complex64::new(
+                    0.1 * (i + 1) as f64 + k as f64 / 3.0,
+                    -(j as f64) * 1e-7 / 7.0,
+                )
+            },
+        )
         .unwrap()
     }
 
@@ -270,7 +327,11 @@ mod tests {
     #[test]
     fn any_column_order() {
         let dir = tempfile::tempdir().unwrap();
-        let p = write(&dir, "a.csv", "H1_1_im,frequency_hz,H1_1_re\n2,0,1\n4,1,3\n");
+        let p = write(
+            &dir,
+            "a.csv",
+            "H1_1_im,frequency_hz,H1_1_re\n2,0,1\n4,1,3\n",
+        );
         let f = read_frf_csv(&p, Quantity::Displacement).unwrap();
         assert_eq!(f.frf.pair(0, 0)[1], Complex64::new(3.0, 4.0));
         assert!(!f.quantity_given);
@@ -280,19 +341,56 @@ mod tests {
     fn errors_name_file_line_and_column() {
         let dir = tempfile::tempdir().unwrap();
         let cases = [
-            ("missing.csv", "frequency_hz,H1_1_re,H1_1_im,H1_2_re\n0,1,1,1\n", "missing column(s) for a 1x2 set: H1_2_im"),
-            ("text.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,abc,1\n", "line 3, column H1_1_re: 'abc' is not a number"),
-            ("nan.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1,NaN\n", "line 2, column H1_1_im: NaN is not a finite number"),
-            ("uneven.csv", "# quantity: velocity\nfrequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,1,1\n2.5,1,1\n", "line 5, column frequency_hz: frequencies are not uniformly spaced"),
-            ("start.csv", "frequency_hz,H1_1_re,H1_1_im\n1,1,1\n2,1,1\n", "line 2, column frequency_hz: frequencies must start at 0 Hz"),
-            ("short.csv", "frequency_hz,H1_1_re,H1_1_im\n0,1\n", "line 2: 2 cells, the header has 3"),
-            ("nofreq.csv", "H1_1_re,H1_1_im\n0,1\n", "column frequency_hz: missing column"),
-            ("quantity.csv", "# quantity: jerk\nfrequency_hz,H1_1_re,H1_1_im\n0,1,1\n", "unknown quantity 'jerk'"),
+            (
+                "missing.csv",
+                "frequency_hz,H1_1_re,H1_1_im,H1_2_re\n0,1,1,1\n",
+                "missing column(s) for a 1x2 set: H1_2_im",
+            ),
+            (
+                "text.csv",
+                "frequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,abc,1\n",
+                "line 3, column H1_1_re: 'abc' is not a number",
+            ),
+            (
+                "nan.csv",
+                "frequency_hz,H1_1_re,H1_1_im\n0,1,NaN\n",
+                "line 2, column H1_1_im: NaN is not a finite number",
+            ),
+            (
+                "uneven.csv",
+                "# quantity: velocity\nfrequency_hz,H1_1_re,H1_1_im\n0,1,1\n1,1,1\n2.5,1,1\n",
+                "line 5, column frequency_hz: frequencies are not uniformly spaced",
+            ),
+            (
+                "start.csv",
+                "frequency_hz,H1_1_re,H1_1_im\n1,1,1\n2,1,1\n",
+                "line 2, column frequency_hz: frequencies must start at 0 Hz",
+            ),
+            (
+                "short.csv",
+                "frequency_hz,H1_1_re,H1_1_im\n0,1\n",
+                "line 2: 2 cells, the header has 3",
+            ),
+            (
+                "nofreq.csv",
+                "H1_1_re,H1_1_im\n0,1\n",
+                "column frequency_hz: missing column",
+            ),
+            (
+                "quantity.csv",
+                "# quantity: jerk\nfrequency_hz,H1_1_re,H1_1_im\n0,1,1\n",
+                "unknown quantity 'jerk'",
+            ),
         ];
         for (name, text, expected) in cases {
             let p = write(&dir, name, text);
-            let err = read_frf_csv(&p, Quantity::Velocity).unwrap_err().to_string();
-            assert!(err.contains(name) && err.contains(expected), "{name}: {err}");
+            let err = read_frf_csv(&p, Quantity::Velocity)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.contains(name) && err.contains(expected),
+                "{name}: {err}"
+            );
         }
     }
 }

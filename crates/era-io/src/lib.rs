@@ -39,10 +39,21 @@ pub enum IoError {
 }
 
 impl IoError {
-    pub(crate) fn format(path: impl Into<PathBuf>, location: impl Into<String>, message: impl Into<String>) -> Self {
-        IoError::Format { path: path.into(), location: location.into(), message: message.into() }
+    pub(crate) fn format(
+        path: impl Into<PathBuf>,
+        location: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        IoError::Format {
+            path: path.into(),
+            location: location.into(),
+            message: message.into(),
+        }
     }
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        IoError::Io { path: path.into(), source }
+        IoError::Io {
+            path: path.into(),
+            source,
+        }
     }
 }

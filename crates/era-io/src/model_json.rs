@@ -121,7 +121,9 @@ pub struct ModelJson {
 
 /// Row-major nested vectors of a matrix.
 pub fn rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows()).map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect()).collect()
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
 }
 
 fn matrix(name: &str, rows: &[Vec<f64>], nrows: usize, ncols: usize) -> Result<Mat<f64>, String> {
@@ -138,7 +140,10 @@ pub fn modal_json(modal: &ModalParameters) -> (Vec<ModeJson>, Vec<RealPoleJson>)
         modal
             .real_poles
             .iter()
-            .map(|r| RealPoleJson { eigenvalue: r.eigenvalue, frequency_hz: r.frequency_hz })
+            .map(|r| RealPoleJson {
+                eigenvalue: r.eigenvalue,
+                frequency_hz: r.frequency_hz,
+            })
             .collect(),
     )
 }
@@ -189,7 +194,12 @@ impl ModelJson {
                 cols: found.realization.hankel_size.1,
                 path: "dense".into(),
             },
-            warnings: found.realization.warnings.iter().map(ToString::to_string).collect(),
+            warnings: found
+                .realization
+                .warnings
+                .iter()
+                .map(ToString::to_string)
+                .collect(),
             timings_s,
         }
     }
@@ -223,7 +233,9 @@ impl ModelJson {
         let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
         let model: ModelJson = serde_json::from_str(&text)
             .map_err(|e| IoError::format(path, format!("line {}: ", e.line()), e.to_string()))?;
-        model.state_space().map_err(|e| IoError::format(path, "", e))?;
+        model
+            .state_space()
+            .map_err(|e| IoError::format(path, "", e))?;
         Ok(model)
     }
 
@@ -326,7 +338,11 @@ mod tests {
 
     #[test]
     fn model_json_round_trips_the_state_space() {
-        let found = identify(&truth_model_frf(None).unwrap(), &EraOptions::thesis_truth_model()).unwrap();
+        let found = identify(
+            &truth_model_frf(None).unwrap(),
+            &EraOptions::thesis_truth_model(),
+        )
+        .unwrap();
         let mut params = BTreeMap::new();
         params.insert("states".to_string(), serde_json::json!(8));
         let json = ModelJson::from_identification(&found, params, None);

@@ -62,9 +62,15 @@ impl LowPass {
             None,
         );
         let DigitalFilter::Sos(sos) = filter else {
-            return Err(EraError::Numerical("Butterworth design did not return sections".into()));
+            return Err(EraError::Numerical(
+                "Butterworth design did not return sections".into(),
+            ));
         };
-        Ok(LowPass { sections: sos.sos, order, cutoff_hz })
+        Ok(LowPass {
+            sections: sos.sos,
+            order,
+            cutoff_hz,
+        })
     }
 
     /// Filter order.

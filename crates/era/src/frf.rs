@@ -115,7 +115,13 @@ impl FrfData {
                 });
             }
         }
-        Ok(FrfData { frequency_hz, outputs, inputs, values, quantity })
+        Ok(FrfData {
+            frequency_hz,
+            outputs,
+            inputs,
+            values,
+            quantity,
+        })
     }
 
     /// Builds from a function of (output, input, line), all 0-based.
@@ -172,7 +178,10 @@ impl FrfData {
     /// If `i` or `j` is out of range.
     #[track_caller]
     pub fn pair(&self, output: usize, input: usize) -> &[Complex64] {
-        assert!(output < self.outputs && input < self.inputs, "pair out of range");
+        assert!(
+            output < self.outputs && input < self.inputs,
+            "pair out of range"
+        );
         let lines = self.lines();
         let start = (output * self.inputs + input) * lines;
         &self.values[start..start + lines]
@@ -193,14 +202,21 @@ pub fn validate_frequencies(frequency_hz: &[f64]) -> Result<()> {
     let lines = frequency_hz.len();
     for (line, f) in frequency_hz.iter().enumerate() {
         if !f.is_finite() {
-            return Err(EraError::NonFinite { what: "frequency", output: 0, input: 0, line });
+            return Err(EraError::NonFinite {
+                what: "frequency",
+                output: 0,
+                input: 0,
+                line,
+            });
         }
     }
     if lines < 2 {
         return Err(EraError::TooFewLines { lines });
     }
     if frequency_hz[0] != 0.0 {
-        return Err(EraError::FirstLineNotZero { first_hz: frequency_hz[0] });
+        return Err(EraError::FirstLineNotZero {
+            first_hz: frequency_hz[0],
+        });
     }
     let spacing = frequency_hz[1];
     if spacing <= 0.0 {
@@ -251,7 +267,10 @@ mod tests {
         let err = FrfData::new(vec![1.0, 2.0, 3.0], 1, 1, ones(3), Quantity::Velocity);
         assert!(matches!(err, Err(EraError::FirstLineNotZero { .. })));
         let err = FrfData::new(vec![0.0, 1.0, 2.5], 1, 1, ones(3), Quantity::Velocity);
-        assert!(matches!(err, Err(EraError::NonUniformFrequencies { line: 2, .. })));
+        assert!(matches!(
+            err,
+            Err(EraError::NonUniformFrequencies { line: 2, .. })
+        ));
     }
 
     #[test]
@@ -261,17 +280,33 @@ mod tests {
         let err = FrfData::new(uniform_lines(3, 1.0), 1, 2, v, Quantity::Velocity);
         assert_eq!(
             err,
-            Err(EraError::NonFinite { what: "FRF", output: 1, input: 2, line: 1 })
+            Err(EraError::NonFinite {
+                what: "FRF",
+                output: 1,
+                input: 2,
+                line: 1
+            })
         );
         let err = FrfData::new(uniform_lines(3, 1.0), 2, 2, ones(6), Quantity::Velocity);
-        assert!(matches!(err, Err(EraError::ShapeMismatch { expected: 12, got: 6, .. })));
+        assert!(matches!(
+            err,
+            Err(EraError::ShapeMismatch {
+                expected: 12,
+                got: 6,
+                ..
+            })
+        ));
     }
 
     #[test]
     fn pair_is_output_major() {
-        let d = FrfData::from_fn(uniform_lines(2, 1.0), 2, 3, Quantity::Velocity, |i, j, k| {
-            Complex64::new((10 * i + j) as f64, k as f64)
-        })
+        let d = FrfData::from_fn(
+            uniform_lines(2, 1.0),
+            2,
+            3,
+            Quantity::Velocity,
+            |i, j, k| Complex64::new((10 * i + j) as f64, k as f64),
+        )
         .unwrap();
         assert_eq!(d.pair(1, 2)[1], Complex64::new(12.0, 1.0));
     }

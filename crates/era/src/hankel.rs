@@ -121,9 +121,21 @@ impl ThesisHankel {
             });
         }
         let blocks = half - 1;
-        let h0 = HankelShape { block_rows: blocks, block_cols: blocks, first_sample: 1 };
-        let h1 = HankelShape { first_sample: 2, ..h0 };
-        Ok(ThesisHankel { markov_samples, half, h0, h1 })
+        let h0 = HankelShape {
+            block_rows: blocks,
+            block_cols: blocks,
+            first_sample: 1,
+        };
+        let h1 = HankelShape {
+            first_sample: 2,
+            ..h0
+        };
+        Ok(ThesisHankel {
+            markov_samples,
+            half,
+            h0,
+            h1,
+        })
     }
 
     /// Markov samples the thesis passes in (`Y_0 … Y_M`, of which `Y_(M-1)`, `Y_M` go
@@ -149,12 +161,20 @@ mod tests {
     #[test]
     fn fast_equals_naive() {
         let m = MarkovSequence::from_fn(3, 2, 20, |k, i, j| (k * 100 + i * 10 + j) as f64);
-        let shape = HankelShape { block_rows: 4, block_cols: 6, first_sample: 3 };
+        let shape = HankelShape {
+            block_rows: 4,
+            block_cols: 6,
+            first_sample: 3,
+        };
         let a = build(&m, shape).unwrap();
         let b = build_naive(&m, shape).unwrap();
         assert_eq!(a, b);
         assert_eq!(a[(3 * 3 + 2, 5 * 2 + 1)], (3 + 3 + 5) as f64 * 100.0 + 21.0);
-        let too_long = HankelShape { block_rows: 10, block_cols: 10, first_sample: 2 };
+        let too_long = HankelShape {
+            block_rows: 10,
+            block_cols: 10,
+            first_sample: 2,
+        };
         assert!(build(&m, too_long).is_err());
     }
 }

@@ -60,12 +60,20 @@ impl EraOptions {
     }
     /// The thesis's DTA settings (Appendix J): `ns 80, lh 5, ni 1, nz 3, ndpts 1024`.
     pub fn thesis_dta() -> Self {
-        EraOptions { integrations: 1, zero_lines: 3, pad_to: 1024, ..Self::new(80, 5) }
+        EraOptions {
+            integrations: 1,
+            zero_lines: 3,
+            pad_to: 1024,
+            ..Self::new(80, 5)
+        }
     }
     /// The thesis's truth-model settings (Appendix J.2.2): `ns 8, lh 4, ni 0, nz 0,
     /// ndpts 1024`.
     pub fn thesis_truth_model() -> Self {
-        EraOptions { pad_to: 1024, ..Self::new(8, 4) }
+        EraOptions {
+            pad_to: 1024,
+            ..Self::new(8, 4)
+        }
     }
 }
 
@@ -143,7 +151,12 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
         clock = Instant::now();
     };
 
-    let pre = preprocess(frf, options.integrations, options.pad_to, options.zero_lines)?;
+    let pre = preprocess(
+        frf,
+        options.integrations,
+        options.pad_to,
+        options.zero_lines,
+    )?;
     if pre.frf.is_all_zero() {
         return Err(EraError::AllZero);
     }
@@ -162,7 +175,10 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
     let markov = MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series);
     lap(&mut timings.markov);
 
-    let realize_options = RealizeOptions { direct_term: options.direct_term, ..RealizeOptions::new(options.states, options.hankel_factor) };
+    let realize_options = RealizeOptions {
+        direct_term: options.direct_term,
+        ..RealizeOptions::new(options.states, options.hankel_factor)
+    };
     let realization = match path {
         Path::Fast => realize(&markov, pre.sample_time_s, &realize_options)?,
         Path::Naive => realize_naive(&markov, pre.sample_time_s, &realize_options)?,
@@ -185,9 +201,19 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
         Path::Fast => HessenbergForm::new(&model).response(measured.frequency_hz()),
         Path::Naive => frequency_response_naive(&model, measured.frequency_hz()),
     };
-    let first_line = options.zero_lines.max(usize::from(options.integrations > 0));
+    let first_line = options
+        .zero_lines
+        .max(usize::from(options.integrations > 0));
     let fit = fit_metrics(&measured, &response, first_line);
     lap(&mut timings.fit);
 
-    Ok(Identification { model, realization, modal, fit, processed, sample_time_s: pre.sample_time_s, timings })
+    Ok(Identification {
+        model,
+        realization,
+        modal,
+        fit,
+        processed,
+        sample_time_s: pre.sample_time_s,
+        timings,
+    })
 }

@@ -29,7 +29,12 @@ pub struct MarkovSequence {
 impl MarkovSequence {
     /// All-zero sequence.
     pub fn zeros(outputs: usize, inputs: usize, samples: usize) -> Self {
-        MarkovSequence { outputs, inputs, samples, data: vec![0.0; outputs * inputs * samples] }
+        MarkovSequence {
+            outputs,
+            inputs,
+            samples,
+            data: vec![0.0; outputs * inputs * samples],
+        }
     }
 
     /// Builds from one time series per output/input pair, pairs in `[output][input]`
@@ -103,7 +108,9 @@ impl MarkovSequence {
     }
     /// Time series of one pair.
     pub fn pair_series(&self, output: usize, input: usize) -> Vec<f64> {
-        (0..self.samples).map(|k| self.get(k, output, input)).collect()
+        (0..self.samples)
+            .map(|k| self.get(k, output, input))
+            .collect()
     }
     /// The q×p block `Y_k` as row-major nested vectors.
     pub fn block(&self, sample: usize) -> Vec<Vec<f64>> {
@@ -181,7 +188,11 @@ pub fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
 /// Markov parameters of the FRFs: [`impulse_responses`] woven into a [`MarkovSequence`].
 pub fn markov_from_frf(frf: &FrfData) -> Result<MarkovSequence> {
     let series = impulse_responses(frf)?;
-    Ok(MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series))
+    Ok(MarkovSequence::from_pair_series(
+        frf.outputs(),
+        frf.inputs(),
+        &series,
+    ))
 }
 
 #[cfg(test)]
@@ -192,10 +203,16 @@ mod tests {
     #[test]
     fn fft_path_equals_naive_mirror_ifft() {
         // Arbitrary complex data, including non-real DC and Nyquist lines.
-        let d = FrfData::from_fn(uniform_lines(17, 0.5), 2, 3, Quantity::Velocity, |i, j, k| {
-            let x = (i * 31 + j * 7 + k * 13) as f64;
-            Complex64::new(x.sin(), (1.7 * x).cos())
-        })
+        let d = FrfData::from_fn(
+            uniform_lines(17, 0.5),
+            2,
+            3,
+            Quantity::Velocity,
+            |i, j, k| {
+                let x = (i * 31 + j * 7 + k * 13) as f64;
+                Complex64::new(x.sin(), (1.7 * x).cos())
+            },
+        )
         .unwrap();
         let fast = impulse_responses(&d).unwrap();
         let slow = impulse_responses_naive(&d);
@@ -209,9 +226,13 @@ mod tests {
 
     #[test]
     fn constant_spectrum_is_a_unit_impulse() {
-        let d = FrfData::from_fn(uniform_lines(5, 1.0), 1, 1, Quantity::Velocity, |_, _, _| {
-            Complex64::new(1.0, 0.0)
-        })
+        let d = FrfData::from_fn(
+            uniform_lines(5, 1.0),
+            1,
+            1,
+            Quantity::Velocity,
+            |_, _, _| Complex64::new(1.0, 0.0),
+        )
         .unwrap();
         let h = impulse_responses(&d).unwrap().remove(0);
         assert!((h[0] - 1.0).abs() < 1e-15);

@@ -30,12 +30,14 @@ impl ModalForm {
     /// Diagonalises `model.a` and projects `B` and `C` onto the eigenvectors.
     ///
     /// # Errors
-    /// [`EraError::Numerical`] when the eigen solver fails.
+    /// [`crate::EraError::Numerical`] when the eigen solver fails.
     pub fn new(model: &StateSpace) -> Result<Self> {
         let n = model.states();
         let (eigenvalues_of_a, v) = balanced_eigen(&model.a)?;
         let v_inv = v.partial_piv_lu().inverse();
-        let complex = |m: &Mat<f64>| Mat::from_fn(m.nrows(), m.ncols(), |i, j| Complex64::new(m[(i, j)], 0.0));
+        let complex = |m: &Mat<f64>| {
+            Mat::from_fn(m.nrows(), m.ncols(), |i, j| Complex64::new(m[(i, j)], 0.0))
+        };
         let cv = complex(&model.c) * &v;
         let vib = &v_inv * complex(&model.b);
         let (q, p) = (model.outputs(), model.inputs());
@@ -46,13 +48,16 @@ impl ModalForm {
             eigenvalues.push(eigenvalues_of_a[k]);
             let mut shape: Vec<Complex64> = (0..q).map(|i| cv[(i, k)]).collect();
             let mut part: Vec<Complex64> = (0..p).map(|j| vib[(k, j)]).collect();
-            let largest = shape.iter().copied().fold(Complex64::new(0.0, 0.0), |best, x| {
-                if x.norm() > best.norm() {
-                    x
-                } else {
-                    best
-                }
-            });
+            let largest = shape
+                .iter()
+                .copied()
+                .fold(Complex64::new(0.0, 0.0), |best, x| {
+                    if x.norm() > best.norm() {
+                        x
+                    } else {
+                        best
+                    }
+                });
             if largest.norm() > 0.0 {
                 shape.iter_mut().for_each(|x| *x /= largest);
                 part.iter_mut().for_each(|x| *x *= largest);
@@ -61,7 +66,12 @@ impl ModalForm {
             participations.push(part);
         }
         let eigenvector_condition = v.norm_l2() * v_inv.norm_l2();
-        Ok(ModalForm { eigenvalues, shapes, participations, eigenvector_condition })
+        Ok(ModalForm {
+            eigenvalues,
+            shapes,
+            participations,
+            eigenvector_condition,
+        })
     }
 }
 
@@ -114,7 +124,7 @@ pub fn continuous_pole(eigenvalue: Complex64, domain: TimeDomain) -> Complex64 {
 /// Modal parameters of a model (DESIGN.md §1.11).
 ///
 /// # Errors
-/// [`EraError::Numerical`] when the eigen solver fails.
+/// [`crate::EraError::Numerical`] when the eigen solver fails.
 pub fn modal_parameters(model: &StateSpace) -> Result<ModalParameters> {
     Ok(modal_parameters_of(&ModalForm::new(model)?, model.domain))
 }
@@ -141,7 +151,9 @@ pub fn modal_parameters_of(form: &ModalForm, domain: TimeDomain) -> ModalParamet
             });
         }
     }
-    out.modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-    out.real_poles.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    out.modes
+        .sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    out.real_poles
+        .sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
     out
 }

@@ -16,11 +16,13 @@ use num_complex::Complex64;
 pub fn integrate(frf: &FrfData, times: usize) -> Result<FrfData> {
     let mut quantity = frf.quantity();
     for _ in 0..times {
-        quantity = quantity.integrated().ok_or_else(|| EraError::InvalidParameter {
-            name: "integrations",
-            value: times.to_string(),
-            reason: format!("{} FRFs cannot be integrated {times} times", frf.quantity()),
-        })?;
+        quantity = quantity
+            .integrated()
+            .ok_or_else(|| EraError::InvalidParameter {
+                name: "integrations",
+                value: times.to_string(),
+                reason: format!("{} FRFs cannot be integrated {times} times", frf.quantity()),
+            })?;
     }
     if times == 0 {
         return Ok(frf.clone());
@@ -80,8 +82,14 @@ pub fn zero_leading_lines(frf: &FrfData, count: usize) -> FrfData {
             *v = Complex64::new(0.0, 0.0);
         }
     }
-    FrfData::new(frf.frequency_hz().to_vec(), frf.outputs(), frf.inputs(), values, frf.quantity())
-        .expect("zeroing lines keeps the data valid")
+    FrfData::new(
+        frf.frequency_hz().to_vec(),
+        frf.outputs(),
+        frf.inputs(),
+        values,
+        frf.quantity(),
+    )
+    .expect("zeroing lines keeps the data valid")
 }
 
 /// The FRFs as the inverse FFT sees them, with the sample time they imply.
@@ -128,7 +136,11 @@ pub fn preprocess(
     let padded = pad(&integrated, pad_to);
     let ts = sample_time_s(padded.spacing_hz(), padded.lines());
     let zeroed = zero_leading_lines(&padded, zero_lines);
-    Ok(Preprocessed { frf: zeroed, sample_time_s: ts, measured_lines: frf.lines() })
+    Ok(Preprocessed {
+        frf: zeroed,
+        sample_time_s: ts,
+        measured_lines: frf.lines(),
+    })
 }
 
 #[cfg(test)]
@@ -139,8 +151,10 @@ mod tests {
     #[test]
     fn integration_divides_by_j_omega_and_zeros_dc() {
         let f = uniform_lines(3, 1.0);
-        let d = FrfData::from_fn(f, 1, 1, Quantity::Acceleration, |_, _, _| Complex64::new(1.0, 0.0))
-            .unwrap();
+        let d = FrfData::from_fn(f, 1, 1, Quantity::Acceleration, |_, _, _| {
+            Complex64::new(1.0, 0.0)
+        })
+        .unwrap();
         let v = integrate(&d, 1).unwrap();
         assert_eq!(v.quantity(), Quantity::Velocity);
         assert_eq!(v.pair(0, 0)[0], Complex64::new(0.0, 0.0));
@@ -152,9 +166,13 @@ mod tests {
     #[test]
     fn dta_settings_give_thesis_sample_time() {
         // 801 lines at 0.025 Hz padded to 1025 lines: Ts = 1/51.2 s (thesis §4.5).
-        let d = FrfData::from_fn(uniform_lines(801, 0.025), 1, 1, Quantity::Acceleration, |_, _, _| {
-            Complex64::new(1.0, 1.0)
-        })
+        let d = FrfData::from_fn(
+            uniform_lines(801, 0.025),
+            1,
+            1,
+            Quantity::Acceleration,
+            |_, _, _| Complex64::new(1.0, 1.0),
+        )
         .unwrap();
         let p = preprocess(&d, 1, 1024, 3).unwrap();
         assert_eq!(p.frf.lines(), 1025);

@@ -45,7 +45,11 @@ pub struct RealizeOptions {
 impl RealizeOptions {
     /// Options with `D = 0`.
     pub fn new(states: usize, hankel_factor: usize) -> Self {
-        RealizeOptions { states, hankel_factor, direct_term: DirectTerm::Zero }
+        RealizeOptions {
+            states,
+            hankel_factor,
+            direct_term: DirectTerm::Zero,
+        }
     }
 }
 
@@ -98,7 +102,10 @@ pub struct Realization {
 }
 
 /// Checks the options against the data before any heavy work.
-fn plan(markov: &MarkovSequence, options: &RealizeOptions) -> Result<(ThesisHankel, Vec<RealizeWarning>)> {
+fn plan(
+    markov: &MarkovSequence,
+    options: &RealizeOptions,
+) -> Result<(ThesisHankel, Vec<RealizeWarning>)> {
     if options.states == 0 {
         return Err(EraError::InvalidParameter {
             name: "states",
@@ -126,11 +133,19 @@ fn plan(markov: &MarkovSequence, options: &RealizeOptions) -> Result<(ThesisHank
     let cols = shapes.h0.block_cols * markov.inputs();
     let available = rows.min(cols);
     if available < options.states {
-        return Err(EraError::HankelTooSmall { rows, cols, available, states: options.states });
+        return Err(EraError::HankelTooSmall {
+            rows,
+            cols,
+            available,
+            states: options.states,
+        });
     }
     let mut warnings = Vec::new();
     if available < 2 * options.states {
-        warnings.push(RealizeWarning::FewSingularValues { available, states: options.states });
+        warnings.push(RealizeWarning::FewSingularValues {
+            available,
+            states: options.states,
+        });
     }
     if shapes.h1.last_sample() > markov.samples() / 2 {
         warnings.push(RealizeWarning::PastHalfPeriod {
@@ -143,14 +158,22 @@ fn plan(markov: &MarkovSequence, options: &RealizeOptions) -> Result<(ThesisHank
 
 /// Numerical rank of a singular-value list: values above `max(rows, cols)·ε·σ₁`.
 pub fn numerical_rank(singular_values: &[f64], rows: usize, cols: usize) -> (usize, f64) {
-    let threshold = singular_values.first().copied().unwrap_or(0.0) * rows.max(cols) as f64 * f64::EPSILON;
-    (singular_values.iter().filter(|s| **s > threshold).count(), threshold)
+    let threshold =
+        singular_values.first().copied().unwrap_or(0.0) * rows.max(cols) as f64 * f64::EPSILON;
+    (
+        singular_values.iter().filter(|s| **s > threshold).count(),
+        threshold,
+    )
 }
 
 fn check_rank(singular_values: &[f64], rows: usize, cols: usize, states: usize) -> Result<()> {
     let (rank, threshold) = numerical_rank(singular_values, rows, cols);
     if rank < states {
-        return Err(EraError::RankDeficient { rank, states, threshold });
+        return Err(EraError::RankDeficient {
+            rank,
+            states,
+            threshold,
+        });
     }
     Ok(())
 }
@@ -169,10 +192,16 @@ fn direct_term(markov: &MarkovSequence, which: DirectTerm) -> Mat<f64> {
 /// [`EraError::InvalidParameter`], [`EraError::NotEnoughMarkovSamples`],
 /// [`EraError::HankelTooSmall`] (§1.8 error), [`EraError::RankDeficient`] when the data's
 /// Hankel has numerical rank below `states`, [`EraError::Numerical`] when the SVD fails.
-pub fn realize(markov: &MarkovSequence, sample_time_s: f64, options: &RealizeOptions) -> Result<Realization> {
+pub fn realize(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
     let h0 = hankel::build(markov, shapes.h0)?;
-    let svd = h0.thin_svd().map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
+    let svd = h0
+        .thin_svd()
+        .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
     let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
     check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
     let n = options.states;
@@ -199,11 +228,17 @@ pub fn realize(markov: &MarkovSequence, sample_time_s: f64, options: &RealizeOpt
 ///
 /// # Errors
 /// As [`realize`].
-pub fn realize_naive(markov: &MarkovSequence, sample_time_s: f64, options: &RealizeOptions) -> Result<Realization> {
+pub fn realize_naive(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
     let h0 = hankel::build_naive(markov, shapes.h0)?;
     let h1 = hankel::build_naive(markov, shapes.h1)?;
-    let svd = h0.svd().map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
+    let svd = h0
+        .svd()
+        .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
     let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
     check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
     let n = options.states;

@@ -46,11 +46,15 @@ impl HessenbergForm {
         let mut q = Mat::<f64>::identity(n, n);
         if n > 2 {
             let par = faer::get_global_parallelism();
-            let bs = faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(n - 1, n - 1);
+            let bs =
+                faer::linalg::qr::no_pivoting::factor::recommended_block_size::<f64>(n - 1, n - 1);
             let mut reflectors = Mat::<f64>::zeros(bs, n - 1);
-            let scratch = hessenberg::hessenberg_in_place_scratch::<f64>(n, bs, par, Default::default()).or(
-                householder::apply_block_householder_sequence_on_the_right_in_place_scratch::<f64>(n - 1, bs, n - 1),
-            );
+            let scratch =
+                hessenberg::hessenberg_in_place_scratch::<f64>(n, bs, par, Default::default()).or(
+                    householder::apply_block_householder_sequence_on_the_right_in_place_scratch::<
+                        f64,
+                    >(n - 1, bs, n - 1),
+                );
             let mut buffer = MemBuffer::new(scratch);
             hessenberg::hessenberg_in_place(
                 h.as_mut(),
@@ -75,7 +79,13 @@ impl HessenbergForm {
         }
         let qt_b = q.transpose() * &b;
         let c_q = &c * &q;
-        HessenbergForm { h, qt_b, c_q, d: model.d.clone(), domain: model.domain }
+        HessenbergForm {
+            h,
+            qt_b,
+            c_q,
+            d: model.d.clone(),
+            domain: model.domain,
+        }
     }
 
     /// The Hessenberg matrix `H` (of the balanced `A`).
@@ -96,7 +106,11 @@ impl HessenbergForm {
             let z = evaluation_point(self.domain, *f);
             for i in 0..n {
                 for j in 0..n {
-                    m[i * n + j] = if i == j { z - self.h[(i, j)] } else { Complex64::new(-self.h[(i, j)], 0.0) };
+                    m[i * n + j] = if i == j {
+                        z - self.h[(i, j)]
+                    } else {
+                        Complex64::new(-self.h[(i, j)], 0.0)
+                    };
                 }
                 for j in 0..p {
                     x[i * p + j] = Complex64::new(self.qt_b[(i, j)], 0.0);
@@ -170,7 +184,11 @@ pub fn frequency_response(model: &StateSpace, frequency_hz: &[f64]) -> Result<Ve
 
 /// Frequency response from a precomputed [`ModalForm`] of `model`: O(n·q·p) per line,
 /// accurate to about `κ(V)·ε` relative ([`ModalForm::eigenvector_condition`]).
-pub fn frequency_response_modal(model: &StateSpace, form: &ModalForm, frequency_hz: &[f64]) -> Vec<Complex64> {
+pub fn frequency_response_modal(
+    model: &StateSpace,
+    form: &ModalForm,
+    frequency_hz: &[f64],
+) -> Vec<Complex64> {
     let (q, p, lines) = (model.outputs(), model.inputs(), frequency_hz.len());
     let mut out = vec![Complex64::new(0.0, 0.0); q * p * lines];
     let mut weights = vec![Complex64::new(0.0, 0.0); form.eigenvalues.len()];
@@ -194,7 +212,12 @@ pub fn frequency_response_modal(model: &StateSpace, form: &ModalForm, frequency_
 
 /// Reference: a dense complex LU solve `(zI − A) X = B` at every line.
 pub fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
-    let (n, q, p, lines) = (model.states(), model.outputs(), model.inputs(), frequency_hz.len());
+    let (n, q, p, lines) = (
+        model.states(),
+        model.outputs(),
+        model.inputs(),
+        frequency_hz.len(),
+    );
     let bc = Mat::from_fn(n, p, |i, j| Complex64::new(model.b[(i, j)], 0.0));
     let cc = Mat::from_fn(q, n, |i, j| Complex64::new(model.c[(i, j)], 0.0));
     let mut out = vec![Complex64::new(0.0, 0.0); q * p * lines];
@@ -230,7 +253,13 @@ pub fn model_frf(model: &StateSpace, like: &FrfData) -> Result<FrfData> {
         });
     }
     let values = frequency_response(model, like.frequency_hz())?;
-    FrfData::new(like.frequency_hz().to_vec(), like.outputs(), like.inputs(), values, like.quantity())
+    FrfData::new(
+        like.frequency_hz().to_vec(),
+        like.outputs(),
+        like.inputs(),
+        values,
+        like.quantity(),
+    )
 }
 
 /// Fit of one output/input pair.
@@ -281,7 +310,11 @@ fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
 /// If `model` does not have the measured layout.
 #[track_caller]
 pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -> FitReport {
-    assert_eq!(model.len(), measured.values().len(), "model response layout");
+    assert_eq!(
+        model.len(),
+        measured.values().len(),
+        "model response layout"
+    );
     let (q, p, lines) = (measured.outputs(), measured.inputs(), measured.lines());
     let first_line = first_line.min(lines);
     let square = q == p;
@@ -293,7 +326,11 @@ pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -
             let h = &model[start..start + g.len()];
             let num: f64 = g.iter().zip(h).map(|(a, b)| (a - b).norm_sqr()).sum();
             let den: f64 = g.iter().map(|a| a.norm_sqr()).sum();
-            let relative_error = if den > 0.0 { (num / den).sqrt() } else { f64::NAN };
+            let relative_error = if den > 0.0 {
+                (num / den).sqrt()
+            } else {
+                f64::NAN
+            };
             let db: Vec<f64> = g
                 .iter()
                 .zip(h)
@@ -301,11 +338,23 @@ pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -
                 .map(|(a, b)| 20.0 * (b.norm() / a.norm()).log10())
                 .collect();
             let rms_log_magnitude_db = mean(db.iter().map(|d| d * d)).map_or(f64::NAN, f64::sqrt);
-            pairs.push(PairFit { output: i, input: j, collocated: square && i == j, relative_error, rms_log_magnitude_db });
+            pairs.push(PairFit {
+                output: i,
+                input: j,
+                collocated: square && i == j,
+                relative_error,
+                rms_log_magnitude_db,
+            });
         }
     }
     let pick = |col: bool, f: fn(&PairFit) -> f64| {
-        mean(pairs.iter().filter(|x| x.collocated == col).map(f).filter(|v| v.is_finite()))
+        mean(
+            pairs
+                .iter()
+                .filter(|x| x.collocated == col)
+                .map(f)
+                .filter(|v| v.is_finite()),
+        )
     };
     FitReport {
         first_line,
@@ -326,7 +375,11 @@ mod tests {
     /// `max |a − b| / max |b|`: per-line ratios blow up at exact zeros (DC of a velocity).
     fn worst_relative(a: &[Complex64], b: &[Complex64]) -> f64 {
         let scale = b.iter().map(|y| y.norm()).fold(0.0, f64::max);
-        a.iter().zip(b).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max) / scale
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).norm())
+            .fold(0.0, f64::max)
+            / scale
     }
 
     #[test]

@@ -27,7 +27,9 @@ impl Minstd {
     /// Seeds the generator; a seed that is 0 modulo 2³¹ − 1 becomes 1 (as in the peer).
     pub fn new(seed: u64) -> Self {
         let state = seed % MINSTD_MODULUS;
-        Minstd { state: if state == 0 { 1 } else { state } }
+        Minstd {
+            state: if state == 0 { 1 } else { state },
+        }
     }
     /// Next uniform in (0, 1).
     pub fn uniform(&mut self) -> f64 {
@@ -74,7 +76,9 @@ pub fn add_noise(frf: &FrfData, fraction: f64, seed: u64) -> Result<FrfData> {
             let draws: Vec<Complex64> = (0..lines).map(|_| rng.complex_normal()).collect();
             let start = (i * p + j) * lines;
             let pair = &mut values[start..start + lines];
-            let rms = |v: &[Complex64]| (v.iter().map(|x| x.norm_sqr()).sum::<f64>() / v.len() as f64).sqrt();
+            let rms = |v: &[Complex64]| {
+                (v.iter().map(|x| x.norm_sqr()).sum::<f64>() / v.len() as f64).sqrt()
+            };
             let scale = fraction * rms(pair) / rms(&draws);
             for (v, g) in pair.iter_mut().zip(&draws) {
                 *v += g * scale;
@@ -119,7 +123,11 @@ pub fn truth_model() -> StateSpace {
         (false, true) => -stiffness(i - 4, j) / m,
         (false, false) => -damping(i - 4, j - 4) / m,
     });
-    let b = Mat::from_fn(8, 3, |i, j| if i >= 4 && i - 4 == j { 1.0 / m } else { 0.0 });
+    let b = Mat::from_fn(
+        8,
+        3,
+        |i, j| if i >= 4 && i - 4 == j { 1.0 / m } else { 0.0 },
+    );
     let cm = Mat::from_fn(3, 8, |i, j| f64::from(u8::from(i == j)));
     StateSpace::new(a, b, cm, Mat::zeros(3, 3), TimeDomain::Continuous)
 }
@@ -133,7 +141,10 @@ pub fn truth_model() -> StateSpace {
 pub fn truth_model_frf(noise: Option<(f64, u64)>) -> Result<FrfData> {
     let ts = 1.0 / TRUTH_SAMPLE_RATE_HZ;
     let discrete = truth_model().c2d(ts)?;
-    let lines = uniform_lines(TRUTH_LINES, TRUTH_SAMPLE_RATE_HZ / 2.0 / (TRUTH_LINES - 1) as f64);
+    let lines = uniform_lines(
+        TRUTH_LINES,
+        TRUTH_SAMPLE_RATE_HZ / 2.0 / (TRUTH_LINES - 1) as f64,
+    );
     let values = frequency_response(&discrete, &lines)?;
     let clean = FrfData::new(lines, 3, 3, values, Quantity::Displacement)?;
     match noise {
@@ -186,7 +197,13 @@ impl Default for ModalSpec {
 impl ModalSpec {
     /// A spec with the DTA-like defaults and the given size.
     pub fn new(outputs: usize, inputs: usize, modes: usize) -> Self {
-        ModalSpec { outputs, inputs, modes, collocated: outputs == inputs, ..Self::default() }
+        ModalSpec {
+            outputs,
+            inputs,
+            modes,
+            collocated: outputs == inputs,
+            ..Self::default()
+        }
     }
 }
 
@@ -215,18 +232,33 @@ impl ModalStructure {
     /// `collocated` with `q ≠ p`.
     pub fn random(spec: &ModalSpec) -> Result<Self> {
         let bad = |name: &'static str, value: String, reason: &str| {
-            Err(EraError::InvalidParameter { name, value, reason: reason.into() })
+            Err(EraError::InvalidParameter {
+                name,
+                value,
+                reason: reason.into(),
+            })
         };
         if spec.outputs == 0 || spec.inputs == 0 {
-            return bad("outputs/inputs", format!("{}x{}", spec.outputs, spec.inputs), "need at least 1 each");
+            return bad(
+                "outputs/inputs",
+                format!("{}x{}", spec.outputs, spec.inputs),
+                "need at least 1 each",
+            );
         }
         if spec.modes == 0 {
             return bad("modes", "0".into(), "need at least one mode");
         }
         if !(spec.fmin_hz > 0.0 && spec.fmax_hz >= spec.fmin_hz && spec.fmax_hz.is_finite()) {
-            return bad("fmin/fmax", format!("{}..{}", spec.fmin_hz, spec.fmax_hz), "need 0 < fmin <= fmax");
+            return bad(
+                "fmin/fmax",
+                format!("{}..{}", spec.fmin_hz, spec.fmax_hz),
+                "need 0 < fmin <= fmax",
+            );
         }
-        if !(spec.damping_min > 0.0 && spec.damping_max >= spec.damping_min && spec.damping_max < 1.0) {
+        if !(spec.damping_min > 0.0
+            && spec.damping_max >= spec.damping_min
+            && spec.damping_max < 1.0)
+        {
             return bad(
                 "damping",
                 format!("{}..{}", spec.damping_min, spec.damping_max),
@@ -234,23 +266,37 @@ impl ModalStructure {
             );
         }
         if spec.collocated && spec.outputs != spec.inputs {
-            return bad("collocated", format!("{}x{}", spec.outputs, spec.inputs), "a collocated set must be square");
+            return bad(
+                "collocated",
+                format!("{}x{}", spec.outputs, spec.inputs),
+                "a collocated set must be square",
+            );
         }
         let mut rng = Minstd::new(spec.seed);
         let r = spec.modes;
-        let mut frequencies_hz: Vec<f64> =
-            (0..r).map(|_| spec.fmin_hz + (spec.fmax_hz - spec.fmin_hz) * rng.uniform()).collect();
+        let mut frequencies_hz: Vec<f64> = (0..r)
+            .map(|_| spec.fmin_hz + (spec.fmax_hz - spec.fmin_hz) * rng.uniform())
+            .collect();
         frequencies_hz.sort_by(f64::total_cmp);
-        let damping_ratios =
-            (0..r).map(|_| spec.damping_min + (spec.damping_max - spec.damping_min) * rng.uniform()).collect();
-        let output_shapes: Vec<Vec<f64>> =
-            (0..r).map(|_| (0..spec.outputs).map(|_| rng.normal()).collect()).collect();
+        let damping_ratios = (0..r)
+            .map(|_| spec.damping_min + (spec.damping_max - spec.damping_min) * rng.uniform())
+            .collect();
+        let output_shapes: Vec<Vec<f64>> = (0..r)
+            .map(|_| (0..spec.outputs).map(|_| rng.normal()).collect())
+            .collect();
         let input_shapes = if spec.collocated {
             output_shapes.clone()
         } else {
-            (0..r).map(|_| (0..spec.inputs).map(|_| rng.normal()).collect()).collect()
+            (0..r)
+                .map(|_| (0..spec.inputs).map(|_| rng.normal()).collect())
+                .collect()
         };
-        Ok(ModalStructure { frequencies_hz, damping_ratios, output_shapes, input_shapes })
+        Ok(ModalStructure {
+            frequencies_hz,
+            damping_ratios,
+            output_shapes,
+            input_shapes,
+        })
     }
 
     /// Outputs `q`.
@@ -290,7 +336,12 @@ impl ModalStructure {
         let freq = uniform_lines(lines, spacing_hz);
         let (q, p) = (self.outputs(), self.inputs());
         let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
-        for (r, (fr, zr)) in self.frequencies_hz.iter().zip(&self.damping_ratios).enumerate() {
+        for (r, (fr, zr)) in self
+            .frequencies_hz
+            .iter()
+            .zip(&self.damping_ratios)
+            .enumerate()
+        {
             let wr = 2.0 * PI * fr;
             for (k, f) in freq.iter().enumerate() {
                 let w = 2.0 * PI * f;
@@ -302,7 +353,8 @@ impl ModalStructure {
                 };
                 for i in 0..q {
                     for j in 0..p {
-                        values[(i * p + j) * lines + k] += factor * self.output_shapes[r][i] * self.input_shapes[r][j];
+                        values[(i * p + j) * lines + k] +=
+                            factor * self.output_shapes[r][i] * self.input_shapes[r][j];
                     }
                 }
             }
@@ -369,7 +421,9 @@ mod tests {
             for j in 0..3 {
                 let a = clean.pair(i, j);
                 let b = noisy.pair(i, j);
-                let rms = |f: &dyn Fn(usize) -> f64| ((0..a.len()).map(f).sum::<f64>() / a.len() as f64).sqrt();
+                let rms = |f: &dyn Fn(usize) -> f64| {
+                    ((0..a.len()).map(f).sum::<f64>() / a.len() as f64).sqrt()
+                };
                 let signal = rms(&|k| a[k].norm_sqr());
                 let noise = rms(&|k| (b[k] - a[k]).norm_sqr());
                 assert!((noise / signal - 0.15).abs() < 1e-12);
@@ -379,14 +433,24 @@ mod tests {
 
     #[test]
     fn modal_frf_agrees_with_its_state_space() {
-        let spec = ModalSpec { collocated: false, ..ModalSpec::new(3, 2, 4) };
+        let spec = ModalSpec {
+            collocated: false,
+            ..ModalSpec::new(3, 2, 4)
+        };
         let s = ModalStructure::random(&spec).unwrap();
-        for quantity in [Quantity::Displacement, Quantity::Velocity, Quantity::Acceleration] {
+        for quantity in [
+            Quantity::Displacement,
+            Quantity::Velocity,
+            Quantity::Acceleration,
+        ] {
             let frf = s.frf(50, 0.3, quantity).unwrap();
             let ss = s.state_space(quantity);
             let g = frequency_response(&ss, frf.frequency_hz()).unwrap();
             for (x, y) in frf.values().iter().zip(&g) {
-                assert!((x - y).norm() <= 1e-9 * (1.0 + x.norm()), "{quantity}: {x} vs {y}");
+                assert!(
+                    (x - y).norm() <= 1e-9 * (1.0 + x.norm()),
+                    "{quantity}: {x} vs {y}"
+                );
             }
         }
     }

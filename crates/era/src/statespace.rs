@@ -109,7 +109,13 @@ impl StateSpace {
         let e = expm(&aug);
         let ad = Mat::from_fn(n, n, |i, j| e[(i, j)]);
         let bd = Mat::from_fn(n, p, |i, j| e[(i, n + j)]);
-        Ok(StateSpace::new(ad, bd, self.c.clone(), self.d.clone(), TimeDomain::Discrete { sample_time_s }))
+        Ok(StateSpace::new(
+            ad,
+            bd,
+            self.c.clone(),
+            self.d.clone(),
+            TimeDomain::Discrete { sample_time_s },
+        ))
     }
 
     /// Zero-order-hold inverse (DESIGN.md §1.10): `Ac = log(Ad)/Ts` and
@@ -151,10 +157,16 @@ impl StateSpace {
             .collect();
         let ac = spectral_function(&v, &v_inv, &log_over_ts, None)?;
         let bc = spectral_function(&v, &v_inv, &input_factor, Some(&self.b))?;
-        let cont = StateSpace::new(ac, bc, self.c.clone(), self.d.clone(), TimeDomain::Continuous);
+        let cont = StateSpace::new(
+            ac,
+            bc,
+            self.c.clone(),
+            self.d.clone(),
+            TimeDomain::Continuous,
+        );
         let back = cont.c2d(ts)?;
         let err = relative_difference(&back.a, &self.a).max(relative_difference(&back.b, &self.b));
-        if !(err < 1e-8) {
+        if err.is_nan() || err >= 1e-8 {
             return Err(EraError::Conversion(format!(
                 "the zero-order-hold inverse is unreliable for this model (round trip error {err:.2e}): its eigenvectors are nearly dependent; keep --time-domain discrete"
             )));
@@ -174,7 +186,9 @@ pub fn balanced_eigen(a: &Mat<f64>) -> Result<(Vec<Complex64>, Mat<Complex64>)> 
     let n = a.nrows();
     let d = balancing_scale(a);
     let ab = Mat::from_fn(n, n, |i, j| a[(i, j)] * d[j] / d[i]);
-    let eig = ab.eigen().map_err(|e| EraError::Numerical(format!("eigendecomposition of A: {e:?}")))?;
+    let eig = ab
+        .eigen()
+        .map_err(|e| EraError::Numerical(format!("eigendecomposition of A: {e:?}")))?;
     let values = (0..n).map(|k| eig.S()[k]).collect();
     let vectors = Mat::from_fn(n, n, |i, k| eig.U()[(i, k)] * d[i]);
     Ok((values, vectors))
@@ -265,17 +279,27 @@ pub fn expm(m: &Mat<f64>) -> Mat<f64> {
     // digits.
     let scale = balancing_scale(m);
     let m = &Mat::from_fn(n, n, |i, j| m[(i, j)] * scale[j] / scale[i]);
-    let norm1 = (0..n).map(|j| (0..n).map(|i| m[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-    let squarings = if norm1 > THETA_13 { (norm1 / THETA_13).log2().ceil() as i32 } else { 0 };
+    let norm1 = (0..n)
+        .map(|j| (0..n).map(|i| m[(i, j)].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let squarings = if norm1 > THETA_13 {
+        (norm1 / THETA_13).log2().ceil() as i32
+    } else {
+        0
+    };
     let a = m * faer::Scale(0.5f64.powi(squarings));
     let ident = Mat::<f64>::identity(n, n);
     let a2 = &a * &a;
     let a4 = &a2 * &a2;
     let a6 = &a2 * &a4;
     let lin = |c6: f64, c4: f64, c2: f64, c0: f64| -> Mat<f64> {
-        &a6 * faer::Scale(c6) + &a4 * faer::Scale(c4) + &a2 * faer::Scale(c2) + &ident * faer::Scale(c0)
+        &a6 * faer::Scale(c6)
+            + &a4 * faer::Scale(c4)
+            + &a2 * faer::Scale(c2)
+            + &ident * faer::Scale(c0)
     };
-    let u_inner = &a6 * (&a6 * faer::Scale(B[13]) + &a4 * faer::Scale(B[11]) + &a2 * faer::Scale(B[9]))
+    let u_inner = &a6
+        * (&a6 * faer::Scale(B[13]) + &a4 * faer::Scale(B[11]) + &a2 * faer::Scale(B[9]))
         + lin(B[7], B[5], B[3], B[1]);
     let u = &a * u_inner;
     let v = &a6 * (&a6 * faer::Scale(B[12]) + &a4 * faer::Scale(B[10]) + &a2 * faer::Scale(B[8]))

@@ -14,12 +14,23 @@ fn matches_scipy_sosfiltfilt() {
     for (c, name) in header.iter().enumerate().skip(1) {
         // "order4_wn0.1": normalised cut-off 2·fc·Ts = wn, so with Ts = 1 s, fc = wn/2.
         let (order, wn) = name.trim_start_matches("order").split_once("_wn").unwrap();
-        let filter = LowPass::design(order.parse().unwrap(), wn.parse::<f64>().unwrap() / 2.0, 1.0).unwrap();
+        let filter = LowPass::design(
+            order.parse().unwrap(),
+            wn.parse::<f64>().unwrap() / 2.0,
+            1.0,
+        )
+        .unwrap();
         let y = filter.apply(&x).unwrap();
         let expected = column(c);
         let scale = expected.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = y.iter().zip(&expected).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        assert!(worst <= 1e-10 * scale, "{name}: max difference {worst:e} of {scale:e}");
+        let worst = y
+            .iter()
+            .zip(&expected)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            worst <= 1e-10 * scale,
+            "{name}: max difference {worst:e} of {scale:e}"
+        );
     }
 }
 

@@ -35,7 +35,14 @@ fn random_system(max_modes: usize) -> impl Strategy<Value = RandomSystem> {
             prop::collection::vec(prop_oneof![-1.5f64..-0.5, 0.5f64..1.5], outputs * n),
             prop::collection::vec(-0.2f64..0.2, n * n),
         )
-            .prop_map(move |(modes, b, c, mix)| RandomSystem { modes, b, c, mix, outputs, inputs })
+            .prop_map(move |(modes, b, c, mix)| RandomSystem {
+                modes,
+                b,
+                c,
+                mix,
+                outputs,
+                inputs,
+            })
     })
 }
 
@@ -65,11 +72,19 @@ impl RandomSystem {
             a[(2 * k + 1, 2 * k)] = im;
             a[(2 * k + 1, 2 * k + 1)] = re;
         }
-        let t = Mat::from_fn(n, n, |i, j| f64::from(u8::from(i == j)) + self.mix[i * n + j]);
+        let t = Mat::from_fn(n, n, |i, j| {
+            f64::from(u8::from(i == j)) + self.mix[i * n + j]
+        });
         let t_inv = faer::linalg::solvers::DenseSolveCore::inverse(&t.partial_piv_lu());
         let b0 = Mat::from_fn(n, self.inputs, |i, j| self.b[i * self.inputs + j]);
         let c0 = Mat::from_fn(self.outputs, n, |i, j| self.c[i * n + j]);
-        StateSpace::new(&t * &a * &t_inv, &t * &b0, &c0 * &t_inv, Mat::zeros(self.outputs, self.inputs), domain)
+        StateSpace::new(
+            &t * &a * &t_inv,
+            &t * &b0,
+            &c0 * &t_inv,
+            Mat::zeros(self.outputs, self.inputs),
+            domain,
+        )
     }
 }
 

@@ -29,16 +29,31 @@ fn round_trip(outputs: usize, inputs: usize, modes: usize, seed: u64, domain: Mo
     let lines = 513;
     let spacing = 1.0; // Nyquist 512 Hz: Ts = 1/1024 s
     let ts = 1.0 / (2.0 * spacing * (lines - 1) as f64);
-    let discrete = structure.state_space(Quantity::Displacement).c2d(ts).unwrap();
+    let discrete = structure
+        .state_space(Quantity::Displacement)
+        .c2d(ts)
+        .unwrap();
     let freq = uniform_lines(lines, spacing);
     let values = frequency_response(&discrete, &freq).unwrap();
     let frf = FrfData::new(freq, outputs, inputs, values, Quantity::Displacement).unwrap();
     let hankel_factor = if outputs.min(inputs) == 1 { 8 } else { 4 };
-    let options = EraOptions { domain, ..EraOptions::new(2 * modes, hankel_factor) };
+    let options = EraOptions {
+        domain,
+        ..EraOptions::new(2 * modes, hankel_factor)
+    };
     let found = identify(&frf, &options).unwrap();
-    assert_eq!(found.modal.modes.len(), modes, "{outputs}x{inputs} seed {seed}");
+    assert_eq!(
+        found.modal.modes.len(),
+        modes,
+        "{outputs}x{inputs} seed {seed}"
+    );
     let expected: Vec<Complex64> = structure.poles();
-    let got: Vec<Complex64> = found.modal.modes.iter().map(|m| m.continuous_pole).collect();
+    let got: Vec<Complex64> = found
+        .modal
+        .modes
+        .iter()
+        .map(|m| m.continuous_pole)
+        .collect();
     worst_match(&expected, &got)
 }
 
@@ -47,7 +62,10 @@ fn poles_come_back_for_several_shapes_and_seeds() {
     for (q, p, r) in [(1, 1, 3), (3, 2, 5), (3, 3, 6), (8, 8, 12)] {
         for seed in [11, 2024, 987_654_321] {
             let err = round_trip(q, p, r, seed, ModelDomain::Discrete);
-            assert!(err < 1e-8, "{q}x{p}, {r} modes, seed {seed}: relative pole error {err:e}");
+            assert!(
+                err < 1e-8,
+                "{q}x{p}, {r} modes, seed {seed}: relative pole error {err:e}"
+            );
         }
     }
 }

@@ -18,9 +18,17 @@ fn dta_like_set_fast_equals_naive_reference() {
     let naive = identify_naive(&frf, &options).unwrap();
     assert_eq!(fast.realization.hankel_size, (1592, 1592));
     let err = worst_match(&naive.model.poles().unwrap(), &fast.model.poles().unwrap());
-    assert!(err <= 1e-8, "eigenvalues differ from the naive reference by {err:e}");
+    assert!(
+        err <= 1e-8,
+        "eigenvalues differ from the naive reference by {err:e}"
+    );
     let s1 = naive.realization.singular_values[0];
-    for (a, b) in fast.realization.singular_values.iter().zip(&naive.realization.singular_values) {
+    for (a, b) in fast
+        .realization
+        .singular_values
+        .iter()
+        .zip(&naive.realization.singular_values)
+    {
         assert!((a - b).abs() <= 1e-12 * s1);
     }
     // Against the thesis routines run by the Octave peer on the same set
@@ -34,7 +42,10 @@ fn dta_like_set_fast_equals_naive_reference() {
     let ts: f64 = first[1].parse().unwrap();
     assert_eq!(ts, fast.sample_time_s);
     let err = worst_match(&peer, &fast.model.poles().unwrap());
-    assert!(err <= 1e-8, "eigenvalues differ from the Octave peer by {err:e}");
+    assert!(
+        err <= 1e-8,
+        "eigenvalues differ from the Octave peer by {err:e}"
+    );
 
     // One-to-one against the true modes: 39 of 40 within 0.5 % in frequency. At ns = 80
     // the thesis algorithm merges a near-coincident pair (7.0335 / 7.0343 Hz) and spends
@@ -54,5 +65,8 @@ fn dta_like_set_fast_equals_naive_reference() {
             }
         }
     }
-    assert!(matched >= 39, "only {matched} of 40 true modes matched one-to-one within 0.5 %");
+    assert!(
+        matched >= 39,
+        "only {matched} of 40 true modes matched one-to-one within 0.5 %"
+    );
 }

@@ -9,7 +9,12 @@ use era::sim::{truth_model, truth_model_frf};
 use era::Complex64;
 
 /// Table 5.2, truth column: frequency (Hz) and damping ratio (%), as printed.
-const TABLE_5_2_TRUTH: [(f64, f64); 4] = [(1748.64, 5.02), (5031.80, 4.22), (7709.75, 5.22), (9458.39, 6.03)];
+const TABLE_5_2_TRUTH: [(f64, f64); 4] = [
+    (1748.64, 5.02),
+    (5031.80, 4.22),
+    (7709.75, 5.22),
+    (9458.39, 6.03),
+];
 
 #[test]
 fn no_noise_recovers_table_5_2_truth() {
@@ -18,13 +23,31 @@ fn no_noise_recovers_table_5_2_truth() {
     assert_eq!(found.modal.modes.len(), 4);
     assert!(found.modal.real_poles.is_empty());
     for (mode, (f, z)) in found.modal.modes.iter().zip(TABLE_5_2_TRUTH) {
-        assert!((mode.frequency_hz - f).abs() < 0.01, "{} vs {f}", mode.frequency_hz);
+        assert!(
+            (mode.frequency_hz - f).abs() < 0.01,
+            "{} vs {f}",
+            mode.frequency_hz
+        );
         // The table prints ζ to 0.01 %, i.e. ±5e-5 as a fraction.
-        assert!((mode.damping_ratio - z / 100.0).abs() < 1e-4, "{} vs {z}", mode.damping_ratio);
+        assert!(
+            (mode.damping_ratio - z / 100.0).abs() < 1e-4,
+            "{} vs {z}",
+            mode.damping_ratio
+        );
     }
     // And to round-off against the exact continuous poles.
-    let exact: Vec<Complex64> = truth_model().poles().unwrap().into_iter().filter(|s| s.im > 0.0).collect();
-    let ident: Vec<Complex64> = found.modal.modes.iter().map(|m| m.continuous_pole).collect();
+    let exact: Vec<Complex64> = truth_model()
+        .poles()
+        .unwrap()
+        .into_iter()
+        .filter(|s| s.im > 0.0)
+        .collect();
+    let ident: Vec<Complex64> = found
+        .modal
+        .modes
+        .iter()
+        .map(|m| m.continuous_pole)
+        .collect();
     let err = worst_match(&exact, &ident);
     assert!(err < 1e-9, "relative pole error {err:e}");
     assert!(found.fit.collocated_mean_relative_error.unwrap() < 1e-9);
@@ -49,14 +72,21 @@ fn clean_and_noisy_runs_match_the_octave_peer() {
         let found = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
         let poles = found.model.poles().unwrap();
         let err = worst_match(&octave_eigs(case), &poles);
-        assert!(err < 1e-9, "{case}: eigenvalues differ from the peer by {err:e}");
+        assert!(
+            err < 1e-9,
+            "{case}: eigenvalues differ from the peer by {err:e}"
+        );
         let col = if case == "clean" { 1 } else { 2 };
         let sv = &found.realization.singular_values;
         assert_eq!(sv.len(), sv_rows.len());
         let s1 = sv[0];
         for (k, row) in sv_rows.iter().enumerate() {
             let peer: f64 = row[col].parse().unwrap();
-            assert!((sv[k] - peer).abs() <= 1e-10 * s1, "{case} sv {k}: {} vs {peer}", sv[k]);
+            assert!(
+                (sv[k] - peer).abs() <= 1e-10 * s1,
+                "{case} sv {k}: {} vs {peer}",
+                sv[k]
+            );
         }
     }
 }

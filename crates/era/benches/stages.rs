@@ -1,0 +1,50 @@
+//! Stages of the pipeline at the thesis's DTA size: 8×8 FRFs, 40 modes, 801 lines at
+//! 0.025 Hz (acceleration), ns 80, lh 5, so H0 is 1592 × 1592.
+//!
+//! `cargo bench -p era --bench stages`. Setup happens outside the timed closures; the
+//! naive Hankel is there as the baseline of the fast one.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use era::hankel::{self, ThesisHankel};
+use era::identify::{identify, EraOptions};
+use era::markov::markov_from_frf;
+use era::modal::modal_parameters;
+use era::preprocess::preprocess;
+use era::realize::{realize, RealizeOptions};
+use era::response::HessenbergForm;
+use era::sim::{ModalSpec, ModalStructure};
+use era::Quantity;
+use std::hint::black_box;
+
+fn stages(c: &mut Criterion) {
+    let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
+    let frf = structure.frf(801, 0.025, Quantity::Acceleration).unwrap();
+    let options = EraOptions::thesis_dta();
+    let pre = preprocess(&frf, 1, 1024, 3).unwrap();
+    let markov = markov_from_frf(&pre.frf).unwrap();
+    let shapes = ThesisHankel::new(80, 5).unwrap();
+    let realization = realize(&markov, pre.sample_time_s, &RealizeOptions::new(80, 5)).unwrap();
+    let model = realization.model.clone();
+    let h0 = hankel::build(&markov, shapes.h0).unwrap();
+
+    let mut g = c.benchmark_group("dta_8x8_ns80_lh5");
+    g.sample_size(10);
+    g.bench_function("preprocess", |b| b.iter(|| preprocess(black_box(&frf), 1, 1024, 3).unwrap()));
+    g.bench_function("markov_realfft", |b| b.iter(|| markov_from_frf(black_box(&pre.frf)).unwrap()));
+    g.bench_function("hankel_build", |b| b.iter(|| hankel::build(black_box(&markov), shapes.h0).unwrap()));
+    g.bench_function("hankel_build_naive", |b| b.iter(|| hankel::build_naive(black_box(&markov), shapes.h0).unwrap()));
+    g.bench_function("thin_svd_1592", |b| b.iter(|| black_box(&h0).thin_svd().unwrap()));
+    g.bench_function("singular_values_only_1592", |b| b.iter(|| black_box(&h0).singular_values().unwrap()));
+    g.bench_function("realize_total", |b| {
+        b.iter(|| realize(black_box(&markov), pre.sample_time_s, &RealizeOptions::new(80, 5)).unwrap())
+    });
+    g.bench_function("modes", |b| b.iter(|| modal_parameters(black_box(&model)).unwrap()));
+    g.bench_function("model_frf_801_lines", |b| {
+        b.iter(|| HessenbergForm::new(black_box(&model)).response(frf.frequency_hz()))
+    });
+    g.bench_function("identify_end_to_end", |b| b.iter(|| identify(black_box(&frf), &options).unwrap()));
+    g.finish();
+}
+
+criterion_group!(benches, stages);
+criterion_main!(benches);
