@@ -182,6 +182,7 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
 /// Timing table.
 pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
     let order = [
+        "simulate",
         "read",
         "preprocess",
         "markov",

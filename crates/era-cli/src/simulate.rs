@@ -1,12 +1,14 @@
 //! `era simulate truth-model|modal`: synthetic FRF files.
 
 use crate::args::{ModalArgs, SimulateArgs, SimulateCommon, SimulateModel};
-use crate::report::{print_json, Human};
+use crate::report::{print_json, timings_table, Human};
 use crate::usage;
 use era::sim::{add_noise, truth_model_frf, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
 use era_io::csv::write_frf_csv;
 use serde_json::json;
+use std::collections::BTreeMap;
+use std::time::Instant;
 
 fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
     let Some((lo, hi)) = text.split_once("..") else {
@@ -33,9 +35,11 @@ fn finish(
     sim: &SimulateCommon,
     frf: &FrfData,
     extra: &[(&str, &str)],
-    summary: serde_json::Value,
+    mut summary: serde_json::Value,
+    simulate_s: f64,
 ) -> anyhow::Result<()> {
     let human = Human::new(&sim.common);
+    let clock = Instant::now();
     let seed = sim.seed.to_string();
     let noise = sim.noise.to_string();
     let mut meta: Vec<(&str, &str)> = extra.to_vec();
@@ -56,6 +60,15 @@ fn finish(
             String::new()
         },
     ));
+    if sim.common.timings {
+        let timings: BTreeMap<String, f64> = [
+            ("simulate".to_string(), simulate_s),
+            ("write".to_string(), clock.elapsed().as_secs_f64()),
+        ]
+        .into();
+        human.print(&timings_table(&timings));
+        summary["timings_s"] = json!(timings);
+    }
     if sim.common.json {
         print_json(&summary)?;
     }
@@ -64,6 +77,7 @@ fn finish(
 
 fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
     check_noise(sim.noise)?;
+    let clock = Instant::now();
     let noise = (sim.noise > 0.0).then_some((sim.noise, sim.seed));
     let frf = truth_model_frf(noise)?;
     let modal = era::modal::modal_parameters(&era::sim::truth_model())?;
@@ -83,6 +97,7 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
             ("source", "era simulate truth-model"),
         ],
         summary,
+        clock.elapsed().as_secs_f64(),
     )
 }
 
@@ -115,6 +130,7 @@ fn modal(a: &ModalArgs) -> anyhow::Result<()> {
         collocated: a.collocated,
         seed: a.sim.seed,
     };
+    let clock = Instant::now();
     let structure = ModalStructure::random(&spec)?;
     let quantity: Quantity = a.quantity.into();
     let mut frf = structure.frf(a.lines, a.df, quantity)?;
@@ -129,7 +145,14 @@ fn modal(a: &ModalArgs) -> anyhow::Result<()> {
         .collect();
     let summary = json!({"file": a.sim.out, "model": "modal", "outputs": a.outputs, "inputs": a.inputs, "lines": a.lines,
         "spacing_hz": a.df, "quantity": quantity.name(), "collocated": a.collocated, "noise": a.sim.noise, "seed": a.sim.seed, "modes": modes});
-    finish(&a.sim, &frf, &[("source", "era simulate modal")], summary)
+    let simulate_s = clock.elapsed().as_secs_f64();
+    finish(
+        &a.sim,
+        &frf,
+        &[("source", "era simulate modal")],
+        summary,
+        simulate_s,
+    )
 }
 
 pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {

@@ -421,3 +421,35 @@ fn a_failed_run_leaves_no_file_behind() {
         "no model.json from a failed run"
     );
 }
+
+#[test]
+fn simulate_reports_timings_and_the_true_modes() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = dir.path().join("m.csv");
+    let out = era()
+        .args([
+            "simulate",
+            "modal",
+            "--outputs",
+            "2",
+            "--inputs",
+            "2",
+            "--modes",
+            "3",
+            "--collocated",
+            "--timings",
+            "--json",
+            "--out",
+        ])
+        .arg(&frf)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let v = json_of(&out);
+    assert!(
+        v["timings_s"]["simulate"].as_f64().is_some() && v["timings_s"]["write"].as_f64().is_some()
+    );
+    assert_eq!(v["modes"].as_array().unwrap().len(), 3);
+    let text = std::fs::read_to_string(&frf).unwrap();
+    assert!(text.starts_with("# quantity: acceleration\n"));
+}

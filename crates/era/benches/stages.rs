@@ -29,20 +29,43 @@ fn stages(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("dta_8x8_ns80_lh5");
     g.sample_size(10);
-    g.bench_function("preprocess", |b| b.iter(|| preprocess(black_box(&frf), 1, 1024, 3).unwrap()));
-    g.bench_function("markov_realfft", |b| b.iter(|| markov_from_frf(black_box(&pre.frf)).unwrap()));
-    g.bench_function("hankel_build", |b| b.iter(|| hankel::build(black_box(&markov), shapes.h0).unwrap()));
-    g.bench_function("hankel_build_naive", |b| b.iter(|| hankel::build_naive(black_box(&markov), shapes.h0).unwrap()));
-    g.bench_function("thin_svd_1592", |b| b.iter(|| black_box(&h0).thin_svd().unwrap()));
-    g.bench_function("singular_values_only_1592", |b| b.iter(|| black_box(&h0).singular_values().unwrap()));
-    g.bench_function("realize_total", |b| {
-        b.iter(|| realize(black_box(&markov), pre.sample_time_s, &RealizeOptions::new(80, 5)).unwrap())
+    g.bench_function("preprocess", |b| {
+        b.iter(|| preprocess(black_box(&frf), 1, 1024, 3).unwrap())
     });
-    g.bench_function("modes", |b| b.iter(|| modal_parameters(black_box(&model)).unwrap()));
+    g.bench_function("markov_realfft", |b| {
+        b.iter(|| markov_from_frf(black_box(&pre.frf)).unwrap())
+    });
+    g.bench_function("hankel_build", |b| {
+        b.iter(|| hankel::build(black_box(&markov), shapes.h0).unwrap())
+    });
+    g.bench_function("hankel_build_naive", |b| {
+        b.iter(|| hankel::build_naive(black_box(&markov), shapes.h0).unwrap())
+    });
+    g.bench_function("thin_svd_1592", |b| {
+        b.iter(|| black_box(&h0).thin_svd().unwrap())
+    });
+    g.bench_function("singular_values_only_1592", |b| {
+        b.iter(|| black_box(&h0).singular_values().unwrap())
+    });
+    g.bench_function("realize_total", |b| {
+        b.iter(|| {
+            realize(
+                black_box(&markov),
+                pre.sample_time_s,
+                &RealizeOptions::new(80, 5),
+            )
+            .unwrap()
+        })
+    });
+    g.bench_function("modes", |b| {
+        b.iter(|| modal_parameters(black_box(&model)).unwrap())
+    });
     g.bench_function("model_frf_801_lines", |b| {
         b.iter(|| HessenbergForm::new(black_box(&model)).response(frf.frequency_hz()))
     });
-    g.bench_function("identify_end_to_end", |b| b.iter(|| identify(black_box(&frf), &options).unwrap()));
+    g.bench_function("identify_end_to_end", |b| {
+        b.iter(|| identify(black_box(&frf), &options).unwrap())
+    });
     g.finish();
 }
 

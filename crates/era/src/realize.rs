@@ -20,6 +20,7 @@ use crate::hankel::{self, ThesisHankel};
 use crate::markov::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
+use std::time::Instant;
 
 /// What the model's `D` is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -99,6 +100,10 @@ pub struct Realization {
     pub hankel_size: (usize, usize),
     /// Warnings of §1.8.
     pub warnings: Vec<RealizeWarning>,
+    /// Wall time of the Hankel construction and SVD, s.
+    pub hankel_svd_seconds: f64,
+    /// Wall time of the products of §1.9, s.
+    pub products_seconds: f64,
 }
 
 /// Checks the options against the data before any heavy work.
@@ -198,12 +203,15 @@ pub fn realize(
     options: &RealizeOptions,
 ) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
+    let clock = Instant::now();
     let h0 = hankel::build(markov, shapes.h0)?;
     let svd = h0
         .thin_svd()
         .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
     let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
     check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
+    let hankel_svd_seconds = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
     let n = options.states;
     let (q, p) = (markov.outputs(), markov.inputs());
     let un = svd.U().subcols(0, n);
@@ -220,6 +228,8 @@ pub fn realize(
         singular_values,
         hankel_size: (h0.nrows(), h0.ncols()),
         warnings,
+        hankel_svd_seconds,
+        products_seconds: clock.elapsed().as_secs_f64(),
     })
 }
 
@@ -234,6 +244,7 @@ pub fn realize_naive(
     options: &RealizeOptions,
 ) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
+    let clock = Instant::now();
     let h0 = hankel::build_naive(markov, shapes.h0)?;
     let h1 = hankel::build_naive(markov, shapes.h1)?;
     let svd = h0
@@ -241,6 +252,8 @@ pub fn realize_naive(
         .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
     let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
     check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
+    let hankel_svd_seconds = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
     let n = options.states;
     let (q, p) = (markov.outputs(), markov.inputs());
     let (u, v) = (svd.U(), svd.V());
@@ -274,5 +287,7 @@ pub fn realize_naive(
         singular_values,
         hankel_size: (h0.nrows(), h0.ncols()),
         warnings,
+        hankel_svd_seconds,
+        products_seconds: clock.elapsed().as_secs_f64(),
     })
 }
