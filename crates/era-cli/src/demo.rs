@@ -8,20 +8,12 @@ use crate::usage;
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
 use era::modal::{modal_parameters, Mode};
-use era::sim::{truth_model, truth_model_frf};
+use era::sim::{truth_model, truth_model_frf, TABLE_5_2_ERA_NOISY};
 use era_io::csv::write_frf_csv;
 use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::time::Instant;
-
-/// Table 5.2 as printed in the thesis: ERA fit with noise (f Hz, ζ %), for reference.
-const THESIS_ERA_NOISY: [(f64, f64); 4] = [
-    (1747.70, 4.98),
-    (5031.66, 4.28),
-    (7708.31, 5.31),
-    (9457.83, 6.03),
-];
 
 fn max_errors(truth: &[Mode], found: &[Mode]) -> serde_json::Value {
     if truth.len() != found.len() {
@@ -119,7 +111,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     let _ = writeln!(t, "\nno noise: {}", show(&e0));
     let _ = writeln!(t, "{pct:.0} % noise (seed {}): {}", a.seed, show(&e1));
     let _ = write!(t, "thesis (1994), ERA with 15 % noise:");
-    for (f, z) in THESIS_ERA_NOISY {
+    for (f, z) in TABLE_5_2_ERA_NOISY {
         let _ = write!(t, "  {f:.2} / {z:.2}");
     }
     let _ = writeln!(t, "\n(the noisy column depends on the noise draw; scripts/octave_peer.sh compare SEED runs the thesis routines on the same draw)");

@@ -1,6 +1,7 @@
 //! End-to-end tests of the `era` binary.
 
 use assert_cmd::Command;
+use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -18,6 +19,17 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
+/// Writes the truth model's FRFs into `dir` with `era simulate truth-model`.
+fn simulated_truth(dir: &Path) -> PathBuf {
+    let frf = dir.join("truth.csv");
+    era()
+        .args(["simulate", "truth-model", "-q", "--out"])
+        .arg(&frf)
+        .assert()
+        .success();
+    frf
+}
+
 /// Runs `era` and expects exit code 2 with `needle` in stderr, and no panic.
 fn expect_input_error(args: &[&str], needle: &str) {
     let out = era().args(args).output().unwrap();
@@ -29,13 +41,6 @@ fn expect_input_error(args: &[&str], needle: &str) {
     );
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
 }
-
-const TABLE_5_2_TRUTH: [(f64, f64); 4] = [
-    (1748.64, 5.02),
-    (5031.80, 4.22),
-    (7709.75, 5.22),
-    (9458.39, 6.03),
-];
 
 #[test]
 fn demo_prints_table_5_2_and_json_agrees() {
@@ -125,12 +130,7 @@ fn demo_out_writes_frfs_models_and_fits() {
 #[test]
 fn simulate_then_identify_the_truth_model() {
     let dir = tempfile::tempdir().unwrap();
-    let frf = dir.path().join("truth.csv");
-    era()
-        .args(["simulate", "truth-model", "-q", "--out"])
-        .arg(&frf)
-        .assert()
-        .success();
+    let frf = simulated_truth(dir.path());
     let out_dir = dir.path().join("out");
     let out = era()
         .arg("identify")
@@ -291,12 +291,7 @@ fn bad_csv_files_exit_2_naming_the_problem() {
 #[test]
 fn impossible_requests_exit_2() {
     let dir = tempfile::tempdir().unwrap();
-    let frf = dir.path().join("truth.csv");
-    era()
-        .args(["simulate", "truth-model", "-q", "--out"])
-        .arg(&frf)
-        .assert()
-        .success();
+    let frf = simulated_truth(dir.path());
     let f = frf.to_str().unwrap();
     expect_input_error(
         &["identify", f, "--states", "12", "--hankel-factor", "4"],
@@ -400,12 +395,7 @@ fn impossible_requests_exit_2() {
 #[test]
 fn a_failed_run_leaves_no_file_behind() {
     let dir = tempfile::tempdir().unwrap();
-    let frf = dir.path().join("truth.csv");
-    era()
-        .args(["simulate", "truth-model", "-q", "--out"])
-        .arg(&frf)
-        .assert()
-        .success();
+    let frf = simulated_truth(dir.path());
     let out_dir = dir.path().join("out");
     let out = era()
         .arg("identify")

@@ -88,6 +88,24 @@ pub fn add_noise(frf: &FrfData, fraction: f64, seed: u64) -> Result<FrfData> {
     FrfData::new(frf.frequency_hz().to_vec(), q, p, values, frf.quantity())
 }
 
+/// Table 5.2 of the thesis as printed, truth column: natural frequency (Hz) and
+/// damping ratio (%) of the four truth-model modes, to 0.01.
+pub const TABLE_5_2_TRUTH: [(f64, f64); 4] = [
+    (1748.64, 5.02),
+    (5031.80, 4.22),
+    (7709.75, 5.22),
+    (9458.39, 6.03),
+];
+
+/// Table 5.2 as printed, "ERA fit with noise" column (the thesis's own noise draw, which
+/// is not recorded): frequency (Hz) and damping ratio (%).
+pub const TABLE_5_2_ERA_NOISY: [(f64, f64); 4] = [
+    (1747.70, 4.98),
+    (5031.66, 4.28),
+    (7708.31, 5.31),
+    (9457.83, 6.03),
+];
+
 /// Sample rate of the truth-model FRFs, Hz (DESIGN.md §2).
 pub const TRUTH_SAMPLE_RATE_HZ: f64 = 25_600.0;
 /// Number of truth-model FRF lines (0 … 12 800 Hz).

@@ -5,16 +5,8 @@ mod common;
 
 use common::{read_csv, worst_match};
 use era::identify::{identify, EraOptions};
-use era::sim::{truth_model, truth_model_frf};
+use era::sim::{truth_model, truth_model_frf, TABLE_5_2_TRUTH};
 use era::Complex64;
-
-/// Table 5.2, truth column: frequency (Hz) and damping ratio (%), as printed.
-const TABLE_5_2_TRUTH: [(f64, f64); 4] = [
-    (1748.64, 5.02),
-    (5031.80, 4.22),
-    (7709.75, 5.22),
-    (9458.39, 6.03),
-];
 
 #[test]
 fn no_noise_recovers_table_5_2_truth() {
