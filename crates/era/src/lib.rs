@@ -37,6 +37,7 @@
 pub mod error;
 pub mod filter;
 pub mod frf;
+pub mod friction;
 pub mod hankel;
 pub mod identify;
 pub mod markov;

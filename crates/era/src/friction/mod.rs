@@ -1,0 +1,210 @@
+//! Coulomb friction of reaction-mass actuators: free-decay identification, simulation,
+//! compensation and tuning (thesis §3.1, §4.3–4.4, Table 5.1, Appendix K, Appendix L.3).
+//!
+//! Each actuator is a single-degree-of-freedom oscillator with dry friction,
+//!
+//! ```text
+//! m ẍ + c ẋ + F_C sgn(ẋ) + k x = u(t),        ω_n² = k/m   (Eq. 3.1, c = 0 in the thesis)
+//! ```
+//!
+//! Released from rest at `x0`, each half-cycle is a half sine about the shifted centre
+//! `±F_C/k`, and the velocity amplitude drops by `2 F_C ω_n / k` every half-cycle
+//! (Eq. 3.10): linearly, where viscous damping decays exponentially. Over `cycles`
+//! cycles the drop `Δy` gives the friction force (Eq. 3.12):
+//!
+//! ```text
+//! F_C = Δy · k / (8π f_n · cycles)
+//! ```
+//!
+//! - [`simulate`]: the exact piecewise solution (Eqs. 3.3–3.9) and an event-driven
+//!   integrator for forced, viscous and compensated motion.
+//! - [`estimate`]: automatic free-decay analysis of a record (what the thesis did with
+//!   mouse clicks in `FC.M`).
+//! - [`compensator`]: the sampled dead-zone compensator of Appendix K, allocation-free.
+//! - [`tune`]: bisection for the coefficient at which the compensated decay is neutral
+//!   (what the thesis did by hand with its "tweak" routine).
+//!
+//! Units are the caller's, consistently: the thesis used inches, lbf and seconds, with
+//! `k = 1.0 lbf/in`, so forces come out in lbf and velocities in in/s.
+
+pub mod compensator;
+pub mod estimate;
+pub mod simulate;
+pub mod tune;
+
+use thiserror::Error;
+
+/// Problems with friction records and parameters.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FrictionError {
+    /// A parameter is out of range.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Flag name.
+        name: &'static str,
+        /// Value given.
+        value: String,
+        /// Why.
+        reason: String,
+    },
+    /// Too few samples to analyse.
+    #[error("the record has {samples} samples, at least {needed} are needed")]
+    TooFewSamples {
+        /// Samples found.
+        samples: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// Time does not increase strictly.
+    #[error("time is not strictly increasing at sample {index} ({previous} s then {time} s)")]
+    NonMonotonicTime {
+        /// 0-based sample.
+        index: usize,
+        /// The previous time, s.
+        previous: f64,
+        /// This time, s.
+        time: f64,
+    },
+    /// NaN or infinity.
+    #[error("non-finite {column} at sample {index}")]
+    NonFinite {
+        /// Column name.
+        column: &'static str,
+        /// 0-based sample.
+        index: usize,
+    },
+    /// The record does not oscillate (it stops within a cycle, like the thesis's
+    /// horizontal actuators 9 and 10).
+    #[error(
+        "the record never oscillates: {half_cycles} half-cycle(s) above the noise after release, at least 3 are needed"
+    )]
+    NeverOscillates {
+        /// Half-cycles found.
+        half_cycles: usize,
+    },
+    /// Oscillates, but not long enough for a fit.
+    #[error(
+        "too few cycles to fit: {usable} usable half-cycle(s) after skipping the release transient and the stuck tail, at least {needed} are needed"
+    )]
+    TooFewCycles {
+        /// Usable half-cycles.
+        usable: usize,
+        /// Needed.
+        needed: usize,
+    },
+    /// A compensator buffer has the wrong length.
+    #[error("expected {expected} channels, got {got}")]
+    Expected {
+        /// Channels configured.
+        expected: usize,
+        /// Length given.
+        got: usize,
+    },
+}
+
+/// Result alias.
+pub type Result<T> = std::result::Result<T, FrictionError>;
+
+/// A reaction-mass actuator: oscillator with Coulomb (and optionally viscous) damping.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Oscillator {
+    /// Net spring stiffness `k` (force per length; thesis 1.0 lbf/in).
+    pub stiffness: f64,
+    /// Undamped natural frequency `f_n`, Hz.
+    pub natural_frequency_hz: f64,
+    /// Coulomb friction force `F_C` (force).
+    pub coulomb_force: f64,
+    /// Viscous damping ratio `ζ` (fraction), 0 for the thesis's model.
+    pub viscous_damping_ratio: f64,
+}
+
+impl Oscillator {
+    /// A Coulomb-only oscillator.
+    pub fn coulomb(stiffness: f64, natural_frequency_hz: f64, coulomb_force: f64) -> Self {
+        Oscillator {
+            stiffness,
+            natural_frequency_hz,
+            coulomb_force,
+            viscous_damping_ratio: 0.0,
+        }
+    }
+
+    /// Checks every parameter.
+    ///
+    /// # Errors
+    /// [`FrictionError::InvalidParameter`] for a non-positive stiffness or frequency, a
+    /// negative friction force, or a damping ratio outside `[0, 1)`.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name, value: f64, reason: &str| {
+            Err(FrictionError::InvalidParameter {
+                name,
+                value: value.to_string(),
+                reason: reason.into(),
+            })
+        };
+        if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
+            return bad("stiffness", self.stiffness, "must be positive");
+        }
+        if !(self.natural_frequency_hz.is_finite() && self.natural_frequency_hz > 0.0) {
+            return bad(
+                "natural-frequency-hz",
+                self.natural_frequency_hz,
+                "must be positive",
+            );
+        }
+        if !(self.coulomb_force.is_finite() && self.coulomb_force >= 0.0) {
+            return bad("coulomb-force", self.coulomb_force, "must be >= 0");
+        }
+        if !(self.viscous_damping_ratio.is_finite()
+            && (0.0..1.0).contains(&self.viscous_damping_ratio))
+        {
+            return bad(
+                "viscous-damping-ratio",
+                self.viscous_damping_ratio,
+                "must be in [0, 1)",
+            );
+        }
+        Ok(())
+    }
+
+    /// `ω_n = 2π f_n`, rad/s.
+    pub fn omega(&self) -> f64 {
+        2.0 * std::f64::consts::PI * self.natural_frequency_hz
+    }
+    /// Moving mass `m = k/ω_n²`.
+    pub fn mass(&self) -> f64 {
+        self.stiffness / (self.omega() * self.omega())
+    }
+    /// Viscous coefficient `c = 2ζ√(k m)`.
+    pub fn viscous_coefficient(&self) -> f64 {
+        2.0 * self.viscous_damping_ratio * (self.stiffness * self.mass()).sqrt()
+    }
+    /// Velocity drop per cycle of a Coulomb free decay, `4 F_C ω_n / k` (Eq. 3.10).
+    pub fn velocity_drop_per_cycle(&self) -> f64 {
+        4.0 * self.coulomb_force * self.omega() / self.stiffness
+    }
+}
+
+/// Eq. 3.12: `F_C = Δy · k / (8π f_n · cycles)`.
+pub fn coulomb_force_from_decay(
+    velocity_drop: f64,
+    stiffness: f64,
+    natural_frequency_hz: f64,
+    cycles: f64,
+) -> f64 {
+    velocity_drop * stiffness / (8.0 * std::f64::consts::PI * natural_frequency_hz * cycles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eq_3_12_inverts_eq_3_10() {
+        let o = Oscillator::coulomb(1.0, 1.5, 0.0591);
+        let cycles = 3.5;
+        let drop = o.velocity_drop_per_cycle() * cycles;
+        assert!((coulomb_force_from_decay(drop, 1.0, 1.5, cycles) - 0.0591).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,154 @@
+//! Automatic tuning of the compensation coefficient (replaces the thesis's "tweak"
+//! routine of Appendix K.2, where the coefficient was adjusted by eye until the
+//! compensated free decay neither decayed nor grew).
+//!
+//! With the compensator applying `c·sgn(v)` outside its dead zone (fraction 1), the
+//! compensated free decay is simulated ([`super::simulate::integrate`], sampled
+//! compensator, zero-order hold) and its velocity amplitude measured over the cycles.
+//! The trend is monotone in `c`: below the neutral coefficient the motion decays, above
+//! it it grows. Bisection finds the neutral `c*`. Without viscous damping and with a
+//! negligible dead zone `c* = F_C`; viscous damping and the dead zone raise it.
+//!
+//! At the applied fraction `φ` the **stability margin** is `1 − φ·c/c*` for a coefficient
+//! `c`: positive means the compensated actuator still decays, negative means it
+//! oscillates — as the thesis's raw free-decay coefficients did.
+
+use super::compensator::ChannelConfig;
+use super::simulate::integrate;
+use super::{FrictionError, Oscillator, Result};
+
+/// Settings of a tuning run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TuneSpec {
+    /// The actuator model.
+    pub oscillator: Oscillator,
+    /// Release displacement of the simulated free decays.
+    pub x0: f64,
+    /// Compensator dead zone (velocity).
+    pub dead_zone: f64,
+    /// Compensator sample rate, Hz (thesis: 200).
+    pub sample_rate_hz: f64,
+    /// Cycles simulated per trial.
+    pub cycles: usize,
+    /// Fraction of the coefficient to apply in service (thesis: 0.85–0.9).
+    pub fraction: f64,
+}
+
+/// Result of a tuning run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TuneResult {
+    /// Coefficient at which the compensated free decay is neutral.
+    pub neutral_coefficient: f64,
+    /// `fraction × neutral`: the coefficient to program.
+    pub applied_coefficient: f64,
+    /// `1 − fraction` at the neutral coefficient.
+    pub stability_margin: f64,
+    /// Bisection iterations.
+    pub iterations: usize,
+}
+
+/// Velocity amplitude trend of the compensated free decay with coefficient `c`:
+/// (last peak − first peak) / first peak over the simulated cycles.
+///
+/// # Errors
+/// From the integrator.
+pub fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> {
+    let channel = ChannelConfig {
+        coefficient,
+        dead_zone: spec.dead_zone,
+        fraction: 1.0,
+        ..ChannelConfig::thesis(coefficient)
+    };
+    let samples = (spec.cycles as f64 * spec.sample_rate_hz / spec.oscillator.natural_frequency_hz)
+        .ceil() as usize;
+    let states = integrate(
+        &spec.oscillator,
+        spec.x0,
+        0.0,
+        spec.sample_rate_hz,
+        samples,
+        |_, s| channel.output(s.v),
+    )?;
+    // Peak |v| in the first and the last cycle.
+    let per_cycle = (spec.sample_rate_hz / spec.oscillator.natural_frequency_hz).ceil() as usize;
+    let peak =
+        |range: &[super::simulate::State]| range.iter().fold(0.0f64, |m, s| m.max(s.v.abs()));
+    let first = peak(&states[..per_cycle.min(states.len())]);
+    let last = peak(&states[states.len().saturating_sub(per_cycle)..]);
+    Ok((last - first) / first.max(f64::MIN_POSITIVE))
+}
+
+/// Bisection for the neutral coefficient between 0 and `4·F_C + drop` of the model.
+///
+/// # Errors
+/// [`FrictionError::InvalidParameter`] for invalid settings.
+pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
+    spec.oscillator.validate()?;
+    let bad = |name, value: f64, reason: &str| {
+        Err(FrictionError::InvalidParameter {
+            name,
+            value: value.to_string(),
+            reason: reason.into(),
+        })
+    };
+    if !(spec.x0.is_finite() && spec.x0 != 0.0) {
+        return bad("x0", spec.x0, "must be non-zero");
+    }
+    if !(spec.fraction.is_finite() && spec.fraction > 0.0 && spec.fraction <= 1.0) {
+        return bad("fraction", spec.fraction, "must be in (0, 1]");
+    }
+    if !(spec.dead_zone.is_finite() && spec.dead_zone >= 0.0) {
+        return bad("dead-zone", spec.dead_zone, "must be >= 0");
+    }
+    if spec.cycles < 2 {
+        return bad(
+            "cycles",
+            spec.cycles as f64,
+            "need at least 2 cycles per trial",
+        );
+    }
+    if !(spec.sample_rate_hz.is_finite()
+        && spec.sample_rate_hz > 4.0 * spec.oscillator.natural_frequency_hz)
+    {
+        return bad(
+            "sample-rate",
+            spec.sample_rate_hz,
+            "must exceed 4 x the natural frequency",
+        );
+    }
+    let o = &spec.oscillator;
+    // Upper bracket: enough force to beat friction and the viscous loss at x0.
+    let viscous = o.viscous_coefficient() * o.omega() * spec.x0.abs();
+    let (mut lo, mut hi) = (
+        0.0,
+        2.0 * (o.coulomb_force + viscous).max(1e-12 * o.stiffness * spec.x0.abs()),
+    );
+    let mut guard = 0;
+    while amplitude_trend(spec, hi)? < 0.0 && guard < 20 {
+        hi *= 2.0;
+        guard += 1;
+    }
+    let mut iterations = 0;
+    while hi - lo > 1e-5 * hi && iterations < 60 {
+        let mid = 0.5 * (lo + hi);
+        if amplitude_trend(spec, mid)? < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        iterations += 1;
+    }
+    let neutral = 0.5 * (lo + hi);
+    Ok(TuneResult {
+        neutral_coefficient: neutral,
+        applied_coefficient: spec.fraction * neutral,
+        stability_margin: 1.0 - spec.fraction,
+        iterations,
+    })
+}
+
+/// Stability margin `1 − fraction·coefficient/neutral` of a coefficient against the
+/// neutral one: negative means the compensated actuator oscillates.
+pub fn stability_margin(coefficient: f64, fraction: f64, neutral: f64) -> f64 {
+    1.0 - fraction * coefficient / neutral
+}
