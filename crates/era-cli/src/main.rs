@@ -6,6 +6,7 @@
 
 mod args;
 mod demo;
+mod friction;
 mod identify;
 mod report;
 mod simulate;
@@ -39,6 +40,9 @@ fn exit_code(err: &anyhow::Error) -> u8 {
         }
         if cause.downcast_ref::<era_io::IoError>().is_some()
             || cause.downcast_ref::<UsageError>().is_some()
+            || cause
+                .downcast_ref::<era::friction::FrictionError>()
+                .is_some()
         {
             return 2;
         }
@@ -55,6 +59,7 @@ fn main() -> ExitCode {
         args::Command::Demo(a) => demo::run(a),
         args::Command::Identify(a) => identify::run(a),
         args::Command::Simulate(a) => simulate::run(a),
+        args::Command::Friction(a) => friction::run(a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -7,6 +7,7 @@ use era::identify::{EraOptions, Identification, ModelDomain};
 use era::realize::DirectTerm;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::io::Write as _;
 
 /// Where human text goes.
 pub struct Human {
@@ -25,18 +26,27 @@ impl Human {
         if self.quiet {
             return;
         }
+        // A closed pipe (`era demo | head`) is not an error worth reporting.
         if self.to_stderr {
-            eprint!("{text}");
+            let _ = std::io::stderr().write_all(text.as_bytes());
         } else {
-            print!("{text}");
+            let _ = std::io::stdout().write_all(text.as_bytes());
         }
     }
 }
 
-/// Prints JSON on stdout.
+/// Prints JSON on stdout; a reader that closed the pipe early is not an error.
 pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
-    println!("{}", serde_json::to_string_pretty(value)?);
-    Ok(())
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|_| stdout.flush())
+    {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
 }
 
 /// Every parameter by its JSON name (DESIGN.md §1 table).

@@ -1,6 +1,7 @@
 //! File formats of `era`: one module per format.
 //!
 //! - [`csv`]: our self-describing FRF CSV (DESIGN.md §4), read and written;
+//! - [`decay_csv`]: free-decay records (time, velocity, displacement) for `era friction`;
 //! - [`model_json`]: `model.json` and `fit.json`;
 //! - [`atomic`]: every write goes to a temporary file in the destination folder and is
 //!   renamed into place, so a failed run never leaves a half-written file.
@@ -9,6 +10,7 @@
 
 pub mod atomic;
 pub mod csv;
+pub mod decay_csv;
 pub mod model_json;
 
 use std::path::PathBuf;

@@ -1,0 +1,307 @@
+//! `era friction estimate|simulate|tune`.
+
+use crate::args::{
+    DecayMethodArg, FrictionAction, FrictionArgs, FrictionEstimateArgs, FrictionSimulateArgs,
+    FrictionTuneArgs, OscillatorArgs,
+};
+use crate::report::{print_json, timings_table, Human};
+use crate::usage;
+use anyhow::Context;
+use era::friction::estimate::{estimate_displacement, estimate_velocity, summarize, DecayEstimate};
+use era::friction::simulate::{free_decay_record, DecaySpec, Method};
+use era::friction::tune::{stability_margin, tune, TuneSpec};
+use era::friction::Oscillator;
+use era_io::decay_csv::{read_decay_csv, write_decay_csv};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+fn estimate_file(path: &Path, stiffness: f64) -> anyhow::Result<(DecayEstimate, &'static str)> {
+    let file = read_decay_csv(path)?;
+    let result = match (&file.velocity, &file.displacement) {
+        (Some(v), _) => estimate_velocity(&file.time_s, v, stiffness).map(|e| (e, "velocity")),
+        (None, Some(x)) => {
+            estimate_displacement(&file.time_s, x, stiffness).map(|e| (e, "displacement"))
+        }
+        (None, None) => unreachable!("the reader requires one of the columns"),
+    };
+    result.with_context(|| format!("{}", path.display()))
+}
+
+fn record_json(path: &Path, e: &DecayEstimate, signal: &str) -> serde_json::Value {
+    json!({
+        "file": path,
+        "signal": signal,
+        "natural_frequency_hz": e.natural_frequency_hz,
+        "natural_frequency_hz_from_peaks": e.natural_frequency_hz_from_peaks,
+        "cycles": e.cycles,
+        "velocity_drop_per_cycle": e.velocity_drop_per_cycle,
+        "coulomb_force": e.coulomb_force,
+        "viscous_damping_ratio": e.viscous_damping_ratio,
+        "better_model": e.better_model.name(),
+        "coulomb_residual": e.coulomb_residual,
+        "viscous_residual": e.viscous_residual,
+        "half_cycles_fitted": e.half_cycles.len(),
+        "fit_start_s": e.half_cycles.first().map(|h| h.start_s),
+        "fit_end_s": e.half_cycles.last().map(|h| h.end_s),
+        "noise_rms": e.noise_rms,
+    })
+}
+
+fn check_stiffness(k: f64) -> anyhow::Result<()> {
+    if !(k.is_finite() && k > 0.0) {
+        return usage(format!(
+            "--stiffness {k}: must be a positive stiffness (thesis: 1.0 lbf/in)"
+        ));
+    }
+    Ok(())
+}
+
+fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    check_stiffness(a.stiffness)?;
+    let clock = Instant::now();
+    let mut estimates = Vec::new();
+    let mut records = Vec::new();
+    let mut table = format!(
+        "era friction estimate (k = {}; Eq. 3.12: F_C = dy k / (8 pi f_n cycles))\n{:<28} {:>9} {:>7} {:>12} {:>11} {:>9} {:>9}\n",
+        a.stiffness, "record", "f_n (Hz)", "cycles", "drop/cycle", "F_C", "zeta", "model"
+    );
+    for path in &a.files {
+        let (e, signal) = estimate_file(path, a.stiffness)?;
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let _ = writeln!(
+            table,
+            "{:<28} {:>9.4} {:>7.1} {:>12.5} {:>11.5} {:>9.5} {:>9}",
+            name,
+            e.natural_frequency_hz,
+            e.cycles,
+            e.velocity_drop_per_cycle,
+            e.coulomb_force,
+            e.viscous_damping_ratio,
+            e.better_model.name()
+        );
+        records.push(record_json(path, &e, signal));
+        estimates.push(e);
+    }
+    let s = summarize(&estimates);
+    let _ = writeln!(
+        table,
+        "\nF_C mean {:.5}, std {:.5} over {} record(s); f_n mean {:.4} Hz",
+        s.coulomb_force_mean,
+        s.coulomb_force_std,
+        estimates.len(),
+        s.natural_frequency_hz_mean
+    );
+    human.print(&table);
+    let mut out = json!({
+        "records": records,
+        "coulomb_force_mean": s.coulomb_force_mean,
+        "coulomb_force_std": s.coulomb_force_std,
+        "natural_frequency_hz_mean": s.natural_frequency_hz_mean,
+        "stiffness": a.stiffness,
+    });
+    if a.common.timings {
+        let t: BTreeMap<String, f64> =
+            [("estimate".to_string(), clock.elapsed().as_secs_f64())].into();
+        human.print(&timings_table(&t));
+        out["timings_s"] = json!(t);
+    }
+    if a.common.json {
+        print_json(&out)?;
+    }
+    Ok(())
+}
+
+fn oscillator(m: &OscillatorArgs, coulomb_force: f64) -> anyhow::Result<Oscillator> {
+    check_stiffness(m.stiffness)?;
+    let o = Oscillator {
+        stiffness: m.stiffness,
+        natural_frequency_hz: m.natural_frequency_hz,
+        coulomb_force,
+        viscous_damping_ratio: m.viscous_damping_ratio,
+    };
+    o.validate()?;
+    Ok(o)
+}
+
+fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    let clock = Instant::now();
+    let osc = oscillator(&a.model, a.coulomb_force)?;
+    let method = match a.method {
+        Some(DecayMethodArg::Exact) if osc.viscous_damping_ratio != 0.0 => {
+            return usage("--method exact is for Coulomb friction alone: drop --viscous-damping-ratio or use --method integrate");
+        }
+        Some(DecayMethodArg::Exact) => Method::Exact,
+        Some(DecayMethodArg::Integrate) => Method::Integrate,
+        None if osc.viscous_damping_ratio != 0.0 => Method::Integrate,
+        None => Method::Exact,
+    };
+    let spec = DecaySpec {
+        oscillator: osc,
+        x0: a.model.x0,
+        sample_rate_hz: a.model.sample_rate,
+        hold_s: a.hold,
+        duration_s: a.duration,
+        noise_fraction: a.noise,
+        seed: a.seed,
+        method,
+    };
+    let record = free_decay_record(&spec)?;
+    let simulate_s = clock.elapsed().as_secs_f64();
+    let meta = [
+        ("source", "era friction simulate".to_string()),
+        ("stiffness", a.model.stiffness.to_string()),
+        (
+            "natural_frequency_hz",
+            a.model.natural_frequency_hz.to_string(),
+        ),
+        ("coulomb_force", a.coulomb_force.to_string()),
+        (
+            "viscous_damping_ratio",
+            a.model.viscous_damping_ratio.to_string(),
+        ),
+        ("x0", a.model.x0.to_string()),
+        ("release_time_s", a.hold.to_string()),
+        ("noise_fraction", a.noise.to_string()),
+        ("seed", a.seed.to_string()),
+    ];
+    let clock = Instant::now();
+    write_decay_csv(&a.out, &record, &meta)?;
+    human.print(&format!(
+        "wrote {}: {} samples at {} Hz, release at {} s, F_C {} (k {}, f_n {} Hz){}\n",
+        a.out.display(),
+        record.time_s.len(),
+        a.model.sample_rate,
+        a.hold,
+        a.coulomb_force,
+        a.model.stiffness,
+        a.model.natural_frequency_hz,
+        if a.noise > 0.0 {
+            format!(", {} % noise (seed {})", 100.0 * a.noise, a.seed)
+        } else {
+            String::new()
+        }
+    ));
+    let mut out = json!({"file": a.out, "samples": record.time_s.len(), "method": format!("{method:?}").to_lowercase()});
+    if a.common.timings {
+        let t: BTreeMap<String, f64> = [
+            ("simulate".to_string(), simulate_s),
+            ("write".to_string(), clock.elapsed().as_secs_f64()),
+        ]
+        .into();
+        human.print(&timings_table(&t));
+        out["timings_s"] = json!(t);
+    }
+    if a.common.json {
+        print_json(&out)?;
+    }
+    Ok(())
+}
+
+fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    let clock = Instant::now();
+    check_stiffness(a.model.stiffness)?;
+    // The actuator: from records, or from the flags.
+    let (coulomb_force, natural_frequency_hz, raw) = match (a.files.is_empty(), a.coulomb_force) {
+        (true, None) => return usage("give free-decay record file(s) or --coulomb-force"),
+        (false, Some(_)) => {
+            return usage("give either record file(s) or --coulomb-force, not both")
+        }
+        (true, Some(fc)) => (fc, a.model.natural_frequency_hz, None),
+        (false, None) => {
+            let estimates: Vec<DecayEstimate> = a
+                .files
+                .iter()
+                .map(|p| estimate_file(p, a.model.stiffness).map(|(e, _)| e))
+                .collect::<anyhow::Result<_>>()?;
+            let s = summarize(&estimates);
+            (
+                s.coulomb_force_mean,
+                s.natural_frequency_hz_mean,
+                Some(s.coulomb_force_mean),
+            )
+        }
+    };
+    let osc = Oscillator {
+        natural_frequency_hz,
+        ..oscillator(&a.model, coulomb_force)?
+    };
+    let spec = TuneSpec {
+        oscillator: osc,
+        x0: a.model.x0,
+        dead_zone: a.dead_zone,
+        sample_rate_hz: a.model.sample_rate,
+        cycles: a.cycles,
+        fraction: a.fraction,
+    };
+    let t = tune(&spec)?;
+    let mut text = format!(
+        "era friction tune: k {}, f_n {:.4} Hz, F_C {:.5}, zeta {}, dead zone {}, {} Hz compensator\n",
+        osc.stiffness, osc.natural_frequency_hz, osc.coulomb_force, osc.viscous_damping_ratio, a.dead_zone, a.model.sample_rate
+    );
+    let _ = writeln!(
+        text,
+        "neutral coefficient      {:.5}  (compensated free decay neither decays nor grows)",
+        t.neutral_coefficient
+    );
+    let _ = writeln!(
+        text,
+        "applied at {:>4.0} %       {:.5}  (stability margin {:.1} %)",
+        100.0 * a.fraction,
+        t.applied_coefficient,
+        100.0 * t.stability_margin
+    );
+    let mut out = json!({
+        "neutral_coefficient": t.neutral_coefficient,
+        "applied_coefficient": t.applied_coefficient,
+        "fraction": a.fraction,
+        "stability_margin": t.stability_margin,
+        "bisection_iterations": t.iterations,
+        "model": {"stiffness": osc.stiffness, "natural_frequency_hz": osc.natural_frequency_hz,
+                  "coulomb_force": osc.coulomb_force, "viscous_damping_ratio": osc.viscous_damping_ratio},
+        "dead_zone": a.dead_zone,
+    });
+    if let Some(raw) = raw {
+        let margin = stability_margin(raw, a.fraction, t.neutral_coefficient);
+        let _ = writeln!(
+            text,
+            "the free-decay estimate {raw:.5} at {:.0} %: margin {:.1} %{}",
+            100.0 * a.fraction,
+            100.0 * margin,
+            if margin < 0.0 {
+                " -- it would make the actuator oscillate"
+            } else {
+                ""
+            }
+        );
+        out["free_decay_estimate"] = json!(raw);
+        out["free_decay_estimate_margin"] = json!(margin);
+    }
+    human.print(&text);
+    if a.common.timings {
+        let tm: BTreeMap<String, f64> =
+            [("tune".to_string(), clock.elapsed().as_secs_f64())].into();
+        human.print(&timings_table(&tm));
+        out["timings_s"] = json!(tm);
+    }
+    if a.common.json {
+        print_json(&out)?;
+    }
+    Ok(())
+}
+
+pub fn run(a: &FrictionArgs) -> anyhow::Result<()> {
+    match &a.action {
+        FrictionAction::Estimate(e) => estimate(e),
+        FrictionAction::Simulate(s) => simulate(s),
+        FrictionAction::Tune(t) => tune_cmd(t),
+    }
+}
