@@ -1,13 +1,11 @@
 //! End-to-end tests of the `era` binary.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{era, expect_input_error};
 use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-fn era() -> Command {
-    Command::cargo_bin("era").unwrap()
-}
 
 fn json_of(output: &std::process::Output) -> Value {
     serde_json::from_slice(&output.stdout).expect("stdout is JSON")
@@ -28,18 +26,6 @@ fn simulated_truth(dir: &Path) -> PathBuf {
         .assert()
         .success();
     frf
-}
-
-/// Runs `era` and expects exit code 2 with `needle` in stderr, and no panic.
-fn expect_input_error(args: &[&str], needle: &str) {
-    let out = era().args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(needle),
-        "{args:?}: expected '{needle}' in: {stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
 }
 
 #[test]

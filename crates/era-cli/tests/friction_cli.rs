@@ -1,12 +1,10 @@
 //! End-to-end tests of `era friction`.
 
-use assert_cmd::Command;
+mod common;
+
+use common::{era, expect_input_error};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-fn era() -> Command {
-    Command::cargo_bin("era").unwrap()
-}
 
 /// Simulates a free decay into `dir/name` (k = 1 lbf/in, f_n = 1.5 Hz, 200 Hz).
 fn decay(dir: &Path, name: &str, coulomb_force: f64, extra: &[&str]) -> PathBuf {
@@ -29,17 +27,6 @@ fn decay(dir: &Path, name: &str, coulomb_force: f64, extra: &[&str]) -> PathBuf 
         .assert()
         .success();
     path
-}
-
-fn expect_input_error(args: &[&str], needle: &str) {
-    let out = era().args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(needle),
-        "{args:?}: expected '{needle}' in: {stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
 #[test]

@@ -14,7 +14,7 @@
 //! name the file, the line and the column.
 
 use crate::atomic::write_atomic;
-use crate::IoError;
+use crate::{metadata_line, IoError};
 use era::{Complex64, EraError, FrfData, Quantity};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -60,14 +60,8 @@ fn parse_column(name: &str) -> Option<(usize, usize, Part)> {
 /// row, non-uniform frequencies or a first line other than 0 Hz.
 pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-    let fail = |line: usize, column: &str, message: String| {
-        let location = if column.is_empty() {
-            format!("line {line}: ")
-        } else {
-            format!("line {line}, column {column}: ")
-        };
-        IoError::format(path, location, message)
-    };
+    let fail =
+        |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
 
     // Metadata lines, then the header.
     let mut metadata = BTreeMap::new();
@@ -77,9 +71,9 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
         if trimmed.is_empty() {
             continue;
         }
-        if let Some(meta) = trimmed.strip_prefix('#') {
-            if let Some((key, value)) = meta.split_once(':') {
-                metadata.insert(key.trim().to_ascii_lowercase(), value.trim().to_string());
+        if trimmed.starts_with('#') {
+            if let Some((key, value)) = metadata_line(trimmed) {
+                metadata.insert(key, value);
             }
             continue;
         }

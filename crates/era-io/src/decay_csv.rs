@@ -12,7 +12,7 @@
 //! column, a non-numeric cell, NaN or infinity, and time that does not increase.
 
 use crate::atomic::write_atomic;
-use crate::IoError;
+use crate::{metadata_line, IoError};
 use era::friction::simulate::DecayRecord;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -37,14 +37,8 @@ pub struct DecayFile {
 /// [`IoError`] naming the file, line and column.
 pub fn read_decay_csv(path: &Path) -> Result<DecayFile, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-    let fail = |line: usize, column: &str, message: String| {
-        let location = if column.is_empty() {
-            format!("line {line}: ")
-        } else {
-            format!("line {line}, column {column}: ")
-        };
-        IoError::format(path, location, message)
-    };
+    let fail =
+        |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
     let mut metadata = BTreeMap::new();
     let mut header: Option<(usize, Vec<String>)> = None;
     let (mut time_s, mut velocity, mut displacement) = (Vec::new(), Vec::new(), Vec::new());
@@ -55,9 +49,9 @@ pub fn read_decay_csv(path: &Path) -> Result<DecayFile, IoError> {
         if trimmed.is_empty() {
             continue;
         }
-        if let Some(meta) = trimmed.strip_prefix('#') {
-            if let Some((k, v)) = meta.split_once(':') {
-                metadata.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
+        if trimmed.starts_with('#') {
+            if let Some((key, value)) = metadata_line(trimmed) {
+                metadata.insert(key, value);
             }
             continue;
         }

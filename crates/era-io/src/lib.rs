@@ -59,3 +59,22 @@ impl IoError {
         }
     }
 }
+
+impl IoError {
+    /// A format error at a 1-based line and, when not empty, a named column.
+    pub(crate) fn at(path: &std::path::Path, line: usize, column: &str, message: String) -> Self {
+        let location = if column.is_empty() {
+            format!("line {line}: ")
+        } else {
+            format!("line {line}, column {column}: ")
+        };
+        IoError::format(path, location, message)
+    }
+}
+
+/// A `# key: value` metadata line as (lower-case key, value); `None` for other lines
+/// (a `#` line without a colon is a plain comment).
+pub(crate) fn metadata_line(trimmed: &str) -> Option<(String, String)> {
+    let (key, value) = trimmed.strip_prefix('#')?.split_once(':')?;
+    Some((key.trim().to_ascii_lowercase(), value.trim().to_string()))
+}

@@ -50,13 +50,8 @@ impl ChannelConfig {
     }
 
     fn validate(&self, channel: usize) -> Result<()> {
-        let bad = |name, value: f64, reason: String| {
-            Err(FrictionError::InvalidParameter {
-                name,
-                value: value.to_string(),
-                reason,
-            })
-        };
+        let bad =
+            |name, value: f64, reason: String| Err(FrictionError::invalid(name, value, reason));
         if !(self.coefficient.is_finite() && self.coefficient >= 0.0) {
             return bad(
                 "coefficient",

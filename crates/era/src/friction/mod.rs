@@ -103,6 +103,17 @@ pub enum FrictionError {
     },
 }
 
+impl FrictionError {
+    /// [`FrictionError::InvalidParameter`] from a flag name, its value and the reason.
+    pub fn invalid(name: &'static str, value: impl ToString, reason: impl Into<String>) -> Self {
+        FrictionError::InvalidParameter {
+            name,
+            value: value.to_string(),
+            reason: reason.into(),
+        }
+    }
+}
+
 /// Result alias.
 pub type Result<T> = std::result::Result<T, FrictionError>;
 
@@ -136,13 +147,7 @@ impl Oscillator {
     /// [`FrictionError::InvalidParameter`] for a non-positive stiffness or frequency, a
     /// negative friction force, or a damping ratio outside `[0, 1)`.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name, value: f64, reason: &str| {
-            Err(FrictionError::InvalidParameter {
-                name,
-                value: value.to_string(),
-                reason: reason.into(),
-            })
-        };
+        let bad = |name, value: f64, reason: &str| Err(FrictionError::invalid(name, value, reason));
         if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
             return bad("stiffness", self.stiffness, "must be positive");
         }

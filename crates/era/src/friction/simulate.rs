@@ -239,13 +239,7 @@ pub struct DecayRecord {
 pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
     let osc = &spec.oscillator;
     osc.validate()?;
-    let bad = |name, value: f64, reason: &str| {
-        Err(FrictionError::InvalidParameter {
-            name,
-            value: value.to_string(),
-            reason: reason.into(),
-        })
-    };
+    let bad = |name, value: f64, reason: &str| Err(FrictionError::invalid(name, value, reason));
     if !(spec.x0.is_finite() && spec.x0 != 0.0) {
         return bad("x0", spec.x0, "the initial displacement must be non-zero");
     }

@@ -84,13 +84,7 @@ pub fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> {
 /// [`FrictionError::InvalidParameter`] for invalid settings.
 pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     spec.oscillator.validate()?;
-    let bad = |name, value: f64, reason: &str| {
-        Err(FrictionError::InvalidParameter {
-            name,
-            value: value.to_string(),
-            reason: reason.into(),
-        })
-    };
+    let bad = |name, value: f64, reason: &str| Err(FrictionError::invalid(name, value, reason));
     if !(spec.x0.is_finite() && spec.x0 != 0.0) {
         return bad("x0", spec.x0, "must be non-zero");
     }
