@@ -70,6 +70,16 @@ pub enum DirectTermArg {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SvdArg {
+    /// Form H0 and take its thin SVD (all singular values).
+    Dense,
+    /// FFT products and a truncated SVD; H0 is never formed.
+    MatrixFree,
+    /// Dense while the Hankel's short side is below 1024, matrix-free beyond.
+    Auto,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum QuantityArg {
     Acceleration,
     Velocity,
@@ -118,6 +128,9 @@ pub struct IdentifyArgs {
     /// The model's D matrix.
     #[arg(long, value_enum, default_value_t = DirectTermArg::Zero)]
     pub direct_term: DirectTermArg,
+    /// How the Hankel SVD is computed.
+    #[arg(long, value_enum, default_value_t = SvdArg::Auto)]
+    pub svd: SvdArg,
     /// Quantity of the FRFs when the file does not say (a "# quantity:" line).
     #[arg(long, value_enum)]
     pub quantity: Option<QuantityArg>,

@@ -1,13 +1,14 @@
 //! `era identify FILE`: the pipeline of DESIGN.md §1 on an FRF file.
 
-use crate::args::{DirectTermArg, IdentifyArgs, TimeDomainArg};
+use crate::args::{DirectTermArg, IdentifyArgs, SvdArg, TimeDomainArg};
 use crate::report::{
-    identification_summary, parameter_echo, parameters, print_json, timings_table, Human,
+    identification_summary, parameter_echo, parameters, print_json, svd_path_line, timings_table,
+    Human,
 };
 use crate::usage;
 use anyhow::Context;
 use era::identify::{identify, EraOptions, ModelDomain};
-use era::realize::DirectTerm;
+use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
 use era_io::csv::read_frf_csv;
 use era_io::model_json::{timings_map, FitJson, ModelJson};
@@ -43,6 +44,11 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
         direct_term: match a.direct_term {
             DirectTermArg::Zero => DirectTerm::Zero,
             DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
+        },
+        svd: match a.svd {
+            SvdArg::Dense => SvdPath::Dense,
+            SvdArg::MatrixFree => SvdPath::MatrixFree,
+            SvdArg::Auto => SvdPath::Auto,
         },
     })
 }
@@ -119,6 +125,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     }
     if a.common.timings {
         human.print(&timings_table(&timings));
+        human.print(&svd_path_line(&found.realization));
         model.timings_s = Some(timings);
         if let Some(dir) = &a.out {
             model.write(&dir.join("model.json"))?;

@@ -67,6 +67,7 @@ pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
             ModelDomain::Continuous => "continuous",
         }),
     );
+    m.insert("svd".into(), json!(o.svd.name()));
     m.insert(
         "direct_term".into(),
         json!(match o.direct_term {
@@ -111,6 +112,7 @@ pub fn parameter_echo(o: &EraOptions) -> String {
         DirectTerm::FirstMarkov => "Y0",
     };
     let _ = writeln!(s, "  direct term D           {d}");
+    let _ = writeln!(s, "  SVD                     {}", o.svd.name());
     s
 }
 
@@ -211,4 +213,16 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
     let total: f64 = t.values().sum();
     let _ = writeln!(s, "  {:<11} {total:.6}", "total");
     s
+}
+
+/// Which SVD path ran, for the timings.
+pub fn svd_path_line(r: &era::realize::Realization) -> String {
+    match r.svd_iterations {
+        Some(it) => format!(
+            "  hankel_svd path: {} ({} iterations)\n",
+            r.svd_path.name(),
+            it
+        ),
+        None => format!("  hankel_svd path: {}\n", r.svd_path.name()),
+    }
 }

@@ -76,8 +76,12 @@ pub struct HankelJson {
     pub rows: usize,
     /// Columns of `H0`.
     pub cols: usize,
-    /// `"dense"` (thin SVD of the formed Hankel).
+    /// `"dense"` (thin SVD of the formed Hankel) or `"matrix-free"` (FFT products and a
+    /// truncated SVD).
     pub path: String,
+    /// Iterations of the truncated SVD (matrix-free path).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub svd_iterations: Option<usize>,
 }
 
 /// `model.json`.
@@ -192,7 +196,8 @@ impl ModelJson {
             hankel: HankelJson {
                 rows: found.realization.hankel_size.0,
                 cols: found.realization.hankel_size.1,
-                path: "dense".into(),
+                path: found.realization.svd_path.name().into(),
+                svd_iterations: found.realization.svd_iterations,
             },
             warnings: found
                 .realization

@@ -30,7 +30,7 @@ impl HankelShape {
         self.first_sample + self.block_rows + self.block_cols - 2
     }
 
-    fn check(&self, markov: &MarkovSequence) -> Result<()> {
+    pub(crate) fn check(&self, markov: &MarkovSequence) -> Result<()> {
         if self.block_rows == 0 || self.block_cols == 0 {
             return Err(EraError::InvalidParameter {
                 name: "hankel shape",
@@ -50,6 +50,14 @@ impl HankelShape {
         }
         Ok(())
     }
+}
+
+/// Checks that `shape` is non-empty and fits in the sequence.
+///
+/// # Errors
+/// As [`build`].
+pub fn check_shape(markov: &MarkovSequence, shape: HankelShape) -> Result<()> {
+    shape.check(markov)
 }
 
 /// Builds the block Hankel of `shape`, one contiguous column copy at a time.

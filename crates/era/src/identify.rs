@@ -7,7 +7,7 @@ use crate::frf::FrfData;
 use crate::markov::{impulse_responses, impulse_responses_naive, MarkovSequence};
 use crate::modal::{modal_parameters_of, ModalForm, ModalParameters};
 use crate::preprocess::{integrate, preprocess, zero_leading_lines};
-use crate::realize::{realize, realize_naive, DirectTerm, Realization, RealizeOptions};
+use crate::realize::{realize, realize_naive, DirectTerm, Realization, RealizeOptions, SvdPath};
 use crate::response::{fit_metrics, frequency_response_naive, FitReport, HessenbergForm};
 use crate::statespace::StateSpace;
 use std::time::Instant;
@@ -42,6 +42,8 @@ pub struct EraOptions {
     pub domain: ModelDomain,
     /// `D = 0` or `Y_0`.
     pub direct_term: DirectTerm,
+    /// Dense, matrix-free or automatic SVD.
+    pub svd: SvdPath,
 }
 
 impl EraOptions {
@@ -56,6 +58,7 @@ impl EraOptions {
             pad_to: 0,
             domain: ModelDomain::Discrete,
             direct_term: DirectTerm::Zero,
+            svd: SvdPath::Auto,
         }
     }
     /// The thesis's DTA settings (Appendix J): `ns 80, lh 5, ni 1, nz 3, ndpts 1024`.
@@ -177,6 +180,7 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
 
     let realize_options = RealizeOptions {
         direct_term: options.direct_term,
+        svd: options.svd,
         ..RealizeOptions::new(options.states, options.hankel_factor)
     };
     let realization = match path {

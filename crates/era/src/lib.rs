@@ -39,6 +39,7 @@ pub mod filter;
 pub mod frf;
 pub mod friction;
 pub mod hankel;
+pub mod hankel_op;
 pub mod identify;
 pub mod markov;
 pub mod modal;
@@ -47,6 +48,7 @@ pub mod realize;
 pub mod response;
 pub mod sim;
 pub mod statespace;
+pub mod tsvd;
 
 pub use error::{EraError, Result};
 pub use frf::{FrfData, Quantity};

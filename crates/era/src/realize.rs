@@ -17,8 +17,10 @@
 
 use crate::error::{EraError, Result};
 use crate::hankel::{self, ThesisHankel};
+use crate::hankel_op::{HankelOperator, LinearOperator};
 use crate::markov::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
+use crate::tsvd::{truncated_svd, TruncatedSvdOptions};
 use faer::Mat;
 use std::time::Instant;
 
@@ -32,6 +34,34 @@ pub enum DirectTerm {
     FirstMarkov,
 }
 
+/// How the SVD of `H0` is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SvdPath {
+    /// Form `H0` and take its thin SVD (all singular values).
+    Dense,
+    /// Never form `H0`: FFT products ([`crate::hankel_op`]) and a truncated SVD
+    /// ([`crate::tsvd`]); only the leading singular values.
+    MatrixFree,
+    /// Dense while `H0` is small (below [`AUTO_MATRIX_FREE_MIN_DIM`] on its short
+    /// side), matrix-free beyond.
+    #[default]
+    Auto,
+}
+
+impl SvdPath {
+    /// `"dense"`, `"matrix-free"` or `"auto"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SvdPath::Dense => "dense",
+            SvdPath::MatrixFree => "matrix-free",
+            SvdPath::Auto => "auto",
+        }
+    }
+}
+
+/// [`SvdPath::Auto`] goes matrix-free when the short side of `H0` is at least this.
+pub const AUTO_MATRIX_FREE_MIN_DIM: usize = 1024;
+
 /// Options of the realization step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RealizeOptions {
@@ -41,15 +71,21 @@ pub struct RealizeOptions {
     pub hankel_factor: usize,
     /// `D` of the model.
     pub direct_term: DirectTerm,
+    /// Dense or matrix-free SVD.
+    pub svd: SvdPath,
+    /// Residual tolerance of the truncated SVD ([`crate::tsvd`]), relative to `σ₁`.
+    pub svd_tolerance: f64,
 }
 
 impl RealizeOptions {
-    /// Options with `D = 0`.
+    /// Options with `D = 0`, automatic SVD path, tolerance 1e-12.
     pub fn new(states: usize, hankel_factor: usize) -> Self {
         RealizeOptions {
             states,
             hankel_factor,
             direct_term: DirectTerm::Zero,
+            svd: SvdPath::Auto,
+            svd_tolerance: 1e-12,
         }
     }
 }
@@ -94,7 +130,9 @@ impl std::fmt::Display for RealizeWarning {
 pub struct Realization {
     /// The discrete model, `Ts` that of the Markov sequence.
     pub model: StateSpace,
-    /// All singular values of `H0`, largest first.
+    /// Singular values of `H0`, largest first: all of them on the dense path, the
+    /// `states` leading ones (those that passed the residual test) on the matrix-free
+    /// path.
     pub singular_values: Vec<f64>,
     /// Rows and columns of `H0`.
     pub hankel_size: (usize, usize),
@@ -104,6 +142,10 @@ pub struct Realization {
     pub hankel_svd_seconds: f64,
     /// Wall time of the products of §1.9, s.
     pub products_seconds: f64,
+    /// The SVD path taken (never `Auto`).
+    pub svd_path: SvdPath,
+    /// Iterations of the truncated SVD (matrix-free path).
+    pub svd_iterations: Option<usize>,
 }
 
 /// Checks the options against the data before any heavy work.
@@ -203,6 +245,16 @@ pub fn realize(
     options: &RealizeOptions,
 ) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
+    let short_side =
+        (shapes.h0.block_rows * markov.outputs()).min(shapes.h0.block_cols * markov.inputs());
+    let matrix_free = match options.svd {
+        SvdPath::Dense => false,
+        SvdPath::MatrixFree => true,
+        SvdPath::Auto => short_side >= AUTO_MATRIX_FREE_MIN_DIM,
+    };
+    if matrix_free {
+        return realize_matrix_free(markov, sample_time_s, options, shapes, warnings);
+    }
     let clock = Instant::now();
     let h0 = hankel::build(markov, shapes.h0)?;
     let svd = h0
@@ -230,6 +282,8 @@ pub fn realize(
         warnings,
         hankel_svd_seconds,
         products_seconds: clock.elapsed().as_secs_f64(),
+        svd_path: SvdPath::Dense,
+        svd_iterations: None,
     })
 }
 
@@ -289,5 +343,52 @@ pub fn realize_naive(
         warnings,
         hankel_svd_seconds,
         products_seconds: clock.elapsed().as_secs_f64(),
+        svd_path: SvdPath::Dense,
+        svd_iterations: None,
+    })
+}
+
+/// The matrix-free path of [`realize`]: `H0` and `H1` are never formed.
+fn realize_matrix_free(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+    shapes: ThesisHankel,
+    warnings: Vec<RealizeWarning>,
+) -> Result<Realization> {
+    let clock = Instant::now();
+    let n = options.states;
+    let op0 = HankelOperator::new(markov, shapes.h0)?;
+    let (rows, cols) = (op0.nrows(), op0.ncols());
+    let tsvd_options = TruncatedSvdOptions {
+        tolerance: options.svd_tolerance,
+        ..TruncatedSvdOptions::new(n)
+    };
+    let svd = truncated_svd(&op0, &tsvd_options)?;
+    check_rank(&svd.s, rows, cols, n)?;
+    let hankel_svd_seconds = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let (q, p) = (markov.outputs(), markov.inputs());
+    let un = svd.u.subcols(0, n);
+    let vn = svd.v.subcols(0, n);
+    let op1 = HankelOperator::new(markov, shapes.h1)?;
+    let h1_v = op1.apply(vn);
+    let ut_h1_v = un.transpose() * &h1_v;
+    let root: Vec<f64> = svd.s[..n].iter().map(|s| s.sqrt()).collect();
+    let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
+    let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
+    let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
+    let d = direct_term(markov, options.direct_term);
+    let mut singular_values = svd.s;
+    singular_values.truncate(n); // only these passed the residual test
+    Ok(Realization {
+        model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
+        singular_values,
+        hankel_size: (rows, cols),
+        warnings,
+        hankel_svd_seconds,
+        products_seconds: clock.elapsed().as_secs_f64(),
+        svd_path: SvdPath::MatrixFree,
+        svd_iterations: Some(svd.iterations),
     })
 }

@@ -4,7 +4,8 @@
 mod common;
 
 use common::{read_csv, worst_match};
-use era::identify::{identify, identify_naive, EraOptions};
+use era::identify::{identify, identify_naive, EraOptions, Identification};
+use era::realize::SvdPath;
 use era::sim::{ModalSpec, ModalStructure};
 use era::{Complex64, Quantity};
 
@@ -13,9 +14,23 @@ fn dta_like_set_fast_equals_naive_reference() {
     // 8×8, 40 modes, acceleration, 801 lines at 0.025 Hz: the DTA analyzer's grid.
     let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
     let frf = structure.frf(801, 0.025, Quantity::Acceleration).unwrap();
-    let options = EraOptions::thesis_dta();
-    let fast = identify(&frf, &options).unwrap();
-    let naive = identify_naive(&frf, &options).unwrap();
+    let naive = identify_naive(&frf, &EraOptions::thesis_dta()).unwrap();
+    for svd in [SvdPath::Dense, SvdPath::MatrixFree] {
+        let options = EraOptions {
+            svd,
+            ..EraOptions::thesis_dta()
+        };
+        let fast = identify(&frf, &options).unwrap();
+        assert_eq!(fast.realization.svd_path, svd);
+        check_against_references(&structure, &fast, &naive);
+    }
+}
+
+fn check_against_references(
+    structure: &ModalStructure,
+    fast: &Identification,
+    naive: &Identification,
+) {
     assert_eq!(fast.realization.hankel_size, (1592, 1592));
     let err = worst_match(&naive.model.poles().unwrap(), &fast.model.poles().unwrap());
     assert!(

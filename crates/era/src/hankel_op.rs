@@ -1,0 +1,286 @@
+//! Block-Hankel products without forming the Hankel matrix (DESIGN.md §7).
+//!
+//! With `H[r·q+i][c·p+j] = Y_(s+r+c)[i][j]` (`R` block rows, `C` block columns), one
+//! output block of `H x` is a sum of correlations of the Markov sequences with the input
+//! slices of `x`:
+//!
+//! ```text
+//! (H x)[r·q+i] = Σ_j Σ_c a_ij[r + c] · x[c·p+j],      a_ij[k] = Y_(s+k)[i][j]
+//!             = Σ_j (a_ij ⊛ g̃_j)[r + C − 1],          g̃_j[c'] = x[(C−1−c')·p+j]
+//! ```
+//!
+//! a convolution with the reversed slice, read from index `C − 1` on. A circular
+//! convolution of length `N ≥ R + C − 1` gives those entries exactly, so the spectra
+//! `A_ij = FFT(a_ij)` are computed once (`q·p` real FFTs), and each column of `X` then
+//! costs `p` forward FFTs, `q·p` spectral multiply-adds and `q` inverse FFTs:
+//! O((p + q) N log N + q p N) per vector and O(q p N) memory, where the dense Hankel
+//! needs `R q · C p`. `Hᵀ y` is the same with the roles of outputs and inputs swapped.
+//! Columns are processed in parallel with `rayon`.
+
+use crate::error::Result;
+use crate::hankel::HankelShape;
+use crate::markov::MarkovSequence;
+use faer::{Mat, MatRef};
+use num_complex::Complex64;
+use rayon::prelude::*;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use std::sync::Arc;
+
+/// A linear operator known through its products (what a truncated SVD needs).
+pub trait LinearOperator: Sync {
+    /// Rows.
+    fn nrows(&self) -> usize;
+    /// Columns.
+    fn ncols(&self) -> usize;
+    /// `self · x`.
+    fn apply(&self, x: MatRef<'_, f64>) -> Mat<f64>;
+    /// `selfᵀ · y`.
+    fn apply_transpose(&self, y: MatRef<'_, f64>) -> Mat<f64>;
+}
+
+impl LinearOperator for Mat<f64> {
+    fn nrows(&self) -> usize {
+        Mat::nrows(self)
+    }
+    fn ncols(&self) -> usize {
+        Mat::ncols(self)
+    }
+    fn apply(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        self * x
+    }
+    fn apply_transpose(&self, y: MatRef<'_, f64>) -> Mat<f64> {
+        self.transpose() * y
+    }
+}
+
+/// Smallest `n ≥ min` whose prime factors are 2, 3, 5 and 7 (fast FFT sizes).
+pub fn fast_fft_len(min: usize) -> usize {
+    let mut n = min.max(1);
+    loop {
+        let mut m = n;
+        for f in [2, 3, 5, 7] {
+            while m.is_multiple_of(f) {
+                m /= f;
+            }
+        }
+        if m == 1 {
+            return n;
+        }
+        n += 1;
+    }
+}
+
+/// `H` of a [`HankelShape`] over a [`MarkovSequence`], applied by FFT correlations.
+pub struct HankelOperator {
+    outputs: usize,
+    inputs: usize,
+    shape: HankelShape,
+    fft_len: usize,
+    bins: usize,
+    /// `A_ij`, pair-major: `spectra[(i·p + j)·bins + f]`.
+    spectra: Vec<Complex64>,
+    forward: Arc<dyn RealToComplex<f64>>,
+    inverse: Arc<dyn ComplexToReal<f64>>,
+}
+
+/// Per-thread buffers of one column product.
+struct Scratch {
+    time: Vec<f64>,
+    inputs: Vec<Complex64>,
+    acc: Vec<Complex64>,
+    fft: Vec<Complex64>,
+}
+
+impl HankelOperator {
+    /// Precomputes the spectra of the Markov sequences that `shape` uses.
+    ///
+    /// # Errors
+    /// As [`crate::hankel::build`]: a shape that needs samples the sequence lacks.
+    pub fn new(markov: &MarkovSequence, shape: HankelShape) -> Result<Self> {
+        // Validate exactly as the dense builder does, on a 1×1-block probe of the corner.
+        crate::hankel::check_shape(markov, shape)?;
+        let (q, p) = (markov.outputs(), markov.inputs());
+        let span = shape.block_rows + shape.block_cols - 1;
+        let fft_len = fast_fft_len(span);
+        let bins = fft_len / 2 + 1;
+        let mut planner = RealFftPlanner::<f64>::new();
+        let forward = planner.plan_fft_forward(fft_len);
+        let inverse = planner.plan_fft_inverse(fft_len);
+        let mut spectra = vec![Complex64::new(0.0, 0.0); q * p * bins];
+        let mut time = vec![0.0; fft_len];
+        let mut scratch = forward.make_scratch_vec();
+        for i in 0..q {
+            for j in 0..p {
+                time.iter_mut().for_each(|v| *v = 0.0);
+                for (k, v) in time.iter_mut().take(span).enumerate() {
+                    *v = markov.get(shape.first_sample + k, i, j);
+                }
+                let out = &mut spectra[(i * p + j) * bins..(i * p + j + 1) * bins];
+                forward
+                    .process_with_scratch(&mut time, out, &mut scratch)
+                    .expect("lengths from the plan");
+            }
+        }
+        Ok(HankelOperator {
+            outputs: q,
+            inputs: p,
+            shape,
+            fft_len,
+            bins,
+            spectra,
+            forward,
+            inverse,
+        })
+    }
+
+    /// FFT length used.
+    pub fn fft_len(&self) -> usize {
+        self.fft_len
+    }
+
+    fn scratch(&self, channels: usize) -> Scratch {
+        Scratch {
+            time: vec![0.0; self.fft_len],
+            inputs: vec![Complex64::new(0.0, 0.0); channels * self.bins],
+            acc: vec![Complex64::new(0.0, 0.0); self.bins],
+            fft: vec![
+                Complex64::new(0.0, 0.0);
+                self.forward
+                    .get_scratch_len()
+                    .max(self.inverse.get_scratch_len())
+            ],
+        }
+    }
+
+    /// One column: `out = H x` (transpose = false) or `out = Hᵀ x` (transpose = true).
+    fn column(&self, x: &[f64], out: &mut [f64], transpose: bool, s: &mut Scratch) {
+        let (q, p, bins) = (self.outputs, self.inputs, self.bins);
+        let (r_blocks, c_blocks) = (self.shape.block_rows, self.shape.block_cols);
+        // Input side: p slices of length C (H x), or q slices of length R (Hᵀ y).
+        let (in_ch, in_len, out_ch, out_len) = if transpose {
+            (q, r_blocks, p, c_blocks)
+        } else {
+            (p, c_blocks, q, r_blocks)
+        };
+        for ch in 0..in_ch {
+            s.time.iter_mut().for_each(|v| *v = 0.0);
+            for k in 0..in_len {
+                s.time[k] = x[(in_len - 1 - k) * in_ch + ch];
+            }
+            let spec = &mut s.inputs[ch * bins..(ch + 1) * bins];
+            self.forward
+                .process_with_scratch(&mut s.time, spec, &mut s.fft)
+                .expect("lengths from the plan");
+        }
+        let scale = 1.0 / self.fft_len as f64;
+        for o in 0..out_ch {
+            s.acc.iter_mut().for_each(|v| *v = Complex64::new(0.0, 0.0));
+            for ch in 0..in_ch {
+                let (i, j) = if transpose { (ch, o) } else { (o, ch) };
+                let a = &self.spectra[(i * p + j) * bins..(i * p + j + 1) * bins];
+                let g = &s.inputs[ch * bins..(ch + 1) * bins];
+                for ((acc, a), g) in s.acc.iter_mut().zip(a).zip(g) {
+                    *acc += a * g;
+                }
+            }
+            s.acc[0].im = 0.0;
+            if self.fft_len.is_multiple_of(2) {
+                s.acc[bins - 1].im = 0.0;
+            }
+            self.inverse
+                .process_with_scratch(&mut s.acc, &mut s.time, &mut s.fft)
+                .expect("lengths from the plan");
+            for k in 0..out_len {
+                out[k * out_ch + o] = s.time[in_len - 1 + k] * scale;
+            }
+        }
+    }
+
+    fn product(&self, x: MatRef<'_, f64>, transpose: bool) -> Mat<f64> {
+        let (rows, cols) = (LinearOperator::nrows(self), LinearOperator::ncols(self));
+        let (in_dim, out_dim, in_ch) = if transpose {
+            (rows, cols, self.outputs)
+        } else {
+            (cols, rows, self.inputs)
+        };
+        assert_eq!(x.nrows(), in_dim, "operand rows");
+        let b = x.ncols();
+        let mut out = vec![0.0; out_dim * b];
+        let work = |(col, chunk): (usize, &mut [f64]), s: &mut Scratch| {
+            let column: Vec<f64> = (0..in_dim).map(|r| x[(r, col)]).collect();
+            self.column(&column, chunk, transpose, s);
+        };
+        if b > 1 && out_dim * b > 4096 {
+            out.par_chunks_mut(out_dim)
+                .enumerate()
+                .for_each_init(|| self.scratch(in_ch), |s, item| work(item, s));
+        } else {
+            let mut s = self.scratch(in_ch);
+            out.chunks_mut(out_dim)
+                .enumerate()
+                .for_each(|item| work(item, &mut s));
+        }
+        Mat::from_fn(out_dim, b, |r, c| out[c * out_dim + r])
+    }
+}
+
+impl LinearOperator for HankelOperator {
+    fn nrows(&self) -> usize {
+        self.shape.block_rows * self.outputs
+    }
+    fn ncols(&self) -> usize {
+        self.shape.block_cols * self.inputs
+    }
+    fn apply(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        self.product(x, false)
+    }
+    fn apply_transpose(&self, y: MatRef<'_, f64>) -> Mat<f64> {
+        self.product(y, true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hankel::build_naive;
+
+    #[test]
+    fn fast_lengths_are_7_smooth() {
+        assert_eq!(fast_fft_len(397), 400);
+        assert_eq!(fast_fft_len(1), 1);
+        assert_eq!(fast_fft_len(11), 12);
+    }
+
+    #[test]
+    fn products_equal_the_dense_hankel() {
+        for (q, p, r, c, s) in [
+            (3, 2, 7, 5, 1),
+            (1, 1, 9, 9, 2),
+            (2, 4, 4, 11, 0),
+            (8, 8, 20, 20, 1),
+        ] {
+            let samples = s + r + c + 3;
+            let markov = MarkovSequence::from_fn(q, p, samples, |k, i, j| {
+                ((k * 37 + i * 11 + j * 5) as f64 * 0.7).sin() * 0.9f64.powi(k as i32)
+            });
+            let shape = HankelShape {
+                block_rows: r,
+                block_cols: c,
+                first_sample: s,
+            };
+            let dense = build_naive(&markov, shape).unwrap();
+            let op = HankelOperator::new(&markov, shape).unwrap();
+            let x = Mat::from_fn(c * p, 6, |i, j| ((i * 13 + j * 7) as f64).cos());
+            let y = Mat::from_fn(r * q, 6, |i, j| ((i * 3 + j * 17) as f64).sin());
+            let hx = op.apply(x.as_ref());
+            let hty = op.apply_transpose(y.as_ref());
+            let ex = &dense * &x;
+            let ety = dense.transpose() * &y;
+            assert!((&hx - &ex).norm_l2() <= 1e-13 * ex.norm_l2(), "{q}x{p} H x");
+            assert!(
+                (&hty - &ety).norm_l2() <= 1e-13 * ety.norm_l2(),
+                "{q}x{p} Hᵀ y"
+            );
+        }
+    }
+}
