@@ -429,3 +429,60 @@ fn simulate_reports_timings_and_the_true_modes() {
     let text = std::fs::read_to_string(&frf).unwrap();
     assert!(text.starts_with("# quantity: acceleration\n"));
 }
+
+#[test]
+fn identify_reports_the_svd_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    let base = [
+        "--states",
+        "8",
+        "--hankel-factor",
+        "4",
+        "--pad-to",
+        "1024",
+        "--timings",
+    ];
+    // auto: a 45 x 45 Hankel stays dense.
+    let out = era()
+        .arg("identify")
+        .arg(&frf)
+        .args(base)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["hankel"]["path"], "dense");
+    assert_eq!(v["parameters"]["svd"], "auto");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("hankel_svd path: dense"));
+    // forced matrix-free: same modes, reported as such.
+    let out = era()
+        .arg("identify")
+        .arg(&frf)
+        .args(base)
+        .args(["--svd", "matrix-free", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let w: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(w["hankel"]["path"], "matrix-free");
+    assert!(w["hankel"]["svd_iterations"].as_u64().unwrap() >= 1);
+    assert_eq!(w["singular_values"].as_array().unwrap().len(), 8);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("hankel_svd path: matrix-free"));
+    for (a, b) in v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(w["modes"].as_array().unwrap())
+    {
+        let (fa, fb) = (
+            a["frequency_hz"].as_f64().unwrap(),
+            b["frequency_hz"].as_f64().unwrap(),
+        );
+        assert!((fa - fb).abs() < 1e-8 * fa);
+    }
+}
