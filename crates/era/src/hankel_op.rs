@@ -205,22 +205,27 @@ impl HankelOperator {
         };
         assert_eq!(x.nrows(), in_dim, "operand rows");
         let b = x.ncols();
-        let mut out = vec![0.0; out_dim * b];
-        let work = |(col, chunk): (usize, &mut [f64]), s: &mut Scratch| {
+        // Written in place, column by column (owned columns are contiguous).
+        let mut out = Mat::<f64>::zeros(out_dim, b);
+        let work = |s: &mut Scratch, (col, target): (usize, faer::col::ColMut<'_, f64>)| {
             let column: Vec<f64> = (0..in_dim).map(|r| x[(r, col)]).collect();
-            self.column(&column, chunk, transpose, s);
+            let slice = target
+                .try_as_col_major_mut()
+                .expect("owned columns are contiguous")
+                .as_slice_mut();
+            self.column(&column, slice, transpose, s);
         };
         if b > 1 && out_dim * b > 4096 {
-            out.par_chunks_mut(out_dim)
+            out.par_col_iter_mut()
                 .enumerate()
-                .for_each_init(|| self.scratch(in_ch), |s, item| work(item, s));
+                .for_each_init(|| self.scratch(in_ch), work);
         } else {
             let mut s = self.scratch(in_ch);
-            out.chunks_mut(out_dim)
+            out.col_iter_mut()
                 .enumerate()
-                .for_each(|item| work(item, &mut s));
+                .for_each(|item| work(&mut s, item));
         }
-        Mat::from_fn(out_dim, b, |r, c| out[c * out_dim + r])
+        out
     }
 }
 

@@ -16,7 +16,7 @@
 //! faster path is tested against.
 
 use crate::error::{EraError, Result};
-use crate::hankel::{self, ThesisHankel};
+use crate::hankel::{self, HankelShape, ThesisHankel};
 use crate::hankel_op::{HankelOperator, LinearOperator};
 use crate::markov::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
@@ -245,18 +245,70 @@ pub fn realize(
     options: &RealizeOptions,
 ) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
+    realize_shapes(
+        markov,
+        sample_time_s,
+        options,
+        shapes.h0,
+        shapes.h1,
+        warnings,
+    )
+}
+
+/// ERA with any block-Hankel shape: `H0` of `shape`, `H1` the same shape one sample
+/// later. The thesis shape is what [`realize`] uses; this is for other layouts (e.g.
+/// `m × m` blocks starting at `Y_1`, as python-control builds them).
+///
+/// # Errors
+/// [`EraError::HankelTooSmall`] when `states` exceeds the short side of `H0`;
+/// [`EraError::ShapeMismatch`] when the shapes need samples the sequence lacks; and the
+/// errors of [`realize`].
+pub fn realize_general(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+    shape: HankelShape,
+) -> Result<Realization> {
+    let (rows, cols) = (
+        shape.block_rows * markov.outputs(),
+        shape.block_cols * markov.inputs(),
+    );
+    if options.states == 0 || rows.min(cols) < options.states {
+        return Err(EraError::HankelTooSmall {
+            rows,
+            cols,
+            available: rows.min(cols),
+            states: options.states,
+        });
+    }
+    let h1 = HankelShape {
+        first_sample: shape.first_sample + 1,
+        ..shape
+    };
+    hankel::check_shape(markov, h1)?;
+    realize_shapes(markov, sample_time_s, options, shape, h1, Vec::new())
+}
+
+fn realize_shapes(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+    h0_shape: HankelShape,
+    h1_shape: HankelShape,
+    warnings: Vec<RealizeWarning>,
+) -> Result<Realization> {
     let short_side =
-        (shapes.h0.block_rows * markov.outputs()).min(shapes.h0.block_cols * markov.inputs());
+        (h0_shape.block_rows * markov.outputs()).min(h0_shape.block_cols * markov.inputs());
     let matrix_free = match options.svd {
         SvdPath::Dense => false,
         SvdPath::MatrixFree => true,
         SvdPath::Auto => short_side >= AUTO_MATRIX_FREE_MIN_DIM,
     };
     if matrix_free {
-        return realize_matrix_free(markov, sample_time_s, options, shapes, warnings);
+        return realize_matrix_free(markov, sample_time_s, options, h0_shape, h1_shape, warnings);
     }
     let clock = Instant::now();
-    let h0 = hankel::build(markov, shapes.h0)?;
+    let h0 = hankel::build(markov, h0_shape)?;
     let svd = h0
         .thin_svd()
         .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
@@ -268,7 +320,7 @@ pub fn realize(
     let (q, p) = (markov.outputs(), markov.inputs());
     let un = svd.U().subcols(0, n);
     let vn = svd.V().subcols(0, n);
-    let h1 = hankel::build(markov, shapes.h1)?;
+    let h1 = hankel::build(markov, h1_shape)?;
     let ut_h1_v = un.transpose() * (&h1 * vn);
     let root: Vec<f64> = singular_values[..n].iter().map(|s| s.sqrt()).collect();
     let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
@@ -353,12 +405,13 @@ fn realize_matrix_free(
     markov: &MarkovSequence,
     sample_time_s: f64,
     options: &RealizeOptions,
-    shapes: ThesisHankel,
+    h0_shape: HankelShape,
+    h1_shape: HankelShape,
     warnings: Vec<RealizeWarning>,
 ) -> Result<Realization> {
     let clock = Instant::now();
     let n = options.states;
-    let op0 = HankelOperator::new(markov, shapes.h0)?;
+    let op0 = HankelOperator::new(markov, h0_shape)?;
     let (rows, cols) = (op0.nrows(), op0.ncols());
     let tsvd_options = TruncatedSvdOptions {
         tolerance: options.svd_tolerance,
@@ -371,7 +424,7 @@ fn realize_matrix_free(
     let (q, p) = (markov.outputs(), markov.inputs());
     let un = svd.u.subcols(0, n);
     let vn = svd.v.subcols(0, n);
-    let op1 = HankelOperator::new(markov, shapes.h1)?;
+    let op1 = HankelOperator::new(markov, h1_shape)?;
     let h1_v = op1.apply(vn);
     let ut_h1_v = un.transpose() * &h1_v;
     let root: Vec<f64> = svd.s[..n].iter().map(|s| s.sqrt()).collect();

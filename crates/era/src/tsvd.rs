@@ -3,8 +3,8 @@
 //! explicit residual test.
 //!
 //! With an orthonormal `W` (`cols × k`, `k = rank + oversample`), each iteration forms
-//! `Y = H W`, takes the thin SVD `Y = U Σ Vᵧᵀ`, and sets the Ritz triplets
-//! `(u_i, σ_i, v_i = W Vᵧ e_i)`. Then `Z = Hᵀ U` both continues the iteration
+//! `Y = H W = Q R`, takes the small SVD `R = U_R Σ V_Rᵀ`, and sets the Ritz triplets
+//! `(u_i = Q U_R e_i, σ_i, v_i = W V_R e_i)`. Then `Z = Hᵀ U` both continues the iteration
 //! (`W ← orth(Z)`) and measures the residuals
 //!
 //! ```text
@@ -38,12 +38,12 @@ pub struct TruncatedSvdOptions {
 }
 
 impl TruncatedSvdOptions {
-    /// Defaults for `rank` triplets: oversample `max(10, rank/2)`, tolerance 1e-12,
-    /// at most 300 iterations, seed 1.
+    /// Defaults for `rank` triplets: oversample `rank/2` clamped to 10 … 64, tolerance
+    /// 1e-12, at most 300 iterations, seed 1.
     pub fn new(rank: usize) -> Self {
         TruncatedSvdOptions {
             rank,
-            oversample: (rank / 2).max(10),
+            oversample: (rank / 2).clamp(10, 64),
             tolerance: 1e-12,
             max_iterations: 300,
             seed: 1,
@@ -93,23 +93,28 @@ pub fn truncated_svd(
     }
     let k = (options.rank + options.oversample).min(limit);
     let mut rng = Minstd::new(options.seed);
-    let omega = Mat::from_fn(cols, k, |_, _| rng.normal());
-    let mut w = orthonormal(&omega);
+    // At most three k-wide blocks are alive at once (memory is what limits large cases).
+    let mut w = orthonormal(&Mat::from_fn(cols, k, |_, _| rng.normal()));
     let mut residual = f64::INFINITY;
     for iteration in 1..=options.max_iterations {
-        let y = op.apply(w.as_ref());
-        let svd = y
+        // Rayleigh–Ritz on span(H W): H W = Q R, R = U_R Σ V_Rᵀ.
+        let qr = op.apply(w.as_ref()).qr(); // Y itself is gone once factored
+        let (q, r) = (qr.compute_thin_Q(), qr.thin_R().to_owned());
+        drop(qr);
+        let small = r
             .thin_svd()
             .map_err(|e| EraError::Numerical(format!("small SVD: {e:?}")))?;
-        let s: Vec<f64> = (0..svd.S().dim()).map(|i| svd.S()[i]).collect();
-        let u = svd.U().to_owned();
-        let v = &w * svd.V();
+        let s: Vec<f64> = (0..small.S().dim()).map(|i| small.S()[i]).collect();
+        let u = &q * small.U();
+        drop(q);
+        let v = &w * small.V();
+        drop(w);
         let z = op.apply_transpose(u.as_ref());
         let s1 = s[0].max(f64::MIN_POSITIVE);
         residual = (0..options.rank)
             .map(|i| {
                 (0..cols)
-                    .map(|r| (z[(r, i)] - s[i] * v[(r, i)]).powi(2))
+                    .map(|row| (z[(row, i)] - s[i] * v[(row, i)]).powi(2))
                     .sum::<f64>()
                     .sqrt()
                     / s1
@@ -124,6 +129,7 @@ pub fn truncated_svd(
                 residual,
             });
         }
+        drop((u, v));
         w = orthonormal(&z);
     }
     Err(EraError::Numerical(format!(
