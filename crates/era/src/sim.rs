@@ -417,6 +417,43 @@ impl ModalStructure {
     }
 }
 
+/// Markov blocks of a lightly damped discrete structure, for scale tests and benchmarks:
+/// `Y_k = Σ_r φ_r b_rᵀ e^(−ζ_r ω_r k) sin(ω_r √(1−ζ_r²) k)` for `k ≥ 1` (`Y_0 = 0`), with
+/// `modes` frequencies uniform in 0.01 … 0.45 cycles per sample, ζ in 0.5 … 2 %, and
+/// normal shapes, all drawn from [`Minstd`] with `seed`. The sequence has rank `2·modes`.
+pub fn lightly_damped_markov(
+    outputs: usize,
+    inputs: usize,
+    modes: usize,
+    samples: usize,
+    seed: u64,
+) -> crate::markov::MarkovSequence {
+    let mut rng = Minstd::new(seed);
+    let freq: Vec<f64> = (0..modes).map(|_| 0.01 + 0.44 * rng.uniform()).collect();
+    let zeta: Vec<f64> = (0..modes).map(|_| 0.005 + 0.015 * rng.uniform()).collect();
+    let phi: Vec<Vec<f64>> = (0..modes)
+        .map(|_| (0..outputs).map(|_| rng.normal()).collect())
+        .collect();
+    let b: Vec<Vec<f64>> = (0..modes)
+        .map(|_| (0..inputs).map(|_| rng.normal()).collect())
+        .collect();
+    let mut markov = crate::markov::MarkovSequence::zeros(outputs, inputs, samples);
+    for r in 0..modes {
+        let w = 2.0 * PI * freq[r];
+        let wd = w * (1.0 - zeta[r] * zeta[r]).sqrt();
+        for k in 1..samples {
+            let h = (-zeta[r] * w * k as f64).exp() * (wd * k as f64).sin();
+            for (i, phi_i) in phi[r].iter().enumerate() {
+                for (j, b_j) in b[r].iter().enumerate() {
+                    let v = markov.get(k, i, j) + phi_i * b_j * h;
+                    markov.set(k, i, j, v);
+                }
+            }
+        }
+    }
+    markov
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -472,41 +509,4 @@ mod tests {
             }
         }
     }
-}
-
-/// Markov blocks of a lightly damped discrete structure, for scale tests and benchmarks:
-/// `Y_k = Σ_r φ_r b_rᵀ e^(−ζ_r ω_r k) sin(ω_r √(1−ζ_r²) k)` for `k ≥ 1` (`Y_0 = 0`), with
-/// `modes` frequencies uniform in 0.01 … 0.45 cycles per sample, ζ in 0.5 … 2 %, and
-/// normal shapes, all drawn from [`Minstd`] with `seed`. The sequence has rank `2·modes`.
-pub fn lightly_damped_markov(
-    outputs: usize,
-    inputs: usize,
-    modes: usize,
-    samples: usize,
-    seed: u64,
-) -> crate::markov::MarkovSequence {
-    let mut rng = Minstd::new(seed);
-    let freq: Vec<f64> = (0..modes).map(|_| 0.01 + 0.44 * rng.uniform()).collect();
-    let zeta: Vec<f64> = (0..modes).map(|_| 0.005 + 0.015 * rng.uniform()).collect();
-    let phi: Vec<Vec<f64>> = (0..modes)
-        .map(|_| (0..outputs).map(|_| rng.normal()).collect())
-        .collect();
-    let b: Vec<Vec<f64>> = (0..modes)
-        .map(|_| (0..inputs).map(|_| rng.normal()).collect())
-        .collect();
-    let mut markov = crate::markov::MarkovSequence::zeros(outputs, inputs, samples);
-    for r in 0..modes {
-        let w = 2.0 * PI * freq[r];
-        let wd = w * (1.0 - zeta[r] * zeta[r]).sqrt();
-        for k in 1..samples {
-            let h = (-zeta[r] * w * k as f64).exp() * (wd * k as f64).sin();
-            for i in 0..outputs {
-                for j in 0..inputs {
-                    let v = markov.get(k, i, j) + phi[r][i] * b[r][j] * h;
-                    markov.set(k, i, j, v);
-                }
-            }
-        }
-    }
-    markov
 }
