@@ -2,7 +2,8 @@
 //! Rayleigh–Ritz step (Halko, Martinsson & Tropp 2011, Alg. 4.4 and 5.1), stopped by an
 //! explicit residual test.
 //!
-//! With an orthonormal `W` (`cols × k`, `k = rank + oversample`), each iteration forms
+//! A first pass from a random start finds the range. Then, with an orthonormal `W`
+//! (`cols × k`, `k = rank + oversample`), each iteration forms
 //! `Y = H W = Q R`, takes the small SVD `R = U_R Σ V_Rᵀ`, and sets the Ritz triplets
 //! `(u_i = Q U_R e_i, σ_i, v_i = W V_R e_i)`. Then `Z = Hᵀ U` both continues the iteration
 //! (`W ← orth(Z)`) and measures the residuals
@@ -94,7 +95,10 @@ pub fn truncated_svd(
     let k = (options.rank + options.oversample).min(limit);
     let mut rng = Minstd::new(options.seed);
     // At most three k-wide blocks are alive at once (memory is what limits large cases).
-    let mut w = orthonormal(&Mat::from_fn(cols, k, |_, _| rng.normal()));
+    // The start is uniform on [-1, 1] (any full-rank random test matrix finds the range;
+    // Halko et al. §4) and is not orthonormalised: the first pass only finds the range,
+    // its residual is not tested, and from the second pass on W = orth(Hᵀ U).
+    let mut w = Mat::from_fn(cols, k, |_, _| 2.0 * rng.uniform() - 1.0);
     let mut residual = f64::INFINITY;
     for iteration in 1..=options.max_iterations {
         // Rayleigh–Ritz on span(H W): H W = Q R, R = U_R Σ V_Rᵀ.
@@ -110,6 +114,11 @@ pub fn truncated_svd(
         let v = &w * small.V();
         drop(w);
         let z = op.apply_transpose(u.as_ref());
+        if iteration == 1 {
+            drop((u, v));
+            w = orthonormal(&z);
+            continue;
+        }
         let s1 = s[0].max(f64::MIN_POSITIVE);
         residual = (0..options.rank)
             .map(|i| {
