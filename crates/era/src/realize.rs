@@ -317,16 +317,11 @@ fn realize_shapes(
     let hankel_svd_seconds = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     let n = options.states;
-    let (q, p) = (markov.outputs(), markov.inputs());
     let un = svd.U().subcols(0, n);
     let vn = svd.V().subcols(0, n);
     let h1 = hankel::build(markov, h1_shape)?;
     let ut_h1_v = un.transpose() * (&h1 * vn);
-    let root: Vec<f64> = singular_values[..n].iter().map(|s| s.sqrt()).collect();
-    let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
-    let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
-    let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
-    let d = direct_term(markov, options.direct_term);
+    let (a, b, c, d) = balanced_matrices(&singular_values[..n], un, vn, &ut_h1_v, markov, options);
     Ok(Realization {
         model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
         singular_values,
@@ -400,6 +395,25 @@ pub fn realize_naive(
     })
 }
 
+/// §1.9 from the kept singular values `σ`, `U_n`, `V_n` and `U_nᵀ H1 V_n`:
+/// `A = S^(−½) (U_nᵀ H1 V_n) S^(−½)`, `B` = first p columns of `S^(½) V_nᵀ`,
+/// `C` = first q rows of `U_n S^(½)`, `D` as asked. Shared by both SVD paths.
+fn balanced_matrices(
+    singular_values: &[f64],
+    un: faer::MatRef<'_, f64>,
+    vn: faer::MatRef<'_, f64>,
+    ut_h1_v: &Mat<f64>,
+    markov: &MarkovSequence,
+    options: &RealizeOptions,
+) -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>) {
+    let (n, q, p) = (singular_values.len(), markov.outputs(), markov.inputs());
+    let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
+    let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
+    let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
+    let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
+    (a, b, c, direct_term(markov, options.direct_term))
+}
+
 /// The matrix-free path of [`realize`]: `H0` and `H1` are never formed.
 fn realize_matrix_free(
     markov: &MarkovSequence,
@@ -421,17 +435,12 @@ fn realize_matrix_free(
     check_rank(&svd.s, rows, cols, n)?;
     let hankel_svd_seconds = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let (q, p) = (markov.outputs(), markov.inputs());
     let un = svd.u.subcols(0, n);
     let vn = svd.v.subcols(0, n);
     let op1 = HankelOperator::new(markov, h1_shape)?;
     let h1_v = op1.apply(vn);
     let ut_h1_v = un.transpose() * &h1_v;
-    let root: Vec<f64> = svd.s[..n].iter().map(|s| s.sqrt()).collect();
-    let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
-    let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
-    let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
-    let d = direct_term(markov, options.direct_term);
+    let (a, b, c, d) = balanced_matrices(&svd.s[..n], un, vn, &ut_h1_v, markov, options);
     let mut singular_values = svd.s;
     singular_values.truncate(n); // only these passed the residual test
     Ok(Realization {
