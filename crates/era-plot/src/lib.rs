@@ -1,0 +1,18 @@
+//! Figures for `era`: FRF overlays (thesis Figs. 5.1–5.11 and Appendices A–I), the
+//! singular-value plot of the thesis's `cut` option, a q×p overview grid, and a
+//! self-contained HTML report.
+//!
+//! Plotting stays out of the numeric core. A figure is first a [`Figure`]: panels with
+//! their series and axis ranges, computed from the data by pure functions that tests can
+//! check. [`render_svg`] and [`render_png`] then draw it with `plotters`. Text is drawn
+//! with DejaVu Sans embedded from the `dejavu` crate, so no system font is needed.
+//! [`report::report_html`] puts everything into one file with inline SVG.
+
+pub mod figures;
+pub mod render;
+pub mod report;
+
+pub use figures::{
+    frf_grid, frf_overlay, singular_value_figure, Figure, Panel, Series, SeriesKind, YScale,
+};
+pub use render::{render_png, render_svg, PlotError};
