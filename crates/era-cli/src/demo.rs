@@ -151,9 +151,18 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             ModelJson::from_identification(found, parameters(&options), None)
                 .write(&sub.join("model.json"))?;
             FitJson::from_report(&found.fit).write(&sub.join("fit.json"))?;
+            let title = format!("era demo: the truth model, {}", label.replace('_', " "));
+            crate::figures::write_all(
+                &sub,
+                &title,
+                &parameter_echo(&options),
+                found,
+                0,
+                options.states,
+            )?;
         }
         human.print(&format!(
-            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, {0}/no_noise/{{model,fit}}.json, {0}/noisy/{{model,fit}}.json ({1:.3} s)\n",
+            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, fit.json, report.html and figures ({1:.3} s)\n",
             dir.display(),
             clock.elapsed().as_secs_f64()
         ));

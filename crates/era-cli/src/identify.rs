@@ -116,11 +116,19 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         let clock = Instant::now();
         model.write(&dir.join("model.json"))?;
         fit.write(&dir.join("fit.json"))?;
+        let title = format!("era identify {}", a.file.display());
+        crate::figures::write_all(
+            dir,
+            &title,
+            &parameter_echo(&opts),
+            &found,
+            opts.zero_lines,
+            opts.states,
+        )?;
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
         human.print(&format!(
-            "\nwrote {} and {}\n",
-            dir.join("model.json").display(),
-            dir.join("fit.json").display()
+            "\nwrote {0}/model.json, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
+            dir.display()
         ));
     }
     if a.common.timings {

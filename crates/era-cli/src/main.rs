@@ -6,6 +6,7 @@
 
 mod args;
 mod demo;
+mod figures;
 mod friction;
 mod identify;
 mod report;
@@ -37,6 +38,9 @@ fn exit_code(err: &anyhow::Error) -> u8 {
     for cause in err.chain() {
         if let Some(e) = cause.downcast_ref::<era::EraError>() {
             return if e.is_input_error() { 2 } else { 1 };
+        }
+        if cause.downcast_ref::<era_plot::PlotError>().is_some() {
+            return 1;
         }
         if cause.downcast_ref::<era_io::IoError>().is_some()
             || cause.downcast_ref::<UsageError>().is_some()

@@ -486,3 +486,83 @@ fn identify_reports_the_svd_path() {
         assert!((fa - fb).abs() < 1e-8 * fa);
     }
 }
+
+#[test]
+fn identify_out_writes_every_figure_and_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = dir.path().join("dta.csv");
+    era()
+        .args([
+            "simulate",
+            "modal",
+            "-q",
+            "--collocated",
+            "--seed",
+            "987654321",
+            "--out",
+        ])
+        .arg(&frf)
+        .assert()
+        .success();
+    let out = dir.path().join("out");
+    era()
+        .arg("identify")
+        .arg(&frf)
+        .args([
+            "--states",
+            "80",
+            "--integrations",
+            "1",
+            "--zero-lines",
+            "3",
+            "--pad-to",
+            "1024",
+            "-q",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let count = |ext: &str| {
+        std::fs::read_dir(out.join("pairs"))
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .path()
+                    .extension()
+                    .is_some_and(|x| x == ext)
+            })
+            .count()
+    };
+    assert_eq!(count("svg"), 64);
+    assert_eq!(count("png"), 64);
+    for f in [
+        "grid.svg",
+        "grid.png",
+        "singular_values.svg",
+        "singular_values.png",
+        "report.html",
+        "model.json",
+        "fit.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_eq!(html.matches("class=\"plot overlay\"").count(), 64);
+    for id in [
+        "id=\"parameters\"",
+        "id=\"fig-singular-values\"",
+        "id=\"modal-table\"",
+        "id=\"fit-table\"",
+        "id=\"fig-grid\"",
+    ] {
+        assert!(html.contains(id), "{id}");
+    }
+    assert!(html.contains("Measurement 8, Excitation Actuator 8 (collocated)"));
+    assert!(
+        !html.contains("http://") || html.matches("http://").all(|_| html.contains("xmlns")),
+        "no network references"
+    );
+    assert_eq!(html.matches("<svg").count(), 66);
+}

@@ -102,6 +102,17 @@ pub fn stepped_range(values: impl Iterator<Item = f64>, step: f64) -> (f64, f64)
     (a, if b <= a { a + step } else { b })
 }
 
+/// `phase` moved, line by line, to the multiple of 360° nearest `reference`: a noisy
+/// measured phase shown on the model's branch, where unwrapping the noise on its own
+/// would wander off in 360° steps.
+pub fn phase_on_branch_of(phase: &[f64], reference: &[f64]) -> Vec<f64> {
+    phase
+        .iter()
+        .zip(reference)
+        .map(|(p, r)| p + 360.0 * ((r - p) / 360.0).round())
+        .collect()
+}
+
 /// Phase in degrees, unwrapped along the lines (jumps over 180° are folded back).
 pub fn unwrapped_phase_deg(values: &[Complex64]) -> Vec<f64> {
     let mut out = Vec::with_capacity(values.len());
@@ -151,7 +162,8 @@ pub fn pair_title(output: usize, input: usize, collocated: bool) -> String {
 }
 
 /// Measured and model FRF of one pair: log magnitude over frequency, and unwrapped
-/// phase in degrees (thesis `plotfrfs.m`). `measured` should be the processed
+/// phase in degrees (thesis `plotfrfs.m`), the measured phase on the model's branch
+/// ([`phase_on_branch_of`]). `measured` should be the processed
 /// measurement (after the same integrations as the model); lines whose measured value is
 /// exactly zero (the zeroed low end) are left out.
 ///
@@ -182,7 +194,8 @@ pub fn frf_overlay(
     let x_range = (0.0, f[f.len() - 1]);
     let mag = |g: &[Complex64]| g.iter().map(|v| v.norm()).collect::<Vec<f64>>();
     let (mm, mx) = (mag(&gm), mag(&gx));
-    let (pm, px) = (unwrapped_phase_deg(&gm), unwrapped_phase_deg(&gx));
+    let px = unwrapped_phase_deg(&gx);
+    let pm = phase_on_branch_of(&unwrapped_phase_deg(&gm), &px);
     let series = |a: Vec<f64>, b: Vec<f64>| {
         vec![
             Series {
@@ -357,6 +370,16 @@ mod tests {
         assert!(frf_overlay(&m, &m, 0, 0, true)
             .title
             .ends_with("(collocated)"));
+    }
+
+    #[test]
+    fn measured_phase_follows_the_model_branch() {
+        let model = [0.0, -100.0, -200.0, -300.0];
+        let noisy = [2.0, -95.0 + 360.0, -210.0 - 720.0, -290.0 + 360.0];
+        assert_eq!(
+            phase_on_branch_of(&noisy, &model),
+            vec![2.0, -95.0, -210.0, -290.0]
+        );
     }
 
     #[test]

@@ -62,6 +62,20 @@ where
                     .disable_x_mesh()
                     .disable_y_mesh();
             }
+            let x_span = x1 - x0;
+            let x_format = move |v: &f64| {
+                if x_span >= 20.0 {
+                    format!("{v:.0}")
+                } else {
+                    format!("{v:.2}")
+                }
+            };
+            mesh.x_label_formatter(&x_format);
+            let y_format = |v: &f64| match panel.y_scale {
+                YScale::Log => format!("{v:.0e}"),
+                YScale::Linear => format!("{v:.0}"),
+            };
+            mesh.y_label_formatter(&y_format);
             mesh.draw().map_err(err)?;
             for s in &panel.series {
                 let points: Vec<(f64, f64)> =
@@ -111,7 +125,8 @@ where
                                 points.iter().map(|p| Circle::new(*p, 3, MEASURED.filled())),
                             )
                             .map_err(err)?
-                            .label(s.label.as_str());
+                            .label(s.label.as_str())
+                            .legend(|(x, y)| Circle::new((x + 10, y), 3, MEASURED.filled()));
                     }
                 }
             }

@@ -1,0 +1,70 @@
+//! Writing the figures and `report.html` of one identification into a folder.
+
+use era::identify::Identification;
+use era::preprocess::zero_leading_lines;
+use era::response::model_frf;
+use era_io::atomic::write_atomic;
+use era_plot::report::{report_html, ReportInput};
+use era_plot::{frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure};
+use std::path::{Path, PathBuf};
+
+/// Writes `stem.svg` and `stem.png` for a figure; returns the SVG text.
+fn write_figure(dir: &Path, stem: &str, figure: &Figure) -> anyhow::Result<String> {
+    let svg = render_svg(figure)?;
+    write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
+    let png = dir.join(format!("{stem}.png"));
+    let tmp = dir.join(format!(".{stem}.tmp-{}.png", std::process::id())); // the encoder goes by extension
+    render_png(figure, &tmp).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })?;
+    std::fs::rename(&tmp, &png)
+        .map_err(|e| crate::UsageError(format!("{}: {e}", png.display())))?;
+    Ok(svg)
+}
+
+/// Figures and report of `found` into `dir`: `singular_values`, `grid`,
+/// `pairs/pair_I_J` (SVG and PNG) and `report.html`. Returns the files written.
+pub fn write_all(
+    dir: &Path,
+    title: &str,
+    parameters: &str,
+    found: &Identification,
+    zero_lines: usize,
+    states: usize,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let measured = zero_leading_lines(&found.processed, zero_lines);
+    let model = model_frf(&found.model, &measured)?;
+    let square = measured.outputs() == measured.inputs();
+    let mut written = Vec::new();
+    let sv_svg = write_figure(
+        dir,
+        "singular_values",
+        &singular_value_figure(&found.realization.singular_values, states),
+    )?;
+    written.push(dir.join("singular_values.svg"));
+    let grid_svg = write_figure(dir, "grid", &frf_grid(&measured, &model, square))?;
+    written.push(dir.join("grid.svg"));
+    let pairs = dir.join("pairs");
+    std::fs::create_dir_all(&pairs)
+        .map_err(|e| crate::UsageError(format!("{}: {e}", pairs.display())))?;
+    let mut overlays = Vec::new();
+    for i in 0..measured.outputs() {
+        for j in 0..measured.inputs() {
+            let figure = frf_overlay(&measured, &model, i, j, square && i == j);
+            let svg = write_figure(&pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
+            overlays.push((figure.title.clone(), svg));
+        }
+    }
+    written.push(pairs.clone());
+    let html = report_html(&ReportInput {
+        title,
+        parameters,
+        found,
+        singular_values_svg: &sv_svg,
+        grid_svg: &grid_svg,
+        overlays: &overlays,
+    });
+    write_atomic(&dir.join("report.html"), html.as_bytes())?;
+    written.push(dir.join("report.html"));
+    Ok(written)
+}
