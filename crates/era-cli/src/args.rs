@@ -23,6 +23,31 @@ pub enum Command {
     Simulate(SimulateArgs),
     /// Coulomb friction of the actuators: estimate from free decay, simulate, tune.
     Friction(FrictionArgs),
+    /// Plot an FRF file, overlaid with a model when one is given.
+    Plot(PlotArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PlotArgs {
+    /// FRF file (CSV).
+    pub file: PathBuf,
+    /// model.json to overlay (from era identify --out).
+    #[arg(long, value_name = "MODEL_JSON")]
+    pub model: Option<PathBuf>,
+    /// Integrations applied to the FRFs before plotting (default: the model's, or 0).
+    #[arg(long)]
+    pub integrations: Option<usize>,
+    /// Leading lines left out (default: the model's, or 0).
+    #[arg(long)]
+    pub zero_lines: Option<usize>,
+    /// Quantity of the FRFs when the file does not say.
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Folder for the figures (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub common: CommonArgs,
 }
 
 /// Flags every verb has.

@@ -3,13 +3,14 @@
 use era::identify::Identification;
 use era::preprocess::zero_leading_lines;
 use era::response::model_frf;
+use era::FrfData;
 use era_io::atomic::write_atomic;
 use era_plot::report::{report_html, ReportInput};
 use era_plot::{frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Writes `stem.svg` and `stem.png` for a figure; returns the SVG text.
-fn write_figure(dir: &Path, stem: &str, figure: &Figure) -> anyhow::Result<String> {
+pub fn write_figure(dir: &Path, stem: &str, figure: &Figure) -> anyhow::Result<String> {
     let svg = render_svg(figure)?;
     write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
     let png = dir.join(format!("{stem}.png"));
@@ -22,8 +23,31 @@ fn write_figure(dir: &Path, stem: &str, figure: &Figure) -> anyhow::Result<Strin
     Ok(svg)
 }
 
+/// The overview grid and every pair's overlay of `measured` (and `model` when given)
+/// into `dir` and `dir/pairs`; returns the grid SVG and the (title, SVG) per pair.
+pub fn write_frf_figures(
+    dir: &Path,
+    measured: &FrfData,
+    model: Option<&FrfData>,
+) -> anyhow::Result<(String, Vec<(String, String)>)> {
+    let square = measured.outputs() == measured.inputs();
+    let grid_svg = write_figure(dir, "grid", &frf_grid(measured, model, square))?;
+    let pairs = dir.join("pairs");
+    std::fs::create_dir_all(&pairs)
+        .map_err(|e| crate::UsageError(format!("{}: {e}", pairs.display())))?;
+    let mut overlays = Vec::new();
+    for i in 0..measured.outputs() {
+        for j in 0..measured.inputs() {
+            let figure = frf_overlay(measured, model, i, j, square && i == j);
+            let svg = write_figure(&pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
+            overlays.push((figure.title.clone(), svg));
+        }
+    }
+    Ok((grid_svg, overlays))
+}
+
 /// Figures and report of `found` into `dir`: `singular_values`, `grid`,
-/// `pairs/pair_I_J` (SVG and PNG) and `report.html`. Returns the files written.
+/// `pairs/pair_I_J` (SVG and PNG) and `report.html`.
 pub fn write_all(
     dir: &Path,
     title: &str,
@@ -31,31 +55,15 @@ pub fn write_all(
     found: &Identification,
     zero_lines: usize,
     states: usize,
-) -> anyhow::Result<Vec<PathBuf>> {
+) -> anyhow::Result<()> {
     let measured = zero_leading_lines(&found.processed, zero_lines);
     let model = model_frf(&found.model, &measured)?;
-    let square = measured.outputs() == measured.inputs();
-    let mut written = Vec::new();
     let sv_svg = write_figure(
         dir,
         "singular_values",
         &singular_value_figure(&found.realization.singular_values, states),
     )?;
-    written.push(dir.join("singular_values.svg"));
-    let grid_svg = write_figure(dir, "grid", &frf_grid(&measured, &model, square))?;
-    written.push(dir.join("grid.svg"));
-    let pairs = dir.join("pairs");
-    std::fs::create_dir_all(&pairs)
-        .map_err(|e| crate::UsageError(format!("{}: {e}", pairs.display())))?;
-    let mut overlays = Vec::new();
-    for i in 0..measured.outputs() {
-        for j in 0..measured.inputs() {
-            let figure = frf_overlay(&measured, &model, i, j, square && i == j);
-            let svg = write_figure(&pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
-            overlays.push((figure.title.clone(), svg));
-        }
-    }
-    written.push(pairs.clone());
+    let (grid_svg, overlays) = write_frf_figures(dir, &measured, Some(&model))?;
     let html = report_html(&ReportInput {
         title,
         parameters,
@@ -65,6 +73,5 @@ pub fn write_all(
         overlays: &overlays,
     });
     write_atomic(&dir.join("report.html"), html.as_bytes())?;
-    written.push(dir.join("report.html"));
-    Ok(written)
+    Ok(())
 }

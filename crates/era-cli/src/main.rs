@@ -9,6 +9,7 @@ mod demo;
 mod figures;
 mod friction;
 mod identify;
+mod plot;
 mod report;
 mod simulate;
 
@@ -64,6 +65,7 @@ fn main() -> ExitCode {
         args::Command::Identify(a) => identify::run(a),
         args::Command::Simulate(a) => simulate::run(a),
         args::Command::Friction(a) => friction::run(a),
+        args::Command::Plot(a) => plot::run(a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -568,3 +568,84 @@ fn identify_out_writes_every_figure_and_the_report() {
     assert!(!html.contains("<script") && !html.contains("<link") && !html.contains("src="));
     assert_eq!(html.matches("<svg").count(), 66);
 }
+
+#[test]
+fn plot_overlays_a_file_with_a_model_or_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    let model_dir = dir.path().join("model");
+    era()
+        .arg("identify")
+        .arg(&frf)
+        .args([
+            "--states",
+            "8",
+            "--hankel-factor",
+            "4",
+            "--pad-to",
+            "1024",
+            "-q",
+            "--out",
+        ])
+        .arg(&model_dir)
+        .assert()
+        .success();
+    let with = dir.path().join("with");
+    era()
+        .arg("plot")
+        .arg(&frf)
+        .arg("--model")
+        .arg(model_dir.join("model.json"))
+        .arg("--out")
+        .arg(&with)
+        .arg("-q")
+        .assert()
+        .success();
+    assert_eq!(std::fs::read_dir(with.join("pairs")).unwrap().count(), 18);
+    assert!(with.join("singular_values.svg").is_file());
+    let svg = std::fs::read_to_string(with.join("pairs/pair_2_2.svg")).unwrap();
+    assert!(svg.contains("ERA model") && svg.contains("(collocated)"));
+
+    let alone = dir.path().join("alone");
+    era()
+        .arg("plot")
+        .arg(&frf)
+        .arg("--out")
+        .arg(&alone)
+        .arg("-q")
+        .assert()
+        .success();
+    let svg = std::fs::read_to_string(alone.join("pairs/pair_1_2.svg")).unwrap();
+    assert!(svg.contains("measured") && !svg.contains("ERA model"));
+    assert!(!alone.join("singular_values.svg").exists());
+
+    // A model of another shape is refused.
+    let other = dir.path().join("m.csv");
+    era()
+        .args([
+            "simulate",
+            "modal",
+            "-q",
+            "--outputs",
+            "2",
+            "--inputs",
+            "2",
+            "--modes",
+            "2",
+            "--out",
+        ])
+        .arg(&other)
+        .assert()
+        .success();
+    expect_input_error(
+        &[
+            "plot",
+            other.to_str().unwrap(),
+            "--model",
+            model_dir.join("model.json").to_str().unwrap(),
+            "--out",
+            dir.path().join("x").to_str().unwrap(),
+        ],
+        "the model has 3 outputs x 3 inputs",
+    );
+}

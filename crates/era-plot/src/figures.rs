@@ -172,45 +172,57 @@ pub fn pair_title(output: usize, input: usize, collocated: bool) -> String {
 #[track_caller]
 pub fn frf_overlay(
     measured: &FrfData,
-    model: &FrfData,
+    model: Option<&FrfData>,
     output: usize,
     input: usize,
     collocated: bool,
 ) -> Figure {
-    assert_eq!(
-        (measured.outputs(), measured.inputs(), measured.lines()),
-        (model.outputs(), model.inputs(), model.lines())
-    );
+    if let Some(m) = model {
+        assert_eq!(
+            (measured.outputs(), measured.inputs(), measured.lines()),
+            (m.outputs(), m.inputs(), m.lines()),
+            "model and measurement shapes"
+        );
+    }
     let f = measured.frequency_hz();
     let keep: Vec<usize> = (0..f.len())
         .filter(|&k| measured.pair(output, input)[k].norm() > 0.0)
         .collect();
     let pick = |g: &[Complex64]| -> Vec<Complex64> { keep.iter().map(|&k| g[k]).collect() };
-    let (gm, gx) = (
-        pick(measured.pair(output, input)),
-        pick(model.pair(output, input)),
-    );
+    let gm = pick(measured.pair(output, input));
+    let gx = model.map(|m| pick(m.pair(output, input)));
     let x: Vec<f64> = keep.iter().map(|&k| f[k]).collect();
     let x_range = (0.0, f[f.len() - 1]);
     let mag = |g: &[Complex64]| g.iter().map(|v| v.norm()).collect::<Vec<f64>>();
-    let (mm, mx) = (mag(&gm), mag(&gx));
-    let px = unwrapped_phase_deg(&gx);
-    let pm = phase_on_branch_of(&unwrapped_phase_deg(&gm), &px);
-    let series = |a: Vec<f64>, b: Vec<f64>| {
-        vec![
-            Series {
-                label: "measured".into(),
-                x: x.clone(),
-                y: a,
-                kind: SeriesKind::Measured,
-            },
-            Series {
+    let mm = mag(&gm);
+    let mx = gx.as_deref().map(mag);
+    let px = gx.as_deref().map(unwrapped_phase_deg);
+    let pm = match &px {
+        Some(p) => phase_on_branch_of(&unwrapped_phase_deg(&gm), p),
+        None => unwrapped_phase_deg(&gm),
+    };
+    let series = |a: &[f64], b: Option<&Vec<f64>>| {
+        let mut out = vec![Series {
+            label: "measured".into(),
+            x: x.clone(),
+            y: a.to_vec(),
+            kind: SeriesKind::Measured,
+        }];
+        if let Some(b) = b {
+            out.push(Series {
                 label: "ERA model".into(),
                 x: x.clone(),
-                y: b,
+                y: b.clone(),
                 kind: SeriesKind::Model,
-            },
-        ]
+            });
+        }
+        out
+    };
+    let all = |a: &[f64], b: Option<&Vec<f64>>| {
+        a.iter()
+            .chain(b.into_iter().flatten())
+            .copied()
+            .collect::<Vec<f64>>()
     };
     let magnitude = Panel {
         title: String::new(),
@@ -218,8 +230,8 @@ pub fn frf_overlay(
         y_label: format!("|G| {}", unit(measured)),
         y_scale: YScale::Log,
         x_range,
-        y_range: log_range(mm.iter().chain(&mx).copied()),
-        series: series(mm, mx),
+        y_range: log_range(all(&mm, mx.as_ref()).into_iter()),
+        series: series(&mm, mx.as_ref()),
         marker_x: None,
         guide_y: None,
         legend: true,
@@ -230,8 +242,8 @@ pub fn frf_overlay(
         y_label: "Phase (deg)".into(),
         y_scale: YScale::Linear,
         x_range,
-        y_range: stepped_range(pm.iter().chain(&px).copied(), 90.0),
-        series: series(pm, px),
+        y_range: stepped_range(all(&pm, px.as_ref()).into_iter(), 90.0),
+        series: series(&pm, px.as_ref()),
         marker_x: None,
         guide_y: None,
         legend: false,
@@ -244,12 +256,12 @@ pub fn frf_overlay(
     }
 }
 
-/// A q×p overview: magnitude of every pair, measured and model.
+/// A q×p overview: magnitude of every pair, measured and (when given) model.
 ///
 /// # Panics
 /// As [`frf_overlay`].
 #[track_caller]
-pub fn frf_grid(measured: &FrfData, model: &FrfData, collocated: bool) -> Figure {
+pub fn frf_grid(measured: &FrfData, model: Option<&FrfData>, collocated: bool) -> Figure {
     let (q, p) = (measured.outputs(), measured.inputs());
     let mut panels = Vec::with_capacity(q * p);
     for i in 0..q {
@@ -270,8 +282,13 @@ pub fn frf_grid(measured: &FrfData, model: &FrfData, collocated: bool) -> Figure
         }
     }
     let cell = if p <= 3 { 320 } else { 220 };
+    let title = if model.is_some() {
+        "All pairs: measured (solid) and ERA model (dashed), magnitude"
+    } else {
+        "All pairs: measured magnitude"
+    };
     Figure {
-        title: "All pairs: measured (solid) and ERA model (dashed), magnitude".into(),
+        title: title.into(),
         panels,
         columns: p,
         size: (cell * p as u32 + 40, (cell * 3 / 4) * q as u32 + 60),
@@ -354,7 +371,7 @@ mod tests {
     #[test]
     fn overlay_has_two_panels_two_series_and_ranges_from_the_data() {
         let m = sample();
-        let fig = frf_overlay(&m, &m, 1, 2, false);
+        let fig = frf_overlay(&m, Some(&m), 1, 2, false);
         assert_eq!(fig.title, "Measurement 2, Excitation Actuator 3");
         assert_eq!(fig.panels.len(), 2);
         for p in &fig.panels {
@@ -367,7 +384,7 @@ mod tests {
         assert_eq!(fig.panels[0].y_scale, YScale::Log);
         // Phase −0.2 k rad, unwrapped: −11.5° down to −561°: −630 .. 0 in 90° steps.
         assert_eq!(fig.panels[1].y_range, (-630.0, 0.0));
-        assert!(frf_overlay(&m, &m, 0, 0, true)
+        assert!(frf_overlay(&m, Some(&m), 0, 0, true)
             .title
             .ends_with("(collocated)"));
     }
@@ -394,9 +411,21 @@ mod tests {
     }
 
     #[test]
+    fn without_a_model_each_panel_has_the_measurement_only() {
+        let m = sample();
+        let fig = frf_overlay(&m, None, 0, 1, false);
+        assert!(fig.panels.iter().all(|p| p.series.len() == 1));
+        assert_eq!(fig.panels[0].y_range, (0.01, 10.0));
+        assert_eq!(
+            frf_grid(&m, None, false).title,
+            "All pairs: measured magnitude"
+        );
+    }
+
+    #[test]
     fn grid_has_one_panel_per_pair() {
         let m = sample();
-        let fig = frf_grid(&m, &m, false);
+        let fig = frf_grid(&m, Some(&m), false);
         assert_eq!((fig.panels.len(), fig.columns), (6, 3));
         assert_eq!(fig.panels[5].title, "Y2 / F3");
     }

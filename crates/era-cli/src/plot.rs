@@ -1,0 +1,92 @@
+//! `era plot FRF_FILE [--model model.json] --out DIR`: any FRF file, overlaid with any
+//! model of the same shape.
+
+use crate::args::PlotArgs;
+use crate::figures::{write_figure, write_frf_figures};
+use crate::identify::prepare_out_dir;
+use crate::report::{print_json, Human};
+use crate::usage;
+use anyhow::Context;
+use era::preprocess::{integrate, zero_leading_lines};
+use era::response::model_frf;
+use era::Quantity;
+use era_io::csv::read_frf_csv;
+use era_io::model_json::ModelJson;
+use era_plot::singular_value_figure;
+use serde_json::json;
+
+pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    prepare_out_dir(&a.out)?;
+    let default_quantity = a
+        .quantity
+        .map(Quantity::from)
+        .unwrap_or(Quantity::Acceleration);
+    let file = read_frf_csv(&a.file, default_quantity)
+        .with_context(|| format!("reading {}", a.file.display()))?;
+    let model = match &a.model {
+        Some(path) => {
+            Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
+        }
+        None => None,
+    };
+    let from_model = |key: &str| {
+        model
+            .as_ref()
+            .and_then(|m| m.parameters.get(key))
+            .and_then(|v| v.as_u64())
+            .map(|v| v as usize)
+    };
+    let integrations = a
+        .integrations
+        .or_else(|| from_model("integrations"))
+        .unwrap_or(0);
+    let zero_lines = a
+        .zero_lines
+        .or_else(|| from_model("zero_lines"))
+        .unwrap_or(0);
+    if let Some(m) = &model {
+        if (m.outputs, m.inputs) != (file.frf.outputs(), file.frf.inputs()) {
+            return usage(format!(
+                "--model {}: the model has {} outputs x {} inputs, {} has {} x {}",
+                a.model.as_ref().unwrap().display(),
+                m.outputs,
+                m.inputs,
+                a.file.display(),
+                file.frf.outputs(),
+                file.frf.inputs()
+            ));
+        }
+    }
+    let measured = zero_leading_lines(&integrate(&file.frf, integrations)?, zero_lines);
+    let model_frf = match &model {
+        Some(m) => {
+            let ss = m.state_space().map_err(crate::UsageError)?;
+            if m.states > 0 {
+                write_figure(
+                    &a.out,
+                    "singular_values",
+                    &singular_value_figure(&m.singular_values, m.states),
+                )?;
+            }
+            Some(model_frf(&ss, &measured)?)
+        }
+        None => None,
+    };
+    let (_, overlays) = write_frf_figures(&a.out, &measured, model_frf.as_ref())?;
+    human.print(&format!(
+        "wrote {0}/grid.{{svg,png}} and {1} pair overlays in {0}/pairs{2} ({3} FRFs, {4} integration(s), {5} zeroed line(s))\n",
+        a.out.display(),
+        overlays.len(),
+        if model.is_some() { format!(", and {}/singular_values.{{svg,png}}", a.out.display()) } else { String::new() },
+        measured.quantity(),
+        integrations,
+        zero_lines
+    ));
+    if a.common.json {
+        print_json(
+            &json!({"out": a.out, "pairs": overlays.len(), "model": a.model, "integrations": integrations, "zero_lines": zero_lines}),
+        )?;
+    }
+    Ok(())
+}
