@@ -152,6 +152,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
                 .write(&sub.join("model.json"))?;
             FitJson::from_report(&found.fit).write(&sub.join("fit.json"))?;
             let title = format!("era demo: the truth model, {}", label.replace('_', " "));
+            let bar = crate::progress::bar(&a.common, 9, &format!("figures ({label})"));
             crate::figures::write_all(
                 &sub,
                 &title,
@@ -159,7 +160,9 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
                 found,
                 0,
                 options.states,
+                &bar,
             )?;
+            bar.finish_and_clear();
         }
         human.print(&format!(
             "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, fit.json, report.html and figures ({1:.3} s)\n",

@@ -29,6 +29,7 @@ pub fn write_frf_figures(
     dir: &Path,
     measured: &FrfData,
     model: Option<&FrfData>,
+    progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<(String, Vec<(String, String)>)> {
     let square = measured.outputs() == measured.inputs();
     let grid_svg = write_figure(dir, "grid", &frf_grid(measured, model, square))?;
@@ -41,6 +42,7 @@ pub fn write_frf_figures(
             let figure = frf_overlay(measured, model, i, j, square && i == j);
             let svg = write_figure(&pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
             overlays.push((figure.title.clone(), svg));
+            progress.inc(1);
         }
     }
     Ok((grid_svg, overlays))
@@ -55,6 +57,7 @@ pub fn write_all(
     found: &Identification,
     zero_lines: usize,
     states: usize,
+    progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<()> {
     let measured = zero_leading_lines(&found.processed, zero_lines);
     let model = model_frf(&found.model, &measured)?;
@@ -63,7 +66,7 @@ pub fn write_all(
         "singular_values",
         &singular_value_figure(&found.realization.singular_values, states),
     )?;
-    let (grid_svg, overlays) = write_frf_figures(dir, &measured, Some(&model))?;
+    let (grid_svg, overlays) = write_frf_figures(dir, &measured, Some(&model), progress)?;
     let html = report_html(&ReportInput {
         title,
         parameters,

@@ -7,7 +7,7 @@ use crate::report::{
 };
 use crate::usage;
 use anyhow::Context;
-use era::identify::{identify, EraOptions, ModelDomain};
+use era::identify::{identify_observed, EraOptions, ModelDomain};
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
 use era_io::csv::read_frf_csv;
@@ -104,8 +104,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     ));
     human.print(&parameter_echo(&opts));
 
-    let found =
-        identify(&frf, &opts).with_context(|| format!("identifying {}", a.file.display()))?;
+    let spinner = crate::progress::spinner(&a.common);
+    let found = identify_observed(&frf, &opts, &mut |stage| spinner.set_message(stage.name()))
+        .with_context(|| format!("identifying {}", a.file.display()));
+    spinner.finish_and_clear();
+    let found = found?;
     human.print(&identification_summary(&found, opts.states));
 
     let mut timings = timings_map(&found.timings);
@@ -117,6 +120,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         model.write(&dir.join("model.json"))?;
         fit.write(&dir.join("fit.json"))?;
         let title = format!("era identify {}", a.file.display());
+        let bar = crate::progress::bar(&a.common, (frf.outputs() * frf.inputs()) as u64, "figures");
         crate::figures::write_all(
             dir,
             &title,
@@ -124,7 +128,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             &found,
             opts.zero_lines,
             opts.states,
+            &bar,
         )?;
+        bar.finish_and_clear();
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
         human.print(&format!(
             "\nwrote {0}/model.json, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",

@@ -10,6 +10,7 @@ mod figures;
 mod friction;
 mod identify;
 mod plot;
+mod progress;
 mod report;
 mod simulate;
 

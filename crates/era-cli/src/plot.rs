@@ -73,7 +73,13 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let (_, overlays) = write_frf_figures(&a.out, &measured, model_frf.as_ref())?;
+    let bar = crate::progress::bar(
+        &a.common,
+        (measured.outputs() * measured.inputs()) as u64,
+        "figures",
+    );
+    let (_, overlays) = write_frf_figures(&a.out, &measured, model_frf.as_ref(), &bar)?;
+    bar.finish_and_clear();
     human.print(&format!(
         "wrote {0}/grid.{{svg,png}} and {1} pair overlays in {0}/pairs{2} ({3} FRFs, {4} integration(s), {5} zeroed line(s))\n",
         a.out.display(),

@@ -505,7 +505,7 @@ fn identify_out_writes_every_figure_and_the_report() {
         .assert()
         .success();
     let out = dir.path().join("out");
-    era()
+    let run = era()
         .arg("identify")
         .arg(&frf)
         .args([
@@ -517,12 +517,18 @@ fn identify_out_writes_every_figure_and_the_report() {
             "3",
             "--pad-to",
             "1024",
-            "-q",
             "--out",
         ])
         .arg(&out)
-        .assert()
-        .success();
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    // stderr is not a terminal here: no spinner or bar is drawn into it.
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !stderr.contains('\u{1b}') && !stderr.contains("[0s]"),
+        "{stderr}"
+    );
     let count = |ext: &str| {
         std::fs::read_dir(out.join("pairs"))
             .unwrap()

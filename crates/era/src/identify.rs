@@ -80,6 +80,38 @@ impl EraOptions {
     }
 }
 
+/// A stage of the pipeline, reported to an observer as it starts
+/// ([`identify_observed`]); front ends turn these into progress displays.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Integration, padding, zeroing.
+    Preprocess,
+    /// Inverse FFT (and filter).
+    Markov,
+    /// Hankel and SVD (the long one).
+    HankelSvd,
+    /// Realization products and continuous conversion.
+    Realize,
+    /// Eigendecomposition and modes.
+    Modes,
+    /// Model FRF and fit.
+    Fit,
+}
+
+impl Stage {
+    /// Human name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Preprocess => "preprocessing",
+            Stage::Markov => "Markov parameters",
+            Stage::HankelSvd => "Hankel + SVD",
+            Stage::Realize => "realization",
+            Stage::Modes => "modes",
+            Stage::Fit => "fit",
+        }
+    }
+}
+
 /// Wall time of each stage, seconds.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StageTimings {
@@ -131,7 +163,20 @@ enum Path {
 /// [`EraError::AllZero`] when there is nothing to identify, and every error of the
 /// stages (invalid parameters, too few samples, rank deficiency, numerical failure).
 pub fn identify(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
-    run(frf, options, Path::Fast)
+    run(frf, options, Path::Fast, &mut |_| {})
+}
+
+/// [`identify`], calling `observer` as each [`Stage`] starts (for progress displays;
+/// the core itself draws nothing).
+///
+/// # Errors
+/// As [`identify`].
+pub fn identify_observed(
+    frf: &FrfData,
+    options: &EraOptions,
+    observer: &mut dyn FnMut(Stage),
+) -> Result<Identification> {
+    run(frf, options, Path::Fast, observer)
 }
 
 /// [`identify`] with the naive reference of every stage: DFT by definition, element-wise
@@ -140,10 +185,15 @@ pub fn identify(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
 /// # Errors
 /// As [`identify`].
 pub fn identify_naive(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
-    run(frf, options, Path::Naive)
+    run(frf, options, Path::Naive, &mut |_| {})
 }
 
-fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification> {
+fn run(
+    frf: &FrfData,
+    options: &EraOptions,
+    path: Path,
+    observer: &mut dyn FnMut(Stage),
+) -> Result<Identification> {
     if frf.is_all_zero() {
         return Err(EraError::AllZero);
     }
@@ -154,6 +204,7 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
         clock = Instant::now();
     };
 
+    observer(Stage::Preprocess);
     let pre = preprocess(
         frf,
         options.integrations,
@@ -165,6 +216,7 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
     }
     lap(&mut timings.preprocess);
 
+    observer(Stage::Markov);
     let mut series = match path {
         Path::Fast => impulse_responses(&pre.frf)?,
         Path::Naive => impulse_responses_naive(&pre.frf),
@@ -183,6 +235,7 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
         svd: options.svd,
         ..RealizeOptions::new(options.states, options.hankel_factor)
     };
+    observer(Stage::HankelSvd);
     let realization = match path {
         Path::Fast => realize(&markov, pre.sample_time_s, &realize_options)?,
         Path::Naive => realize_naive(&markov, pre.sample_time_s, &realize_options)?,
@@ -190,6 +243,7 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
     let mut realize_call = 0.0;
     lap(&mut realize_call);
 
+    observer(Stage::Realize);
     let model = match options.domain {
         ModelDomain::Discrete => realization.model.clone(),
         ModelDomain::Continuous => realization.model.d2c()?,
@@ -199,10 +253,12 @@ fn run(frf: &FrfData, options: &EraOptions, path: Path) -> Result<Identification
     timings.hankel_svd = realization.hankel_svd_seconds;
     timings.realize += realize_call - realization.hankel_svd_seconds;
 
+    observer(Stage::Modes);
     let form = ModalForm::new(&model)?;
     let modal = modal_parameters_of(&form, model.domain);
     lap(&mut timings.modes);
 
+    observer(Stage::Fit);
     let processed = integrate(frf, options.integrations)?;
     let measured = zero_leading_lines(&processed, options.zero_lines);
     let response = match path {

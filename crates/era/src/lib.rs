@@ -52,6 +52,6 @@ pub mod tsvd;
 
 pub use error::{EraError, Result};
 pub use frf::{FrfData, Quantity};
-pub use identify::{identify, EraOptions, Identification, ModelDomain};
+pub use identify::{identify, identify_observed, EraOptions, Identification, ModelDomain, Stage};
 pub use num_complex::Complex64;
 pub use statespace::{StateSpace, TimeDomain};

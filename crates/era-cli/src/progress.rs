@@ -1,0 +1,36 @@
+//! Progress on stderr (indicatif): a spinner for the pipeline stages and a bar for the
+//! pair figures. Hidden with `--quiet` and whenever stderr is not a terminal (indicatif
+//! draws nothing then), so pipes, files and CI logs stay clean.
+
+use crate::args::CommonArgs;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::time::Duration;
+
+fn target(common: &CommonArgs) -> ProgressDrawTarget {
+    if common.quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    }
+}
+
+/// A spinner whose message names the current stage.
+pub fn spinner(common: &CommonArgs) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(None, target(common));
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("static template"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(120));
+    bar
+}
+
+/// A bar over `len` items.
+pub fn bar(common: &CommonArgs, len: u64, message: &str) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(len), target(common));
+    bar.set_style(
+        ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed}]")
+            .expect("static template"),
+    );
+    bar.set_message(message.to_string());
+    bar
+}
