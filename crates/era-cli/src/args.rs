@@ -40,7 +40,8 @@ pub struct PlotArgs {
     /// Leading lines left out (default: the model's, or 0).
     #[arg(long)]
     pub zero_lines: Option<usize>,
-    /// Quantity of the FRFs when the file does not say.
+    /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration is
+    /// assumed when neither says).
     #[arg(long, value_enum)]
     pub quantity: Option<QuantityArg>,
     /// Folder for the figures (created if missing).
@@ -156,7 +157,8 @@ pub struct IdentifyArgs {
     /// How the Hankel SVD is computed.
     #[arg(long, value_enum, default_value_t = SvdArg::Auto)]
     pub svd: SvdArg,
-    /// Quantity of the FRFs when the file does not say (a "# quantity:" line).
+    /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration is
+    /// assumed when neither says).
     #[arg(long, value_enum)]
     pub quantity: Option<QuantityArg>,
     /// Folder for model.json and fit.json (created if missing).

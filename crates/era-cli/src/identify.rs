@@ -1,6 +1,6 @@
 //! `era identify FILE`: the pipeline of DESIGN.md §1 on an FRF file.
 
-use crate::args::{DirectTermArg, IdentifyArgs, SvdArg, TimeDomainArg};
+use crate::args::{DirectTermArg, IdentifyArgs, QuantityArg, SvdArg, TimeDomainArg};
 use crate::report::{
     identification_summary, parameter_echo, parameters, print_json, svd_path_line, timings_table,
     Human,
@@ -53,6 +53,24 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     })
 }
 
+/// Reads an FRF CSV for `identify` and `plot`: `--quantity` overrides the file's
+/// `# quantity:` line; with neither, acceleration is assumed. The note says which.
+pub fn read_frf(
+    path: &std::path::Path,
+    quantity: Option<QuantityArg>,
+) -> anyhow::Result<(era::FrfData, &'static str)> {
+    let file = read_frf_csv(path, Quantity::Acceleration)
+        .with_context(|| format!("reading {}", path.display()))?;
+    Ok(match quantity {
+        Some(q) => (file.frf.with_quantity(q.into()), " (from --quantity)"),
+        None if file.quantity_given => (file.frf, ""),
+        None => (
+            file.frf,
+            " (assumed: the file has no '# quantity:' line; set --quantity)",
+        ),
+    })
+}
+
 /// Creates `--out DIR` and checks that it takes files, before any long work.
 pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| {
@@ -76,17 +94,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         prepare_out_dir(dir)?;
     }
     let clock = Instant::now();
-    let default_quantity = a
-        .quantity
-        .map(Quantity::from)
-        .unwrap_or(Quantity::Acceleration);
-    let file = read_frf_csv(&a.file, default_quantity)
-        .with_context(|| format!("reading {}", a.file.display()))?;
+    let (frf, quantity_note) = read_frf(&a.file, a.quantity)?;
     let read_s = clock.elapsed().as_secs_f64();
-    let mut frf = file.frf;
-    if let Some(q) = a.quantity {
-        frf = frf.with_quantity(q.into());
-    }
     let last = frf.frequency_hz()[frf.lines() - 1];
     human.print(&format!(
         "era identify {}\n  {} outputs x {} inputs, {} lines, 0 .. {last} Hz at {} Hz, {}{}\n",
@@ -96,11 +105,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         frf.lines(),
         frf.spacing_hz(),
         frf.quantity(),
-        if file.quantity_given || a.quantity.is_some() {
-            ""
-        } else {
-            " (assumed: the file has no '# quantity:' line; set --quantity)"
-        },
+        quantity_note,
     ));
     human.print(&parameter_echo(&opts));
 

@@ -3,14 +3,12 @@
 
 use crate::args::PlotArgs;
 use crate::figures::{write_figure, write_frf_figures};
-use crate::identify::prepare_out_dir;
+use crate::identify::{prepare_out_dir, read_frf};
 use crate::report::{print_json, Human};
 use crate::usage;
 use anyhow::Context;
 use era::preprocess::{integrate, zero_leading_lines};
 use era::response::model_frf;
-use era::Quantity;
-use era_io::csv::read_frf_csv;
 use era_io::model_json::ModelJson;
 use era_plot::singular_value_figure;
 use serde_json::json;
@@ -18,12 +16,7 @@ use serde_json::json;
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     prepare_out_dir(&a.out)?;
-    let default_quantity = a
-        .quantity
-        .map(Quantity::from)
-        .unwrap_or(Quantity::Acceleration);
-    let file = read_frf_csv(&a.file, default_quantity)
-        .with_context(|| format!("reading {}", a.file.display()))?;
+    let (frf, _) = read_frf(&a.file, a.quantity)?;
     let model = match &a.model {
         Some(path) => {
             Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
@@ -46,19 +39,19 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         .or_else(|| from_model("zero_lines"))
         .unwrap_or(0);
     if let Some(m) = &model {
-        if (m.outputs, m.inputs) != (file.frf.outputs(), file.frf.inputs()) {
+        if (m.outputs, m.inputs) != (frf.outputs(), frf.inputs()) {
             return usage(format!(
                 "--model {}: the model has {} outputs x {} inputs, {} has {} x {}",
                 a.model.as_ref().unwrap().display(),
                 m.outputs,
                 m.inputs,
                 a.file.display(),
-                file.frf.outputs(),
-                file.frf.inputs()
+                frf.outputs(),
+                frf.inputs()
             ));
         }
     }
-    let measured = zero_leading_lines(&integrate(&file.frf, integrations)?, zero_lines);
+    let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
     let model_frf = match &model {
         Some(m) => {
             let ss = m.state_space().map_err(crate::UsageError)?;

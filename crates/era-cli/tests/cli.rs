@@ -655,3 +655,43 @@ fn plot_overlays_a_file_with_a_model_or_alone() {
         "the model has 3 outputs x 3 inputs",
     );
 }
+
+#[test]
+fn quantity_flag_overrides_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path()); // "# quantity: displacement"
+    let base = [
+        "--states",
+        "8",
+        "--hankel-factor",
+        "4",
+        "--pad-to",
+        "1024",
+        "--integrations",
+        "1",
+        "-q",
+    ];
+    expect_input_error(
+        &[
+            "identify",
+            frf.to_str().unwrap(),
+            "--states",
+            "8",
+            "--integrations",
+            "1",
+        ],
+        "displacement FRFs cannot be integrated",
+    );
+    let out = era()
+        .arg("identify")
+        .arg(&frf)
+        .args(base)
+        .args(["--quantity", "velocity", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
