@@ -151,6 +151,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             ModelJson::from_identification(found, parameters(&options), None)
                 .write(&sub.join("model.json"))?;
             FitJson::from_report(&found.fit).write(&sub.join("fit.json"))?;
+            era_io::mat::write_model_mat(&sub.join("model.mat"), &found.model, &found.modal)?;
             let title = format!("era demo: the truth model, {}", label.replace('_', " "));
             let bar = crate::progress::bar(&a.common, 9, &format!("figures ({label})"));
             crate::figures::write_all(
@@ -165,7 +166,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             bar.finish_and_clear();
         }
         human.print(&format!(
-            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, fit.json, report.html and figures ({1:.3} s)\n",
+            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, model.mat, fit.json, report.html and figures ({1:.3} s)\n",
             dir.display(),
             clock.elapsed().as_secs_f64()
         ));

@@ -124,6 +124,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         let clock = Instant::now();
         model.write(&dir.join("model.json"))?;
         fit.write(&dir.join("fit.json"))?;
+        era_io::mat::write_model_mat(&dir.join("model.mat"), &found.model, &found.modal)?;
         let title = format!("era identify {}", a.file.display());
         let bar = crate::progress::bar(&a.common, (frf.outputs() * frf.inputs()) as u64, "figures");
         crate::figures::write_all(
@@ -138,7 +139,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         bar.finish_and_clear();
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
         human.print(&format!(
-            "\nwrote {0}/model.json, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
+            "\nwrote {0}/model.json, {0}/model.mat, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
             dir.display()
         ));
     }

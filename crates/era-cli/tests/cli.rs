@@ -108,6 +108,8 @@ fn demo_out_writes_frfs_models_and_fits() {
         "no_noise/fit.json",
         "noisy/model.json",
         "noisy/fit.json",
+        "noisy/model.mat",
+        "no_noise/model.mat",
     ] {
         assert!(out.join(f).is_file(), "{f}");
     }

@@ -3,6 +3,7 @@
 //! - [`csv`]: our self-describing FRF CSV (DESIGN.md §4), read and written;
 //! - [`decay_csv`]: free-decay records (time, velocity, displacement) for `era friction`;
 //! - [`model_json`]: `model.json` and `fit.json`;
+//! - [`mat`]: MATLAB MAT files (model and FRFs) for MATLAB, Octave and scipy;
 //! - [`atomic`]: every write goes to a temporary file in the destination folder and is
 //!   renamed into place, so a failed run never leaves a half-written file.
 //!
@@ -11,6 +12,7 @@
 pub mod atomic;
 pub mod csv;
 pub mod decay_csv;
+pub mod mat;
 pub mod model_json;
 
 use std::path::PathBuf;
