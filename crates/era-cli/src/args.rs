@@ -29,7 +29,7 @@ pub enum Command {
 
 #[derive(Debug, Args)]
 pub struct PlotArgs {
-    /// FRF file (CSV).
+    /// FRF file: CSV or MAT v5, told apart by content.
     pub file: PathBuf,
     /// model.json to overlay (from era identify --out).
     #[arg(long, value_name = "MODEL_JSON")]
@@ -44,6 +44,10 @@ pub struct PlotArgs {
     /// assumed when neither says).
     #[arg(long, value_enum)]
     pub quantity: Option<QuantityArg>,
+    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
+    /// set is not square.
+    #[arg(long)]
+    pub outputs: Option<usize>,
     /// Folder for the figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -124,7 +128,8 @@ impl From<QuantityArg> for era::Quantity {
 
 #[derive(Debug, Args)]
 pub struct IdentifyArgs {
-    /// FRF file (CSV, DESIGN.md §4).
+    /// FRF file: CSV (DESIGN.md §4) or MAT v5 (FRF + FreqV, xferIJ + FreqV, or a
+    /// q × p × lines array + FreqV), told apart by content.
     pub file: PathBuf,
     /// Model order: first-order states (thesis ns). Two per mode.
     #[arg(long)]
@@ -161,6 +166,10 @@ pub struct IdentifyArgs {
     /// assumed when neither says).
     #[arg(long, value_enum)]
     pub quantity: Option<QuantityArg>,
+    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
+    /// set is not square.
+    #[arg(long)]
+    pub outputs: Option<usize>,
     /// Folder for model.json and fit.json (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,

@@ -53,20 +53,34 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     })
 }
 
-/// Reads an FRF CSV for `identify` and `plot`: `--quantity` overrides the file's
-/// `# quantity:` line; with neither, acceleration is assumed. The note says which.
+/// Reads an FRF file for `identify` and `plot`: MAT v5 when the file starts like one,
+/// CSV otherwise. `--quantity` overrides the file's tag; with neither, acceleration is
+/// assumed. The note says which (and, for MAT, the layout found).
 pub fn read_frf(
     path: &std::path::Path,
     quantity: Option<QuantityArg>,
-) -> anyhow::Result<(era::FrfData, &'static str)> {
-    let file = read_frf_csv(path, Quantity::Acceleration)
-        .with_context(|| format!("reading {}", path.display()))?;
+    outputs: Option<usize>,
+) -> anyhow::Result<(era::FrfData, String)> {
+    let file = if era_io::mat::looks_like_mat(path) {
+        era_io::mat::read_frf_mat(path, outputs, Quantity::Acceleration)
+    } else {
+        read_frf_csv(path, Quantity::Acceleration)
+    }
+    .with_context(|| format!("reading {}", path.display()))?;
+    let layout = file
+        .metadata
+        .get("layout")
+        .map(|l| format!(" [{l}]"))
+        .unwrap_or_default();
     Ok(match quantity {
-        Some(q) => (file.frf.with_quantity(q.into()), " (from --quantity)"),
-        None if file.quantity_given => (file.frf, ""),
+        Some(q) => (
+            file.frf.with_quantity(q.into()),
+            format!(" (from --quantity){layout}"),
+        ),
+        None if file.quantity_given => (file.frf, layout),
         None => (
             file.frf,
-            " (assumed: the file has no '# quantity:' line; set --quantity)",
+            format!(" (assumed: the file does not say; set --quantity){layout}"),
         ),
     })
 }
@@ -94,7 +108,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         prepare_out_dir(dir)?;
     }
     let clock = Instant::now();
-    let (frf, quantity_note) = read_frf(&a.file, a.quantity)?;
+    let (frf, quantity_note) = read_frf(&a.file, a.quantity, a.outputs)?;
     let read_s = clock.elapsed().as_secs_f64();
     let last = frf.frequency_hz()[frf.lines() - 1];
     human.print(&format!(

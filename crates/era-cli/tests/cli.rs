@@ -697,3 +697,71 @@ fn quantity_flag_overrides_the_file() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn identify_reads_mat_files_by_content() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = simulated_truth(dir.path());
+    // The same FRFs as a MAT file in the thesis's FRF + FreqV layout, under a
+    // misleading extension: detection goes by content.
+    let frf = era::sim::truth_model_frf(None).unwrap();
+    let mat = dir.path().join("truth.dat");
+    era_io::mat::write_frf_mat(&mat, &frf).unwrap();
+    let args = [
+        "--states",
+        "8",
+        "--hankel-factor",
+        "4",
+        "--pad-to",
+        "1024",
+        "--quantity",
+        "displacement",
+        "--json",
+        "-q",
+    ];
+    let from_csv: Value = serde_json::from_slice(
+        &era()
+            .arg("identify")
+            .arg(&csv)
+            .args(args)
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap();
+    let out = era().arg("identify").arg(&mat).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let from_mat: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(from_mat["modes"], from_csv["modes"]);
+    // A MAT file with no FRF layout is refused, naming what it holds.
+    let model_dir = dir.path().join("m");
+    era()
+        .arg("identify")
+        .arg(&csv)
+        .args([
+            "--states",
+            "8",
+            "--hankel-factor",
+            "4",
+            "--pad-to",
+            "1024",
+            "-q",
+            "--out",
+        ])
+        .arg(&model_dir)
+        .assert()
+        .success();
+    expect_input_error(
+        &[
+            "identify",
+            model_dir.join("model.mat").to_str().unwrap(),
+            "--states",
+            "2",
+        ],
+        "no FreqV variable",
+    );
+}

@@ -5,15 +5,27 @@
 //!   `ss(a,b,c,d,0)` reads it) and the modal table `freq_hz`, `damping_ratio` (columns),
 //!   so that `load model.mat; sys = ss(a,b,c,d,Ts)` works;
 //! - [`write_frf_mat`]: the thesis's layout, `FRF` (lines × q·p, complex, column
-//!   `(j−1)·q + i` is output i from input j, output-fastest) and `FreqV` (lines × 1, Hz).
+//!   `(j−1)·q + i` is output i from input j, output-fastest) and `FreqV` (lines × 1, Hz),
+//!   plus `outputs` and `inputs` so that the file says how to split the columns;
+//! - [`read_frf_mat`]: FRFs from MAT v5 files, compressed (MATLAB's default `-v7`) or
+//!   not, single or double precision, in three layouts:
+//!   1. `FRF` + `FreqV` as above; the split of the q·p columns comes from the file's
+//!      `outputs`, else from the caller, else a square set is assumed when q·p is a
+//!      perfect square (and the caller is told);
+//!   2. the thesis's `xferIJ` + `FreqV` (Appendix L.2), I the measurement and J the
+//!      actuator. With two digits, each is one index. Longer names are ambiguous
+//!      (`xfer110`: 1 and 10, or 11 and 0?) and refused unless written `xferI_J`;
+//!   3. one q×p×L complex array + `FreqV`.
 //!
 //! Arrays are built with `matrw`'s `NumericArray::new` (column-major values and
 //! dimensions), the one constructor it offers for arrays built at run time.
 
+use crate::csv::FrfFile;
 use crate::IoError;
 use era::modal::ModalParameters;
-use era::{FrfData, StateSpace};
-use matrw::{save_matfile_v7, MatFile, MatVariable, MatlabType, NumericArray};
+use era::{Complex64, EraError, FrfData, Quantity, StateSpace};
+use matrw::{load_matfile, save_matfile_v7, MatFile, MatVariable, MatlabType, NumericArray};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 fn real(rows: usize, cols: usize, f: impl Fn(usize, usize) -> f64) -> MatVariable {
@@ -116,7 +128,273 @@ pub fn write_frf_mat(path: &Path, frf: &FrfData) -> Result<(), IoError> {
         complex(lines, q * p, |k, col| frf.pair(col % q, col / q)[k]),
     );
     file.insert("FreqV", real(lines, 1, |k, _| frf.frequency_hz()[k]));
+    file.insert("outputs", real(1, 1, |_, _| q as f64));
+    file.insert("inputs", real(1, 1, |_, _| p as f64));
     save_atomic(path, file)
+}
+
+/// True when the file starts like a MAT v5 file ("MATLAB 5.0 MAT-file").
+pub fn looks_like_mat(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 19];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok()
+        && &head == b"MATLAB 5.0 MAT-file"
+}
+
+/// A numeric variable: dimensions, real and imaginary parts (column-major, as f64).
+struct Array {
+    dim: Vec<usize>,
+    re: Vec<f64>,
+    im: Option<Vec<f64>>,
+}
+
+/// Any numeric MATLAB type as f64 (`matrw`'s typed accessors panic on a type mismatch,
+/// so the stored type is matched here).
+fn to_f64(t: &MatlabType) -> Option<Vec<f64>> {
+    Some(match t {
+        MatlabType::F64(v) => v.clone(),
+        MatlabType::F32(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::I8(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::U8(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::I16(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::U16(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::I32(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::U32(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        MatlabType::I64(v) => v.iter().map(|x| *x as f64).collect(),
+        MatlabType::U64(v) => v.iter().map(|x| *x as f64).collect(),
+        _ => return None,
+    })
+}
+
+fn arrays(path: &Path) -> Result<BTreeMap<String, Array>, IoError> {
+    let text = path
+        .to_str()
+        .ok_or_else(|| IoError::format(path, "", "the path is not valid UTF-8"))?;
+    if !path.is_file() {
+        return Err(IoError::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "No such file"),
+        ));
+    }
+    let mut file = load_matfile(text)
+        .map_err(|e| IoError::format(path, "", format!("not a readable MAT v5 file: {e}")))?;
+    let names: Vec<String> = file.iter().map(|(k, _)| k.clone()).collect();
+    let mut out = BTreeMap::new();
+    for name in names {
+        if let Some(MatVariable::NumericArray(a)) = file.take(&name) {
+            if let Some(re) = to_f64(&a.value) {
+                let im = a.value_cmp.as_ref().and_then(to_f64);
+                out.insert(
+                    name,
+                    Array {
+                        dim: a.dim.clone(),
+                        im,
+                        re,
+                    },
+                );
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn scalar(vars: &BTreeMap<String, Array>, name: &str) -> Option<usize> {
+    let a = vars.get(name)?;
+    (a.re.len() == 1 && a.re[0] >= 1.0 && a.re[0].fract() == 0.0).then(|| a.re[0] as usize)
+}
+
+/// `xferIJ` or `xferI_J` → (I, J), 1-based; `Err(name)` when ambiguous.
+fn xfer_indices(name: &str) -> Option<Result<(usize, usize), String>> {
+    let rest = name.strip_prefix("xfer")?;
+    if let Some((i, j)) = rest.split_once('_') {
+        return match (i.parse::<usize>(), j.parse::<usize>()) {
+            (Ok(i), Ok(j)) if i > 0 && j > 0 => Some(Ok((i, j))),
+            _ => None,
+        };
+    }
+    if !rest.chars().all(|c| c.is_ascii_digit()) || rest.is_empty() {
+        return None;
+    }
+    if rest.len() == 2 {
+        let d: Vec<usize> = rest.chars().map(|c| c as usize - '0' as usize).collect();
+        return (d[0] > 0 && d[1] > 0).then_some(Ok((d[0], d[1])));
+    }
+    Some(Err(name.to_string()))
+}
+
+/// Reads FRFs from a MAT file (see the module doc for the layouts). `outputs` splits a
+/// non-square `FRF` matrix when the file does not say; FRFs are tagged `quantity`.
+///
+/// # Errors
+/// [`IoError`] naming the file and the variable: no recognised layout, missing or
+/// duplicate pairs, ambiguous `xfer` names, lengths that disagree with `FreqV`, and the
+/// frequency checks of [`FrfData`].
+pub fn read_frf_mat(
+    path: &Path,
+    outputs: Option<usize>,
+    quantity: Quantity,
+) -> Result<FrfFile, IoError> {
+    let vars = arrays(path)?;
+    let fail = |variable: &str, message: String| {
+        IoError::format(path, format!("variable {variable}: "), message)
+    };
+    let freq = vars.get("FreqV").ok_or_else(|| {
+        IoError::format(
+            path,
+            "",
+            format!(
+                "no FreqV variable (the file has: {})",
+                vars.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        )
+    })?;
+    let lines = freq.re.len();
+    let frequency_hz = freq.re.clone();
+    let mut notes = BTreeMap::new();
+    let (q, p, values): (usize, usize, Vec<Complex64>) = if let Some(frf) = vars.get("FRF") {
+        if frf.dim.len() != 2 || frf.dim[0] != lines {
+            return Err(fail(
+                "FRF",
+                format!(
+                    "is {:?}, expected {lines} lines (FreqV) x outputs·inputs columns",
+                    frf.dim
+                ),
+            ));
+        }
+        let cols = frf.dim[1];
+        let q = match (scalar(&vars, "outputs"), outputs) {
+            (Some(q), _) | (None, Some(q)) => q,
+            (None, None) => {
+                let r = (cols as f64).sqrt().round() as usize;
+                if r * r != cols {
+                    return Err(fail(
+                        "FRF",
+                        format!("has {cols} columns: say how many are outputs (--outputs)"),
+                    ));
+                }
+                notes.insert(
+                    "layout".to_string(),
+                    format!("FRF + FreqV, assumed square {r} x {r}"),
+                );
+                r
+            }
+        };
+        if q == 0 || cols % q != 0 {
+            return Err(fail(
+                "FRF",
+                format!("has {cols} columns, not a multiple of {q} outputs"),
+            ));
+        }
+        let p = cols / q;
+        let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+        for j in 0..p {
+            for i in 0..q {
+                let col = j * q + i;
+                for k in 0..lines {
+                    let at = col * lines + k;
+                    values[(i * p + j) * lines + k] =
+                        Complex64::new(frf.re[at], frf.im.as_ref().map_or(0.0, |v| v[at]));
+                }
+            }
+        }
+        notes
+            .entry("layout".to_string())
+            .or_insert_with(|| format!("FRF + FreqV, {q} x {p}"));
+        (q, p, values)
+    } else if vars.keys().any(|k| k.starts_with("xfer")) {
+        let mut pairs = BTreeMap::new();
+        let mut ambiguous = Vec::new();
+        for (name, a) in vars.iter().filter(|(k, _)| k.starts_with("xfer")) {
+            match xfer_indices(name) {
+                Some(Ok(ij)) => {
+                    if a.re.len() != lines {
+                        return Err(fail(
+                            name,
+                            format!("has {} values, FreqV has {lines}", a.re.len()),
+                        ));
+                    }
+                    pairs.insert(ij, a);
+                }
+                Some(Err(n)) => ambiguous.push(n),
+                None => {}
+            }
+        }
+        if !ambiguous.is_empty() {
+            return Err(IoError::format(
+                path,
+                "",
+                format!(
+                    "ambiguous xfer names {} (indices of 10 and over need an underscore, e.g. xfer1_10)",
+                    ambiguous.join(", ")
+                ),
+            ));
+        }
+        let q = pairs.keys().map(|k| k.0).max().unwrap_or(0);
+        let p = pairs.keys().map(|k| k.1).max().unwrap_or(0);
+        let missing: Vec<String> = (1..=q)
+            .flat_map(|i| (1..=p).map(move |j| (i, j)))
+            .filter(|ij| !pairs.contains_key(ij))
+            .map(|(i, j)| format!("xfer{i}{j}"))
+            .collect();
+        if !missing.is_empty() {
+            return Err(IoError::format(
+                path,
+                "",
+                format!("missing pairs for a {q} x {p} set: {}", missing.join(", ")),
+            ));
+        }
+        let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+        for ((i, j), a) in &pairs {
+            for k in 0..lines {
+                values[((i - 1) * p + (j - 1)) * lines + k] =
+                    Complex64::new(a.re[k], a.im.as_ref().map_or(0.0, |v| v[k]));
+            }
+        }
+        notes.insert("layout".to_string(), format!("xferIJ + FreqV, {q} x {p}"));
+        (q, p, values)
+    } else if let Some((name, cube)) = vars
+        .iter()
+        .find(|(_, a)| a.dim.len() == 3 && a.dim[2] == lines)
+    {
+        let (q, p) = (cube.dim[0], cube.dim[1]);
+        let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+        for k in 0..lines {
+            for j in 0..p {
+                for i in 0..q {
+                    let at = i + q * (j + p * k);
+                    values[(i * p + j) * lines + k] =
+                        Complex64::new(cube.re[at], cube.im.as_ref().map_or(0.0, |v| v[at]));
+                }
+            }
+        }
+        notes.insert(
+            "layout".to_string(),
+            format!("{name} ({q} x {p} x {lines}) + FreqV"),
+        );
+        (q, p, values)
+    } else {
+        return Err(IoError::format(
+            path,
+            "",
+            format!(
+                "no FRF layout found: expected FRF + FreqV, xferIJ + FreqV, or a q x p x lines array + FreqV (the file has: {})",
+                vars.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    };
+    let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
+        EraError::NonUniformFrequencies { .. } | EraError::FirstLineNotZero { .. } => {
+            fail("FreqV", e.to_string())
+        }
+        other => IoError::format(path, "", other.to_string()),
+    })?;
+    Ok(FrfFile {
+        frf,
+        quantity_given: false,
+        metadata: notes,
+    })
 }
 
 #[cfg(test)]
@@ -163,6 +441,89 @@ mod tests {
         let (dim, f, _) = values(&mut file, "freq_hz");
         assert_eq!(dim, vec![4, 1]);
         assert_eq!(f[3], found.modal.modes[3].frequency_hz);
+    }
+
+    fn fixture(name: &str) -> std::path::PathBuf {
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures")
+            .join(name)
+    }
+
+    /// The fixtures' FRF: column c (0-based, output-fastest), line k: (1 + k + 5c) + i(21 + k + 5c).
+    fn expected(cols_offset_im: f64, i: usize, j: usize, q: usize, k: usize) -> Complex64 {
+        let c = (j * q + i) as f64;
+        Complex64::new(
+            1.0 + k as f64 + 5.0 * c,
+            cols_offset_im + 1.0 + k as f64 + 5.0 * c,
+        )
+    }
+
+    #[test]
+    fn reads_octave_files_in_every_layout() {
+        for name in [
+            "frf_v6.mat",
+            "frf_v7.mat",
+            "xfer_v7.mat",
+            "cube_v7.mat",
+            "frf_single.mat",
+        ] {
+            let f = read_frf_mat(&fixture(name), None, Quantity::Velocity)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(
+                (f.frf.outputs(), f.frf.inputs(), f.frf.lines()),
+                (2, 2, 5),
+                "{name}"
+            );
+            assert_eq!(f.frf.spacing_hz(), 0.5);
+            for (i, j, k) in [(0, 0, 0), (1, 0, 3), (0, 1, 2), (1, 1, 4)] {
+                assert_eq!(
+                    f.frf.pair(i, j)[k],
+                    expected(20.0, i, j, 2, k),
+                    "{name} ({i},{j},{k})"
+                );
+            }
+        }
+        // A 3 x 2 set needs the split, from the caller when the file does not say.
+        let err = read_frf_mat(&fixture("frf_3x2.mat"), None, Quantity::Velocity)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("frf_3x2.mat") && err.contains("6 columns") && err.contains("--outputs"),
+            "{err}"
+        );
+        let f = read_frf_mat(&fixture("frf_3x2.mat"), Some(3), Quantity::Velocity).unwrap();
+        assert_eq!((f.frf.outputs(), f.frf.inputs()), (3, 2));
+        assert_eq!(f.frf.pair(2, 1)[4], expected(30.0, 2, 1, 3, 4));
+    }
+
+    #[test]
+    fn refuses_ambiguous_missing_and_uneven() {
+        let cases = [
+            ("xfer_ambiguous.mat", "ambiguous xfer names xfer110"),
+            ("xfer_missing.mat", "missing pairs for a 2 x 2 set: xfer22"),
+            (
+                "frf_uneven.mat",
+                "variable FreqV: frequencies are not uniformly spaced",
+            ),
+        ];
+        for (name, needle) in cases {
+            let err = read_frf_mat(&fixture(name), None, Quantity::Velocity)
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(name) && err.contains(needle), "{name}: {err}");
+        }
+        assert!(!looks_like_mat(&fixture("../../src/mat.rs")));
+        assert!(looks_like_mat(&fixture("frf_v6.mat")));
+    }
+
+    #[test]
+    fn our_frf_files_read_back_with_their_split() {
+        let frf = truth_model_frf(None).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("frf.mat");
+        write_frf_mat(&path, &frf).unwrap();
+        let back = read_frf_mat(&path, None, Quantity::Displacement).unwrap();
+        assert_eq!(back.frf, frf);
     }
 
     #[test]
