@@ -4,7 +4,7 @@ use era::identify::Identification;
 use era::preprocess::zero_leading_lines;
 use era::response::model_frf;
 use era::FrfData;
-use era_io::atomic::write_atomic;
+use era_io::atomic::{write_atomic, write_via};
 use era_plot::report::{report_html, ReportInput};
 use era_plot::{frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure};
 use std::path::Path;
@@ -13,13 +13,9 @@ use std::path::Path;
 pub fn write_figure(dir: &Path, stem: &str, figure: &Figure) -> anyhow::Result<String> {
     let svg = render_svg(figure)?;
     write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
-    let png = dir.join(format!("{stem}.png"));
-    let tmp = dir.join(format!(".{stem}.tmp-{}.png", std::process::id())); // the encoder goes by extension
-    render_png(figure, &tmp).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
+    write_via(&dir.join(format!("{stem}.png")), |tmp| {
+        render_png(figure, tmp).map_err(anyhow::Error::from)
     })?;
-    std::fs::rename(&tmp, &png)
-        .map_err(|e| crate::UsageError(format!("{}: {e}", png.display())))?;
     Ok(svg)
 }
 

@@ -20,6 +20,7 @@
 //! Arrays are built with `matrw`'s `NumericArray::new` (column-major values and
 //! dimensions), the one constructor it offers for arrays built at run time.
 
+use crate::atomic::write_via;
 use crate::csv::FrfFile;
 use crate::IoError;
 use era::modal::ModalParameters;
@@ -62,27 +63,15 @@ fn complex(rows: usize, cols: usize, f: impl Fn(usize, usize) -> era::Complex64)
     )
 }
 
-/// Saves through a temporary file in the same folder, then renames.
+/// Saves through [`write_via`] (a temporary file, then a rename).
 fn save_atomic(path: &Path, file: MatFile) -> Result<(), IoError> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out.mat".into());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let tmp_str = tmp
-        .to_str()
-        .ok_or_else(|| IoError::format(path, "", "the path is not valid UTF-8"))?;
-    let result = save_matfile_v7(tmp_str, file, true)
-        .map_err(|e| IoError::format(path, "", format!("cannot write the MAT file: {e}")))
-        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| IoError::io(path, e)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    write_via(path, |tmp| {
+        let tmp = tmp
+            .to_str()
+            .ok_or_else(|| IoError::format(path, "", "the path is not valid UTF-8"))?;
+        save_matfile_v7(tmp, file, true)
+            .map_err(|e| IoError::format(path, "", format!("cannot write the MAT file: {e}")))
+    })
 }
 
 /// Writes `a, b, c, d, Ts, freq_hz, damping_ratio`.
