@@ -4,7 +4,7 @@ use crate::args::{
     DecayMethodArg, FrictionAction, FrictionArgs, FrictionEstimateArgs, FrictionSimulateArgs,
     FrictionTuneArgs, OscillatorArgs,
 };
-use crate::report::{print_json, timings_table, Human};
+use crate::report::{finish_output, Human};
 use crate::usage;
 use anyhow::Context;
 use era::friction::estimate::{estimate_displacement, estimate_velocity, summarize, DecayEstimate};
@@ -13,7 +13,6 @@ use era::friction::tune::{stability_margin, tune, TuneSpec};
 use era::friction::Oscillator;
 use era_io::decay_csv::{read_decay_csv, write_decay_csv};
 use serde_json::json;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -99,23 +98,19 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
         s.natural_frequency_hz_mean
     );
     human.print(&table);
-    let mut out = json!({
+    let out = json!({
         "records": records,
         "coulomb_force_mean": s.coulomb_force_mean,
         "coulomb_force_std": s.coulomb_force_std,
         "natural_frequency_hz_mean": s.natural_frequency_hz_mean,
         "stiffness": a.stiffness,
     });
-    if a.common.timings {
-        let t: BTreeMap<String, f64> =
-            [("estimate".to_string(), clock.elapsed().as_secs_f64())].into();
-        human.print(&timings_table(&t));
-        out["timings_s"] = json!(t);
-    }
-    if a.common.json {
-        print_json(&out)?;
-    }
-    Ok(())
+    finish_output(
+        &human,
+        &a.common,
+        out,
+        &[("estimate", clock.elapsed().as_secs_f64())],
+    )
 }
 
 fn oscillator(m: &OscillatorArgs, coulomb_force: f64) -> anyhow::Result<Oscillator> {
@@ -189,20 +184,16 @@ fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
             String::new()
         }
     ));
-    let mut out = json!({"file": a.out, "samples": record.time_s.len(), "method": format!("{method:?}").to_lowercase()});
-    if a.common.timings {
-        let t: BTreeMap<String, f64> = [
-            ("simulate".to_string(), simulate_s),
-            ("write".to_string(), clock.elapsed().as_secs_f64()),
-        ]
-        .into();
-        human.print(&timings_table(&t));
-        out["timings_s"] = json!(t);
-    }
-    if a.common.json {
-        print_json(&out)?;
-    }
-    Ok(())
+    let out = json!({"file": a.out, "samples": record.time_s.len(), "method": format!("{method:?}").to_lowercase()});
+    finish_output(
+        &human,
+        &a.common,
+        out,
+        &[
+            ("simulate", simulate_s),
+            ("write", clock.elapsed().as_secs_f64()),
+        ],
+    )
 }
 
 fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
@@ -286,16 +277,12 @@ fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
         out["free_decay_estimate_margin"] = json!(margin);
     }
     human.print(&text);
-    if a.common.timings {
-        let tm: BTreeMap<String, f64> =
-            [("tune".to_string(), clock.elapsed().as_secs_f64())].into();
-        human.print(&timings_table(&tm));
-        out["timings_s"] = json!(tm);
-    }
-    if a.common.json {
-        print_json(&out)?;
-    }
-    Ok(())
+    finish_output(
+        &human,
+        &a.common,
+        out,
+        &[("tune", clock.elapsed().as_secs_f64())],
+    )
 }
 
 pub fn run(a: &FrictionArgs) -> anyhow::Result<()> {

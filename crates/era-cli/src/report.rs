@@ -191,7 +191,7 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
     s
 }
 
-/// Timing table.
+/// Timing table: the pipeline stages in their order, then any other stage.
 pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
     let order = [
         "simulate",
@@ -205,7 +205,8 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
         "write",
     ];
     let mut s = String::from("\ntimings (s)\n");
-    for key in order {
+    let others = t.keys().map(String::as_str).filter(|k| !order.contains(k));
+    for key in order.into_iter().chain(others) {
         if let Some(v) = t.get(key) {
             let _ = writeln!(s, "  {key:<11} {v:.6}");
         }
@@ -213,6 +214,25 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
     let total: f64 = t.values().sum();
     let _ = writeln!(s, "  {:<11} {total:.6}", "total");
     s
+}
+
+/// The end of a verb: with `--timings`, the table and `timings_s` in the JSON; with
+/// `--json`, the JSON on stdout.
+pub fn finish_output(
+    human: &Human,
+    common: &CommonArgs,
+    mut out: serde_json::Value,
+    timings: &[(&str, f64)],
+) -> anyhow::Result<()> {
+    if common.timings {
+        let t: BTreeMap<String, f64> = timings.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        human.print(&timings_table(&t));
+        out["timings_s"] = serde_json::json!(t);
+    }
+    if common.json {
+        print_json(&out)?;
+    }
+    Ok(())
 }
 
 /// Which SVD path ran, for the timings.

@@ -1,13 +1,12 @@
 //! `era simulate truth-model|modal`: synthetic FRF files.
 
 use crate::args::{ModalArgs, SimulateArgs, SimulateCommon, SimulateModel};
-use crate::report::{print_json, timings_table, Human};
+use crate::report::{finish_output, Human};
 use crate::usage;
 use era::sim::{add_noise, truth_model_frf, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
 use era_io::csv::write_frf_csv;
 use serde_json::json;
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
@@ -35,7 +34,7 @@ fn finish(
     sim: &SimulateCommon,
     frf: &FrfData,
     extra: &[(&str, &str)],
-    mut summary: serde_json::Value,
+    summary: serde_json::Value,
     simulate_s: f64,
 ) -> anyhow::Result<()> {
     let human = Human::new(&sim.common);
@@ -60,19 +59,15 @@ fn finish(
             String::new()
         },
     ));
-    if sim.common.timings {
-        let timings: BTreeMap<String, f64> = [
-            ("simulate".to_string(), simulate_s),
-            ("write".to_string(), clock.elapsed().as_secs_f64()),
-        ]
-        .into();
-        human.print(&timings_table(&timings));
-        summary["timings_s"] = json!(timings);
-    }
-    if sim.common.json {
-        print_json(&summary)?;
-    }
-    Ok(())
+    finish_output(
+        &human,
+        &sim.common,
+        summary,
+        &[
+            ("simulate", simulate_s),
+            ("write", clock.elapsed().as_secs_f64()),
+        ],
+    )
 }
 
 fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {

@@ -262,3 +262,52 @@ fn a_closed_pipe_is_not_a_panic() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(out.status.code(), Some(0), "{stderr}");
 }
+
+#[test]
+fn timings_name_the_friction_stages() {
+    for (args, stage) in [
+        (
+            vec![
+                "friction",
+                "tune",
+                "--coulomb-force",
+                "0.05",
+                "--stiffness",
+                "1",
+            ],
+            "tune",
+        ),
+        (
+            vec![
+                "friction",
+                "simulate",
+                "--coulomb-force",
+                "0.05",
+                "--stiffness",
+                "1",
+            ],
+            "simulate",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out_file = dir.path().join("d.csv");
+        let mut cmd = era();
+        cmd.args(&args).args(["--timings", "--json"]);
+        if stage == "simulate" {
+            cmd.arg("--out").arg(&out_file);
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(v["timings_s"][stage].as_f64().is_some(), "{stage}");
+        // The table on stderr lists the stage itself, not only the total.
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(&format!("  {stage} ")),
+            "{stage}"
+        );
+    }
+}
