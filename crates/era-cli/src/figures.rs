@@ -2,7 +2,6 @@
 
 use era::identify::Identification;
 use era::preprocess::zero_leading_lines;
-use era::response::model_frf;
 use era::FrfData;
 use era_io::atomic::{write_atomic, write_via};
 use era_plot::report::{report_html, ReportInput};
@@ -56,7 +55,14 @@ pub fn write_all(
     progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<()> {
     let measured = zero_leading_lines(&found.processed, zero_lines);
-    let model = model_frf(&found.model, &measured)?;
+    // The fit already evaluated the model on these lines.
+    let model = FrfData::new(
+        measured.frequency_hz().to_vec(),
+        measured.outputs(),
+        measured.inputs(),
+        found.model_response.clone(),
+        measured.quantity(),
+    )?;
     let sv_svg = write_figure(
         dir,
         "singular_values",

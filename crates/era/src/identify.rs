@@ -146,6 +146,9 @@ pub struct Identification {
     pub processed: FrfData,
     /// Sample time of the impulse responses, s.
     pub sample_time_s: f64,
+    /// The model's FRF on the lines of `processed`, `[output][input][line]` as in
+    /// [`FrfData::values`]: what the fit compared, kept for plots.
+    pub model_response: Vec<crate::Complex64>,
     /// Stage times.
     pub timings: StageTimings,
 }
@@ -278,6 +281,7 @@ fn run(
         fit,
         processed,
         sample_time_s: pre.sample_time_s,
+        model_response: response,
         timings,
     })
 }
