@@ -29,6 +29,8 @@ pub struct FrfFile {
     pub quantity_given: bool,
     /// Every `# key: value` line, keys lower-case.
     pub metadata: BTreeMap<String, String>,
+    /// Node and direction of each output and input, when the file says.
+    pub channels: Option<crate::uff::ChannelTable>,
 }
 
 /// Which part of a complex value a column holds.
@@ -237,6 +239,7 @@ pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, 
         other => IoError::format(path, "", other.to_string()),
     })?;
     Ok(FrfFile {
+        channels: crate::format::channels_from_metadata(&metadata, frf.outputs(), frf.inputs()),
         frf,
         quantity_given: metadata.contains_key("quantity"),
         metadata,

@@ -4,6 +4,9 @@
 //! - [`decay_csv`]: free-decay records (time, velocity, displacement) for `era friction`;
 //! - [`model_json`]: `model.json` and `fit.json`;
 //! - [`mat`]: MATLAB MAT files (model and FRFs) for MATLAB, Octave and scipy;
+//! - [`uff`]: Universal File Format datasets 58/58b (FRFs, read and written) and 55
+//!   (mode shapes, written);
+//! - [`format`]: detection by content and one reader/writer trait over CSV, UFF and MAT;
 //! - [`atomic`]: every write goes to a temporary file in the destination folder and is
 //!   renamed into place, so a failed run never leaves a half-written file.
 //!
@@ -12,8 +15,10 @@
 pub mod atomic;
 pub mod csv;
 pub mod decay_csv;
+pub mod format;
 pub mod mat;
 pub mod model_json;
+pub mod uff;
 
 use std::path::PathBuf;
 use thiserror::Error;

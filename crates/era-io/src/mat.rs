@@ -383,6 +383,7 @@ pub fn read_frf_mat(
         frf,
         quantity_given: false,
         metadata: notes,
+        channels: None,
     })
 }
 

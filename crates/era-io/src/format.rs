@@ -1,0 +1,319 @@
+//! One door for FRF files in every format: detection by content (the extension is a
+//! hint), and a small [`FrfReader`]/[`FrfWriter`] pair that each format implements.
+//!
+//! | format | detected by | read | written |
+//! |---|---|---|---|
+//! | [`FrfFormat::Csv`] | anything else; `.csv` | [`crate::csv`] | full precision |
+//! | [`FrfFormat::Uff`] | first non-blank line `-1`; `.uff`, `.unv`, `.uf` | [`crate::uff`] | 58 ASCII, or 58b with `binary` |
+//! | [`FrfFormat::Mat`] | `MATLAB 5.0 MAT-file` header; `.mat` | [`crate::mat`] | `FRF` + `FreqV` |
+//!
+//! A CSV carries the channel table of a UFF file as metadata lines
+//! (`# output_1: node 12 +Z`), so UFF → CSV → UFF keeps the nodes.
+
+use crate::csv::{format_frf_csv, read_frf_csv, FrfFile};
+use crate::uff::{direction_name, Channel, ChannelTable, Dof, UffWriteOptions};
+use crate::IoError;
+use era::Quantity;
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::Path;
+
+/// A file format for FRFs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrfFormat {
+    /// Our CSV (DESIGN.md §4).
+    Csv,
+    /// Universal File Format dataset 58 (ASCII or binary 58b).
+    Uff,
+    /// MATLAB MAT v5 (compressed or not).
+    Mat,
+}
+
+/// What a reader needs beyond the path.
+#[derive(Debug, Clone, Copy)]
+pub struct ReadOptions {
+    /// Tag for files that do not say what they measure.
+    pub default_quantity: Quantity,
+    /// How many of a MAT `FRF` matrix's columns are outputs, when the file does not say.
+    pub outputs: Option<usize>,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            default_quantity: Quantity::Acceleration,
+            outputs: None,
+        }
+    }
+}
+
+/// Reads FRFs from a file.
+pub trait FrfReader {
+    /// Reads `path`.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the file and where in it the problem is.
+    fn read_frf(&self, path: &Path, opts: &ReadOptions) -> Result<FrfFile, IoError>;
+}
+
+/// Writes FRFs to a file, through a temporary file and a rename.
+pub trait FrfWriter {
+    /// Writes `file` to `path`.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the file.
+    fn write_frf(&self, path: &Path, file: &FrfFile, uff: UffWriteOptions)
+        -> Result<(), IoError>;
+}
+
+impl FrfFormat {
+    /// Lower-case name for messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            FrfFormat::Csv => "CSV",
+            FrfFormat::Uff => "UFF",
+            FrfFormat::Mat => "MAT",
+        }
+    }
+
+    /// The format an extension names, if any.
+    pub fn from_extension(path: &Path) -> Option<FrfFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "csv" | "txt" => Some(FrfFormat::Csv),
+            "uff" | "unv" | "uf" => Some(FrfFormat::Uff),
+            "mat" => Some(FrfFormat::Mat),
+            _ => None,
+        }
+    }
+
+    /// The format of a file from its first bytes; the extension only breaks ties and
+    /// catches a file that is not what its name says.
+    ///
+    /// # Errors
+    /// [`IoError`] when the file cannot be read, is empty, is a MAT v7.3 (HDF5) file, or
+    /// is named `.uff`/`.mat` but does not start like one.
+    pub fn detect(path: &Path) -> Result<FrfFormat, IoError> {
+        let mut head = Vec::with_capacity(4096);
+        std::fs::File::open(path)
+            .and_then(|f| f.take(4096).read_to_end(&mut head))
+            .map_err(|e| IoError::io(path, e))?;
+        if head.is_empty() {
+            return Err(IoError::format(path, "", "the file is empty"));
+        }
+        let by_content = if head.starts_with(b"MATLAB 5.0 MAT-file") {
+            Some(FrfFormat::Mat)
+        } else if head.starts_with(b"MATLAB 7.3 MAT-file") {
+            return Err(IoError::format(
+                path,
+                "",
+                "MAT v7.3 (HDF5) files are not read: save with -v7 (the default) or -v6",
+            ));
+        } else if crate::uff::looks_like_uff(&head) {
+            Some(FrfFormat::Uff)
+        } else {
+            None
+        };
+        match (by_content, FrfFormat::from_extension(path)) {
+            (Some(f), _) => Ok(f),
+            (None, Some(named @ (FrfFormat::Uff | FrfFormat::Mat))) => Err(IoError::format(
+                path,
+                "line 1: ",
+                format!(
+                    "the name says {} but the content does not start like one ('{}')",
+                    named.name(),
+                    first_line(&head)
+                ),
+            )),
+            (None, _) => Ok(FrfFormat::Csv),
+        }
+    }
+}
+
+fn first_line(head: &[u8]) -> String {
+    let line = head.split(|b| *b == b'\n').next().unwrap_or(&[]);
+    let s: String = String::from_utf8_lossy(line).chars().take(40).collect();
+    s.trim_end().to_string()
+}
+
+impl FrfReader for FrfFormat {
+    fn read_frf(&self, path: &Path, opts: &ReadOptions) -> Result<FrfFile, IoError> {
+        match self {
+            FrfFormat::Csv => read_frf_csv(path, opts.default_quantity),
+            FrfFormat::Uff => crate::uff::read_frf_uff(path, opts.default_quantity),
+            FrfFormat::Mat => crate::mat::read_frf_mat(path, opts.outputs, opts.default_quantity),
+        }
+    }
+}
+
+impl FrfWriter for FrfFormat {
+    fn write_frf(
+        &self,
+        path: &Path,
+        file: &FrfFile,
+        uff: UffWriteOptions,
+    ) -> Result<(), IoError> {
+        let unit = |key: &str| file.metadata.get(key).map(String::as_str);
+        match self {
+            FrfFormat::Csv => {
+                let mut extra: Vec<(String, String)> = ["force_unit", "response_unit"]
+                    .iter()
+                    .filter_map(|k| unit(k).map(|v| (k.to_string(), v.to_string())))
+                    .collect();
+                if let Some(t) = &file.channels {
+                    extra.extend(channel_metadata(t));
+                }
+                let extra: Vec<(&str, &str)> =
+                    extra.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+                crate::atomic::write_atomic(path, format_frf_csv(&file.frf, &extra).as_bytes())
+            }
+            FrfFormat::Uff => crate::uff::write_uff58(
+                path,
+                &file.frf,
+                file.channels.as_ref(),
+                (unit("response_unit"), unit("force_unit")),
+                uff,
+            ),
+            FrfFormat::Mat => crate::mat::write_frf_mat(path, &file.frf),
+        }
+    }
+}
+
+/// Detects the format of `path` and reads it.
+///
+/// # Errors
+/// As [`FrfFormat::detect`] and the format's reader.
+pub fn read_frf_file(path: &Path, opts: &ReadOptions) -> Result<(FrfFile, FrfFormat), IoError> {
+    let format = FrfFormat::detect(path)?;
+    Ok((format.read_frf(path, opts)?, format))
+}
+
+/// Writes in the format the extension names.
+///
+/// # Errors
+/// [`IoError`] for an extension that names no FRF format, and the writer's errors.
+pub fn write_frf_file(path: &Path, file: &FrfFile, uff: UffWriteOptions) -> Result<(), IoError> {
+    let format = FrfFormat::from_extension(path).ok_or_else(|| {
+        IoError::format(
+            path,
+            "",
+            "cannot tell the output format from the extension: use .csv, .uff (or .unv) or .mat",
+        )
+    })?;
+    format.write_frf(path, file, uff)
+}
+
+/// `output_1: node 12 +Z` metadata lines for a channel table.
+pub fn channel_metadata(table: &ChannelTable) -> Vec<(String, String)> {
+    let line = |c: &Channel| {
+        let entity = if c.entity.is_empty() || c.entity == "NONE" {
+            String::new()
+        } else {
+            format!(" {}", c.entity)
+        };
+        format!(
+            "node {} {}{entity}",
+            c.dof.node,
+            direction_name(c.dof.direction)
+        )
+    };
+    let outputs = table
+        .outputs
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (format!("output_{}", k + 1), line(c)));
+    let inputs = table
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (format!("input_{}", k + 1), line(c)));
+    outputs.chain(inputs).collect()
+}
+
+fn parse_direction(text: &str) -> Option<i64> {
+    let t = text.to_ascii_uppercase();
+    if t == "S" {
+        return Some(0);
+    }
+    let (sign, rest) = match t.as_bytes().first()? {
+        b'+' => (1, &t[1..]),
+        b'-' => (-1, &t[1..]),
+        _ => (1, t.as_str()),
+    };
+    let magnitude = match rest {
+        "X" => 1,
+        "Y" => 2,
+        "Z" => 3,
+        "RX" => 4,
+        "RY" => 5,
+        "RZ" => 6,
+        other => return other.parse::<i64>().ok().map(|d| d * sign),
+    };
+    Some(sign * magnitude)
+}
+
+fn parse_channel(text: &str) -> Option<Channel> {
+    let mut words = text.split_whitespace();
+    if words.next()? != "node" {
+        return None;
+    }
+    let node = words.next()?.parse::<i64>().ok()?;
+    let direction = parse_direction(words.next()?)?;
+    let entity = words.collect::<Vec<_>>().join(" ");
+    Some(Channel {
+        dof: Dof { node, direction },
+        entity: if entity.is_empty() {
+            "NONE".into()
+        } else {
+            entity
+        },
+    })
+}
+
+/// The channel table from `output_k`/`input_k` metadata, when complete for `q × p`.
+pub fn channels_from_metadata(
+    metadata: &BTreeMap<String, String>,
+    outputs: usize,
+    inputs: usize,
+) -> Option<ChannelTable> {
+    let take = |kind: &str, n: usize| -> Option<Vec<Channel>> {
+        (1..=n)
+            .map(|k| parse_channel(metadata.get(&format!("{kind}_{k}"))?))
+            .collect()
+    };
+    Some(ChannelTable {
+        outputs: take("output", outputs)?,
+        inputs: take("input", inputs)?,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn channel_lines_round_trip() {
+        let mut t = ChannelTable::numbered(2, 1);
+        t.outputs[1].dof.direction = -5;
+        t.inputs[0].entity = "shaker A".into();
+        let meta: BTreeMap<String, String> = channel_metadata(&t).into_iter().collect();
+        assert_eq!(meta["output_2"], "node 2 -RY");
+        assert_eq!(channels_from_metadata(&meta, 2, 1), Some(t));
+        assert_eq!(channels_from_metadata(&meta, 3, 1), None);
+    }
+
+    #[test]
+    fn detection_by_content_with_the_extension_as_a_hint() {
+        let dir = tempfile::tempdir().unwrap();
+        let uff_named_csv = dir.path().join("a.csv");
+        std::fs::write(&uff_named_csv, "    -1\n    58\n").unwrap();
+        assert_eq!(FrfFormat::detect(&uff_named_csv).unwrap(), FrfFormat::Uff);
+        let csv_named_uff = dir.path().join("b.uff");
+        std::fs::write(&csv_named_uff, "frequency_hz,H1_1_re,H1_1_im\n").unwrap();
+        let e = FrfFormat::detect(&csv_named_uff).unwrap_err().to_string();
+        assert!(e.contains("b.uff") && e.contains("UFF"), "{e}");
+        let empty = dir.path().join("c.uff");
+        std::fs::write(&empty, "").unwrap();
+        assert!(FrfFormat::detect(&empty).unwrap_err().to_string().contains("empty"));
+    }
+}
