@@ -59,7 +59,10 @@ fn exit_code(err: &anyhow::Error) -> u8 {
 fn main() -> ExitCode {
     let cli = args::Cli::parse();
     std::panic::set_hook(Box::new(|info| {
-        eprintln!("era: internal error: {info}");
+        // A panic inside the MAT parser is turned into a file error by era-io.
+        if !era_io::mat::containing_panic() {
+            eprintln!("era: internal error: {info}");
+        }
     }));
     let result = std::panic::catch_unwind(|| match &cli.command {
         args::Command::Demo(a) => demo::run(a),

@@ -62,8 +62,7 @@ pub trait FrfWriter {
     ///
     /// # Errors
     /// [`IoError`] naming the file.
-    fn write_frf(&self, path: &Path, file: &FrfFile, uff: UffWriteOptions)
-        -> Result<(), IoError>;
+    fn write_frf(&self, path: &Path, file: &FrfFile, uff: UffWriteOptions) -> Result<(), IoError>;
 }
 
 impl FrfFormat {
@@ -147,12 +146,7 @@ impl FrfReader for FrfFormat {
 }
 
 impl FrfWriter for FrfFormat {
-    fn write_frf(
-        &self,
-        path: &Path,
-        file: &FrfFile,
-        uff: UffWriteOptions,
-    ) -> Result<(), IoError> {
+    fn write_frf(&self, path: &Path, file: &FrfFile, uff: UffWriteOptions) -> Result<(), IoError> {
         let unit = |key: &str| file.metadata.get(key).map(String::as_str);
         match self {
             FrfFormat::Csv => {
@@ -163,8 +157,10 @@ impl FrfWriter for FrfFormat {
                 if let Some(t) = &file.channels {
                     extra.extend(channel_metadata(t));
                 }
-                let extra: Vec<(&str, &str)> =
-                    extra.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect();
+                let extra: Vec<(&str, &str)> = extra
+                    .iter()
+                    .map(|(k, v)| (k.as_str(), v.as_str()))
+                    .collect();
                 crate::atomic::write_atomic(path, format_frf_csv(&file.frf, &extra).as_bytes())
             }
             FrfFormat::Uff => crate::uff::write_uff58(
@@ -314,6 +310,9 @@ mod tests {
         assert!(e.contains("b.uff") && e.contains("UFF"), "{e}");
         let empty = dir.path().join("c.uff");
         std::fs::write(&empty, "").unwrap();
-        assert!(FrfFormat::detect(&empty).unwrap_err().to_string().contains("empty"));
+        assert!(FrfFormat::detect(&empty)
+            .unwrap_err()
+            .to_string()
+            .contains("empty"));
     }
 }

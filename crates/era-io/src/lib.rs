@@ -6,7 +6,7 @@
 //! - [`mat`]: MATLAB MAT files (model and FRFs) for MATLAB, Octave and scipy;
 //! - [`uff`]: Universal File Format datasets 58/58b (FRFs, read and written) and 55
 //!   (mode shapes, written);
-//! - [`format`]: detection by content and one reader/writer trait over CSV, UFF and MAT;
+//! - [`mod@format`]: detection by content and one reader/writer trait over CSV, UFF and MAT;
 //! - [`atomic`]: every write goes to a temporary file in the destination folder and is
 //!   renamed into place, so a failed run never leaves a half-written file.
 //!

@@ -25,7 +25,7 @@ use crate::csv::FrfFile;
 use crate::IoError;
 use era::modal::ModalParameters;
 use era::{Complex64, EraError, FrfData, Quantity, StateSpace};
-use matrw::{load_matfile, save_matfile_v7, MatFile, MatVariable, MatlabType, NumericArray};
+use matrw::{save_matfile_v7, MatFile, MatVariable, MatlabType, NumericArray};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -63,14 +63,37 @@ fn complex(rows: usize, cols: usize, f: impl Fn(usize, usize) -> era::Complex64)
     )
 }
 
-/// Saves through [`write_via`] (a temporary file, then a rename).
+/// Saves through [`write_via`] (a temporary file, then a rename). `matrw` does not
+/// report write errors (it discards them), so the temporary file is read back and
+/// must hold every variable before it replaces the destination.
 fn save_atomic(path: &Path, file: MatFile) -> Result<(), IoError> {
+    let expected: Vec<String> = file.iter().map(|(k, _)| k.clone()).collect();
     write_via(path, |tmp| {
-        let tmp = tmp
+        let tmp_text = tmp
             .to_str()
             .ok_or_else(|| IoError::format(path, "", "the path is not valid UTF-8"))?;
-        save_matfile_v7(tmp, file, true)
-            .map_err(|e| IoError::format(path, "", format!("cannot write the MAT file: {e}")))
+        save_matfile_v7(tmp_text, file, true)
+            .map_err(|e| IoError::format(path, "", format!("cannot write the MAT file: {e}")))?;
+        let bytes = std::fs::read(tmp).map_err(|e| IoError::io(path, e))?;
+        let back = parse_variables(&bytes, path).map_err(|e| {
+            IoError::format(
+                path,
+                "",
+                format!("the written file does not read back: {e}"),
+            )
+        })?;
+        let missing: Vec<&String> = expected
+            .iter()
+            .filter(|n| !back.numeric.contains_key(*n))
+            .collect();
+        if !missing.is_empty() {
+            return Err(IoError::format(
+                path,
+                "",
+                format!("the written file lacks {missing:?} (disk full?)"),
+            ));
+        }
+        Ok(())
     })
 }
 
@@ -157,36 +180,299 @@ fn to_f64(t: &MatlabType) -> Option<Vec<f64>> {
     })
 }
 
-fn arrays(path: &Path) -> Result<BTreeMap<String, Array>, IoError> {
-    let text = path
-        .to_str()
-        .ok_or_else(|| IoError::format(path, "", "the path is not valid UTF-8"))?;
-    if !path.is_file() {
-        return Err(IoError::io(
+/// The variables of a MAT file: numeric arrays, and the others by name and class.
+struct Variables {
+    numeric: BTreeMap<String, Array>,
+    /// Variables that are not numeric arrays: (name, class).
+    other: Vec<(String, &'static str)>,
+}
+
+thread_local! {
+    static CONTAINING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// True while this thread runs `matrw`'s parser inside one of this module's readers: a
+/// panic hook can stay silent, as the panic becomes an [`IoError`].
+pub fn containing_panic() -> bool {
+    CONTAINING.with(|c| c.get())
+}
+
+fn class_of(v: &MatVariable) -> &'static str {
+    match v {
+        MatVariable::NumericArray(a) if to_f64(&a.value).is_none() => "char or logical",
+        MatVariable::NumericArray(_) => "numeric",
+        MatVariable::SparseArray(_) => "sparse",
+        MatVariable::StructureArray(_) | MatVariable::Structure(_) => "struct",
+        MatVariable::CellArray(_) => "cell",
+        _ => "unsupported",
+    }
+}
+
+/// Parses MAT bytes with `matrw`. Its parser can panic on malformed input (an index
+/// out of range, an allocation of a size read from the file); the panic is contained
+/// here and reported as a malformed file.
+fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
+    if bytes.is_empty() {
+        return Err(IoError::format(path, "", "the file is empty"));
+    }
+    if bytes.len() < 128 || !bytes.starts_with(b"MATLAB") {
+        return Err(IoError::format(
             path,
-            std::io::Error::new(std::io::ErrorKind::NotFound, "No such file"),
+            "",
+            "not a MAT v5 file (no 128-byte 'MATLAB 5.0 MAT-file' header)",
         ));
     }
-    let mut file = load_matfile(text)
-        .map_err(|e| IoError::format(path, "", format!("not a readable MAT v5 file: {e}")))?;
-    let names: Vec<String> = file.iter().map(|(k, _)| k.clone()).collect();
-    let mut out = BTreeMap::new();
-    for name in names {
-        if let Some(MatVariable::NumericArray(a)) = file.take(&name) {
-            if let Some(re) = to_f64(&a.value) {
-                let im = a.value_cmp.as_ref().and_then(to_f64);
-                out.insert(
-                    name,
-                    Array {
-                        dim: a.dim.clone(),
-                        im,
-                        re,
-                    },
-                );
+    if bytes.starts_with(b"MATLAB 7.3 MAT-file") {
+        return Err(IoError::format(
+            path,
+            "",
+            "MAT v7.3 (HDF5) files are not read: save with -v7 (the default) or -v6",
+        ));
+    }
+    CONTAINING.with(|c| c.set(true));
+    let parsed =
+        std::panic::catch_unwind(|| matrw::load_matfile_from_u8(bytes).map_err(|e| e.to_string()));
+    CONTAINING.with(|c| c.set(false));
+    let mut file =
+        match parsed {
+            Ok(Ok(file)) => file,
+            Ok(Err(e)) => {
+                return Err(IoError::format(
+                    path,
+                    "",
+                    format!("not a readable MAT v5 file: {e}"),
+                ))
             }
+            Err(_) => return Err(IoError::format(
+                path,
+                "",
+                "not a readable MAT v5 file: a variable is malformed (corrupt or truncated data)",
+            )),
+        };
+    let names: Vec<String> = file.iter().map(|(k, _)| k.clone()).collect();
+    let mut numeric = BTreeMap::new();
+    let mut other = Vec::new();
+    for name in names {
+        match file.take(&name) {
+            Some(MatVariable::NumericArray(a)) => match to_f64(&a.value) {
+                Some(re) => {
+                    let im = a.value_cmp.as_ref().and_then(to_f64);
+                    numeric.insert(
+                        name,
+                        Array {
+                            dim: a.dim.clone(),
+                            im,
+                            re,
+                        },
+                    );
+                }
+                None => other.push((name, "char or logical")),
+            },
+            Some(v) => other.push((name.clone(), class_of(&v))),
+            None => {}
         }
     }
-    Ok(out)
+    Ok(Variables { numeric, other })
+}
+
+fn arrays(path: &Path) -> Result<BTreeMap<String, Array>, IoError> {
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let vars = parse_variables(&bytes, path)?;
+    if vars.numeric.is_empty() {
+        return Err(unsupported_only(path, &vars));
+    }
+    Ok(vars.numeric)
+}
+
+fn unsupported_only(path: &Path, vars: &Variables) -> IoError {
+    let listed = vars
+        .other
+        .iter()
+        .map(|(n, c)| format!("{n} ({c})"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    IoError::format(
+        path,
+        "",
+        if listed.is_empty() {
+            "the file holds no variables".to_string()
+        } else {
+            format!("no numeric arrays; unsupported class: {listed}")
+        },
+    )
+}
+
+/// A real matrix from a MAT file: time histories, samples × channels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MatMatrix {
+    /// The variable's name.
+    pub name: String,
+    /// Rows (samples).
+    pub rows: usize,
+    /// Columns (channels).
+    pub cols: usize,
+    /// Column-major values.
+    pub values: Vec<f64>,
+}
+
+impl MatMatrix {
+    /// Column `j` (0-based).
+    pub fn column(&self, j: usize) -> &[f64] {
+        &self.values[j * self.rows..(j + 1) * self.rows]
+    }
+}
+
+/// Reads a real 2-D numeric variable (any numeric class, as f64): `variable` names it,
+/// else the file must hold exactly one matrix (scalars and vectors of fewer than 2
+/// rows aside).
+///
+/// # Errors
+/// [`IoError`] naming the file and the variable: a missing name (with the list), several
+/// candidates and no name, a complex, N-D or non-numeric variable, NaN or infinity
+/// (row and column given).
+pub fn read_mat_matrix(path: &Path, variable: Option<&str>) -> Result<MatMatrix, IoError> {
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    parse_mat_matrix(&bytes, path, variable)
+}
+
+/// [`read_mat_matrix`] on bytes already read (`path` names them in messages).
+///
+/// # Errors
+/// As [`read_mat_matrix`].
+pub fn parse_mat_matrix(
+    bytes: &[u8],
+    path: &Path,
+    variable: Option<&str>,
+) -> Result<MatMatrix, IoError> {
+    let vars = parse_variables(bytes, path)?;
+    let describe = |vars: &Variables| {
+        vars.numeric
+            .iter()
+            .map(|(n, a)| format!("{n} {:?}", a.dim))
+            .chain(vars.other.iter().map(|(n, c)| format!("{n} ({c})")))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let name = match variable {
+        Some(v) => {
+            if let Some((_, class)) = vars.other.iter().find(|(n, _)| n == v) {
+                return Err(IoError::format(
+                    path,
+                    format!("variable {v}: "),
+                    format!("unsupported class {class}: a numeric matrix is needed"),
+                ));
+            }
+            if !vars.numeric.contains_key(v) {
+                return Err(IoError::format(
+                    path,
+                    "",
+                    format!("no variable {v} (the file has: {})", describe(&vars)),
+                ));
+            }
+            v.to_string()
+        }
+        None => {
+            let candidates: Vec<&String> = vars
+                .numeric
+                .iter()
+                .filter(|(_, a)| a.dim.len() == 2 && a.dim[0] >= 2)
+                .map(|(n, _)| n)
+                .collect();
+            match candidates.as_slice() {
+                [one] => (*one).clone(),
+                [] if vars.numeric.is_empty() => return Err(unsupported_only(path, &vars)),
+                [] => {
+                    return Err(IoError::format(
+                        path,
+                        "",
+                        format!(
+                            "no matrix with 2 or more rows (the file has: {})",
+                            describe(&vars)
+                        ),
+                    ))
+                }
+                _ => {
+                    return Err(IoError::format(
+                        path,
+                        "",
+                        format!(
+                            "several matrices; name one with --variable (the file has: {})",
+                            describe(&vars)
+                        ),
+                    ))
+                }
+            }
+        }
+    };
+    let a = &vars.numeric[&name];
+    let fail = |m: String| IoError::format(path, format!("variable {name}: "), m);
+    if a.im.is_some() {
+        return Err(fail("is complex: time histories must be real".into()));
+    }
+    if a.dim.len() != 2 {
+        return Err(fail(format!(
+            "has {} dimensions {:?}: a matrix is needed",
+            a.dim.len(),
+            a.dim
+        )));
+    }
+    let (rows, cols) = (a.dim[0], a.dim[1]);
+    if let Some(k) = a.re.iter().position(|v| !v.is_finite()) {
+        return Err(fail(format!(
+            "row {}, column {} is {} (samples must be finite)",
+            k % rows.max(1) + 1,
+            k / rows.max(1) + 1,
+            a.re[k]
+        )));
+    }
+    Ok(MatMatrix {
+        name: name.clone(),
+        rows,
+        cols,
+        values: a.re.clone(),
+    })
+}
+
+/// Name, dimensions and class of every variable, for `era info`.
+///
+/// # Errors
+/// [`IoError`] when the file is not a readable MAT v5 file.
+pub fn list_variables(path: &Path) -> Result<Vec<(String, String)>, IoError> {
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let vars = parse_variables(&bytes, path)?;
+    Ok(vars
+        .numeric
+        .iter()
+        .map(|(n, a)| {
+            let dims = a
+                .dim
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join("x");
+            (
+                n.clone(),
+                format!("{dims} {}", if a.im.is_some() { "complex" } else { "real" }),
+            )
+        })
+        .chain(
+            vars.other
+                .iter()
+                .map(|(n, c)| (n.clone(), format!("({c})"))),
+        )
+        .collect())
+}
+
+/// Parses MAT bytes as FRFs (for fuzzing and in-memory use); see [`read_frf_mat`].
+///
+/// # Errors
+/// As [`read_frf_mat`].
+pub fn parse_frf_mat(bytes: &[u8], path: &Path) -> Result<FrfFile, IoError> {
+    let vars = parse_variables(bytes, path)?;
+    if vars.numeric.is_empty() {
+        return Err(unsupported_only(path, &vars));
+    }
+    frf_from_arrays(path, &vars.numeric, None, Quantity::Acceleration)
 }
 
 fn scalar(vars: &BTreeMap<String, Array>, name: &str) -> Option<usize> {
@@ -226,6 +512,15 @@ pub fn read_frf_mat(
     quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
     let vars = arrays(path)?;
+    frf_from_arrays(path, &vars, outputs, quantity)
+}
+
+fn frf_from_arrays(
+    path: &Path,
+    vars: &BTreeMap<String, Array>,
+    outputs: Option<usize>,
+    quantity: Quantity,
+) -> Result<FrfFile, IoError> {
     let fail = |variable: &str, message: String| {
         IoError::format(path, format!("variable {variable}: "), message)
     };
@@ -253,7 +548,7 @@ pub fn read_frf_mat(
             ));
         }
         let cols = frf.dim[1];
-        let q = match (scalar(&vars, "outputs"), outputs) {
+        let q = match (scalar(vars, "outputs"), outputs) {
             (Some(q), _) | (None, Some(q)) => q,
             (None, None) => {
                 let r = (cols as f64).sqrt().round() as usize;

@@ -257,7 +257,9 @@ pub fn function_type_name(code: i64) -> Option<&'static str> {
         "order function",
         "phase compensation",
     ];
-    usize::try_from(code).ok().and_then(|c| NAMES.get(c).copied())
+    usize::try_from(code)
+        .ok()
+        .and_then(|c| NAMES.get(c).copied())
 }
 
 /// The FRF function type.
@@ -265,7 +267,10 @@ pub const FUNCTION_FRF: i64 = 4;
 
 /// True when the first non-blank line of `head` is a UFF record start (`-1`).
 pub fn looks_like_uff(head: &[u8]) -> bool {
-    let text = head.split(|b| *b == b'\n').map(trim_bytes).find(|l| !l.is_empty());
+    let text = head
+        .split(|b| *b == b'\n')
+        .map(trim_bytes)
+        .find(|l| !l.is_empty());
     text == Some(b"-1".as_slice())
 }
 
@@ -274,7 +279,10 @@ fn trim_bytes(line: &[u8]) -> &[u8] {
     match start {
         None => &[],
         Some(s) => {
-            let end = line.iter().rposition(|b| !b.is_ascii_whitespace()).unwrap_or(s);
+            let end = line
+                .iter()
+                .rposition(|b| !b.is_ascii_whitespace())
+                .unwrap_or(s);
             &line[s..=end]
         }
     }
@@ -546,7 +554,11 @@ fn binary_id(p: &Parser, id: &Line, record: usize) -> Result<Binary, IoError> {
     let little_endian = match order {
         1 => true,
         2 => false,
-        o => return Err(fail(format!("byte ordering {o}: expected 1 (little-endian) or 2 (big-endian)"))),
+        o => {
+            return Err(fail(format!(
+                "byte ordering {o}: expected 1 (little-endian) or 2 (big-endian)"
+            )))
+        }
     };
     match format {
         2 => {}
@@ -556,7 +568,11 @@ fn binary_id(p: &Parser, id: &Line, record: usize) -> Result<Binary, IoError> {
                 if format == 1 { "DEC VMS" } else { "IBM 370" }
             )))
         }
-        o => return Err(fail(format!("floating-point format {o}: expected 2 (IEEE 754)"))),
+        o => {
+            return Err(fail(format!(
+                "floating-point format {o}: expected 2 (IEEE 754)"
+            )))
+        }
     }
     if ascii < 0 || bytes < 0 {
         return Err(fail(format!(
@@ -648,12 +664,15 @@ fn header58(
         )
     })?;
     let points = r7.int(10, 10, "number of points")?;
-    let points = usize::try_from(points).ok().filter(|n| *n > 0).ok_or_else(|| {
-        p.error_at(
-            r7.line.start,
-            format!("record {record}: number of points {points}: must be at least 1"),
-        )
-    })?;
+    let points = usize::try_from(points)
+        .ok()
+        .filter(|n| *n > 0)
+        .ok_or_else(|| {
+            p.error_at(
+                r7.line.start,
+                format!("record {record}: number of points {points}: must be at least 1"),
+            )
+        })?;
     let spacing = r7.int(20, 10, "abscissa spacing")?;
     let even = match spacing {
         0 => false,
@@ -1173,16 +1192,15 @@ pub fn frf_from_uff(
         .collect();
     let mut metadata = BTreeMap::new();
     let mut notes: Vec<String> = contents.notes.clone();
-    let others: BTreeMap<&str, usize> =
-        contents
-            .functions
-            .iter()
-            .filter(|(f, _)| f.function_type != FUNCTION_FRF)
-            .fold(BTreeMap::new(), |mut m, (f, _)| {
-                *m.entry(function_type_name(f.function_type).unwrap_or("?"))
-                    .or_insert(0) += 1;
-                m
-            });
+    let others: BTreeMap<&str, usize> = contents
+        .functions
+        .iter()
+        .filter(|(f, _)| f.function_type != FUNCTION_FRF)
+        .fold(BTreeMap::new(), |mut m, (f, _)| {
+            *m.entry(function_type_name(f.function_type).unwrap_or("?"))
+                .or_insert(0) += 1;
+            m
+        });
     if frfs.is_empty() {
         let found = if others.is_empty() {
             "none of dataset 58".to_string()
@@ -1253,7 +1271,10 @@ pub fn frf_from_uff(
         }
     }
     if !duplicates.is_empty() {
-        return Err(fail(format!("duplicate FRF pairs: {}", listed(&duplicates))));
+        return Err(fail(format!(
+            "duplicate FRF pairs: {}",
+            listed(&duplicates)
+        )));
     }
     let missing: Vec<String> = slot
         .iter()
@@ -1327,7 +1348,11 @@ pub fn frf_from_uff(
             listed(&mismatched)
         )));
     }
-    if let Some(f) = frfs.iter().map(|r| &r.0).find(|f| f.axes[0].data_type == 17) {
+    if let Some(f) = frfs
+        .iter()
+        .map(|r| &r.0)
+        .find(|f| f.axes[0].data_type == 17)
+    {
         return Err(fail(format!(
             "record {}: the abscissa is time (data type 17): FRFs need frequency",
             f.record
@@ -1452,7 +1477,11 @@ fn fortran_e(x: f64, width: usize, digits: usize) -> String {
 
 fn header_text(s: &str, width: usize) -> String {
     let t: String = s.chars().filter(|c| !c.is_control()).take(width).collect();
-    let t = if t.trim().is_empty() { "NONE".into() } else { t };
+    let t = if t.trim().is_empty() {
+        "NONE".into()
+    } else {
+        t
+    };
     format!("{t:<width$}")
 }
 
@@ -1591,11 +1620,8 @@ pub fn write_uff58(
                     }
                     w.write_all(&buf)?;
                 } else {
-                    let (width, digits, per_line) = if opts.single {
-                        (13, 5, 6)
-                    } else {
-                        (20, 12, 4)
-                    };
+                    let (width, digits, per_line) =
+                        if opts.single { (13, 5, 6) } else { (20, 12, 4) };
                     let mut line = String::with_capacity(80);
                     let parts = values.iter().flat_map(|v| [v.re, v.im]);
                     for (k, x) in parts.enumerate() {
@@ -1682,7 +1708,11 @@ pub fn write_uff55(
             }
         };
         let d = c.dof.direction;
-        let component = if d == 0 { 2 } else { (d.unsigned_abs() - 1) as usize };
+        let component = if d == 0 {
+            2
+        } else {
+            (d.unsigned_abs() - 1) as usize
+        };
         let sign = if d < 0 { -1.0 } else { 1.0 };
         slots.push((n, component.min(per_node - 1), sign));
     }
@@ -1814,7 +1844,10 @@ mod tests {
             let (a, b) = round_trip(opts);
             assert_eq!(a.frequency_hz(), b.frequency_hz());
             for (x, y) in a.values().iter().zip(b.values()) {
-                assert!((x - y).norm() <= tol * x.norm().max(1e-300), "{opts:?}: {x} vs {y}");
+                assert!(
+                    (x - y).norm() <= tol * x.norm().max(1e-300),
+                    "{opts:?}: {x} vs {y}"
+                );
             }
         }
     }
@@ -1823,11 +1856,20 @@ mod tests {
     fn header_only_read_skips_the_data() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("x.uff");
-        write_uff58(&path, &sample(2, 2, 37), None, (None, None), UffWriteOptions::default())
-            .unwrap();
+        write_uff58(
+            &path,
+            &sample(2, 2, 37),
+            None,
+            (None, None),
+            UffWriteOptions::default(),
+        )
+        .unwrap();
         let c = read_uff(&path, false).unwrap();
         assert_eq!(c.functions.len(), 4);
-        assert!(c.functions.iter().all(|(f, d)| d.is_none() && f.points == 37));
+        assert!(c
+            .functions
+            .iter()
+            .all(|(f, d)| d.is_none() && f.points == 37));
     }
 
     #[test]

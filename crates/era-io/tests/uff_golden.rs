@@ -24,7 +24,11 @@ fn every_pyuff_file_reads_identically() {
         serde_json::from_str(&std::fs::read_to_string(golden().join("expected.json")).unwrap())
             .unwrap();
     let files = expected.as_object().unwrap();
-    assert_eq!(files.len(), 16, "ASCII/binary x real/complex x single/double x even/uneven");
+    assert_eq!(
+        files.len(),
+        16,
+        "ASCII/binary x real/complex x single/double x even/uneven"
+    );
     for (name, records) in files {
         let path = golden().join(name);
         let contents = read_uff(&path, true).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -57,7 +61,10 @@ fn the_frf_matrix_and_its_channel_table() {
     assert_eq!(contents.skipped.get(&151), Some(&1));
     assert_eq!(contents.skipped.get(&164), Some(&1));
     let file = frf_from_uff(&path, &contents, Quantity::Displacement).unwrap();
-    assert_eq!((file.frf.outputs(), file.frf.inputs(), file.frf.lines()), (2, 2, 33));
+    assert_eq!(
+        (file.frf.outputs(), file.frf.inputs(), file.frf.lines()),
+        (2, 2, 33)
+    );
     assert_eq!(file.frf.quantity(), Quantity::Acceleration);
     assert!(file.quantity_given);
     let table = file.channels.unwrap();
@@ -80,7 +87,10 @@ fn the_frf_matrix_and_its_channel_table() {
         let other = read_frf_uff(&golden().join(name), Quantity::Displacement).unwrap();
         let tol = if name.contains("single") { 1e-5 } else { 1e-11 };
         for (a, b) in file.frf.values().iter().zip(other.frf.values()) {
-            assert!((a - b).norm() <= tol * a.norm().max(1e-12), "{name}: {a} vs {b}");
+            assert!(
+                (a - b).norm() <= tol * a.norm().max(1e-12),
+                "{name}: {a} vs {b}"
+            );
         }
     }
 }
