@@ -26,5 +26,9 @@ FRF = single(complex(reshape(1:20, 5, 4), reshape(21:40, 5, 4))); FreqV = single
 save('-v6', 'frf_single.mat', 'FRF', 'FreqV');
 FreqV = [0; 0.5; 1.5; 2; 2.5]; FRF = complex(reshape(1:20, 5, 4), 0);
 save('-v7', 'frf_uneven.mat', 'FRF', 'FreqV');
+names = {'a', 'b'}; label = 'not numeric';
+save('-v7', 'cell_only.mat', 'names', 'label');
+T = reshape(sin(0.1 * (1:600)), 200, 3); u = (1:200)';
+save('-v7', 'time_two.mat', 'T', 'u');
 " 2>/dev/null
 ls -la "$dest"

@@ -25,11 +25,48 @@ pub enum Command {
     Friction(FrictionArgs),
     /// Plot an FRF file, overlaid with a model when one is given.
     Plot(PlotArgs),
+    /// What an FRF file holds (channels, lines, spacing, quantity, units), read from
+    /// the headers only where the format allows: fast on large UFF files.
+    Info(InfoArgs),
+    /// Convert FRFs between CSV, UFF 58 (ASCII or binary 58b) and MAT. The input format
+    /// is told by content, the output format by the extension (.csv, .uff/.unv, .mat).
+    Convert(ConvertArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// FRF file: CSV, UFF (58/58b) or MAT v5.
+    pub file: PathBuf,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// FRF file to read: CSV, UFF (58/58b) or MAT v5, told apart by content.
+    pub input: PathBuf,
+    /// File to write; its extension picks the format: .csv, .uff (or .unv) or .mat.
+    pub output: PathBuf,
+    /// UFF output: binary 58b (little-endian IEEE, exact) instead of ASCII.
+    #[arg(long)]
+    pub binary: bool,
+    /// UFF output: single precision (ASCII 6 significant digits, binary f32).
+    #[arg(long)]
+    pub single: bool,
+    /// Quantity of the FRFs; overrides what the input says.
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
+    /// set is not square.
+    #[arg(long)]
+    pub outputs: Option<usize>,
+    #[command(flatten)]
+    pub common: CommonArgs,
 }
 
 #[derive(Debug, Args)]
 pub struct PlotArgs {
-    /// FRF file: CSV or MAT v5, told apart by content.
+    /// FRF file: CSV, UFF 58/58b or MAT v5, told apart by content.
     pub file: PathBuf,
     /// model.json to overlay (from era identify --out).
     #[arg(long, value_name = "MODEL_JSON")]
@@ -128,8 +165,8 @@ impl From<QuantityArg> for era::Quantity {
 
 #[derive(Debug, Args)]
 pub struct IdentifyArgs {
-    /// FRF file: CSV (DESIGN.md §4) or MAT v5 (FRF + FreqV, xferIJ + FreqV, or a
-    /// q × p × lines array + FreqV), told apart by content.
+    /// FRF file: CSV (DESIGN.md §4), UFF 58/58b, or MAT v5 (FRF + FreqV, xferIJ +
+    /// FreqV, or a q × p × lines array + FreqV), told apart by content.
     pub file: PathBuf,
     /// Model order: first-order states (thesis ns). Two per mode.
     #[arg(long)]
@@ -170,7 +207,8 @@ pub struct IdentifyArgs {
     /// set is not square.
     #[arg(long)]
     pub outputs: Option<usize>,
-    /// Folder for model.json and fit.json (created if missing).
+    /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
+    /// figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     #[command(flatten)]
@@ -186,7 +224,7 @@ pub struct SimulateArgs {
 /// Flags of both simulators.
 #[derive(Debug, Args)]
 pub struct SimulateCommon {
-    /// FRF CSV to write.
+    /// FRF file to write: .uff/.unv (UFF 58), .mat, or CSV for any other name.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
     /// Noise RMS as a fraction of each FRF's RMS (0 = none, 0.15 = 15 %).

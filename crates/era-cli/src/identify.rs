@@ -10,7 +10,7 @@ use anyhow::Context;
 use era::identify::{identify_observed, EraOptions, ModelDomain};
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
-use era_io::csv::read_frf_csv;
+use era_io::format::{read_frf_file, FrfFormat, ReadOptions};
 use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::path::Path;
 use std::time::Instant;
@@ -53,36 +53,61 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     })
 }
 
-/// Reads an FRF file for `identify` and `plot`: MAT v5 when the file starts like one,
-/// CSV otherwise. `--quantity` overrides the file's tag; with neither, acceleration is
-/// assumed. The note says which (and, for MAT, the layout found).
+/// An FRF file as `identify`, `plot` and `convert` see it.
+pub struct InputFrf {
+    /// The file, its quantity set by `--quantity` when given.
+    pub file: era_io::csv::FrfFile,
+    /// Format found.
+    pub format: FrfFormat,
+    /// Where the quantity came from, and the layout found: for the summary line.
+    pub note: String,
+}
+
+/// Reads an FRF file in any format, told apart by content (the extension is a hint).
+/// `--quantity` overrides the file's tag; with neither, acceleration is assumed.
 pub fn read_frf(
     path: &std::path::Path,
     quantity: Option<QuantityArg>,
     outputs: Option<usize>,
-) -> anyhow::Result<(era::FrfData, String)> {
-    let file = if era_io::mat::looks_like_mat(path) {
-        era_io::mat::read_frf_mat(path, outputs, Quantity::Acceleration)
-    } else {
-        read_frf_csv(path, Quantity::Acceleration)
-    }
-    .with_context(|| format!("reading {}", path.display()))?;
+) -> anyhow::Result<InputFrf> {
+    let opts = ReadOptions {
+        default_quantity: Quantity::Acceleration,
+        outputs,
+    };
+    let (mut file, format) =
+        read_frf_file(path, &opts).with_context(|| format!("reading {}", path.display()))?;
     let layout = file
         .metadata
         .get("layout")
         .map(|l| format!(" [{l}]"))
-        .unwrap_or_default();
-    Ok(match quantity {
-        Some(q) => (
-            file.frf.with_quantity(q.into()),
-            format!(" (from --quantity){layout}"),
-        ),
-        None if file.quantity_given => (file.frf, layout),
-        None => (
-            file.frf,
-            format!(" (assumed: the file does not say; set --quantity){layout}"),
-        ),
-    })
+        .unwrap_or_else(|| format!(" [{}]", format.name()));
+    let note = match quantity {
+        Some(q) => {
+            file.frf = file.frf.with_quantity(q.into());
+            file.quantity_given = true;
+            format!(" (from --quantity){layout}")
+        }
+        None if file.quantity_given => layout,
+        None => format!(" (assumed: the file does not say; set --quantity){layout}"),
+    };
+    Ok(InputFrf { file, format, note })
+}
+
+/// The channel table and the notes of a file, as lines for the human summary.
+pub fn describe_input(input: &InputFrf) -> String {
+    let mut text = String::new();
+    if let Some(table) = &input.file.channels {
+        text.push_str("  channels:\n");
+        for line in table.describe() {
+            text.push_str(&format!("    {line}\n"));
+        }
+    }
+    if let Some(notes) = input.file.metadata.get("notes") {
+        for n in notes.split(" | ") {
+            text.push_str(&format!("  note: {n}\n"));
+        }
+    }
+    text
 }
 
 /// Creates `--out DIR` and checks that it takes files, before any long work.
@@ -108,8 +133,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         prepare_out_dir(dir)?;
     }
     let clock = Instant::now();
-    let (frf, quantity_note) = read_frf(&a.file, a.quantity, a.outputs)?;
+    let input = read_frf(&a.file, a.quantity, a.outputs)?;
     let read_s = clock.elapsed().as_secs_f64();
+    let (frf, quantity_note) = (&input.file.frf, &input.note);
     let last = frf.frequency_hz()[frf.lines() - 1];
     human.print(&format!(
         "era identify {}\n  {} outputs x {} inputs, {} lines, 0 .. {last} Hz at {} Hz, {}{}\n",
@@ -121,10 +147,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         frf.quantity(),
         quantity_note,
     ));
+    human.print(&describe_input(&input));
     human.print(&parameter_echo(&opts));
 
     let spinner = crate::progress::spinner(&a.common);
-    let found = identify_observed(&frf, &opts, &mut |stage| spinner.set_message(stage.name()))
+    let found = identify_observed(frf, &opts, &mut |stage| spinner.set_message(stage.name()))
         .with_context(|| format!("identifying {}", a.file.display()));
     spinner.finish_and_clear();
     let found = found?;
@@ -139,6 +166,16 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         model.write(&dir.join("model.json"))?;
         fit.write(&dir.join("fit.json"))?;
         era_io::mat::write_model_mat(&dir.join("model.mat"), &found.model, &found.modal)?;
+        let mut shape_quantity = frf.quantity();
+        for _ in 0..opts.integrations {
+            shape_quantity = shape_quantity.integrated().unwrap_or(shape_quantity);
+        }
+        era_io::uff::write_uff55(
+            &dir.join("modes.uff"),
+            &found.modal,
+            input.file.channels.as_ref(),
+            shape_quantity,
+        )?;
         let title = format!("era identify {}", a.file.display());
         let bar = crate::progress::bar(&a.common, (frf.outputs() * frf.inputs()) as u64, "figures");
         crate::figures::write_all(
@@ -153,7 +190,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         bar.finish_and_clear();
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
         human.print(&format!(
-            "\nwrote {0}/model.json, {0}/model.mat, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
+            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
             dir.display()
         ));
     }

@@ -7,6 +7,7 @@
 mod args;
 mod demo;
 mod figures;
+mod files;
 mod friction;
 mod identify;
 mod plot;
@@ -70,6 +71,8 @@ fn main() -> ExitCode {
         args::Command::Simulate(a) => simulate::run(a),
         args::Command::Friction(a) => friction::run(a),
         args::Command::Plot(a) => plot::run(a),
+        args::Command::Info(a) => files::run_info(a),
+        args::Command::Convert(a) => files::run_convert(a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -16,7 +16,7 @@ use serde_json::json;
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     prepare_out_dir(&a.out)?;
-    let (frf, _) = read_frf(&a.file, a.quantity, a.outputs)?;
+    let frf = read_frf(&a.file, a.quantity, a.outputs)?.file.frf;
     let model = match &a.model {
         Some(path) => {
             Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)

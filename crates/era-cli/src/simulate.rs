@@ -5,7 +5,9 @@ use crate::report::{finish_output, Human};
 use crate::usage;
 use era::sim::{add_noise, truth_model_frf, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
-use era_io::csv::write_frf_csv;
+use era_io::csv::{write_frf_csv, FrfFile};
+use era_io::format::{FrfFormat, FrfWriter};
+use era_io::uff::UffWriteOptions;
 use serde_json::json;
 use std::time::Instant;
 
@@ -44,7 +46,21 @@ fn finish(
     let mut meta: Vec<(&str, &str)> = extra.to_vec();
     meta.push(("noise_fraction", &noise));
     meta.push(("seed", &seed));
-    write_frf_csv(&sim.out, frf, &meta)?;
+    match FrfFormat::from_extension(&sim.out) {
+        Some(format @ (FrfFormat::Uff | FrfFormat::Mat)) => {
+            let file = FrfFile {
+                frf: frf.clone(),
+                quantity_given: true,
+                metadata: meta
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), v.to_string()))
+                    .collect(),
+                channels: None,
+            };
+            format.write_frf(&sim.out, &file, UffWriteOptions::default())?;
+        }
+        _ => write_frf_csv(&sim.out, frf, &meta)?,
+    }
     human.print(&format!(
         "wrote {}: {} outputs x {} inputs, {} lines at {} Hz, {}{}\n",
         sim.out.display(),

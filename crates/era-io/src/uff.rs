@@ -463,12 +463,13 @@ pub fn parse_uff(bytes: &[u8], path: &Path, with_data: bool) -> Result<UffConten
         return Err(IoError::format(path, "", "the file is empty"));
     }
     let mut out = UffContents::default();
+    let mut quirks = Quirks::new();
     let mut record = 0;
     loop {
         // Blank lines between records are tolerated.
         let open = loop {
             match p.next_line() {
-                None => return finish(&p, out),
+                None => return finish(&p, out, quirks),
                 Some(l) if trim_bytes(l.text).is_empty() => continue,
                 Some(l) => break l,
             }
@@ -507,7 +508,7 @@ pub fn parse_uff(bytes: &[u8], path: &Path, with_data: bool) -> Result<UffConten
         if dataset == 58 {
             let f = header58(&mut p, record, open.start, binary)?;
             let data = if let Some(b) = binary {
-                binary_data(&mut p, &f, b, with_data, &mut out.notes)?
+                binary_data(&mut p, &f, b, with_data, &mut quirks)?
             } else {
                 ascii_data(&mut p, &f, with_data)?
             };
@@ -519,9 +520,17 @@ pub fn parse_uff(bytes: &[u8], path: &Path, with_data: bool) -> Result<UffConten
     }
 }
 
-fn finish(p: &Parser, out: UffContents) -> Result<UffContents, IoError> {
+/// Departures from the definition that were read anyway: kind → (records, first).
+type Quirks = BTreeMap<String, (usize, String)>;
+
+fn finish(p: &Parser, mut out: UffContents, quirks: Quirks) -> Result<UffContents, IoError> {
     if out.functions.is_empty() && out.skipped.is_empty() {
         return Err(IoError::format(p.path, "", "no UFF records in the file"));
+    }
+    for (kind, (count, first)) in quirks {
+        out.notes.push(format!(
+            "{count} binary records have {kind} (first: {first}); read as the closing -1 confirms"
+        ));
     }
     Ok(out)
 }
@@ -892,7 +901,7 @@ fn binary_data(
     f: &Function58,
     b: Binary,
     with_data: bool,
-    notes: &mut Vec<String>,
+    quirks: &mut Quirks,
 ) -> Result<Option<Data58>, IoError> {
     let total = total_values(p, f)?;
     let start = p.pos;
@@ -933,14 +942,29 @@ fn binary_data(
     };
     let declared = if f.ordinate.is_double() { 8 } else { 4 };
     if len != b.header_bytes || size != declared {
-        notes.push(format!(
-            "record {} (line {}): the header says {} bytes of {} values; read {len} bytes as {}-byte values, which the closing -1 confirms",
-            f.record,
-            p.line_of(f.offset),
-            b.header_bytes,
-            f.ordinate.name(),
-            size
-        ));
+        let kind = if size != declared {
+            format!(
+                "{size}-byte values under the {declared}-byte type {}",
+                f.ordinate.name()
+            )
+        } else {
+            format!(
+                "a header byte count other than the {} values need",
+                f.ordinate.name()
+            )
+        };
+        let entry = quirks.entry(kind).or_insert_with(|| {
+            (
+                0,
+                format!(
+                    "record {} (line {}) says {} bytes, holds {len}",
+                    f.record,
+                    p.line_of(f.offset),
+                    b.header_bytes
+                ),
+            )
+        });
+        entry.0 += 1;
     }
     p.pos = end;
     if !with_data {
@@ -1125,7 +1149,8 @@ impl ChannelTable {
     }
 }
 
-fn quantity_of(data_type: i64) -> Option<Quantity> {
+/// The quantity an axis's specific data type names (8, 11, 12), if any.
+pub fn quantity_of(data_type: i64) -> Option<Quantity> {
     match data_type {
         8 => Some(Quantity::Displacement),
         11 => Some(Quantity::Velocity),
@@ -1142,7 +1167,8 @@ fn quantity_code(q: Quantity) -> i64 {
     }
 }
 
-fn listed(items: &[String]) -> String {
+/// The first few items joined with "; ", then how many more.
+pub fn listed(items: &[String]) -> String {
     const SHOWN: usize = 8;
     let mut s = items
         .iter()
@@ -1154,6 +1180,79 @@ fn listed(items: &[String]) -> String {
         s.push_str(&format!("; … and {} more", items.len() - SHOWN));
     }
     s
+}
+
+/// How FRF records fill a matrix: the channel table (DOFs in order of first
+/// appearance), the record of each output/input pair, and what is missing or repeated.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FrfLayout {
+    /// Outputs (response DOFs) and inputs (reference DOFs).
+    pub table: ChannelTable,
+    /// For pair `i·p + j`, the index (among the records given) of its record.
+    pub slot: Vec<Option<usize>>,
+    /// "output 2 (12:+Z) from input 1 (101:+Z)" for each pair without a record.
+    pub missing: Vec<String>,
+    /// One line per pair given more than once, with the record numbers.
+    pub duplicates: Vec<String>,
+}
+
+impl FrfLayout {
+    /// The layout of the given FRF records.
+    pub fn of<'a>(records: impl Iterator<Item = &'a Function58>) -> Self {
+        let records: Vec<&Function58> = records.collect();
+        let mut table = ChannelTable::default();
+        let mut out_index: HashMap<&Dof, usize> = HashMap::new();
+        let mut in_index: HashMap<&Dof, usize> = HashMap::new();
+        for f in &records {
+            out_index.entry(&f.response).or_insert_with(|| {
+                table.outputs.push(Channel {
+                    dof: f.response.clone(),
+                    entity: f.response_entity.clone(),
+                });
+                table.outputs.len() - 1
+            });
+            in_index.entry(&f.reference).or_insert_with(|| {
+                table.inputs.push(Channel {
+                    dof: f.reference.clone(),
+                    entity: f.reference_entity.clone(),
+                });
+                table.inputs.len() - 1
+            });
+        }
+        let (q, p) = (table.outputs.len(), table.inputs.len());
+        let mut slot: Vec<Option<usize>> = vec![None; q * p];
+        let mut duplicates = Vec::new();
+        for (n, f) in records.iter().enumerate() {
+            let s = out_index[&f.response] * p + in_index[&f.reference];
+            match slot[s] {
+                Some(first) => duplicates.push(format!(
+                    "{} from {} in records {} and {}",
+                    f.response, f.reference, records[first].record, f.record
+                )),
+                None => slot[s] = Some(n),
+            }
+        }
+        let missing = slot
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.is_none())
+            .map(|(s, _)| {
+                format!(
+                    "output {} ({}) from input {} ({})",
+                    s / p + 1,
+                    table.outputs[s / p].dof,
+                    s % p + 1,
+                    table.inputs[s % p].dof
+                )
+            })
+            .collect();
+        FrfLayout {
+            table,
+            slot,
+            missing,
+            duplicates,
+        }
+    }
 }
 
 /// Builds one FRF matrix from the FRF records of a file read with its data (see the
@@ -1236,68 +1335,23 @@ pub fn frf_from_uff(
                 .join(", ")
         ));
     }
-    // Channels in order of first appearance.
-    let mut outputs: Vec<Channel> = Vec::new();
-    let mut inputs: Vec<Channel> = Vec::new();
-    let mut out_index: HashMap<Dof, usize> = HashMap::new();
-    let mut in_index: HashMap<Dof, usize> = HashMap::new();
-    for (f, _) in &frfs {
-        out_index.entry(f.response.clone()).or_insert_with(|| {
-            outputs.push(Channel {
-                dof: f.response.clone(),
-                entity: f.response_entity.clone(),
-            });
-            outputs.len() - 1
-        });
-        in_index.entry(f.reference.clone()).or_insert_with(|| {
-            inputs.push(Channel {
-                dof: f.reference.clone(),
-                entity: f.reference_entity.clone(),
-            });
-            inputs.len() - 1
-        });
-    }
-    let (q, p) = (outputs.len(), inputs.len());
-    let mut slot: Vec<Option<usize>> = vec![None; q * p];
-    let mut duplicates = Vec::new();
-    for (n, (f, _)) in frfs.iter().enumerate() {
-        let s = out_index[&f.response] * p + in_index[&f.reference];
-        match slot[s] {
-            Some(first) => duplicates.push(format!(
-                "{} from {} in records {} and {}",
-                f.response, f.reference, frfs[first].0.record, f.record
-            )),
-            None => slot[s] = Some(n),
-        }
-    }
-    if !duplicates.is_empty() {
+    let layout = FrfLayout::of(frfs.iter().map(|r| &r.0));
+    if !layout.duplicates.is_empty() {
         return Err(fail(format!(
             "duplicate FRF pairs: {}",
-            listed(&duplicates)
+            listed(&layout.duplicates)
         )));
     }
-    let missing: Vec<String> = slot
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.is_none())
-        .map(|(s, _)| {
-            format!(
-                "output {} ({}) from input {} ({})",
-                s / p + 1,
-                outputs[s / p].dof,
-                s % p + 1,
-                inputs[s % p].dof
-            )
-        })
-        .collect();
-    if !missing.is_empty() {
+    if !layout.missing.is_empty() {
         return Err(fail(format!(
             "missing FRF pairs ({} of {}): {}",
-            missing.len(),
-            q * p,
-            listed(&missing)
+            layout.missing.len(),
+            layout.table.outputs.len() * layout.table.inputs.len(),
+            listed(&layout.missing)
         )));
     }
+    let FrfLayout { table, slot, .. } = layout;
+    let (q, p) = (table.outputs.len(), table.inputs.len());
     // One abscissa for all.
     let (first, first_data) = frfs[0];
     let describe = |f: &Function58| {
@@ -1440,7 +1494,7 @@ pub fn frf_from_uff(
         frf,
         quantity_given: !tagged.is_empty(),
         metadata,
-        channels: Some(ChannelTable { outputs, inputs }),
+        channels: Some(table),
     })
 }
 

@@ -1,0 +1,300 @@
+//! `era info FILE` and `era convert IN OUT`: what an FRF file holds, and the same FRFs
+//! in another format.
+
+use crate::args::{ConvertArgs, InfoArgs};
+use crate::identify::{describe_input, read_frf};
+use crate::report::{finish_output, Human};
+use anyhow::Context;
+use era_io::format::{write_frf_file, FrfFormat};
+use era_io::uff::{function_type_name, listed, quantity_of, FrfLayout, UffWriteOptions};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// `era convert`.
+pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    let target = FrfFormat::from_extension(&a.output).ok_or_else(|| {
+        crate::UsageError(format!(
+            "{}: cannot tell the output format from the extension: use .csv, .uff (or .unv) or .mat",
+            a.output.display()
+        ))
+    })?;
+    if (a.binary || a.single) && target != FrfFormat::Uff {
+        return crate::usage(format!(
+            "--binary and --single apply to UFF output, not to {}",
+            a.output.display()
+        ));
+    }
+    let clock = Instant::now();
+    let input = read_frf(&a.input, a.quantity, a.outputs)?;
+    let read_s = clock.elapsed().as_secs_f64();
+    let frf = &input.file.frf;
+    let clock = Instant::now();
+    let opts = UffWriteOptions {
+        binary: a.binary,
+        single: a.single,
+    };
+    write_frf_file(&a.output, &input.file, opts)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    let write_s = clock.elapsed().as_secs_f64();
+    let kind = match (target, a.binary, a.single) {
+        (FrfFormat::Uff, true, true) => "UFF 58b, single",
+        (FrfFormat::Uff, true, false) => "UFF 58b, double",
+        (FrfFormat::Uff, false, true) => "UFF 58 ASCII, single",
+        (FrfFormat::Uff, false, false) => "UFF 58 ASCII, double",
+        (f, _, _) => f.name(),
+    };
+    human.print(&format!(
+        "era convert {} ({}) -> {} ({kind})\n  {} outputs x {} inputs, {} lines at {} Hz, {}{}\n{}",
+        a.input.display(),
+        input.format.name(),
+        a.output.display(),
+        frf.outputs(),
+        frf.inputs(),
+        frf.lines(),
+        frf.spacing_hz(),
+        frf.quantity(),
+        input.note,
+        describe_input(&input),
+    ));
+    if target == FrfFormat::Mat && input.file.channels.is_some() {
+        human.print("  note: MAT files do not keep the channel table (nodes and directions)\n");
+    }
+    finish_output(
+        &human,
+        &a.common,
+        json!({
+            "input": a.input, "input_format": input.format.name(),
+            "output": a.output, "output_format": kind,
+            "outputs": frf.outputs(), "inputs": frf.inputs(), "lines": frf.lines(),
+            "spacing_hz": frf.spacing_hz(), "quantity": frf.quantity().name(),
+        }),
+        &[("read", read_s), ("write", write_s)],
+    )
+}
+
+/// `era info`.
+pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    let clock = Instant::now();
+    let format =
+        FrfFormat::detect(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    let (text, summary) = match format {
+        FrfFormat::Uff => uff_info(a)?,
+        FrfFormat::Mat => mat_info(a)?,
+        FrfFormat::Csv => csv_info(a)?,
+    };
+    human.print(&text);
+    finish_output(
+        &human,
+        &a.common,
+        summary,
+        &[("info", clock.elapsed().as_secs_f64())],
+    )
+}
+
+fn uff_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
+    let contents = era_io::uff::read_uff(&a.file, false)
+        .with_context(|| format!("reading {}", a.file.display()))?;
+    let mut text = format!("{}: UFF\n", a.file.display());
+    let mut by_type: BTreeMap<String, usize> = BTreeMap::new();
+    for (f, _) in &contents.functions {
+        let name = function_type_name(f.function_type).map_or_else(
+            || format!("unknown type {}", f.function_type),
+            str::to_string,
+        );
+        *by_type.entry(name).or_insert(0) += 1;
+    }
+    let binary = contents
+        .functions
+        .iter()
+        .filter(|(f, _)| f.binary.is_some())
+        .count();
+    text.push_str(&format!(
+        "  dataset 58: {} records ({} binary 58b, {} ASCII): {}\n",
+        contents.functions.len(),
+        binary,
+        contents.functions.len() - binary,
+        by_type
+            .iter()
+            .map(|(k, n)| format!("{n} {k}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    for (d, n) in &contents.skipped {
+        text.push_str(&format!("  dataset {d}: {n} records (skipped)\n"));
+    }
+    let frfs: Vec<_> = contents
+        .functions
+        .iter()
+        .map(|(f, _)| f)
+        .filter(|f| f.function_type == era_io::uff::FUNCTION_FRF)
+        .collect();
+    let layout = FrfLayout::of(frfs.iter().copied());
+    let mut summary = json!({
+        "file": a.file, "format": "UFF",
+        "records_58": contents.functions.len(), "binary_58b": binary,
+        "function_types": by_type, "skipped_datasets": contents.skipped,
+        "notes": contents.notes,
+    });
+    if let Some(first) = frfs.first() {
+        let (q, p) = (layout.table.outputs.len(), layout.table.inputs.len());
+        let same_axis = frfs.iter().all(|f| {
+            f.points == first.points
+                && f.even == first.even
+                && f.abscissa_min == first.abscissa_min
+                && f.abscissa_inc == first.abscissa_inc
+        });
+        let ordinates: Vec<&str> = {
+            let mut v: Vec<&str> = frfs.iter().map(|f| f.ordinate.name()).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let quantity = quantity_of(first.axes[1].data_type).map(|q| q.name());
+        let unit = |u: &str| {
+            if u.is_empty() {
+                "NONE".to_string()
+            } else {
+                u.to_string()
+            }
+        };
+        text.push_str(&format!(
+            "  FRF matrix: {q} outputs x {p} inputs ({} records)\n",
+            frfs.len()
+        ));
+        if first.even {
+            let last = first.abscissa_min + (first.points - 1) as f64 * first.abscissa_inc;
+            text.push_str(&format!(
+                "  lines: {} from {} to {last} Hz, spacing {} Hz{}\n",
+                first.points,
+                first.abscissa_min,
+                first.abscissa_inc,
+                if same_axis {
+                    ""
+                } else {
+                    " (other records differ)"
+                }
+            ));
+        } else {
+            text.push_str(&format!(
+                "  lines: {} at uneven abscissa (ERA needs uniform lines){}\n",
+                first.points,
+                if same_axis {
+                    ""
+                } else {
+                    " (other records differ)"
+                }
+            ));
+        }
+        text.push_str(&format!(
+            "  values: {}\n  quantity: {} per {}\n  units: {} / {}\n",
+            ordinates.join(", "),
+            quantity.unwrap_or("not stated"),
+            if first.axes[2].data_type == 13 {
+                "force"
+            } else {
+                "reference"
+            },
+            unit(&first.axes[1].units),
+            unit(&first.axes[2].units)
+        ));
+        text.push_str("  channels:\n");
+        for line in layout.table.describe() {
+            text.push_str(&format!("    {line}\n"));
+        }
+        if !layout.missing.is_empty() {
+            text.push_str(&format!(
+                "  missing pairs ({}): {}\n",
+                layout.missing.len(),
+                listed(&layout.missing)
+            ));
+        }
+        if !layout.duplicates.is_empty() {
+            text.push_str(&format!(
+                "  duplicate pairs: {}\n",
+                listed(&layout.duplicates)
+            ));
+        }
+        summary["outputs"] = json!(q);
+        summary["inputs"] = json!(p);
+        summary["lines"] = json!(first.points);
+        summary["even"] = json!(first.even);
+        summary["first_hz"] = json!(first.abscissa_min);
+        summary["spacing_hz"] = json!(first.abscissa_inc);
+        summary["quantity"] = json!(quantity);
+        summary["response_unit"] = json!(first.axes[1].units);
+        summary["force_unit"] = json!(first.axes[2].units);
+        summary["channels"] = json!(layout.table.describe());
+        summary["missing_pairs"] = json!(layout.missing);
+        summary["duplicate_pairs"] = json!(layout.duplicates);
+    } else {
+        text.push_str("  no FRF records (function type 4)\n");
+    }
+    for n in &contents.notes {
+        text.push_str(&format!("  note: {n}\n"));
+    }
+    Ok((text, summary))
+}
+
+fn mat_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
+    let vars = era_io::mat::list_variables(&a.file)
+        .with_context(|| format!("reading {}", a.file.display()))?;
+    let mut text = format!("{}: MAT v5\n  variables:\n", a.file.display());
+    for (name, what) in &vars {
+        text.push_str(&format!("    {name}: {what}\n"));
+    }
+    let mut summary = json!({"file": a.file, "format": "MAT",
+        "variables": vars.iter().map(|(n, w)| json!({"name": n, "what": w})).collect::<Vec<_>>()});
+    match read_frf(&a.file, None, None) {
+        Ok(input) => {
+            let frf = &input.file.frf;
+            text.push_str(&format!(
+                "  FRFs: {} outputs x {} inputs, {} lines at {} Hz{}\n",
+                frf.outputs(),
+                frf.inputs(),
+                frf.lines(),
+                frf.spacing_hz(),
+                input.note
+            ));
+            summary["outputs"] = json!(frf.outputs());
+            summary["inputs"] = json!(frf.inputs());
+            summary["lines"] = json!(frf.lines());
+            summary["spacing_hz"] = json!(frf.spacing_hz());
+        }
+        Err(e) => text.push_str(&format!("  not an FRF layout: {}\n", root(&e))),
+    }
+    Ok((text, summary))
+}
+
+fn root(e: &anyhow::Error) -> String {
+    e.root_cause().to_string()
+}
+
+fn csv_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
+    let input = read_frf(&a.file, None, None)?;
+    let frf = &input.file.frf;
+    let last = frf.frequency_hz()[frf.lines() - 1];
+    let meta = &input.file.metadata;
+    let unit = |k: &str| meta.get(k).cloned().unwrap_or_else(|| "not stated".into());
+    let mut text = format!(
+        "{}: CSV\n  FRF matrix: {} outputs x {} inputs\n  lines: {} from 0 to {last} Hz, spacing {} Hz\n  quantity: {}{}\n  units: {} / {}\n",
+        a.file.display(),
+        frf.outputs(),
+        frf.inputs(),
+        frf.lines(),
+        frf.spacing_hz(),
+        frf.quantity(),
+        input.note,
+        unit("response_unit"),
+        unit("force_unit"),
+    );
+    text.push_str(&describe_input(&input));
+    Ok((
+        text,
+        json!({"file": a.file, "format": "CSV", "outputs": frf.outputs(), "inputs": frf.inputs(),
+               "lines": frf.lines(), "spacing_hz": frf.spacing_hz(), "quantity": frf.quantity().name(),
+               "metadata": meta}),
+    ))
+}
