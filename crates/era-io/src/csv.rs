@@ -62,6 +62,18 @@ fn parse_column(name: &str) -> Option<(usize, usize, Part)> {
 /// row, non-uniform frequencies or a first line other than 0 Hz.
 pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    parse_frf_csv(&text, path, default_quantity)
+}
+
+/// [`read_frf_csv`] on text already read; `path` names it in messages.
+///
+/// # Errors
+/// As [`read_frf_csv`].
+pub fn parse_frf_csv(
+    text: &str,
+    path: &Path,
+    default_quantity: Quantity,
+) -> Result<FrfFile, IoError> {
     let fail =
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
 

@@ -37,6 +37,14 @@ pub struct DecayFile {
 /// [`IoError`] naming the file, line and column.
 pub fn read_decay_csv(path: &Path) -> Result<DecayFile, IoError> {
     let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    parse_decay_csv(&text, path)
+}
+
+/// [`read_decay_csv`] on text already read; `path` names it in messages.
+///
+/// # Errors
+/// As [`read_decay_csv`].
+pub fn parse_decay_csv(text: &str, path: &Path) -> Result<DecayFile, IoError> {
     let fail =
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
     let mut metadata = BTreeMap::new();

@@ -17,6 +17,7 @@ pub mod csv;
 pub mod decay_csv;
 pub mod format;
 pub mod mat;
+mod mat_check;
 pub mod model_json;
 pub mod uff;
 

@@ -229,6 +229,8 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
             "MAT v7.3 (HDF5) files are not read: save with -v7 (the default) or -v6",
         ));
     }
+    crate::mat_check::check(bytes)
+        .map_err(|e| IoError::format(path, "", format!("not a readable MAT v5 file: {e}")))?;
     CONTAINING.with(|c| c.set(true));
     let parsed =
         std::panic::catch_unwind(|| matrw::load_matfile_from_u8(bytes).map_err(|e| e.to_string()));
@@ -240,7 +242,7 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
                 return Err(IoError::format(
                     path,
                     "",
-                    format!("not a readable MAT v5 file: {e}"),
+                    format!("not a readable MAT v5 file: {}", first_error_line(&e)),
                 ))
             }
             Err(_) => return Err(IoError::format(
@@ -273,6 +275,34 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
         }
     }
     Ok(Variables { numeric, other })
+}
+
+/// The first informative line of a `matrw`/`binrw` error (which spans many lines
+/// with terminal colour codes).
+fn first_error_line(text: &str) -> String {
+    let mut plain = String::with_capacity(text.len());
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // Skip "ESC [ ... letter".
+            for d in chars.by_ref() {
+                if d.is_ascii_alphabetic() {
+                    break;
+                }
+            }
+        } else {
+            plain.push(c);
+        }
+    }
+    let line = plain
+        .lines()
+        .map(|l| l.trim_start_matches(|c: char| !c.is_alphanumeric()).trim())
+        .find(|l| l.contains("Error:") || l.contains("error:"))
+        .or_else(|| plain.lines().map(str::trim).find(|l| !l.is_empty()))
+        .unwrap_or("unreadable")
+        .trim_start_matches("0: ")
+        .to_string();
+    line.replace("Error: ", "")
 }
 
 fn arrays(path: &Path) -> Result<BTreeMap<String, Array>, IoError> {

@@ -1,0 +1,36 @@
+//! Inputs the fuzzers (fuzz/, `cargo fuzz run <target>`) found to crash a reader, kept
+//! so the fix stays. Each must now be refused with an error naming the problem.
+
+use std::path::{Path, PathBuf};
+
+fn cases(prefix: &str) -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.file_name().unwrap().to_str().unwrap().starts_with(prefix))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn mat_allocation_bombs_are_refused_before_matrw_allocates() {
+    // Found by the `mat` target: element sizes near 4 GiB in 600-byte files made matrw
+    // allocate gigabytes (libFuzzer's out-of-memory report). era-io's structural check
+    // now refuses them.
+    let found = cases("mat_");
+    assert!(found.len() >= 2);
+    for path in found {
+        let bytes = std::fs::read(&path).unwrap();
+        let e = era_io::mat::parse_frf_mat(&bytes, &path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("not a readable MAT v5 file"),
+            "{}: {e}",
+            path.display()
+        );
+        assert!(era_io::mat::parse_mat_matrix(&bytes, &path, None).is_err());
+    }
+}
