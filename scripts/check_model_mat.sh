@@ -14,3 +14,16 @@ python3 -c "import json; [print('%.10f %.10f' % (m['frequency_hz'], m['damping_r
 (cd "$work/out" && octave --no-gui -q -H --eval "pkg load control; load model.mat; sys = ss(a,b,c,d,Ts); [wn, z] = damp(sys); [wn, i] = unique(round(wn*1e6)/1e6); z = z(i); printf('%.10f %.10f\n', [wn(:)/(2*pi), z(:)]'); printf('freq_hz from the file: '); printf('%.4f ', freq_hz); printf('\n');" 2>/dev/null) > "$work/octave.txt"
 echo "model.json:"; cat "$work/json_modes.txt"
 echo "Octave, ss(a,b,c,d,Ts) from model.mat:"; cat "$work/octave.txt"
+# The issue's one-liner: eig(a) from model.mat against the eigenvalues in model.json.
+(cd "$work/out" && octave --no-gui -q -H --eval "load model.mat; e = eig(a); printf('%.17g %.17g\n', [real(e), imag(e)]');" 2>/dev/null) > "$work/octave_eig.txt"
+python3 - "$work/out/model.json" "$work/octave_eig.txt" <<'PY'
+import json, sys
+model = json.load(open(sys.argv[1]))
+want = [complex(m["eigenvalue_re"], s * m["eigenvalue_im"]) for m in model["modes"] for s in (1, -1)]
+want += [complex(p["eigenvalue"], 0) for p in model["real_poles"]]
+got = [complex(*map(float, l.split())) for l in open(sys.argv[2]) if l.strip()]
+assert len(got) == len(want), (len(got), len(want))
+worst = max(min(abs(g - w) for g in got) / abs(w) for w in want)
+print("eig(a) in Octave vs model.json eigenvalues: %d values, max relative difference %.2e" % (len(want), worst))
+sys.exit(0 if worst < 1e-12 else 1)
+PY
