@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Loads era's model.mat in GNU Octave the way a MATLAB user would
-# (load model.mat; sys = ss(a,b,c,d,Ts)) and compares the modes with model.json.
+# (load model.mat; sys = ss(a,b,c,d,Ts)), compares the modes with model.json, then eig(a)
+# with the eigenvalues in model.json (issue 3).
 # Needs: apt-get install -y --no-install-recommends octave octave-control
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)

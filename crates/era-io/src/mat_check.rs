@@ -94,6 +94,11 @@ impl Reader<'_> {
             return Err(format!("byte {data}: array flags missing"));
         }
         let class = self.u32_at(flags_at)? & 0xff;
+        match class {
+            1 | 2 | 4..=15 => {}
+            3 => return Err(format!("byte {data}: MATLAB objects (class 3) are not supported")),
+            c => return Err(format!("byte {data}: unknown array class {c}")),
+        }
         // Dimensions.
         let (ty, dims_n, dims_at, next) = self.tag(at, end)?;
         if ty != MI_INT32 || dims_n % 4 != 0 || dims_n < 8 {
@@ -153,7 +158,7 @@ pub(crate) fn check(bytes: &[u8]) -> Result<(), String> {
         let (ty, n, data, next) = top.tag(at, bytes.len())?;
         match ty {
             MI_MATRIX => top.matrix(data, n, 0)?,
-            MI_COMPRESSED => {
+            MI_COMPRESSED if n > 0 => {
                 let inflated = inflate(&bytes[data..data + n])
                     .map_err(|e| format!("byte {at}: compressed element: {e}"))?;
                 let inner = Reader {
