@@ -2,7 +2,7 @@
 //! in another format.
 
 use crate::args::{ConvertArgs, InfoArgs};
-use crate::identify::{describe_input, read_frf};
+use crate::identify::{describe_input, read_frf, shape_line};
 use crate::report::{finish_output, Human};
 use anyhow::Context;
 use era_io::format::{write_frf_file, FrfFormat};
@@ -46,15 +46,11 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
         (f, _, _) => f.name(),
     };
     human.print(&format!(
-        "era convert {} ({}) -> {} ({kind})\n  {} outputs x {} inputs, {} lines at {} Hz, {}{}\n{}",
+        "era convert {} ({}) -> {} ({kind})\n  {}{}\n{}",
         a.input.display(),
         input.format.name(),
         a.output.display(),
-        frf.outputs(),
-        frf.inputs(),
-        frf.lines(),
-        frf.spacing_hz(),
-        frf.quantity(),
+        shape_line(frf),
         input.note,
         describe_input(&input),
     ));
@@ -275,17 +271,12 @@ fn root(e: &anyhow::Error) -> String {
 fn csv_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
     let input = read_frf(&a.file, None, None)?;
     let frf = &input.file.frf;
-    let last = frf.frequency_hz()[frf.lines() - 1];
     let meta = &input.file.metadata;
     let unit = |k: &str| meta.get(k).cloned().unwrap_or_else(|| "not stated".into());
     let mut text = format!(
-        "{}: CSV\n  FRF matrix: {} outputs x {} inputs\n  lines: {} from 0 to {last} Hz, spacing {} Hz\n  quantity: {}{}\n  units: {} / {}\n",
+        "{}: CSV\n  {}{}\n  units: {} / {}\n",
         a.file.display(),
-        frf.outputs(),
-        frf.inputs(),
-        frf.lines(),
-        frf.spacing_hz(),
-        frf.quantity(),
+        shape_line(frf),
         input.note,
         unit("response_unit"),
         unit("force_unit"),

@@ -93,6 +93,19 @@ pub fn read_frf(
     Ok(InputFrf { file, format, note })
 }
 
+/// `8 outputs x 8 inputs, 801 lines, 0 .. 20 Hz at 0.025 Hz, acceleration`.
+pub fn shape_line(frf: &era::FrfData) -> String {
+    format!(
+        "{} outputs x {} inputs, {} lines, 0 .. {} Hz at {} Hz, {}",
+        frf.outputs(),
+        frf.inputs(),
+        frf.lines(),
+        frf.frequency_hz()[frf.lines() - 1],
+        frf.spacing_hz(),
+        frf.quantity()
+    )
+}
+
 /// The channel table and the notes of a file, as lines for the human summary.
 pub fn describe_input(input: &InputFrf) -> String {
     let mut text = String::new();
@@ -135,17 +148,12 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let clock = Instant::now();
     let input = read_frf(&a.file, a.quantity, a.outputs)?;
     let read_s = clock.elapsed().as_secs_f64();
-    let (frf, quantity_note) = (&input.file.frf, &input.note);
-    let last = frf.frequency_hz()[frf.lines() - 1];
+    let frf = &input.file.frf;
     human.print(&format!(
-        "era identify {}\n  {} outputs x {} inputs, {} lines, 0 .. {last} Hz at {} Hz, {}{}\n",
+        "era identify {}\n  {}{}\n",
         a.file.display(),
-        frf.outputs(),
-        frf.inputs(),
-        frf.lines(),
-        frf.spacing_hz(),
-        frf.quantity(),
-        quantity_note,
+        shape_line(frf),
+        input.note,
     ));
     human.print(&describe_input(&input));
     human.print(&parameter_echo(&opts));

@@ -202,11 +202,7 @@ pub fn write_frf_file(path: &Path, file: &FrfFile, uff: UffWriteOptions) -> Resu
 /// `output_1: node 12 +Z` metadata lines for a channel table.
 pub fn channel_metadata(table: &ChannelTable) -> Vec<(String, String)> {
     let line = |c: &Channel| {
-        let entity = if c.entity.is_empty() || c.entity == "NONE" {
-            String::new()
-        } else {
-            format!(" {}", c.entity)
-        };
+        let entity = c.entity_name().map(|e| format!(" {e}")).unwrap_or_default();
         format!(
             "node {} {}{entity}",
             c.dof.node,

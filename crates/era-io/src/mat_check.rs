@@ -96,7 +96,11 @@ impl Reader<'_> {
         let class = self.u32_at(flags_at)? & 0xff;
         match class {
             1 | 2 | 4..=15 => {}
-            3 => return Err(format!("byte {data}: MATLAB objects (class 3) are not supported")),
+            3 => {
+                return Err(format!(
+                    "byte {data}: MATLAB objects (class 3) are not supported"
+                ))
+            }
             c => return Err(format!("byte {data}: unknown array class {c}")),
         }
         // Dimensions.

@@ -1094,6 +1094,13 @@ pub struct Channel {
     pub entity: String,
 }
 
+impl Channel {
+    /// The entity name, unless blank or `NONE`.
+    pub fn entity_name(&self) -> Option<&str> {
+        (!self.entity.is_empty() && self.entity != "NONE").then_some(self.entity.as_str())
+    }
+}
+
 /// Which DOF each output and input of an FRF matrix is.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ChannelTable {
@@ -1123,11 +1130,10 @@ impl ChannelTable {
     /// The table as text lines: `output 1 = node 12 +Z (entity)`.
     pub fn describe(&self) -> Vec<String> {
         let row = |kind: &str, k: usize, c: &Channel| {
-            let entity = if c.entity.is_empty() || c.entity == "NONE" {
-                String::new()
-            } else {
-                format!(" ({})", c.entity)
-            };
+            let entity = c
+                .entity_name()
+                .map(|e| format!(" ({e})"))
+                .unwrap_or_default();
             format!(
                 "{kind} {} = node {} {}{entity}",
                 k + 1,
