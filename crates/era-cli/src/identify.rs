@@ -178,6 +178,26 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         for _ in 0..opts.integrations {
             shape_quantity = shape_quantity.integrated().unwrap_or(shape_quantity);
         }
+        // The model's synthesised FRFs on the measurement's lines, after the same
+        // integrations, for tools that overlay them on the measurement.
+        let processed = &found.processed;
+        let synthesised = era::FrfData::new(
+            processed.frequency_hz().to_vec(),
+            processed.outputs(),
+            processed.inputs(),
+            found.model_response.clone(),
+            processed.quantity(),
+        )?;
+        era_io::uff::write_uff58(
+            &dir.join("model_frf.uff"),
+            &synthesised,
+            input.file.channels.as_ref(),
+            (None, None),
+            era_io::uff::UffWriteOptions {
+                binary: true,
+                single: false,
+            },
+        )?;
         era_io::uff::write_uff55(
             &dir.join("modes.uff"),
             &found.modal,
@@ -198,7 +218,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         bar.finish_and_clear();
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
         human.print(&format!(
-            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
+            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
             dir.display()
         ));
     }

@@ -140,6 +140,12 @@ fn identify_reads_uff_and_writes_modes_uff_and_model_mat() {
     assert_eq!(modes.matches("\n    55").count(), 2, "{modes}");
     assert!(modes.contains("        12\n"), "node 12 in:\n{modes}");
     assert!(out.join("model.mat").is_file());
+    // The model's synthesised FRFs, as binary UFF with the measurement's channels.
+    let info = stdout_of(&["info", s(&out.join("model_frf.uff"))]);
+    assert!(
+        info.contains("4 binary 58b") && info.contains("output 2 = node 12 -Y"),
+        "{info}"
+    );
     // The pyuff-checked modes file came from the same command on the CSV copy.
     let again = dir.path().join("again");
     stdout_of(&[
@@ -261,7 +267,7 @@ fn an_empty_file_is_refused_in_every_format() {
 }
 
 #[test]
-fn missing_and_duplicate_pairs_and_unknown_types_are_listed() {
+fn missing_duplicate_and_mismatched_records_and_unknown_types_are_listed() {
     let dir = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(golden("ascii_complex_double_even.uff")).unwrap();
     // Records: 151, 164, then four FRFs; each record starts with "    -1\n    NN".
@@ -281,6 +287,18 @@ fn missing_and_duplicate_pairs_and_unknown_types_are_listed() {
     expect_input_error(
         &["identify", s(&twice), "--states", "2"],
         "duplicate FRF pairs: 11:+Z from 101:+Z in records 3 and 7",
+    );
+    // The last FRF record on a coarser grid.
+    let coarse = dir.path().join("coarse.uff");
+    let (head, last) = text.split_at(starts[3]);
+    std::fs::write(
+        &coarse,
+        format!("{head}{}", last.replacen("2.50000e-01", "5.00000e-01", 1)),
+    )
+    .unwrap();
+    expect_input_error(
+        &["identify", s(&coarse), "--states", "2"],
+        "abscissas disagree with record 3 (33 points from 0 step 0.25): record 6 (12:-Y from 102:+Z): 33 points from 0 step 0.5",
     );
     let unknown = dir.path().join("unknown.uff");
     std::fs::write(
