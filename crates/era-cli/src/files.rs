@@ -119,7 +119,8 @@ fn uff_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
             .join(", ")
     ));
     for (d, n) in &contents.skipped {
-        text.push_str(&format!("  dataset {d}: {n} records (skipped)\n"));
+        let records = if *n == 1 { "record" } else { "records" };
+        text.push_str(&format!("  dataset {d}: {n} {records} (skipped)\n"));
     }
     let frfs: Vec<_> = contents
         .functions

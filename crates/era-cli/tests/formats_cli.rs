@@ -49,7 +49,7 @@ fn info_lists_channels_lines_quantity_and_units() {
         "units: m/s^2 / N",
         "output 2 = node 12 -Y",
         "input 2 = node 102 +Z",
-        "dataset 151: 1 records (skipped)",
+        "dataset 151: 1 record (skipped)",
     ] {
         assert!(text.contains(needle), "'{needle}' in:\n{text}");
     }
