@@ -305,9 +305,10 @@ fn first_error_line(text: &str) -> String {
     line.replace("Error: ", "")
 }
 
-fn arrays(path: &Path) -> Result<BTreeMap<String, Array>, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let vars = parse_variables(&bytes, path)?;
+/// The numeric arrays of MAT bytes; an error naming the other classes when there are
+/// none.
+fn numeric_arrays(bytes: &[u8], path: &Path) -> Result<BTreeMap<String, Array>, IoError> {
+    let vars = parse_variables(bytes, path)?;
     if vars.numeric.is_empty() {
         return Err(unsupported_only(path, &vars));
     }
@@ -498,11 +499,12 @@ pub fn list_variables(path: &Path) -> Result<Vec<(String, String)>, IoError> {
 /// # Errors
 /// As [`read_frf_mat`].
 pub fn parse_frf_mat(bytes: &[u8], path: &Path) -> Result<FrfFile, IoError> {
-    let vars = parse_variables(bytes, path)?;
-    if vars.numeric.is_empty() {
-        return Err(unsupported_only(path, &vars));
-    }
-    frf_from_arrays(path, &vars.numeric, None, Quantity::Acceleration)
+    frf_from_arrays(
+        path,
+        &numeric_arrays(bytes, path)?,
+        None,
+        Quantity::Acceleration,
+    )
 }
 
 fn scalar(vars: &BTreeMap<String, Array>, name: &str) -> Option<usize> {
@@ -541,8 +543,8 @@ pub fn read_frf_mat(
     outputs: Option<usize>,
     quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
-    let vars = arrays(path)?;
-    frf_from_arrays(path, &vars, outputs, quantity)
+    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    frf_from_arrays(path, &numeric_arrays(&bytes, path)?, outputs, quantity)
 }
 
 fn frf_from_arrays(
