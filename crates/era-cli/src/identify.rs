@@ -174,10 +174,6 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         model.write(&dir.join("model.json"))?;
         fit.write(&dir.join("fit.json"))?;
         era_io::mat::write_model_mat(&dir.join("model.mat"), &found.model, &found.modal)?;
-        let mut shape_quantity = frf.quantity();
-        for _ in 0..opts.integrations {
-            shape_quantity = shape_quantity.integrated().unwrap_or(shape_quantity);
-        }
         // The model's synthesised FRFs on the measurement's lines, after the same
         // integrations, for tools that overlay them on the measurement.
         let processed = &found.processed;
@@ -202,7 +198,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             &dir.join("modes.uff"),
             &found.modal,
             input.file.channels.as_ref(),
-            shape_quantity,
+            // The shapes are of the integrated quantity, as the model is.
+            found.processed.quantity(),
         )?;
         let title = format!("era identify {}", a.file.display());
         let bar = crate::progress::bar(&a.common, (frf.outputs() * frf.inputs()) as u64, "figures");
