@@ -127,6 +127,33 @@ pub enum EraError {
     /// The model could not be converted reliably (e.g. defective eigenvectors).
     #[error("{0}")]
     Conversion(String),
+    /// A time-history sample is NaN or infinite.
+    #[error("non-finite sample in {role} {channel} at sample {sample} (0-based)")]
+    NonFiniteSample {
+        /// `"input"` or `"output"`.
+        role: &'static str,
+        /// 1-based channel among the inputs or the outputs.
+        channel: usize,
+        /// 0-based sample index.
+        sample: usize,
+    },
+    /// The input cross-spectral matrix cannot be inverted (H1, multiple coherence).
+    #[error(
+        "the input cross-spectral matrix is singular at {singular_lines} of {lines} lines (first at {first_hz} Hz, smallest normalised eigenvalue {min_eigenvalue:.3e}): {reason}"
+    )]
+    SingularInputSpectrum {
+        /// Lines where it is singular.
+        singular_lines: usize,
+        /// Lines in all.
+        lines: usize,
+        /// Frequency of the first singular line, Hz.
+        first_hz: f64,
+        /// Smallest eigenvalue of the coherence-normalised matrix at that line (1 = fully
+        /// independent inputs, 0 = linearly dependent).
+        min_eigenvalue: f64,
+        /// What it means: which inputs are coherent, or too few averages.
+        reason: String,
+    },
     /// A dense decomposition failed to converge.
     #[error("numerical failure: {0}")]
     Numerical(String),

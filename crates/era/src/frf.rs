@@ -3,6 +3,8 @@
 use crate::error::{EraError, Result};
 use num_complex::Complex64;
 
+pub mod estimate;
+
 /// What an FRF measures per unit force.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Quantity {

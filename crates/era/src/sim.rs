@@ -454,6 +454,67 @@ pub fn lightly_damped_markov(
     markov
 }
 
+/// Time response of a discrete model from rest: `x_{k+1} = A x_k + B u_k`,
+/// `y_k = C x_k + D u_k`. `inputs[j]` is input `j`'s samples (all of one length); the
+/// result is `outputs[i]`, of the same length. For testing FRF estimation and for
+/// synthetic time histories.
+///
+/// # Errors
+/// [`EraError::InvalidParameter`] for a continuous model; [`EraError::ShapeMismatch`]
+/// when the number of input channels differs from the model's or they differ in length.
+pub fn time_response(model: &StateSpace, inputs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+    if model.sample_time_s().is_none() {
+        return Err(EraError::InvalidParameter {
+            name: "model",
+            value: "continuous".into(),
+            reason: "time_response needs a discrete model (StateSpace::c2d)".into(),
+        });
+    }
+    let (n, p, q) = (model.states(), model.inputs(), model.outputs());
+    if inputs.len() != p {
+        return Err(EraError::ShapeMismatch {
+            what: "input channels of the model".into(),
+            expected: p,
+            got: inputs.len(),
+        });
+    }
+    let samples = inputs.first().map_or(0, Vec::len);
+    if let Some(bad) = inputs.iter().find(|u| u.len() != samples) {
+        return Err(EraError::ShapeMismatch {
+            what: "samples per input channel".into(),
+            expected: samples,
+            got: bad.len(),
+        });
+    }
+    let mut x = vec![0.0; n];
+    let mut next = vec![0.0; n];
+    let mut out = vec![vec![0.0; samples]; q];
+    for k in 0..samples {
+        for (i, channel) in out.iter_mut().enumerate() {
+            let mut v = 0.0;
+            for (s, xs) in x.iter().enumerate() {
+                v += model.c[(i, s)] * xs;
+            }
+            for (j, u) in inputs.iter().enumerate() {
+                v += model.d[(i, j)] * u[k];
+            }
+            channel[k] = v;
+        }
+        for (r, nr) in next.iter_mut().enumerate() {
+            let mut v = 0.0;
+            for (s, xs) in x.iter().enumerate() {
+                v += model.a[(r, s)] * xs;
+            }
+            for (j, u) in inputs.iter().enumerate() {
+                v += model.b[(r, j)] * u[k];
+            }
+            *nr = v;
+        }
+        std::mem::swap(&mut x, &mut next);
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
