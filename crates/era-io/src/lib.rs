@@ -19,6 +19,7 @@ pub mod format;
 pub mod mat;
 mod mat_check;
 pub mod model_json;
+pub mod time;
 pub mod uff;
 
 use std::path::PathBuf;

@@ -197,6 +197,15 @@ pub fn containing_panic() -> bool {
     CONTAINING.with(|c| c.get())
 }
 
+/// Runs a third-party parser, turning a panic into `Err` with [`containing_panic`] true
+/// meanwhile (the CLI's hook stays silent).
+pub(crate) fn contain<T>(f: impl FnOnce() -> T + std::panic::UnwindSafe) -> std::thread::Result<T> {
+    CONTAINING.with(|c| c.set(true));
+    let result = std::panic::catch_unwind(f);
+    CONTAINING.with(|c| c.set(false));
+    result
+}
+
 fn class_of(v: &MatVariable) -> &'static str {
     match v {
         MatVariable::NumericArray(a) if to_f64(&a.value).is_none() => "char or logical",
@@ -231,10 +240,7 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
     }
     crate::mat_check::check(bytes)
         .map_err(|e| IoError::format(path, "", format!("not a readable MAT v5 file: {e}")))?;
-    CONTAINING.with(|c| c.set(true));
-    let parsed =
-        std::panic::catch_unwind(|| matrw::load_matfile_from_u8(bytes).map_err(|e| e.to_string()));
-    CONTAINING.with(|c| c.set(false));
+    let parsed = contain(|| matrw::load_matfile_from_u8(bytes).map_err(|e| e.to_string()));
     let mut file =
         match parsed {
             Ok(Ok(file)) => file,
