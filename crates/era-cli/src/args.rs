@@ -17,8 +17,12 @@ pub enum Command {
     /// The thesis's truth-model validation (Table 5.2): truth, ERA without noise, ERA with
     /// noise, side by side.
     Demo(DemoArgs),
-    /// Identify a model from an FRF file (DESIGN.md §1).
+    /// Identify a model from an FRF file (DESIGN.md §1), or from time histories with
+    /// --from-time.
     Identify(IdentifyArgs),
+    /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
+    /// HDF5): Welch-averaged spectra, H1, H2 or Hv.
+    Frf(FrfArgs),
     /// Write synthetic FRFs: the truth model or a seeded modal structure.
     Simulate(SimulateArgs),
     /// Coulomb friction of the actuators: estimate from free decay, simulate, tune.
@@ -31,6 +35,93 @@ pub enum Command {
     /// Convert FRFs between CSV, UFF 58 (ASCII or binary 58b) and MAT. The input format
     /// is told by content, the output format by the extension (.csv, .uff/.unv, .mat).
     Convert(ConvertArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct FrfArgs {
+    /// Time-history files: CSV (time_s plus named channels), MAT v5 or HDF5, told apart
+    /// by content. Several files are records of one test: their spectra are averaged.
+    #[arg(required = true, value_name = "TIME_FILE")]
+    pub files: Vec<PathBuf>,
+    /// Input (force) channels: 1-based column numbers, ranges and names, e.g. 1,2 or
+    /// force.
+    #[arg(long, value_name = "CHANNELS")]
+    pub inputs: String,
+    /// Output (response) channels, e.g. 3-30 or acc.
+    #[arg(long, value_name = "CHANNELS")]
+    pub outputs: String,
+    #[command(flatten)]
+    pub welch: WelchArgs,
+    /// What the outputs measure (the FRFs' quantity).
+    #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
+    pub quantity: QuantityArg,
+    /// FRF file to write: .csv, .uff/.unv (UFF 58) or .mat. The coherence goes beside
+    /// it, to <name>.coherence.csv.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// UFF output: binary 58b instead of ASCII.
+    #[arg(long)]
+    pub binary: bool,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+/// How FRFs are estimated from time histories (era frf, era identify --from-time).
+#[derive(Debug, Args, Clone)]
+pub struct WelchArgs {
+    /// Samples per frame (FFT length): lines are frame/2 + 1, spaced fs/frame.
+    #[arg(long, default_value_t = 2048)]
+    pub frame: usize,
+    /// Window of each frame.
+    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
+    pub window: WindowArg,
+    /// Overlap of consecutive frames, as a fraction of the frame (0 ≤ overlap < 1).
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub overlap: f64,
+    /// FRF estimator: h1 (noise on the outputs), h2 (noise on the inputs), hv (total
+    /// least squares).
+    #[arg(long, value_enum, default_value_t = EstimatorArg::H1)]
+    pub estimator: EstimatorArg,
+    /// Trend removed from each frame before windowing.
+    #[arg(long, value_enum, default_value_t = DetrendArg::Mean)]
+    pub detrend: DetrendArg,
+    /// Keep the lines up to this frequency (the analyzer's span). ERA then sees a
+    /// Nyquist frequency of max-hz, as after decimation: use it when the modes lie far
+    /// below fs/2.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub max_hz: Option<f64>,
+    /// Sample rate, Hz: needed for MAT files, and overrides what a CSV or HDF5 file
+    /// says.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub sample_rate: Option<f64>,
+    /// MAT input: the matrix to read (repeat to place several side by side).
+    #[arg(long, value_name = "NAME")]
+    pub variable: Vec<String>,
+    /// HDF5 input: a 2-D dataset (columns are channels), or 1-D datasets, one per
+    /// channel (repeat the flag).
+    #[arg(long, value_name = "PATH")]
+    pub dataset: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WindowArg {
+    Rectangular,
+    Hann,
+    FlatTop,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EstimatorArg {
+    H1,
+    H2,
+    Hv,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DetrendArg {
+    None,
+    Mean,
+    Linear,
 }
 
 #[derive(Debug, Args)]
@@ -204,9 +295,26 @@ pub struct IdentifyArgs {
     #[arg(long, value_enum)]
     pub quantity: Option<QuantityArg>,
     /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
-    /// set is not square.
-    #[arg(long)]
-    pub outputs: Option<usize>,
+    /// set is not square. With --from-time: the output channels of the time file (as
+    /// era frf --outputs).
+    #[arg(long, value_name = "N | CHANNELS")]
+    pub outputs: Option<String>,
+    /// Other model orders (states) to identify for a stability check of the modes,
+    /// e.g. 40,50,70: a mode is stable when every order has one within 0.5 % in
+    /// frequency, 30 % in damping and MAC 0.9 in shape, and it is damped below 10 %.
+    #[arg(long, value_name = "STATES", value_delimiter = ',')]
+    pub orders: Vec<usize>,
+    /// FILE holds time histories: estimate the FRFs first (as era frf), then identify.
+    #[arg(long, requires = "inputs")]
+    pub from_time: bool,
+    /// With --from-time: the input channels of the time file.
+    #[arg(long, value_name = "CHANNELS", requires = "from_time")]
+    pub inputs: Option<String>,
+    #[command(flatten)]
+    pub welch: WelchArgs,
+    /// With --from-time: also write the estimated FRFs (.csv, .uff or .mat).
+    #[arg(long, value_name = "FILE", requires = "from_time")]
+    pub save_frf: Option<PathBuf>,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
     /// figures (created if missing).
     #[arg(long, value_name = "DIR")]

@@ -146,15 +146,52 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         prepare_out_dir(dir)?;
     }
     let clock = Instant::now();
-    let input = read_frf(&a.file, a.quantity, a.outputs)?;
-    let read_s = clock.elapsed().as_secs_f64();
+    let mut estimate_s = None;
+    let input = if a.from_time {
+        let inputs = a.inputs.as_deref().unwrap_or_default();
+        let Some(outputs) = a.outputs.as_deref() else {
+            return crate::usage("--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)");
+        };
+        let quantity = a.quantity.unwrap_or(QuantityArg::Acceleration);
+        let found = crate::frf::estimate_from_time(
+            std::slice::from_ref(&a.file),
+            inputs,
+            outputs,
+            &a.welch,
+            quantity,
+            &a.common,
+        )?;
+        human.print(&format!(
+            "era identify --from-time {}\n{}",
+            a.file.display(),
+            found.summary
+        ));
+        if let Some(path) = &a.save_frf {
+            let coherence = crate::frf::write_estimate(path, &found, false)?;
+            human.print(&format!(
+                "  wrote {} and {}\n",
+                path.display(),
+                coherence.display()
+            ));
+        }
+        estimate_s = Some(found.timings.1);
+        found.input
+    } else {
+        let outputs = match a.outputs.as_deref() {
+            None => None,
+            Some(text) => Some(text.trim().parse::<usize>().map_err(|_| {
+                crate::UsageError(format!(
+                    "--outputs {text}: expected the number of outputs of a MAT FRF matrix (channel lists apply with --from-time)"
+                ))
+            })?),
+        };
+        let input = read_frf(&a.file, a.quantity, outputs)?;
+        human.print(&format!("era identify {}\n", a.file.display()));
+        input
+    };
+    let read_s = clock.elapsed().as_secs_f64() - estimate_s.unwrap_or(0.0);
     let frf = &input.file.frf;
-    human.print(&format!(
-        "era identify {}\n  {}{}\n",
-        a.file.display(),
-        shape_line(frf),
-        input.note,
-    ));
+    human.print(&format!("  {}{}\n", shape_line(frf), input.note));
     human.print(&describe_input(&input));
     human.print(&parameter_echo(&opts));
 
@@ -164,10 +201,24 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     spinner.finish_and_clear();
     let found = found?;
     human.print(&identification_summary(&found, opts.states));
+    human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
+    let stability = if a.orders.is_empty() {
+        None
+    } else {
+        let (text, value) = stability_check(frf, &opts, &a.orders, &found)?;
+        human.print(&text);
+        Some(value)
+    };
 
     let mut timings = timings_map(&found.timings);
     timings.insert("read".into(), read_s);
+    if let Some(t) = estimate_s {
+        timings.insert("frf_estimate".into(), t);
+    }
     let mut model = ModelJson::from_identification(&found, parameters(&opts), None);
+    if let Some(v) = stability {
+        model.stability = Some(v);
+    }
     let fit = FitJson::from_report(&found.fit);
     if let Some(dir) = &a.out {
         let clock = Instant::now();
@@ -231,4 +282,114 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         print_json(&model)?;
     }
     Ok(())
+}
+
+/// Per-pair relative fit error as an outputs × inputs grid (up to 64 pairs).
+fn pair_fit_table(fit: &era::response::FitReport, q: usize, p: usize) -> String {
+    use std::fmt::Write as _;
+    if q * p > 64 {
+        return format!("  per-pair fit: {} pairs, see fit.json (--out)\n", q * p);
+    }
+    let mut s = String::from(
+        "relative fit error per pair (rows: outputs, columns: inputs; * collocated)\n",
+    );
+    let _ = write!(s, "{:>8}", "");
+    for j in 1..=p {
+        let _ = write!(s, " {:>10}", format!("in {j}"));
+    }
+    s.push('\n');
+    for i in 0..q {
+        let _ = write!(s, "{:>8}", format!("out {}", i + 1));
+        for j in 0..p {
+            match fit.pairs.iter().find(|f| f.output == i && f.input == j) {
+                Some(f) => {
+                    let mark = if f.collocated { "*" } else { " " };
+                    let _ = write!(s, " {:>9.3e}{mark}", f.relative_error);
+                }
+                None => {
+                    let _ = write!(s, " {:>10}", "-");
+                }
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Identifies at the other `orders` and matches the modes (era::stability).
+fn stability_check(
+    frf: &era::FrfData,
+    opts: &EraOptions,
+    orders: &[usize],
+    found: &era::Identification,
+) -> anyhow::Result<(String, serde_json::Value)> {
+    use era::stability::{stability, StabilityCriteria};
+    use std::fmt::Write as _;
+    let mut others = Vec::new();
+    for &order in orders {
+        if order == 0 {
+            return usage("--orders: an order of 0 states is not a model");
+        }
+        let mut o = opts.clone();
+        o.states = order;
+        let other =
+            era::identify(frf, &o).with_context(|| format!("identifying at --orders {order}"))?;
+        others.push(other.modal.modes);
+    }
+    let lists: Vec<&[era::modal::Mode]> = others.iter().map(Vec::as_slice).collect();
+    let criteria = StabilityCriteria::default();
+    let table = stability(&found.modal.modes, &lists, &criteria);
+    let mut s = format!(
+        "\nstability of the {} modes of the {}-state model across orders {} (0.5 % in f, 30 % in zeta, MAC >= 0.9, zeta < 10 %)\n",
+        table.len(),
+        opts.states,
+        orders.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
+    );
+    let _ = write!(s, "{:>5} {:>12} {:>9}", "mode", "f (Hz)", "zeta (%)");
+    for o in orders {
+        let _ = write!(s, " {:>11}", format!("{o} states"));
+    }
+    let _ = writeln!(s, "  stable");
+    let mut rows = Vec::new();
+    for t in &table {
+        let m = &found.modal.modes[t.mode];
+        let _ = write!(
+            s,
+            "{:>5} {:>12.4} {:>9.4}",
+            t.mode + 1,
+            m.frequency_hz,
+            100.0 * m.damping_ratio
+        );
+        for (k, hit) in t.matches.iter().enumerate() {
+            match hit {
+                Some((j, mac)) => {
+                    let f = others[k][*j].frequency_hz;
+                    let _ = write!(s, " {:>11}", format!("{f:.2} {mac:.2}"));
+                }
+                None => {
+                    let _ = write!(s, " {:>11}", "-");
+                }
+            }
+        }
+        let _ = writeln!(s, "  {}", if t.stable { "yes" } else { "" });
+        rows.push(serde_json::json!({
+            "mode": t.mode + 1, "frequency_hz": m.frequency_hz, "damping_ratio": m.damping_ratio,
+            "stable": t.stable,
+            "matches": t.matches.iter().enumerate().map(|(k, h)| serde_json::json!({
+                "states": orders[k],
+                "frequency_hz": h.map(|(j, _)| others[k][j].frequency_hz),
+                "mac": h.map(|(_, mac)| mac),
+            })).collect::<Vec<_>>(),
+        }));
+    }
+    let stable = table.iter().filter(|t| t.stable).count();
+    let _ = writeln!(
+        s,
+        "{stable} of {} modes stable (columns: the matching mode's f in Hz and its MAC)",
+        table.len()
+    );
+    Ok((
+        s,
+        serde_json::json!({"orders": orders, "modes": rows, "stable": stable}),
+    ))
 }

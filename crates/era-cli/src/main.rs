@@ -8,6 +8,7 @@ mod args;
 mod demo;
 mod figures;
 mod files;
+mod frf;
 mod friction;
 mod identify;
 mod plot;
@@ -68,6 +69,7 @@ fn main() -> ExitCode {
     let result = std::panic::catch_unwind(|| match &cli.command {
         args::Command::Demo(a) => demo::run(a),
         args::Command::Identify(a) => identify::run(a),
+        args::Command::Frf(a) => frf::run(a),
         args::Command::Simulate(a) => simulate::run(a),
         args::Command::Friction(a) => friction::run(a),
         args::Command::Plot(a) => plot::run(a),

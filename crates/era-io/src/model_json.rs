@@ -121,6 +121,9 @@ pub struct ModelJson {
     /// Stage wall times, s, when asked for.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub timings_s: Option<BTreeMap<String, f64>>,
+    /// The stability check across model orders (`era identify --orders`), when run.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub stability: Option<serde_json::Value>,
 }
 
 /// Row-major nested vectors of a matrix.
@@ -206,6 +209,7 @@ impl ModelJson {
                 .map(ToString::to_string)
                 .collect(),
             timings_s,
+            stability: None,
         }
     }
 

@@ -47,6 +47,7 @@ pub mod preprocess;
 pub mod realize;
 pub mod response;
 pub mod sim;
+pub mod stability;
 pub mod statespace;
 pub mod tsvd;
 

@@ -320,3 +320,37 @@ fn bad_time_data_is_refused_with_a_reason() {
         }
     ));
 }
+
+#[test]
+fn pooling_records_equals_welch_over_all_their_frames() {
+    // Without overlap, a record cut at a frame boundary gives the same frames in two
+    // records as in one: pooled spectra and FRFs equal the whole record's.
+    let x = noise(3, 8192, 1.0);
+    let y: Vec<f64> = x
+        .windows(3)
+        .map(|w| w[0] - 0.5 * w[1] + 0.25 * w[2])
+        .chain([0.0, 0.0])
+        .collect();
+    let mut opts = hann(1024, 500.0);
+    opts.overlap = 0.0;
+    let whole = era::frf::estimate::spectra(&[&x], &[&y], &opts, true).unwrap();
+    let a = era::frf::estimate::spectra(&[&x[..3072]], &[&y[..3072]], &opts, true).unwrap();
+    let b = era::frf::estimate::spectra(&[&x[3072..]], &[&y[3072..]], &opts, true).unwrap();
+    let pooled = era::frf::estimate::Spectra::pool(&[a, b]).unwrap();
+    assert_eq!(pooled.frames(), whole.frames());
+    for (u, v) in pooled.gyx(0, 0).iter().zip(whole.gyx(0, 0)) {
+        assert!((u - v).norm() <= 1e-12 * v.norm().max(1e-300), "{u} vs {v}");
+    }
+    let e =
+        era::frf::estimate::estimate_from_spectra(pooled, Estimator::H2, Quantity::Acceleration)
+            .unwrap();
+    let w = era::frf::estimate::estimate_from_spectra(whole, Estimator::H2, Quantity::Acceleration)
+        .unwrap();
+    for (u, v) in e.frf.values().iter().zip(w.frf.values()) {
+        assert!((u - v).norm() <= 1e-10 * v.norm(), "{u} vs {v}");
+    }
+    // Records of different settings are refused.
+    let c = era::frf::estimate::spectra(&[&x], &[&y], &hann(512, 500.0), true).unwrap();
+    let d = era::frf::estimate::spectra(&[&x], &[&y], &hann(1024, 500.0), true).unwrap();
+    assert!(era::frf::estimate::Spectra::pool(&[d, c]).is_err());
+}

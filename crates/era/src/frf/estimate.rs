@@ -342,6 +342,58 @@ impl Spectra {
     }
 }
 
+impl Spectra {
+    /// Pools the spectra of several records taken with the same settings: the
+    /// frame-weighted mean, which is exactly Welch's average over all their frames.
+    ///
+    /// # Errors
+    /// [`EraError::ShapeMismatch`] when the records differ in lines, channels or
+    /// frequencies, or there are none.
+    pub fn pool(records: &[Spectra]) -> Result<Spectra> {
+        let Some(first) = records.first() else {
+            return Err(EraError::ShapeMismatch {
+                what: "records to pool".into(),
+                expected: 1,
+                got: 0,
+            });
+        };
+        for (r, other) in records.iter().enumerate().skip(1) {
+            let same = other.frequency_hz == first.frequency_hz
+                && other.inputs == first.inputs
+                && other.outputs == first.outputs
+                && other.gyy_full == first.gyy_full;
+            if !same {
+                return Err(EraError::ShapeMismatch {
+                    what: format!(
+                        "record {} (lines, channels or sample rate differ from record 1)",
+                        r + 1
+                    ),
+                    expected: first.lines(),
+                    got: other.lines(),
+                });
+            }
+        }
+        let frames: usize = records.iter().map(|r| r.frames).sum();
+        let mut pooled = first.clone();
+        pooled.frames = frames;
+        let mix = |get: fn(&Spectra) -> &Vec<Complex64>| -> Vec<Complex64> {
+            (0..get(first).len())
+                .map(|t| {
+                    records
+                        .iter()
+                        .map(|r| get(r)[t] * r.frames as f64)
+                        .sum::<Complex64>()
+                        / frames as f64
+                })
+                .collect()
+        };
+        pooled.gxx = mix(|r| &r.gxx);
+        pooled.gyx = mix(|r| &r.gyx);
+        pooled.gyy = mix(|r| &r.gyy);
+        Ok(pooled)
+    }
+}
+
 fn check_channels(inputs: &[&[f64]], outputs: &[&[f64]]) -> Result<usize> {
     if inputs.is_empty() || outputs.is_empty() {
         return Err(EraError::ShapeMismatch {
@@ -508,6 +560,49 @@ pub struct FrfEstimate {
 }
 
 impl FrfEstimate {
+    /// Keeps the first `lines` lines (an analyzer's span: `era frf --max-hz`). The
+    /// sample time ERA infers from the FRF grows accordingly, as after decimation.
+    ///
+    /// # Errors
+    /// [`EraError::InvalidParameter`] for fewer than 2 lines or more than there are.
+    pub fn truncate(&mut self, lines: usize) -> Result<()> {
+        let total = self.spectra.lines();
+        if lines < 2 || lines > total {
+            return Err(EraError::InvalidParameter {
+                name: "max-hz",
+                value: format!("{lines} lines"),
+                reason: format!("keeps fewer than 2 or more than the {total} lines"),
+            });
+        }
+        let cut_c = |v: &[Complex64], pairs: usize| -> Vec<Complex64> {
+            (0..pairs)
+                .flat_map(|a| v[a * total..a * total + lines].iter().copied())
+                .collect()
+        };
+        let cut_r = |v: &[f64], pairs: usize| -> Vec<f64> {
+            (0..pairs)
+                .flat_map(|a| v[a * total..a * total + lines].iter().copied())
+                .collect()
+        };
+        let (p, q) = (self.spectra.inputs, self.spectra.outputs);
+        let s = &mut self.spectra;
+        s.gxx = cut_c(&s.gxx, p * p);
+        s.gyx = cut_c(&s.gyx, q * p);
+        s.gyy = cut_c(&s.gyy, if s.gyy_full { q * q } else { q });
+        s.frequency_hz.truncate(lines);
+        self.frf = FrfData::new(
+            s.frequency_hz.clone(),
+            q,
+            p,
+            cut_c(self.frf.values(), q * p),
+            self.frf.quantity(),
+        )?;
+        self.ordinary_coherence = cut_r(&self.ordinary_coherence, q * p);
+        self.multiple_coherence = cut_r(&self.multiple_coherence, q);
+        self.unexcited_lines.retain(|&k| k < lines);
+        Ok(())
+    }
+
     /// Ordinary coherence of one pair over the lines (0-based).
     pub fn coherence(&self, output: usize, input: usize) -> &[f64] {
         let l = self.spectra.lines();
@@ -550,6 +645,31 @@ pub fn estimate(
         });
     }
     let s = spectra(inputs, outputs, options, estimator == Estimator::H2)?;
+    estimate_from_spectra(s, estimator, quantity)
+}
+
+/// Estimates FRFs (and coherence) from spectra already averaged, e.g. pooled over
+/// several records with [`Spectra::pool`]. H2 needs spectra computed with the full
+/// output matrix.
+///
+/// # Errors
+/// As [`estimate`], and [`EraError::InvalidParameter`] for H2 on spectra without the
+/// full output matrix.
+pub fn estimate_from_spectra(
+    s: Spectra,
+    estimator: Estimator,
+    quantity: Quantity,
+) -> Result<FrfEstimate> {
+    if estimator == Estimator::H2 && (!s.gyy_full || s.outputs < s.inputs) {
+        return Err(EraError::InvalidParameter {
+            name: "estimator",
+            value: "h2".into(),
+            reason: format!(
+                "H2 needs the full output cross-spectral matrix and at least as many outputs as inputs ({} outputs, {} inputs)",
+                s.outputs, s.inputs
+            ),
+        });
+    }
     let unexcited = check_input_matrix(&s)?;
     let (p, q, lines) = (s.inputs, s.outputs, s.lines());
     let mut skip = vec![false; lines];

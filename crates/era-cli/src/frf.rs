@@ -1,0 +1,569 @@
+//! `era frf`: FRFs and coherence from time histories, and the same step for
+//! `era identify --from-time`.
+
+use crate::args::{DetrendArg, EstimatorArg, FrfArgs, QuantityArg, WelchArgs, WindowArg};
+use crate::identify::{shape_line, InputFrf};
+use crate::report::{finish_output, Human};
+use anyhow::Context as _;
+use era::frf::estimate::{self, Detrend, Estimator, FrfEstimate, WelchOptions, Window};
+use era_io::csv::FrfFile;
+use era_io::format::{channel_metadata, FrfFormat};
+use era_io::time::{parse_channels, read_time_file, TimeHistory, TimeSelection};
+use era_io::uff::{Channel, ChannelTable, Dof, UffWriteOptions};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// FRFs estimated from a time file, with what a summary needs.
+pub struct FromTime {
+    /// The FRFs as a file would hold them (metadata: the estimation settings).
+    pub input: InputFrf,
+    /// The estimate (coherence, spectra).
+    pub estimate: FrfEstimate,
+    /// Human summary lines.
+    pub summary: String,
+    /// JSON summary.
+    pub json: serde_json::Value,
+    /// Seconds reading and estimating.
+    pub timings: (f64, f64),
+}
+
+fn window(w: WindowArg) -> Window {
+    match w {
+        WindowArg::Rectangular => Window::Rectangular,
+        WindowArg::Hann => Window::Hann,
+        WindowArg::FlatTop => Window::FlatTop,
+    }
+}
+
+fn estimator(e: EstimatorArg) -> Estimator {
+    match e {
+        EstimatorArg::H1 => Estimator::H1,
+        EstimatorArg::H2 => Estimator::H2,
+        EstimatorArg::Hv => Estimator::Hv,
+    }
+}
+
+fn detrend(d: DetrendArg) -> Detrend {
+    match d {
+        DetrendArg::None => Detrend::None,
+        DetrendArg::Mean => Detrend::Mean,
+        DetrendArg::Linear => Detrend::Linear,
+    }
+}
+
+/// UFF entity names are 10 characters wide.
+fn entity(label: &str) -> String {
+    let cleaned: String = label
+        .chars()
+        .map(|c| if c.is_ascii_graphic() { c } else { '_' })
+        .take(10)
+        .collect();
+    if cleaned.is_empty() {
+        "NONE".into()
+    } else {
+        cleaned
+    }
+}
+
+/// The first record's table, sample rate (and where it came from) and the selected
+/// input and output columns.
+type FirstRecord = (TimeHistory, f64, String, Vec<usize>, Vec<usize>);
+
+/// Reads the time files (records of one test), selects the channels and estimates the
+/// FRFs from their pooled spectra.
+pub fn estimate_from_time(
+    paths: &[PathBuf],
+    inputs: &str,
+    outputs: &str,
+    welch: &WelchArgs,
+    quantity: QuantityArg,
+    common: &crate::args::CommonArgs,
+) -> anyhow::Result<FromTime> {
+    let selection = TimeSelection {
+        variables: welch.variable.clone(),
+        datasets: welch.dataset.clone(),
+    };
+    if let Some(r) = welch.sample_rate {
+        if !(r.is_finite() && r > 0.0) {
+            return crate::usage(format!(
+                "--sample-rate {r}: must be a positive number of samples per second"
+            ));
+        }
+    }
+    let est = estimator(welch.estimator);
+    let spinner = crate::progress::spinner(common);
+    let (mut read_s, mut estimate_s) = (0.0, 0.0);
+    let mut records = Vec::new();
+    // The first record's table, rate and channels describe the result; later records
+    // must agree (pooling checks lines and channel counts).
+    let mut first: Option<FirstRecord> = None;
+    for path in paths {
+        spinner.set_message(format!("reading {}", path.display()));
+        let clock = Instant::now();
+        let history = read_time_file(path, &selection)
+            .with_context(|| format!("reading {}", path.display()))?;
+        read_s += clock.elapsed().as_secs_f64();
+        let (rate, rate_from) = match (welch.sample_rate, &history.sample_rate) {
+            (Some(r), Some((f, from))) if (r - f).abs() > 1e-9 * f => (
+                r,
+                format!("--sample-rate (the file says {f} Hz, from {from})"),
+            ),
+            (Some(r), _) => (r, "--sample-rate".to_string()),
+            (None, Some((f, from))) => (*f, from.clone()),
+            (None, None) => {
+                return crate::usage(format!(
+                    "{}: this {} file does not give the sample rate: set --sample-rate HZ",
+                    path.display(),
+                    history.format.name()
+                ))
+            }
+        };
+        if let Some((_, r0, _, _, _)) = &first {
+            if (rate - r0).abs() > 1e-9 * r0 {
+                return crate::usage(format!(
+                    "{}: sample rate {rate} Hz, the first file's is {r0} Hz: records to average must share it",
+                    path.display()
+                ));
+            }
+        }
+        let pick = |flag: &str, spec: &str| {
+            parse_channels(spec, &history)
+                .map_err(|m| crate::UsageError(format!("{flag} {spec}: {m} ({})", path.display())))
+        };
+        let input_cols = pick("--inputs", inputs)?;
+        let output_cols = pick("--outputs", outputs)?;
+        let opts = WelchOptions {
+            sample_rate_hz: rate,
+            frame: welch.frame,
+            overlap: welch.overlap,
+            window: window(welch.window),
+            detrend: detrend(welch.detrend),
+        };
+        let xs: Vec<&[f64]> = input_cols
+            .iter()
+            .map(|&c| history.columns[c].as_slice())
+            .collect();
+        let ys: Vec<&[f64]> = output_cols
+            .iter()
+            .map(|&c| history.columns[c].as_slice())
+            .collect();
+        spinner.set_message(format!("spectra of {}", path.display()));
+        let clock = Instant::now();
+        let spectra = estimate::spectra(&xs, &ys, &opts, est == Estimator::H2)
+            .map_err(|e| describe_estimate_error(e, &history, &input_cols, &output_cols))
+            .with_context(|| format!("estimating FRFs from {}", path.display()))?;
+        estimate_s += clock.elapsed().as_secs_f64();
+        records.push(spectra);
+        if first.is_none() {
+            first = Some((history, rate, rate_from, input_cols, output_cols));
+        }
+    }
+    let Some((history, rate, rate_from, input_cols, output_cols)) = first else {
+        return crate::usage("no time-history file given");
+    };
+    let path = &paths[0];
+    let opts = WelchOptions {
+        sample_rate_hz: rate,
+        frame: welch.frame,
+        overlap: welch.overlap,
+        window: window(welch.window),
+        detrend: detrend(welch.detrend),
+    };
+    spinner.set_message("estimating FRFs");
+    let clock = Instant::now();
+    let pooled =
+        estimate::Spectra::pool(&records).with_context(|| "averaging the records".to_string())?;
+    let found = estimate::estimate_from_spectra(pooled, est, quantity.into());
+    spinner.finish_and_clear();
+    let mut found = found
+        .map_err(|e| describe_estimate_error(e, &history, &input_cols, &output_cols))
+        .with_context(|| format!("estimating FRFs from {}", path.display()))?;
+    estimate_s += clock.elapsed().as_secs_f64();
+    if let Some(max) = welch.max_hz {
+        let f = found.frf.frequency_hz();
+        let top = f[f.len() - 1];
+        if !(max.is_finite() && max >= f[1] && max <= top) {
+            return crate::usage(format!(
+                "--max-hz {max}: must lie between the first line above 0 Hz ({} Hz) and the Nyquist frequency ({top} Hz)",
+                f[1]
+            ));
+        }
+        let keep = f.iter().take_while(|&&v| v <= max * (1.0 + 1e-12)).count();
+        found.truncate(keep)?;
+    }
+
+    let label = |c: usize| history.label(c);
+    let channel = |c: usize| Channel {
+        dof: Dof {
+            node: c as i64 + 1,
+            direction: 3,
+        },
+        entity: match &history.names {
+            Some(n) => entity(&n[c]),
+            None => "NONE".into(),
+        },
+    };
+    let table = ChannelTable {
+        outputs: output_cols.iter().map(|&c| channel(c)).collect(),
+        inputs: input_cols.iter().map(|&c| channel(c)).collect(),
+    };
+    let frames = found.spectra.frames();
+    let mut metadata = BTreeMap::new();
+    for (k, v) in [
+        (
+            "source",
+            format!(
+                "era frf {}",
+                paths
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            ),
+        ),
+        ("estimator", est.name().to_string()),
+        ("window", opts.window.name().to_string()),
+        ("frame", opts.frame.to_string()),
+        ("overlap", opts.overlap.to_string()),
+        ("detrend", opts.detrend.name().to_string()),
+        ("averages", frames.to_string()),
+        ("sample_rate_hz", rate.to_string()),
+        (
+            "max_hz",
+            welch.max_hz.map_or("none".to_string(), |m| m.to_string()),
+        ),
+    ] {
+        metadata.insert(k.to_string(), v);
+    }
+    let file = FrfFile {
+        frf: found.frf.clone(),
+        quantity_given: true,
+        metadata,
+        channels: Some(table),
+    };
+
+    let (q, p, lines) = (found.frf.outputs(), found.frf.inputs(), found.frf.lines());
+    let mut summary = String::new();
+    let _ = writeln!(
+        summary,
+        "  time histories: {} ({}), sample rate {rate} Hz from {rate_from}",
+        history.description,
+        history.format.name()
+    );
+    if paths.len() > 1 {
+        let _ = writeln!(
+            summary,
+            "  averaged over {} records: {} (the channels and description are the first's)",
+            paths.len(),
+            paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    let names = |cols: &[usize]| {
+        cols.iter()
+            .map(|&c| match &history.names {
+                Some(_) => format!("{} ({})", c + 1, label(c)),
+                None => (c + 1).to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let _ = writeln!(summary, "  inputs: {}", names(&input_cols));
+    let _ = writeln!(summary, "  outputs: {}", names(&output_cols));
+    let _ = writeln!(
+        summary,
+        "  {} estimate: {} frames of {} samples ({} window, {} % overlap = {} samples, detrend {}), {lines} lines at {} Hz",
+        est.name().to_uppercase(),
+        frames,
+        opts.frame,
+        opts.window.name(),
+        opts.overlap * 100.0,
+        opts.overlap_samples(),
+        opts.detrend.name(),
+        found.frf.spacing_hz(),
+    );
+    if frames < 10 {
+        let _ = writeln!(
+            summary,
+            "  note: only {frames} averages: coherence and FRF variance are poorly estimated; a shorter --frame gives more"
+        );
+    }
+    if !found.unexcited_lines.is_empty() {
+        let _ = writeln!(
+            summary,
+            "  note: {} line(s) without input power (first at {} Hz): FRF and coherence set to 0 there",
+            found.unexcited_lines.len(),
+            found.frf.frequency_hz()[found.unexcited_lines[0]]
+        );
+    }
+    // Multiple coherence per output over the excited band (every input within 40 dB of
+    // its largest autospectrum): the median, and the share of lines above 0.9.
+    let band: Vec<usize> = (1..lines)
+        .filter(|&k| {
+            (0..p).all(|j| {
+                let g = found.spectra.gxx(j, j);
+                let top = g.iter().map(|v| v.re).fold(0.0, f64::max);
+                g[k].re >= 1e-4 * top
+            })
+        })
+        .collect();
+    let band = if band.is_empty() {
+        (1..lines).collect()
+    } else {
+        band
+    };
+    let f = found.frf.frequency_hz();
+    let _ = writeln!(
+        summary,
+        "  excited band (inputs within 40 dB of their peak): {} .. {} Hz, {} lines",
+        f[band[0]],
+        f[band[band.len() - 1]],
+        band.len()
+    );
+    let mut per_output = Vec::new();
+    for (i, &column) in output_cols.iter().enumerate() {
+        let all = found.multiple(i);
+        let mut m: Vec<f64> = band.iter().map(|&k| all[k]).collect();
+        m.sort_by(f64::total_cmp);
+        let median = m[m.len() / 2];
+        let good = m.iter().filter(|v| **v > 0.9).count() as f64 / m.len() as f64;
+        per_output.push(json!({"output": i + 1, "channel": label(column),
+            "median_multiple_coherence": median, "share_above_0_9": good}));
+    }
+    let medians: Vec<f64> = per_output
+        .iter()
+        .map(|v| v["median_multiple_coherence"].as_f64().unwrap_or(0.0))
+        .collect();
+    let lowest = medians
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(i, v)| (i, *v))
+        .unwrap_or((0, 0.0));
+    let _ = writeln!(
+        summary,
+        "  multiple coherence (median over the band): {} per output; lowest output {} ({}) at {:.4}",
+        if q <= 8 {
+            medians
+                .iter()
+                .map(|v| format!("{v:.4}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        } else {
+            let mut sorted = medians.clone();
+            sorted.sort_by(f64::total_cmp);
+            format!("{:.4} .. {:.4}", sorted[0], sorted[sorted.len() - 1])
+        },
+        lowest.0 + 1,
+        label(output_cols[lowest.0]),
+        lowest.1
+    );
+    let json = json!({
+        "files": paths, "format": history.format.name(), "samples": history.samples(),
+        "sample_rate_hz": rate, "sample_rate_from": rate_from,
+        "inputs": input_cols.iter().map(|&c| json!({"column": c + 1, "name": label(c)})).collect::<Vec<_>>(),
+        "outputs": output_cols.iter().map(|&c| json!({"column": c + 1, "name": label(c)})).collect::<Vec<_>>(),
+        "estimator": est.name(), "window": opts.window.name(), "frame": opts.frame,
+        "overlap": opts.overlap, "overlap_samples": opts.overlap_samples(), "detrend": opts.detrend.name(),
+        "averages": frames, "lines": lines, "spacing_hz": found.frf.spacing_hz(),
+        "pairs": q * p, "unexcited_lines": found.unexcited_lines.len(),
+        "excited_band_hz": [f[band[0]], f[band[band.len() - 1]]],
+        "coherence": per_output,
+    });
+    let note = format!(" [estimated from {}]", history.format.name());
+    Ok(FromTime {
+        input: InputFrf {
+            file,
+            format: FrfFormat::Csv,
+            note,
+        },
+        estimate: found,
+        summary,
+        json,
+        timings: (read_s, estimate_s),
+    })
+}
+
+/// Names the channels in a singular-input or non-finite error (the library numbers
+/// them among the selected inputs and outputs).
+fn describe_estimate_error(
+    e: era::EraError,
+    history: &TimeHistory,
+    inputs: &[usize],
+    outputs: &[usize],
+) -> anyhow::Error {
+    let with = |text: String| anyhow::Error::new(e.clone()).context(text);
+    match &e {
+        era::EraError::NonFiniteSample {
+            role,
+            channel,
+            sample,
+        } => {
+            let c = if *role == "input" { inputs } else { outputs }[channel - 1];
+            with(format!(
+                "channel {} ({}) is not finite at sample {sample}",
+                c + 1,
+                history.label(c)
+            ))
+        }
+        era::EraError::SingularInputSpectrum { .. } => with(format!(
+            "inputs (file channels {}) cannot be separated",
+            inputs
+                .iter()
+                .map(|c| format!("{} = {}", c + 1, history.label(*c)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+        _ => anyhow::Error::new(e),
+    }
+}
+
+/// `frf.csv` → `frf.coherence.csv`.
+pub fn coherence_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "frf".into());
+    out.with_file_name(format!("{stem}.coherence.csv"))
+}
+
+/// The coherence as CSV: `frequency_hz`, `coh{i}_{j}` (ordinary), `mcoh{i}` (multiple).
+pub fn write_coherence(path: &Path, est: &FrfEstimate, source: &str) -> anyhow::Result<()> {
+    let (q, p, lines) = (est.frf.outputs(), est.frf.inputs(), est.frf.lines());
+    let mut out = String::with_capacity(lines * (q * p + q + 1) * 24);
+    let _ = writeln!(out, "# coherence of {source}");
+    let _ = writeln!(
+        out,
+        "# coh<i>_<j>: ordinary coherence of output i with input j; mcoh<i>: multiple coherence of output i"
+    );
+    out.push_str("frequency_hz");
+    for i in 1..=q {
+        for j in 1..=p {
+            let _ = write!(out, ",coh{i}_{j}");
+        }
+    }
+    for i in 1..=q {
+        let _ = write!(out, ",mcoh{i}");
+    }
+    out.push('\n');
+    for k in 0..lines {
+        let _ = write!(out, "{}", est.frf.frequency_hz()[k]);
+        for i in 0..q {
+            for j in 0..p {
+                let _ = write!(out, ",{}", est.coherence(i, j)[k]);
+            }
+        }
+        for i in 0..q {
+            let _ = write!(out, ",{}", est.multiple(i)[k]);
+        }
+        out.push('\n');
+    }
+    era_io::atomic::write_atomic(path, out.as_bytes())?;
+    Ok(())
+}
+
+/// Writes the FRFs (the estimation settings kept as CSV metadata) and the coherence.
+pub fn write_estimate(out: &Path, found: &FromTime, binary: bool) -> anyhow::Result<PathBuf> {
+    let format = FrfFormat::from_extension(out).ok_or_else(|| {
+        crate::UsageError(format!(
+            "--out {}: cannot tell the format from the extension: use .csv, .uff (or .unv) or .mat",
+            out.display()
+        ))
+    })?;
+    if binary && format != FrfFormat::Uff {
+        return crate::usage(format!(
+            "--binary applies to UFF output, not to {}",
+            out.display()
+        ));
+    }
+    let file = &found.input.file;
+    match format {
+        FrfFormat::Csv => {
+            let mut extra: Vec<(String, String)> = file
+                .metadata
+                .iter()
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect();
+            if let Some(t) = &file.channels {
+                extra.extend(channel_metadata(t));
+            }
+            let extra: Vec<(&str, &str)> = extra
+                .iter()
+                .map(|(k, v)| (k.as_str(), v.as_str()))
+                .collect();
+            era_io::csv::write_frf_csv(out, &file.frf, &extra)?;
+        }
+        _ => era_io::format::write_frf_file(
+            out,
+            file,
+            UffWriteOptions {
+                binary,
+                single: false,
+            },
+        )?,
+    }
+    let coherence = coherence_path(out);
+    write_coherence(&coherence, &found.estimate, &out.display().to_string())?;
+    Ok(coherence)
+}
+
+/// `era frf`.
+pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    // Refuse a bad --out before reading anything.
+    match FrfFormat::from_extension(&a.out) {
+        None => {
+            return crate::usage(format!(
+            "--out {}: cannot tell the format from the extension: use .csv, .uff (or .unv) or .mat",
+            a.out.display()
+        ))
+        }
+        Some(f) if a.binary && f != FrfFormat::Uff => {
+            return crate::usage(format!(
+                "--binary applies to UFF output, not to {}",
+                a.out.display()
+            ))
+        }
+        _ => {}
+    }
+    let found = estimate_from_time(
+        &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, &a.common,
+    )?;
+    human.print(&format!(
+        "era frf {}\n{}  FRFs: {}\n",
+        a.files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
+        found.summary,
+        shape_line(&found.input.file.frf)
+    ));
+    let clock = Instant::now();
+    let coherence = write_estimate(&a.out, &found, a.binary)?;
+    let write_s = clock.elapsed().as_secs_f64();
+    human.print(&format!(
+        "wrote {} and {}\n",
+        a.out.display(),
+        coherence.display()
+    ));
+    let mut out = found.json.clone();
+    out["output"] = json!(a.out);
+    out["coherence_file"] = json!(coherence);
+    finish_output(
+        &human,
+        &a.common,
+        out,
+        &[
+            ("read", found.timings.0),
+            ("estimate", found.timings.1),
+            ("write", write_s),
+        ],
+    )
+}
