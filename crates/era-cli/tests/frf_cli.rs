@@ -3,7 +3,7 @@
 //! a message when ../shared/data is absent).
 
 mod common;
-use common::{era, expect_input_error};
+use common::{era, expect_input_error, shared};
 use era::sim::{time_response, truth_model, Minstd};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -260,18 +260,6 @@ fn bad_time_data_exits_2_naming_the_problem() {
         .assert()
         .success();
     assert!(out.is_file());
-}
-
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("skipped: {} is absent", p.display());
-        None
-    }
 }
 
 #[test]

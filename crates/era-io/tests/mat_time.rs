@@ -2,20 +2,10 @@
 //! values (samples and column sums from scipy.io.loadmat). Skipped with
 //! a message when the shared data folder is absent.
 
-use era_io::mat::read_mat_matrix;
-use std::path::PathBuf;
+mod common;
+use common::shared;
 
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("skipped: {} is absent", p.display());
-        None
-    }
-}
+use era_io::mat::read_mat_matrix;
 
 #[test]
 fn daisy_files_read_as_time_histories() {

@@ -2,20 +2,10 @@
 //! (HDF5, pure-Rust reader) and the DaISy steel subframe (MAT v5). Skipped with a message
 //! when the shared data folder is absent.
 
-use era_io::time::{parse_channels, read_time_file, TimeFormat, TimeSelection};
-use std::path::PathBuf;
+mod common;
+use common::shared;
 
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("skipped: {} is absent", p.display());
-        None
-    }
-}
+use era_io::time::{parse_channels, read_time_file, TimeFormat, TimeSelection};
 
 #[test]
 fn ladisk_hdf5_reads_channels_names_and_sample_rate() {

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use assert_cmd::Command;
+use std::path::PathBuf;
 
 /// The `era` binary under test.
 pub fn era() -> Command {
@@ -18,4 +19,18 @@ pub fn expect_input_error(args: &[&str], needle: &str) {
         "{args:?}: expected '{needle}' in: {stderr}"
     );
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+}
+
+/// A file under ../shared/data (beside the checkout), or None with a message saying the
+/// test is skipped because it is absent.
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
+    if p.is_file() {
+        Some(p)
+    } else {
+        eprintln!("skipped: {} is absent", p.display());
+        None
+    }
 }
