@@ -7,7 +7,7 @@ use crate::report::{finish_output, Human};
 use anyhow::Context as _;
 use era::frf::estimate::{self, Detrend, Estimator, FrfEstimate, WelchOptions, Window};
 use era_io::csv::FrfFile;
-use era_io::format::{channel_metadata, FrfFormat};
+use era_io::format::FrfFormat;
 use era_io::time::{parse_channels, read_time_file, TimeHistory, TimeSelection};
 use era_io::uff::{Channel, ChannelTable, Dof, UffWriteOptions};
 use serde_json::json;
@@ -484,21 +484,8 @@ pub fn write_estimate(out: &Path, found: &FromTime, binary: bool) -> anyhow::Res
     }
     let file = &found.input.file;
     match format {
-        FrfFormat::Csv => {
-            let mut extra: Vec<(String, String)> = file
-                .metadata
-                .iter()
-                .map(|(k, v)| (k.clone(), v.clone()))
-                .collect();
-            if let Some(t) = &file.channels {
-                extra.extend(channel_metadata(t));
-            }
-            let extra: Vec<(&str, &str)> = extra
-                .iter()
-                .map(|(k, v)| (k.as_str(), v.as_str()))
-                .collect();
-            era_io::csv::write_frf_csv(out, &file.frf, &extra)?;
-        }
+        // The estimation settings stay with the FRFs as `# key: value` lines.
+        FrfFormat::Csv => era_io::format::write_frf_csv_keeping(out, file, |_| true)?,
         _ => era_io::format::write_frf_file(
             out,
             file,

@@ -149,20 +149,9 @@ impl FrfWriter for FrfFormat {
     fn write_frf(&self, path: &Path, file: &FrfFile, uff: UffWriteOptions) -> Result<(), IoError> {
         let unit = |key: &str| file.metadata.get(key).map(String::as_str);
         match self {
-            FrfFormat::Csv => {
-                let mut extra: Vec<(String, String)> = ["force_unit", "response_unit"]
-                    .iter()
-                    .filter_map(|k| unit(k).map(|v| (k.to_string(), v.to_string())))
-                    .collect();
-                if let Some(t) = &file.channels {
-                    extra.extend(channel_metadata(t));
-                }
-                let extra: Vec<(&str, &str)> = extra
-                    .iter()
-                    .map(|(k, v)| (k.as_str(), v.as_str()))
-                    .collect();
-                crate::atomic::write_atomic(path, format_frf_csv(&file.frf, &extra).as_bytes())
-            }
+            FrfFormat::Csv => write_frf_csv_keeping(path, file, |key| {
+                key == "force_unit" || key == "response_unit"
+            }),
             FrfFormat::Uff => crate::uff::write_uff58(
                 path,
                 &file.frf,
@@ -173,6 +162,32 @@ impl FrfWriter for FrfFormat {
             FrfFormat::Mat => crate::mat::write_frf_mat(path, &file.frf),
         }
     }
+}
+
+/// Writes an FRF CSV with the channel table and the metadata entries whose key `keep`
+/// accepts, as `# key: value` lines.
+///
+/// # Errors
+/// [`IoError`] naming the file.
+pub fn write_frf_csv_keeping(
+    path: &Path,
+    file: &FrfFile,
+    keep: impl Fn(&str) -> bool,
+) -> Result<(), IoError> {
+    let mut extra: Vec<(String, String)> = file
+        .metadata
+        .iter()
+        .filter(|(k, _)| keep(k))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
+    if let Some(t) = &file.channels {
+        extra.extend(channel_metadata(t));
+    }
+    let extra: Vec<(&str, &str)> = extra
+        .iter()
+        .map(|(k, v)| (k.as_str(), v.as_str()))
+        .collect();
+    crate::atomic::write_atomic(path, format_frf_csv(&file.frf, &extra).as_bytes())
 }
 
 /// Detects the format of `path` and reads it.
