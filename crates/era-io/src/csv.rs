@@ -14,7 +14,7 @@
 //! name the file, the line and the column.
 
 use crate::atomic::write_atomic;
-use crate::{metadata_line, IoError};
+use crate::IoError;
 use era::{Complex64, EraError, FrfData, Quantity};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -78,29 +78,14 @@ pub fn parse_frf_csv(
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
 
     // Metadata lines, then the header.
-    let mut metadata = BTreeMap::new();
-    let mut header_line = 0;
-    for (index, line) in text.lines().enumerate() {
-        let trimmed = line.trim();
-        if trimmed.is_empty() {
-            continue;
-        }
-        if trimmed.starts_with('#') {
-            if let Some((key, value)) = metadata_line(trimmed) {
-                metadata.insert(key, value);
-            }
-            continue;
-        }
-        header_line = index + 1;
-        break;
-    }
-    if header_line == 0 {
+    let (metadata, header) = crate::metadata_and_header(text);
+    let Some((header_line, _)) = header else {
         return Err(IoError::format(
             path,
             "",
             "no header line (expected frequency_hz,H1_1_re,H1_1_im,...)",
         ));
-    }
+    };
     let quantity = match metadata.get("quantity") {
         Some(q) => Quantity::parse(q).ok_or_else(|| {
             IoError::format(

@@ -25,7 +25,7 @@
 //! the sample (CSV: the line). Channels of unequal length are refused.
 
 use crate::mat::{contain, parse_mat_matrix};
-use crate::{metadata_line, IoError};
+use crate::IoError;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -173,27 +173,13 @@ pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHist
 /// # Errors
 /// [`IoError`] naming the line and column.
 pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
-    let mut metadata = BTreeMap::new();
-    let mut lines = text.lines().enumerate();
-    let (header_line, header) = loop {
-        let Some((n, line)) = lines.next() else {
-            return Err(IoError::format(
-                path,
-                "",
-                "no header line (expected time_s,<channel>,…)",
-            ));
-        };
-        let trimmed = line.trim();
-        if trimmed.is_empty() {
-            continue;
-        }
-        if trimmed.starts_with('#') {
-            if let Some((k, v)) = metadata_line(trimmed) {
-                metadata.insert(k, v);
-            }
-            continue;
-        }
-        break (n + 1, trimmed);
+    let (metadata, header) = crate::metadata_and_header(text);
+    let Some((header_line, header)) = header else {
+        return Err(IoError::format(
+            path,
+            "",
+            "no header line (expected time_s,<channel>,…)",
+        ));
     };
     let names: Vec<String> = header.split(',').map(|c| c.trim().to_string()).collect();
     if names[0] != "time_s" {
@@ -235,7 +221,7 @@ pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
     }
     let width = names.len();
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); width];
-    for (n, line) in lines {
+    for (n, line) in text.lines().enumerate().skip(header_line) {
         let trimmed = line.trim();
         if trimmed.is_empty() || trimmed.starts_with('#') {
             continue;
