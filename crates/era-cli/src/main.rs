@@ -48,6 +48,7 @@ fn exit_code(err: &anyhow::Error) -> u8 {
         }
         if cause.downcast_ref::<era_io::IoError>().is_some()
             || cause.downcast_ref::<UsageError>().is_some()
+            || cause.downcast_ref::<era::limits::LimitError>().is_some()
             || cause
                 .downcast_ref::<era::friction::FrictionError>()
                 .is_some()

@@ -154,6 +154,10 @@ pub enum EraError {
         /// What it means: which inputs are coherent, or too few averages.
         reason: String,
     },
+    /// A size asked for by the data or a parameter is above a resource limit
+    /// ([`crate::limits`]).
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
     /// A dense decomposition failed to converge.
     #[error("numerical failure: {0}")]
     Numerical(String),

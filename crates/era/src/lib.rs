@@ -41,6 +41,7 @@ pub mod friction;
 pub mod hankel;
 pub mod hankel_op;
 pub mod identify;
+pub mod limits;
 pub mod markov;
 pub mod modal;
 pub mod preprocess;

@@ -34,3 +34,4 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
         None
     }
 }
+pub mod hostile;
