@@ -6,6 +6,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
+command -v octave >/dev/null || { echo "octave is not installed (see the header of $0)" >&2; exit 2; }
 . scripts/era_bin.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
