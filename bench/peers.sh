@@ -19,8 +19,10 @@ if [ ! -x "$venv/bin/python" ]; then
   "$venv/bin/pip" install -q numpy scipy control
 fi
 command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (apt-get install time)" >&2; exit 2; }
-(cd "$here" && cargo build --release -q --example era_core)
-core="$here/target/release/examples/era_core"
+cd "$here"
+cargo build --release -q --example era_core
+target_dir=$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')
+core="${target_dir:-${CARGO_TARGET_DIR:-$here/target}}/release/examples/era_core"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 

@@ -2,13 +2,13 @@
 # Generates a ~1 GB ASCII UFF 58 file (32 outputs x 8 inputs, 100 000 lines each, 256
 # records) and a binary 58b copy, then times `era info` (headers only) and a full read
 # (`era convert` to binary). Not committed, not a test: issue 3 asks for `era info` on a
-# 1 GB UFF in under 2 s. Usage: scripts/big_uff_info.sh [DIR] (default target/big-uff)
+# 1 GB UFF in under 2 s. Usage: scripts/big_uff_info.sh [DIR] (default TARGET/big-uff,
+# TARGET being CARGO_TARGET_DIR or target/)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
-cargo build --release -q
-era=target/release/era
-dir=${1:-target/big-uff}
+. scripts/era_bin.sh
+dir=${1:-$target_dir/big-uff}
 mkdir -p "$dir"
 big=$dir/big.uff
 if [ ! -f "$big" ]; then

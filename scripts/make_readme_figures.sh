@@ -5,8 +5,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
-cargo build --release -q
-era=target/release/era
+. scripts/era_bin.sh
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$era" demo -q --out "$work/demo"

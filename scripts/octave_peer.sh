@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs the Octave peer (../shared/reference/octave, the thesis's routines transcribed)
+# Runs the Octave peer (the thesis's routines transcribed; not shipped in this repository:
+# ERA_OCTAVE_PEER names its folder, default ../shared/reference/octave beside the checkout)
 # on the truth model, and either stores its results as golden test data or puts them
 # beside `era demo` for the same noise seed.
 #
@@ -12,7 +13,7 @@ set -euo pipefail
 mode=${1:-compare}
 seed=${2:-123456789}
 here=$(cd "$(dirname "$0")/.." && pwd)
-peer="$here/../shared/reference/octave"
+peer=${ERA_OCTAVE_PEER:-$here/../shared/reference/octave}
 [ -d "$peer" ] || { echo "no Octave peer at $peer" >&2; exit 2; }
 command -v octave >/dev/null || { echo "octave is not installed (see the header of $0)" >&2; exit 2; }
 work=$(mktemp -d)

@@ -21,8 +21,7 @@ case "${1:-}" in
     "$venv/bin/python" scripts/uff_peer.py golden "$golden"
     ;;
   check)
-    cargo build --release -q
-    era=target/release/era
+    . scripts/era_bin.sh
     out=$golden/era
     mkdir -p "$out"
     # The source: the pyuff golden FRFs (2 x 2, 33 lines) as era reads them.

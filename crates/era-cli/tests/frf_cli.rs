@@ -1,9 +1,9 @@
 //! `era frf` and `era identify --from-time`: time histories to FRFs to a model, bad time
-//! data refused with exit code 2, and the DaISy steel subframe walkthrough (skipped with
-//! a message when ../shared/data is absent).
+//! data refused with exit code 2, and the walkthroughs on the DaISy steel subframe and
+//! the LADISK plate (data/; a missing data file fails the test).
 
 mod common;
-use common::{era, expect_input_error, shared};
+use common::{data_file, era, expect_input_error};
 use era::sim::{time_response, truth_model, Minstd};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -264,9 +264,7 @@ fn bad_time_data_exits_2_naming_the_problem() {
 
 #[test]
 fn daisy_steel_subframe_walkthrough_finds_the_stable_modes() {
-    let Some(mat) = shared("daisy-steel-subframe/flexible_structure_dat.mat") else {
-        return;
-    };
+    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("subframe.csv");
     let v = json_of(&[
@@ -314,11 +312,8 @@ fn daisy_steel_subframe_walkthrough_finds_the_stable_modes() {
 fn ladisk_plate_runs_average_to_one_coherent_frf_and_era_finds_its_peaks() {
     let runs: Vec<PathBuf> = ["view_0", "view_0_02", "view_0_03", "view_0_04", "view_1"]
         .iter()
-        .filter_map(|r| shared(&format!("ladisk-plate-sweep/{r}.hdf5")))
+        .map(|r| data_file(&format!("ladisk-plate-sweep/{r}.hdf5")))
         .collect();
-    if runs.len() < 5 {
-        return;
-    }
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("plate.csv");
     let mut args: Vec<&str> = vec!["frf"];

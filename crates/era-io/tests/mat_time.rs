@@ -1,9 +1,8 @@
-//! The real MAT v5 files of ../shared/data/daisy-* read as time histories: shape and
-//! values (samples and column sums from scipy.io.loadmat). Skipped with
-//! a message when the shared data folder is absent.
+//! The real MAT v5 files of data/daisy-* read as time histories: shape and values
+//! (samples and column sums from scipy.io.loadmat). A missing data file fails the test.
 
 mod common;
-use common::shared;
+use common::data_file;
 
 use era_io::mat::read_mat_matrix;
 
@@ -37,7 +36,7 @@ fn daisy_files_read_as_time_histories() {
         ),
     ];
     for (rel, name, rows, cols, first, last) in cases {
-        let Some(path) = shared(rel) else { continue };
+        let path = data_file(rel);
         let m = read_mat_matrix(&path, None).unwrap();
         assert_eq!(
             (m.name.as_str(), m.rows, m.cols),

@@ -1,17 +1,15 @@
-//! Time-history files of ../shared/data read by `time::read_time_file`: the LADISK plate
-//! (HDF5, pure-Rust reader) and the DaISy steel subframe (MAT v5). Skipped with a message
-//! when the shared data folder is absent.
+//! Time-history files of data/ read by `time::read_time_file`: the LADISK plate (HDF5,
+//! pure-Rust reader) and the DaISy steel subframe (MAT v5). A missing data file fails the
+//! test.
 
 mod common;
-use common::shared;
+use common::data_file;
 
 use era_io::time::{parse_channels, read_time_file, TimeFormat, TimeSelection};
 
 #[test]
 fn ladisk_hdf5_reads_channels_names_and_sample_rate() {
-    let Some(path) = shared("ladisk-plate-sweep/view_0.hdf5") else {
-        return;
-    };
+    let path = data_file("ladisk-plate-sweep/view_0.hdf5");
     let h = read_time_file(&path, &TimeSelection::default()).unwrap();
     assert_eq!(h.format, TimeFormat::Hdf5);
     assert_eq!(h.channels(), 3);
@@ -74,9 +72,7 @@ fn ladisk_hdf5_reads_channels_names_and_sample_rate() {
 
 #[test]
 fn daisy_mat_reads_as_thirty_unnamed_channels() {
-    let Some(path) = shared("daisy-steel-subframe/flexible_structure_dat.mat") else {
-        return;
-    };
+    let path = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
     let h = read_time_file(&path, &TimeSelection::default()).unwrap();
     assert_eq!(h.format, TimeFormat::Mat);
     assert_eq!((h.channels(), h.samples()), (30, 8523));

@@ -3,16 +3,18 @@
 
 use std::path::PathBuf;
 
-/// A file under ../shared/data (beside the checkout), or None with a message saying the
-/// test is skipped because it is absent.
-pub fn shared(rel: &str) -> Option<PathBuf> {
+/// A file under the workspace's `data/` folder (the real data sets shipped with the repo,
+/// see data/README.md). A missing file fails the test with its path: the data tests never
+/// skip silently.
+#[track_caller]
+pub fn data_file(rel: &str) -> PathBuf {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
+        .join("../../data")
         .join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("skipped: {} is absent", p.display());
-        None
-    }
+    assert!(
+        p.is_file(),
+        "data file {} is missing: the repository's data/ folder should hold it (see data/README.md)",
+        p.display()
+    );
+    p
 }
