@@ -14,24 +14,12 @@
 //! name the file, the line and the column.
 
 use crate::atomic::write_atomic;
+pub use crate::frf_file::FrfFile;
 use crate::IoError;
 use era::{Complex64, EraError, FrfData, Quantity};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
-
-/// An FRF file's data and metadata.
-#[derive(Debug, Clone)]
-pub struct FrfFile {
-    /// The FRFs.
-    pub frf: FrfData,
-    /// Whether the file said what quantity it holds (otherwise the default was used).
-    pub quantity_given: bool,
-    /// Every `# key: value` line, keys lower-case.
-    pub metadata: BTreeMap<String, String>,
-    /// Node and direction of each output and input, when the file says.
-    pub channels: Option<crate::uff::ChannelTable>,
-}
 
 /// Which part of a complex value a column holds.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -78,7 +66,7 @@ pub fn parse_frf_csv(
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
 
     // Metadata lines, then the header.
-    let (metadata, header) = crate::metadata_and_header(text);
+    let (metadata, header) = crate::text::metadata_and_header(text);
     let Some((header_line, _)) = header else {
         return Err(IoError::format(
             path,
@@ -247,7 +235,7 @@ pub fn parse_frf_csv(
         other => IoError::format(path, "", other.to_string()),
     })?;
     Ok(FrfFile {
-        channels: crate::format::channels_from_metadata(&metadata, frf.outputs(), frf.inputs()),
+        channels: crate::frf_file::channels_from_metadata(&metadata, frf.outputs(), frf.inputs()),
         frf,
         quantity_given: metadata.contains_key("quantity"),
         metadata,

@@ -12,7 +12,8 @@
 //! column, a non-numeric cell, NaN or infinity, and time that does not increase.
 
 use crate::atomic::write_atomic;
-use crate::{metadata_line, IoError};
+use crate::text::metadata_line;
+use crate::IoError;
 use era::friction::simulate::DecayRecord;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

@@ -10,11 +10,12 @@
 //! A CSV carries the channel table of a UFF file as metadata lines
 //! (`# output_1: node 12 +Z`), so UFF → CSV → UFF keeps the nodes.
 
-use crate::csv::{format_frf_csv, read_frf_csv, FrfFile};
-use crate::uff::{direction_name, Channel, ChannelTable, Dof, UffWriteOptions};
+use crate::csv::{format_frf_csv, read_frf_csv};
+use crate::frf_file::FrfFile;
+pub use crate::frf_file::{channel_metadata, channels_from_metadata};
+use crate::uff::UffWriteOptions;
 use crate::IoError;
 use era::Quantity;
-use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -214,89 +215,11 @@ pub fn write_frf_file(path: &Path, file: &FrfFile, uff: UffWriteOptions) -> Resu
     format.write_frf(path, file, uff)
 }
 
-/// `output_1: node 12 +Z` metadata lines for a channel table.
-pub fn channel_metadata(table: &ChannelTable) -> Vec<(String, String)> {
-    let line = |c: &Channel| {
-        let entity = c.entity_name().map(|e| format!(" {e}")).unwrap_or_default();
-        format!(
-            "node {} {}{entity}",
-            c.dof.node,
-            direction_name(c.dof.direction)
-        )
-    };
-    let outputs = table
-        .outputs
-        .iter()
-        .enumerate()
-        .map(|(k, c)| (format!("output_{}", k + 1), line(c)));
-    let inputs = table
-        .inputs
-        .iter()
-        .enumerate()
-        .map(|(k, c)| (format!("input_{}", k + 1), line(c)));
-    outputs.chain(inputs).collect()
-}
-
-fn parse_direction(text: &str) -> Option<i64> {
-    let t = text.to_ascii_uppercase();
-    if t == "S" {
-        return Some(0);
-    }
-    let (sign, rest) = match t.as_bytes().first()? {
-        b'+' => (1, &t[1..]),
-        b'-' => (-1, &t[1..]),
-        _ => (1, t.as_str()),
-    };
-    let magnitude = match rest {
-        "X" => 1,
-        "Y" => 2,
-        "Z" => 3,
-        "RX" => 4,
-        "RY" => 5,
-        "RZ" => 6,
-        other => return other.parse::<i64>().ok().map(|d| d * sign),
-    };
-    Some(sign * magnitude)
-}
-
-fn parse_channel(text: &str) -> Option<Channel> {
-    let mut words = text.split_whitespace();
-    if words.next()? != "node" {
-        return None;
-    }
-    let node = words.next()?.parse::<i64>().ok()?;
-    let direction = parse_direction(words.next()?)?;
-    let entity = words.collect::<Vec<_>>().join(" ");
-    Some(Channel {
-        dof: Dof { node, direction },
-        entity: if entity.is_empty() {
-            "NONE".into()
-        } else {
-            entity
-        },
-    })
-}
-
-/// The channel table from `output_k`/`input_k` metadata, when complete for `q × p`.
-pub fn channels_from_metadata(
-    metadata: &BTreeMap<String, String>,
-    outputs: usize,
-    inputs: usize,
-) -> Option<ChannelTable> {
-    let take = |kind: &str, n: usize| -> Option<Vec<Channel>> {
-        (1..=n)
-            .map(|k| parse_channel(metadata.get(&format!("{kind}_{k}"))?))
-            .collect()
-    };
-    Some(ChannelTable {
-        outputs: take("output", outputs)?,
-        inputs: take("input", inputs)?,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frf_file::ChannelTable;
+    use std::collections::BTreeMap;
 
     #[test]
     fn channel_lines_round_trip() {

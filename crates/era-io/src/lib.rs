@@ -6,6 +6,9 @@
 //! - [`mat`]: MATLAB MAT files (model and FRFs) for MATLAB, Octave and scipy;
 //! - [`uff`]: Universal File Format datasets 58/58b (FRFs, read and written) and 55
 //!   (mode shapes, written);
+//! - [`frf_file`]: the types every FRF format shares ([`frf_file::FrfFile`],
+//!   [`frf_file::ChannelTable`]);
+//! - [`text`]: CSV metadata lines, shared by the CSV readers;
 //! - [`mod@format`]: detection by content and one reader/writer trait over CSV, UFF and MAT;
 //! - [`atomic`]: every write goes to a temporary file in the destination folder and is
 //!   renamed into place, so a failed run never leaves a half-written file.
@@ -16,13 +19,14 @@ pub mod atomic;
 pub mod csv;
 pub mod decay_csv;
 pub mod format;
+pub mod frf_file;
 pub mod mat;
 mod mat_check;
 pub mod model_json;
+pub mod text;
 pub mod time;
 pub mod uff;
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use thiserror::Error;
 
@@ -80,31 +84,4 @@ impl IoError {
         };
         IoError::format(path, location, message)
     }
-}
-
-/// A `# key: value` metadata line as (lower-case key, value); `None` for other lines
-/// (a `#` line without a colon is a plain comment).
-/// The `# key: value` lines before a CSV header (keys lower-case; blank lines skipped)
-/// and the header itself as (1-based line number, trimmed text), if there is one.
-pub(crate) fn metadata_and_header(text: &str) -> (BTreeMap<String, String>, Option<(usize, &str)>) {
-    let mut metadata = BTreeMap::new();
-    for (index, line) in text.lines().enumerate() {
-        let trimmed = line.trim();
-        if trimmed.is_empty() {
-            continue;
-        }
-        if trimmed.starts_with('#') {
-            if let Some((key, value)) = metadata_line(trimmed) {
-                metadata.insert(key, value);
-            }
-            continue;
-        }
-        return (metadata, Some((index + 1, trimmed)));
-    }
-    (metadata, None)
-}
-
-pub(crate) fn metadata_line(trimmed: &str) -> Option<(String, String)> {
-    let (key, value) = trimmed.strip_prefix('#')?.split_once(':')?;
-    Some((key.trim().to_ascii_lowercase(), value.trim().to_string()))
 }

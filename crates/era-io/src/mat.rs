@@ -21,7 +21,7 @@
 //! dimensions), the one constructor it offers for arrays built at run time.
 
 use crate::atomic::write_via;
-use crate::csv::FrfFile;
+use crate::frf_file::FrfFile;
 use crate::IoError;
 use era::modal::ModalParameters;
 use era::{Complex64, EraError, FrfData, Quantity, StateSpace};

@@ -173,7 +173,7 @@ pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHist
 /// # Errors
 /// [`IoError`] naming the line and column.
 pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
-    let (metadata, header) = crate::metadata_and_header(text);
+    let (metadata, header) = crate::text::metadata_and_header(text);
     let Some((header_line, header)) = header else {
         return Err(IoError::format(
             path,

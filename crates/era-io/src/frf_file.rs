@@ -1,0 +1,215 @@
+//! The types every FRF format shares: [`FrfFile`] (data, metadata, channel table), the
+//! [`ChannelTable`] of node/direction [`Dof`]s, and the channel-table metadata lines a
+//! CSV carries (`# output_1: node 12 +Z`). No other module of this crate is imported
+//! here, so every format can use these without a cycle.
+
+use era::FrfData;
+use std::collections::BTreeMap;
+
+/// An FRF file's data and metadata.
+#[derive(Debug, Clone)]
+pub struct FrfFile {
+    /// The FRFs.
+    pub frf: FrfData,
+    /// Whether the file said what quantity it holds (otherwise the default was used).
+    pub quantity_given: bool,
+    /// Every `# key: value` line, keys lower-case.
+    pub metadata: BTreeMap<String, String>,
+    /// Node and direction of each output and input, when the file says.
+    pub channels: Option<ChannelTable>,
+}
+
+/// A node and direction (records 6): the place a function was measured.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Dof {
+    /// Node number.
+    pub node: i64,
+    /// 0 scalar, ±1..±3 translation X, Y, Z, ±4..±6 rotation about X, Y, Z.
+    pub direction: i64,
+}
+
+impl std::fmt::Display for Dof {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}", self.node, direction_name(self.direction))
+    }
+}
+
+/// `+X`, `-Z`, `+RY`, `S` (scalar) or the number itself when out of range.
+pub fn direction_name(direction: i64) -> String {
+    let sign = if direction < 0 { "-" } else { "+" };
+    match direction.abs() {
+        0 => "S".into(),
+        1 => format!("{sign}X"),
+        2 => format!("{sign}Y"),
+        3 => format!("{sign}Z"),
+        4 => format!("{sign}RX"),
+        5 => format!("{sign}RY"),
+        6 => format!("{sign}RZ"),
+        _ => direction.to_string(),
+    }
+}
+
+/// A channel of an FRF matrix: the DOF and entity name it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    /// Node and direction.
+    pub dof: Dof,
+    /// Entity name (`NONE` when unused).
+    pub entity: String,
+}
+
+impl Channel {
+    /// The entity name, unless blank or `NONE`.
+    pub fn entity_name(&self) -> Option<&str> {
+        (!self.entity.is_empty() && self.entity != "NONE").then_some(self.entity.as_str())
+    }
+}
+
+/// Which DOF each output and input of an FRF matrix is.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ChannelTable {
+    /// Outputs (response DOFs), in matrix order.
+    pub outputs: Vec<Channel>,
+    /// Inputs (reference DOFs), in matrix order.
+    pub inputs: Vec<Channel>,
+}
+
+impl ChannelTable {
+    /// Outputs at nodes 1..q and inputs at nodes 1001..1000+p, all `+Z`: the
+    /// numbering `era` uses when a file does not say.
+    pub fn numbered(outputs: usize, inputs: usize) -> Self {
+        let ch = |node: usize| Channel {
+            dof: Dof {
+                node: node as i64,
+                direction: 3,
+            },
+            entity: "NONE".into(),
+        };
+        ChannelTable {
+            outputs: (1..=outputs).map(ch).collect(),
+            inputs: (1001..1001 + inputs).map(ch).collect(),
+        }
+    }
+
+    /// The table as text lines: `output 1 = node 12 +Z (entity)`.
+    pub fn describe(&self) -> Vec<String> {
+        let row = |kind: &str, k: usize, c: &Channel| {
+            let entity = c
+                .entity_name()
+                .map(|e| format!(" ({e})"))
+                .unwrap_or_default();
+            format!(
+                "{kind} {} = node {} {}{entity}",
+                k + 1,
+                c.dof.node,
+                direction_name(c.dof.direction)
+            )
+        };
+        self.outputs
+            .iter()
+            .enumerate()
+            .map(|(k, c)| row("output", k, c))
+            .chain(
+                self.inputs
+                    .iter()
+                    .enumerate()
+                    .map(|(k, c)| row("input", k, c)),
+            )
+            .collect()
+    }
+}
+
+/// The first few items joined with "; ", then how many more.
+pub fn listed(items: &[String]) -> String {
+    const SHOWN: usize = 8;
+    let mut s = items
+        .iter()
+        .take(SHOWN)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join("; ");
+    if items.len() > SHOWN {
+        s.push_str(&format!("; … and {} more", items.len() - SHOWN));
+    }
+    s
+}
+
+/// `output_1: node 12 +Z` metadata lines for a channel table.
+pub fn channel_metadata(table: &ChannelTable) -> Vec<(String, String)> {
+    let line = |c: &Channel| {
+        let entity = c.entity_name().map(|e| format!(" {e}")).unwrap_or_default();
+        format!(
+            "node {} {}{entity}",
+            c.dof.node,
+            direction_name(c.dof.direction)
+        )
+    };
+    let outputs = table
+        .outputs
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (format!("output_{}", k + 1), line(c)));
+    let inputs = table
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (format!("input_{}", k + 1), line(c)));
+    outputs.chain(inputs).collect()
+}
+
+fn parse_direction(text: &str) -> Option<i64> {
+    let t = text.to_ascii_uppercase();
+    if t == "S" {
+        return Some(0);
+    }
+    let (sign, rest) = match t.as_bytes().first()? {
+        b'+' => (1, &t[1..]),
+        b'-' => (-1, &t[1..]),
+        _ => (1, t.as_str()),
+    };
+    let magnitude = match rest {
+        "X" => 1,
+        "Y" => 2,
+        "Z" => 3,
+        "RX" => 4,
+        "RY" => 5,
+        "RZ" => 6,
+        other => return other.parse::<i64>().ok().map(|d| d * sign),
+    };
+    Some(sign * magnitude)
+}
+
+fn parse_channel(text: &str) -> Option<Channel> {
+    let mut words = text.split_whitespace();
+    if words.next()? != "node" {
+        return None;
+    }
+    let node = words.next()?.parse::<i64>().ok()?;
+    let direction = parse_direction(words.next()?)?;
+    let entity = words.collect::<Vec<_>>().join(" ");
+    Some(Channel {
+        dof: Dof { node, direction },
+        entity: if entity.is_empty() {
+            "NONE".into()
+        } else {
+            entity
+        },
+    })
+}
+
+/// The channel table from `output_k`/`input_k` metadata, when complete for `q × p`.
+pub fn channels_from_metadata(
+    metadata: &BTreeMap<String, String>,
+    outputs: usize,
+    inputs: usize,
+) -> Option<ChannelTable> {
+    let take = |kind: &str, n: usize| -> Option<Vec<Channel>> {
+        (1..=n)
+            .map(|k| parse_channel(metadata.get(&format!("{kind}_{k}"))?))
+            .collect()
+    };
+    Some(ChannelTable {
+        outputs: take("output", outputs)?,
+        inputs: take("input", inputs)?,
+    })
+}
