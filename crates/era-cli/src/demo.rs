@@ -4,7 +4,6 @@
 use crate::args::DemoArgs;
 use crate::identify::prepare_out_dir;
 use crate::report::{parameter_echo, parameters, print_json, timings_table, Human};
-use crate::usage;
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
 use era::modal::{modal_parameters, Mode};
@@ -40,12 +39,7 @@ fn cell(mode: Option<&Mode>) -> String {
 
 pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
-    if !(a.noise.is_finite() && a.noise >= 0.0) {
-        return usage(format!(
-            "--noise {}: must be a fraction >= 0 (0.15 for 15 %)",
-            a.noise
-        ));
-    }
+    crate::simulate::check_noise(a.noise)?;
     if let Some(dir) = &a.out {
         prepare_out_dir(dir)?;
     }

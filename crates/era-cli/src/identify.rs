@@ -15,6 +15,9 @@ use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::path::Path;
 use std::time::Instant;
 
+/// The most `--orders` one run identifies.
+const MAX_ORDERS: usize = 64;
+
 /// Options from flags, with the checks clap cannot do.
 pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     if a.states == 0 {
@@ -22,6 +25,42 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     }
     if a.hankel_factor == 0 {
         return usage("--hankel-factor 0: must be at least 1");
+    }
+    // Sizes are checked against their limits here, under the flag's name, before anything
+    // is read or allocated (the core checks them again for library users).
+    use era::limits::{LINES, SAMPLES, STATES};
+    STATES.check("--states", a.states as u64)?;
+    SAMPLES.check_product(
+        "--states x --hankel-factor (Markov samples)",
+        &[a.states as u64, a.hankel_factor as u64],
+    )?;
+    if a.pad_to != 0 {
+        LINES.check(
+            "--pad-to (lines, pad-to + 1)",
+            (a.pad_to as u64).saturating_add(1),
+        )?;
+    }
+    if a.orders.len() > MAX_ORDERS {
+        return usage(format!(
+            "--orders: {} orders given, at most {MAX_ORDERS} (each is a whole identification)",
+            a.orders.len()
+        ));
+    }
+    for &order in &a.orders {
+        if order == 0 {
+            return usage("--orders: an order of 0 states is not a model");
+        }
+        STATES.check(format!("--orders {order}"), order as u64)?;
+        SAMPLES.check_product(
+            format!("--orders {order} x --hankel-factor (Markov samples)"),
+            &[order as u64, a.hankel_factor as u64],
+        )?;
+    }
+    if !(1..=20).contains(&a.lowpass_order) {
+        return usage(format!(
+            "--lowpass-order {}: the Butterworth order must be 1 to 20",
+            a.lowpass_order
+        ));
     }
     let lowpass = match a.lowpass_hz {
         Some(hz) if !(hz.is_finite() && hz > 0.0) => {

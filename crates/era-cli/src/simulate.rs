@@ -23,11 +23,20 @@ fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
     }
 }
 
-fn check_noise(noise: f64) -> anyhow::Result<()> {
-    if !(noise.is_finite() && noise >= 0.0) {
+pub fn check_noise(noise: f64) -> anyhow::Result<()> {
+    let max = era::sim::MAX_NOISE_FRACTION;
+    if !(noise.is_finite() && (0.0..=max).contains(&noise)) {
         return usage(format!(
-            "--noise {noise}: must be a fraction >= 0 (0.15 for 15 %)"
+            "--noise {noise}: must be a fraction from 0 to {max} (0.15 for 15 %)"
         ));
+    }
+    Ok(())
+}
+
+/// A positive, finite number for `flag`.
+fn check_positive(flag: &str, value: f64, what: &str) -> anyhow::Result<()> {
+    if !(value.is_finite() && value > 0.0) {
+        return usage(format!("{flag} {value}: must be a positive {what}"));
     }
     Ok(())
 }
@@ -115,6 +124,28 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
 fn modal(a: &ModalArgs) -> anyhow::Result<()> {
     check_noise(a.sim.noise)?;
     let (damping_min, damping_max) = parse_range(&a.damping)?;
+    // Sizes against their limits, under the flag's name, before anything is allocated.
+    use era::limits::{CHANNELS, LINES, STATES, VALUES};
+    CHANNELS.check("--outputs", a.outputs as u64)?;
+    CHANNELS.check("--inputs", a.inputs as u64)?;
+    STATES.check_product("--modes (2 states each)", &[a.modes as u64, 2])?;
+    LINES.check("--lines", a.lines as u64)?;
+    VALUES.check_product(
+        "--outputs x --inputs x --lines",
+        &[a.outputs as u64, a.inputs as u64, a.lines as u64],
+    )?;
+    VALUES.check_product(
+        "--outputs x --inputs x --lines x --modes (modal FRF terms)",
+        &[
+            a.outputs as u64,
+            a.inputs as u64,
+            a.lines as u64,
+            a.modes as u64,
+        ],
+    )?;
+    check_positive("--df", a.df, "line spacing in Hz")?;
+    check_positive("--fmin", a.fmin, "frequency in Hz")?;
+    check_positive("--fmax", a.fmax, "frequency in Hz")?;
     if a.collocated && a.outputs != a.inputs {
         return usage(format!(
             "--collocated needs as many outputs as inputs, got {} x {}",

@@ -83,10 +83,22 @@ pub fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     if hi.is_nan() || hi <= 0.0 {
         return (0.1, 1.0);
     }
-    let (a, b) = (lo.log10().floor(), hi.log10().ceil());
+    // Decades clamped to ±MAX_DECADE, so that 1.7e308 cannot round up to 1e309 = inf
+    // (plotters then loops forever looking for tick marks), and at most
+    // MAX_LOG_SPAN_DECADES of them: values far below the top are clipped, not drawn.
+    let b = hi.log10().ceil().clamp(-MAX_DECADE + 1.0, MAX_DECADE);
+    let a = lo.log10().floor().clamp(-MAX_DECADE, MAX_DECADE - 1.0);
+    let a = a.max(b - MAX_LOG_SPAN_DECADES);
     let b = if b <= a { a + 1.0 } else { b };
     (10f64.powf(a), 10f64.powf(b))
 }
+
+/// The largest decade a log axis reaches: `1e300`, well inside `f64` after plotters
+/// rounds outwards.
+pub const MAX_DECADE: f64 = 300.0;
+
+/// The most decades one log axis spans.
+pub const MAX_LOG_SPAN_DECADES: f64 = 60.0;
 
 /// Range rounded outwards to multiples of `step` (at least one step).
 pub fn stepped_range(values: impl Iterator<Item = f64>, step: f64) -> (f64, f64) {
@@ -98,6 +110,8 @@ pub fn stepped_range(values: impl Iterator<Item = f64>, step: f64) -> (f64, f64)
     if lo > hi {
         return (-step, step);
     }
+    // Values beyond ±1e300 are clamped, so the rounded range stays finite.
+    let (lo, hi) = (lo.clamp(-1e300, 1e300), hi.clamp(-1e300, 1e300));
     let (a, b) = ((lo / step).floor() * step, (hi / step).ceil() * step);
     (a, if b <= a { a + step } else { b })
 }

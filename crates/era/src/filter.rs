@@ -19,6 +19,14 @@ use sci_rs::signal::filter::design::{
 };
 use sci_rs::signal::filter::sosfiltfilt_dyn;
 
+/// The normalised cut-off (`2·fc·Ts`, 1 = Nyquist) must lie in
+/// `[MIN_NORMALISED_CUTOFF, 1 − MIN_NORMALISED_CUTOFF]`. Closer to 0 or to Nyquist the
+/// bilinear transform puts the poles so near `z = ±1` that sci-rs's pairing of poles
+/// into sections fails an internal assertion (a panic at `1e-300`) or the sections lose
+/// every digit (NaN impulse responses at `1e-10`). 10⁻⁴ of Nyquist is far below any
+/// useful low-pass of an impulse response.
+pub const MIN_NORMALISED_CUTOFF: f64 = 1e-4;
+
 /// A zero-phase low-pass Butterworth filter.
 #[derive(Debug, Clone)]
 pub struct LowPass {
@@ -32,8 +40,9 @@ impl LowPass {
     /// samples `sample_time_s` apart (normalised cut-off `2·fc·Ts`, 1 = Nyquist).
     ///
     /// # Errors
-    /// [`EraError::InvalidParameter`] when the order is 0 or above 20, or the cut-off is
-    /// not strictly between 0 and the Nyquist frequency `1/(2·Ts)`.
+    /// [`EraError::InvalidParameter`] when the order is 0 or above 20, the sample time is
+    /// not positive, or the cut-off is not between 0 and the Nyquist frequency `1/(2·Ts)`
+    /// with the margin [`MIN_NORMALISED_CUTOFF`] (checked before sci-rs sees it).
     pub fn design(order: usize, cutoff_hz: f64, sample_time_s: f64) -> Result<Self> {
         if order == 0 || order > 20 {
             return Err(EraError::InvalidParameter {
@@ -42,14 +51,24 @@ impl LowPass {
                 reason: "the Butterworth order must be 1 to 20".into(),
             });
         }
+        if !(sample_time_s.is_finite() && sample_time_s > 0.0) {
+            return Err(EraError::InvalidParameter {
+                name: "sample-time",
+                value: sample_time_s.to_string(),
+                reason: "the impulse responses need a positive, finite sample time".into(),
+            });
+        }
         let normalised = 2.0 * cutoff_hz * sample_time_s;
-        if !(normalised > 0.0 && normalised < 1.0) {
+        let nyquist = 0.5 / sample_time_s;
+        if !(normalised >= MIN_NORMALISED_CUTOFF && normalised <= 1.0 - MIN_NORMALISED_CUTOFF) {
             return Err(EraError::InvalidParameter {
                 name: "lowpass-hz",
                 value: cutoff_hz.to_string(),
                 reason: format!(
-                    "the cut-off must lie strictly between 0 and the Nyquist frequency {} Hz",
-                    0.5 / sample_time_s
+                    "the cut-off must lie between {:.6e} Hz and {:.6e} Hz ({MIN_NORMALISED_CUTOFF} to {} of the Nyquist frequency {nyquist} Hz)",
+                    MIN_NORMALISED_CUTOFF * nyquist,
+                    (1.0 - MIN_NORMALISED_CUTOFF) * nyquist,
+                    1.0 - MIN_NORMALISED_CUTOFF,
                 ),
             });
         }
@@ -66,6 +85,17 @@ impl LowPass {
                 "Butterworth design did not return sections".into(),
             ));
         };
+        let finite = sos
+            .sos
+            .iter()
+            .all(|s| s.b.iter().chain(s.a.iter()).all(|c| c.is_finite()));
+        if !finite {
+            return Err(EraError::InvalidParameter {
+                name: "lowpass-hz",
+                value: cutoff_hz.to_string(),
+                reason: format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower --lowpass-order"),
+            });
+        }
         Ok(LowPass {
             sections: sos.sos,
             order,
@@ -107,6 +137,62 @@ impl LowPass {
                 ),
             });
         }
-        Ok(sosfiltfilt_dyn(signal.iter(), &self.sections))
+        let out = sosfiltfilt_dyn(signal.iter(), &self.sections);
+        if out.iter().any(|x| !x.is_finite()) {
+            return Err(EraError::InvalidParameter {
+                name: "lowpass-hz",
+                value: self.cutoff_hz.to_string(),
+                reason: format!(
+                    "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower --lowpass-order",
+                    self.order
+                ),
+            });
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cutoffs_outside_the_margin_are_refused_before_sci_rs() {
+        // 1e-300 Hz made sci-rs panic; 1e-10 Hz gave NaN impulse responses.
+        for hz in [
+            1e-300,
+            1e-10,
+            0.0,
+            -1.0,
+            f64::NAN,
+            f64::INFINITY,
+            0.5,
+            1e300,
+        ] {
+            let e = LowPass::design(4, hz, 1.0).unwrap_err();
+            assert!(e.to_string().contains("lowpass-hz"), "{hz}: {e}");
+        }
+        assert!(LowPass::design(4, 0.1, f64::NAN).is_err());
+        assert!(LowPass::design(4, 0.1, 0.0).is_err());
+    }
+
+    #[test]
+    fn every_order_is_finite_across_the_allowed_band() {
+        // The edges of the allowed band and a few decades between, at every order: no
+        // panic inside sci-rs, finite sections, a finite filtered impulse.
+        let mut impulse = vec![0.0; 4000];
+        impulse[10] = 1.0;
+        let lo = MIN_NORMALISED_CUTOFF;
+        for order in 1..=20 {
+            for normalised in [lo, 1e-3, 1e-2, 0.1, 0.5, 0.9, 1.0 - lo] {
+                let f = LowPass::design(order, normalised / 2.0, 1.0)
+                    .unwrap_or_else(|e| panic!("order {order} at {normalised}: {e}"));
+                let out = f.apply(&impulse).unwrap();
+                assert!(
+                    out.iter().all(|x| x.is_finite()),
+                    "order {order} at {normalised}"
+                );
+            }
+        }
     }
 }

@@ -116,15 +116,22 @@ impl ThesisHankel {
     /// # Errors
     /// [`EraError::InvalidParameter`] when `ns·lh < 8` (no room for a 1-block `H0`).
     pub fn new(states: usize, hankel_factor: usize) -> Result<Self> {
-        let markov_samples = (states * hankel_factor) / 4 * 4;
+        crate::limits::STATES.check("states", states as u64)?;
+        // The Markov samples are samples of the impulse responses: a product above the
+        // sample limit cannot be filled from any data a limit lets through. Refusing it
+        // here also keeps the product (and every message that prints it) from wrapping.
+        let product = crate::limits::SAMPLES.check_product(
+            "Markov samples (states x hankel-factor)",
+            &[states as u64, hankel_factor as u64],
+        )?;
+        let markov_samples = product / 4 * 4;
         let half = markov_samples / 2;
         if half < 2 {
             return Err(EraError::InvalidParameter {
                 name: "hankel-factor",
                 value: hankel_factor.to_string(),
                 reason: format!(
-                    "states x hankel-factor = {} is below 8: the Hankel matrix would be empty",
-                    states * hankel_factor
+                    "states x hankel-factor = {product} is below 8: the Hankel matrix would be empty"
                 ),
             });
         }

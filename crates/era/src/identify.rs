@@ -153,6 +153,73 @@ pub struct Identification {
     pub timings: StageTimings,
 }
 
+/// The largest FRF magnitude identified as given: `2^300` (about 2e90). Above it the
+/// squared norms inside the SVD head for overflow (1e154 overflowed them).
+pub const SAFE_MAGNITUDE_MAX: f64 = 2.037_035_976_334_486e90; // 2^300
+/// The smallest largest-magnitude identified as given, `2^-300`.
+pub const SAFE_MAGNITUDE_MIN: f64 = 4.909_093_465_297_727e-91; // 2^-300
+
+/// An exact power-of-two scale `2^e` (`e` even) applied to data whose largest magnitude
+/// lies outside [`SAFE_MAGNITUDE_MIN`, `SAFE_MAGNITUDE_MAX`].
+///
+/// ERA of `s·G` gives the balanced realization `(A, √s·B, √s·C, s·D)` of `G`'s, with
+/// singular values `s·σ`: dividing `B` and `C` by `√s`, `D` and `σ` by `s` (exact, as
+/// powers of two) gives the model of the data as given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct MagnitudeScale {
+    exponent: i32,
+}
+
+impl MagnitudeScale {
+    fn of(frf: &FrfData) -> Option<Self> {
+        let max = frf
+            .values()
+            .iter()
+            .map(|v| v.re.abs().max(v.im.abs()))
+            .fold(0.0f64, f64::max);
+        if max == 0.0 || (SAFE_MAGNITUDE_MIN..=SAFE_MAGNITUDE_MAX).contains(&max) {
+            return None;
+        }
+        // Bring the largest magnitude near 1; an even exponent so √s is exact, and within
+        // ±1000 so 2^e is a normal double.
+        let e = -(max.log2().round() as i32);
+        let e = (e - e.rem_euclid(2)).clamp(-1000, 1000);
+        Some(MagnitudeScale { exponent: e })
+    }
+
+    fn factor(exponent: i32) -> f64 {
+        2f64.powi(exponent)
+    }
+
+    fn apply(self, frf: &FrfData) -> Result<FrfData> {
+        let s = Self::factor(self.exponent);
+        let values = frf.values().iter().map(|v| v * s).collect();
+        FrfData::new(
+            frf.frequency_hz().to_vec(),
+            frf.outputs(),
+            frf.inputs(),
+            values,
+            frf.quantity(),
+        )
+    }
+
+    fn undo(self, r: &mut Realization) {
+        let inv = Self::factor(-self.exponent);
+        let inv_sqrt = Self::factor(-self.exponent / 2);
+        let m = &mut r.model;
+        for (mat, k) in [(&mut m.b, inv_sqrt), (&mut m.c, inv_sqrt), (&mut m.d, inv)] {
+            for j in 0..mat.ncols() {
+                for i in 0..mat.nrows() {
+                    mat[(i, j)] *= k;
+                }
+            }
+        }
+        for sv in &mut r.singular_values {
+            *sv *= inv;
+        }
+    }
+}
+
 /// Which implementation of each stage to use.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Path {
@@ -207,9 +274,22 @@ fn run(
         clock = Instant::now();
     };
 
+    // Magnitudes far from 1 overflow (or underflow) the squares inside the SVD: such data
+    // is identified at an exact power-of-two scale, and the model is scaled back below.
+    // Data inside the safe range is untouched (the thesis results stay bit for bit).
+    let scale = MagnitudeScale::of(frf);
+    let scaled;
+    let working = match scale {
+        Some(sc) => {
+            scaled = sc.apply(frf)?;
+            &scaled
+        }
+        None => frf,
+    };
+
     observer(Stage::Preprocess);
     let pre = preprocess(
-        frf,
+        working,
         options.integrations,
         options.pad_to,
         options.zero_lines,
@@ -239,10 +319,13 @@ fn run(
         ..RealizeOptions::new(options.states, options.hankel_factor)
     };
     observer(Stage::HankelSvd);
-    let realization = match path {
+    let mut realization = match path {
         Path::Fast => realize(&markov, pre.sample_time_s, &realize_options)?,
         Path::Naive => realize_naive(&markov, pre.sample_time_s, &realize_options)?,
     };
+    if let Some(sc) = scale {
+        sc.undo(&mut realization);
+    }
     let mut realize_call = 0.0;
     lap(&mut realize_call);
 
@@ -284,4 +367,66 @@ fn run(
         model_response: response,
         timings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::truth_model_frf;
+
+    fn scaled(frf: &FrfData, factor: f64) -> FrfData {
+        FrfData::new(
+            frf.frequency_hz().to_vec(),
+            frf.outputs(),
+            frf.inputs(),
+            frf.values().iter().map(|v| v * factor).collect(),
+            frf.quantity(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn huge_and_tiny_magnitudes_are_identified_at_a_safe_scale() {
+        // FRFs of 1e154 and more overflowed the SVD (exit 1); 1e-300 underflowed.
+        let truth = truth_model_frf(None).unwrap();
+        let opts = EraOptions::thesis_truth_model();
+        let reference = identify(&truth, &opts).unwrap();
+        assert!(
+            MagnitudeScale::of(&truth).is_none(),
+            "the thesis data is untouched"
+        );
+        for factor in [1e160, 1e300, 1e-300, 2f64.powi(-1000)] {
+            let data = scaled(&truth, factor);
+            let found = identify(&data, &opts).unwrap_or_else(|e| panic!("x {factor:e}: {e}"));
+            // Same modes, the model of the data as given: B·C and D scale with it.
+            for (a, b) in found.modal.modes.iter().zip(&reference.modal.modes) {
+                assert!(
+                    (a.frequency_hz - b.frequency_hz).abs() < 1e-9 * b.frequency_hz,
+                    "x {factor:e}: {} vs {}",
+                    a.frequency_hz,
+                    b.frequency_hz
+                );
+            }
+            let r = reference.realization.singular_values[0];
+            let f = found.realization.singular_values[0];
+            assert!(
+                ((f / factor) / r - 1.0).abs() < 1e-9,
+                "x {factor:e}: sigma {f:e} vs {r:e}"
+            );
+            for (m, g) in found
+                .model_response
+                .iter()
+                .zip(&found.processed.values()[..])
+            {
+                assert!(m.re.is_finite() && m.im.is_finite());
+                let _ = g;
+            }
+            let rel = found.fit.pairs[0].relative_error;
+            let rel0 = reference.fit.pairs[0].relative_error;
+            assert!(
+                (rel - rel0).abs() < 1e-6,
+                "x {factor:e}: fit {rel} vs {rel0}"
+            );
+        }
+    }
 }

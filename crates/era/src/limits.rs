@@ -18,6 +18,7 @@
 //! | [`VALUES`]: complex values of one FRF set (outputs × inputs × lines) | 200 000 000 | `ERA_MAX_VALUES` |
 //! | [`INPUT_BYTES`]: bytes read from a pipe, standard input or a device | 1 GiB | `ERA_MAX_INPUT_BYTES` |
 //! | [`ITERATIONS`]: iterations or cycles of an iterative routine | 1 000 000 | `ERA_MAX_ITERATIONS` |
+//! | [`STEPS`]: integrator steps of one simulation (friction simulate, all tune trials) | 200 000 000 | `ERA_MAX_STEPS` |
 //!
 //! The defaults let every real data set we know through (the thesis set is 8 × 8 × 801; a
 //! 28 × 2 × 16 385 analyzer set is 0.9 M values) while keeping the memory any one request
@@ -79,6 +80,28 @@ pub const ITERATIONS: Limit = Limit {
     default: 1_000_000,
     env: "ERA_MAX_ITERATIONS",
 };
+
+/// Integrator steps of one friction simulation (`era friction simulate`, or all the
+/// bisection trials of `era friction tune` together): a bound on the run time, about
+/// ten seconds at the default.
+pub const STEPS: Limit = Limit {
+    what: "integrator steps",
+    default: 200_000_000,
+    env: "ERA_MAX_STEPS",
+};
+
+/// A count computed in floating point (samples = rate × duration, steps = cycles ×
+/// rate / f_n) as a `u64` for [`Limit::check`]: NaN and values beyond `u64::MAX`
+/// saturate at `u64::MAX`, so they are refused rather than wrapped.
+pub fn saturating_count(x: f64) -> u64 {
+    if x.is_nan() || x >= u64::MAX as f64 {
+        u64::MAX
+    } else if x <= 0.0 {
+        0
+    } else {
+        x.ceil() as u64
+    }
+}
 
 /// A request above a [`Limit`].
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -177,6 +200,15 @@ mod tests {
             "{m}"
         );
         assert!(m.contains("ERA_TEST_LIMIT_NEVER_SET"), "{m}");
+    }
+
+    #[test]
+    fn float_counts_saturate() {
+        assert_eq!(saturating_count(f64::NAN), u64::MAX);
+        assert_eq!(saturating_count(f64::INFINITY), u64::MAX);
+        assert_eq!(saturating_count(1e300), u64::MAX);
+        assert_eq!(saturating_count(-5.0), 0);
+        assert_eq!(saturating_count(2.5), 3);
     }
 
     #[test]

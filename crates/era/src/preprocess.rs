@@ -107,7 +107,9 @@ pub struct Preprocessed {
 ///
 /// # Errors
 /// From [`integrate`]; [`EraError::InvalidParameter`] when `zero_lines` removes every
-/// measured line.
+/// measured line; [`EraError::Limit`] when `pad_to + 1` lines exceed
+/// [`crate::limits::LINES`] or the padded set exceeds [`crate::limits::VALUES`] (checked
+/// before anything is allocated).
 pub fn preprocess(
     frf: &FrfData,
     integrations: usize,
@@ -121,7 +123,7 @@ pub fn preprocess(
             reason: format!("the data has only {} lines", frf.lines()),
         });
     }
-    if pad_to != 0 && pad_to + 1 < frf.lines() {
+    if pad_to != 0 && pad_to.saturating_add(1) < frf.lines() {
         return Err(EraError::InvalidParameter {
             name: "pad-to",
             value: pad_to.to_string(),
@@ -131,6 +133,15 @@ pub fn preprocess(
                 frf.lines()
             ),
         });
+    }
+    if pad_to != 0 {
+        // pad_to + 1 lines per pair, without wrapping at usize::MAX.
+        let lines = (pad_to as u64).saturating_add(1);
+        crate::limits::LINES.check("pad-to", lines)?;
+        crate::limits::VALUES.check_product(
+            "pad-to (outputs x inputs x lines)",
+            &[frf.outputs() as u64, frf.inputs() as u64, lines],
+        )?;
     }
     let integrated = integrate(frf, integrations)?;
     let padded = pad(&integrated, pad_to);
@@ -161,6 +172,28 @@ mod tests {
         let expected = Complex64::new(0.0, -1.0 / (2.0 * std::f64::consts::PI * 2.0));
         assert!((v.pair(0, 0)[2] - expected).norm() < 1e-15);
         assert!(integrate(&d, 3).is_err());
+    }
+
+    #[test]
+    fn huge_padding_is_refused_before_allocating() {
+        let d = FrfData::from_fn(
+            uniform_lines(9, 1.0),
+            2,
+            2,
+            Quantity::Acceleration,
+            |_, _, _| Complex64::new(1.0, 0.0),
+        )
+        .unwrap();
+        for pad_to in [usize::MAX - 1, usize::MAX, 100_000_000] {
+            match preprocess(&d, 0, pad_to, 0) {
+                Err(EraError::Limit(e)) => {
+                    assert_eq!(e.context, "pad-to");
+                    assert!(e.asked > e.allowed, "{e}");
+                }
+                other => panic!("pad-to {pad_to}: {other:?}"),
+            }
+        }
+        assert!(preprocess(&d, 0, 16, 0).is_ok());
     }
 
     #[test]

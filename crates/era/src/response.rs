@@ -324,8 +324,28 @@ pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -
             let g = &measured.pair(i, j)[first_line..];
             let start = (i * p + j) * lines + first_line;
             let h = &model[start..start + g.len()];
-            let num: f64 = g.iter().zip(h).map(|(a, b)| (a - b).norm_sqr()).sum();
-            let den: f64 = g.iter().map(|a| a.norm_sqr()).sum();
+            let mut num: f64 = g.iter().zip(h).map(|(a, b)| (a - b).norm_sqr()).sum();
+            let mut den: f64 = g.iter().map(|a| a.norm_sqr()).sum();
+            if !(num.is_finite() && den.is_finite()) || den < f64::MIN_POSITIVE {
+                // Squares of magnitudes beyond about 1e154 overflow, below 1e-154 they
+                // underflow: sum them at an exact power-of-two scale instead (the ratio
+                // is the same). Ordinary data never takes this path.
+                let top = g
+                    .iter()
+                    .chain(h)
+                    .map(|z| z.re.abs().max(z.im.abs()))
+                    .filter(|m| m.is_finite())
+                    .fold(0.0f64, f64::max);
+                if top > 0.0 {
+                    let k = 2f64.powi((-(top.log2().round() as i32)).clamp(-1000, 1000));
+                    num = g
+                        .iter()
+                        .zip(h)
+                        .map(|(a, b)| (a * k - b * k).norm_sqr())
+                        .sum();
+                    den = g.iter().map(|a| (a * k).norm_sqr()).sum();
+                }
+            }
             let relative_error = if den > 0.0 {
                 (num / den).sqrt()
             } else {

@@ -52,6 +52,10 @@ impl Minstd {
     }
 }
 
+/// The largest noise fraction [`add_noise`] takes: noise a thousand times the signal
+/// already buries it; beyond, the noisy values head for overflow.
+pub const MAX_NOISE_FRACTION: f64 = 1000.0;
+
 /// Adds complex Gaussian noise to every FRF: the noise on each pair has an RMS of exactly
 /// `fraction` times that pair's RMS magnitude (DESIGN.md §2; thesis "15 % noise").
 ///
@@ -59,13 +63,14 @@ impl Minstd {
 /// (input 1: outputs 1…q, then input 2, …), and within a pair every line in order.
 ///
 /// # Errors
-/// [`EraError::InvalidParameter`] for a negative or non-finite fraction.
+/// [`EraError::InvalidParameter`] for a negative or non-finite fraction, or one above
+/// [`MAX_NOISE_FRACTION`].
 pub fn add_noise(frf: &FrfData, fraction: f64, seed: u64) -> Result<FrfData> {
-    if !(fraction.is_finite() && fraction >= 0.0) {
+    if !(fraction.is_finite() && (0.0..=MAX_NOISE_FRACTION).contains(&fraction)) {
         return Err(EraError::InvalidParameter {
             name: "noise",
             value: fraction.to_string(),
-            reason: "the noise fraction must be a finite number >= 0 (0.15 for 15 %)".into(),
+            reason: format!("the noise fraction must be a number from 0 to {MAX_NOISE_FRACTION} (0.15 for 15 %)"),
         });
     }
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
@@ -266,6 +271,16 @@ impl ModalStructure {
         if spec.modes == 0 {
             return bad("modes", "0".into(), "need at least one mode");
         }
+        crate::limits::CHANNELS.check("outputs", spec.outputs as u64)?;
+        crate::limits::CHANNELS.check("inputs", spec.inputs as u64)?;
+        crate::limits::STATES.check_product("modes (2 states each)", &[spec.modes as u64, 2])?;
+        crate::limits::VALUES.check_product(
+            "mode shapes ((outputs + inputs) x modes)",
+            &[
+                (spec.outputs as u64).saturating_add(spec.inputs as u64),
+                spec.modes as u64,
+            ],
+        )?;
         if !(spec.fmin_hz > 0.0 && spec.fmax_hz >= spec.fmin_hz && spec.fmax_hz.is_finite()) {
             return bad(
                 "fmin/fmax",
@@ -342,7 +357,9 @@ impl ModalStructure {
     /// acceleration `−ω²·G`).
     ///
     /// # Errors
-    /// [`EraError::InvalidParameter`] for fewer than 2 lines or a non-positive spacing.
+    /// [`EraError::InvalidParameter`] for fewer than 2 lines or a non-positive spacing;
+    /// [`EraError::Limit`] when the lines, the values or the terms (values × modes) are
+    /// above [`crate::limits::LINES`] or [`crate::limits::VALUES`].
     pub fn frf(&self, lines: usize, spacing_hz: f64, quantity: Quantity) -> Result<FrfData> {
         if lines < 2 || !(spacing_hz > 0.0 && spacing_hz.is_finite()) {
             return Err(EraError::InvalidParameter {
@@ -351,8 +368,23 @@ impl ModalStructure {
                 reason: "need at least 2 lines and a positive spacing".into(),
             });
         }
-        let freq = uniform_lines(lines, spacing_hz);
+        crate::limits::LINES.check("lines", lines as u64)?;
         let (q, p) = (self.outputs(), self.inputs());
+        crate::limits::VALUES.check_product(
+            "FRF values (outputs x inputs x lines)",
+            &[q as u64, p as u64, lines as u64],
+        )?;
+        // The work: one term per mode and value.
+        crate::limits::VALUES.check_product(
+            "modal FRF terms (outputs x inputs x lines x modes)",
+            &[
+                q as u64,
+                p as u64,
+                lines as u64,
+                self.frequencies_hz.len() as u64,
+            ],
+        )?;
+        let freq = uniform_lines(lines, spacing_hz);
         let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
         for (r, (fr, zr)) in self
             .frequencies_hz
@@ -376,6 +408,19 @@ impl ModalStructure {
                     }
                 }
             }
+        }
+        if values
+            .iter()
+            .any(|v| !(v.re.is_finite() && v.im.is_finite()))
+        {
+            return Err(EraError::InvalidParameter {
+                name: "lines/df",
+                value: format!("{lines} lines at {spacing_hz} Hz"),
+                reason: format!(
+                    "the {quantity} FRFs overflow at these frequencies (up to {} Hz): lower --df or --lines",
+                    spacing_hz * (lines - 1) as f64
+                ),
+            });
         }
         FrfData::new(freq, q, p, values, quantity)
     }

@@ -320,7 +320,11 @@ pub(crate) fn balancing_scale(m: &Mat<f64>) -> Vec<f64> {
     let n = m.nrows();
     let mut d = vec![1.0f64; n];
     const RADIX: f64 = 2.0;
-    loop {
+    // LAPACK's loop converges for finite matrices in a few sweeps; the cap (and the
+    // skip of non-finite norms below, where halving infinity never ends) makes sure a
+    // matrix with overflowed entries cannot keep it running.
+    const MAX_SWEEPS: usize = 1000;
+    for _ in 0..MAX_SWEEPS {
         let mut converged = true;
         for i in 0..n {
             let (mut c, mut r) = (0.0, 0.0);
@@ -328,7 +332,7 @@ pub(crate) fn balancing_scale(m: &Mat<f64>) -> Vec<f64> {
                 c += (m[(k, i)] * d[i] / d[k]).abs();
                 r += (m[(i, k)] * d[k] / d[i]).abs();
             }
-            if c == 0.0 || r == 0.0 {
+            if c == 0.0 || r == 0.0 || !(c + r).is_finite() {
                 continue;
             }
             let total = c + r;
@@ -353,6 +357,7 @@ pub(crate) fn balancing_scale(m: &Mat<f64>) -> Vec<f64> {
             return d;
         }
     }
+    d
 }
 
 #[cfg(test)]

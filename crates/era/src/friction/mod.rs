@@ -83,6 +83,18 @@ pub enum FrictionError {
         /// Half-cycles found.
         half_cycles: usize,
     },
+    /// A size or amount of work asked for is above a resource limit.
+    #[error(transparent)]
+    Limit(#[from] crate::limits::LimitError),
+    /// A simulation produced NaN or infinite values: the parameters are beyond what
+    /// double precision can represent.
+    #[error("{what} is not finite for {parameters}: the parameters are beyond what double precision can simulate")]
+    NonFiniteResult {
+        /// What came out non-finite.
+        what: &'static str,
+        /// The parameters, as `name value` pairs.
+        parameters: String,
+    },
     /// Oscillates, but not long enough for a fit.
     #[error(
         "too few cycles to fit: {usable} usable half-cycle(s) after skipping the release transient and the stuck tail, at least {needed} are needed"
@@ -111,6 +123,17 @@ impl FrictionError {
             value: value.to_string(),
             reason: reason.into(),
         }
+    }
+}
+
+/// A parameter value for a message: plain for ordinary magnitudes, in exponent form
+/// beyond (`1e308`, not 309 digits).
+pub fn show(x: f64) -> String {
+    let a = x.abs();
+    if x.is_finite() && a != 0.0 && !(1e-4..1e15).contains(&a) {
+        format!("{x:e}")
+    } else {
+        x.to_string()
     }
 }
 

@@ -147,6 +147,24 @@ fn advance(osc: &Oscillator, mass: f64, c: f64, force: f64, mut state: State, mu
     state
 }
 
+/// Internal integrator steps per sample period: the step is at most `1/(2000 f_n)`.
+///
+/// # Errors
+/// [`FrictionError::Limit`] when one sample period would need more steps than
+/// [`crate::limits::STEPS`] allows (a natural frequency far above the sample rate).
+pub fn substeps_per_sample(osc: &Oscillator, sample_rate_hz: f64) -> Result<usize> {
+    let ratio = 2000.0 * osc.natural_frequency_hz / sample_rate_hz;
+    let n = crate::limits::STEPS.check(
+        format!(
+            "steps per sample: 2000 x natural-frequency-hz {} / sample-rate {}",
+            super::show(osc.natural_frequency_hz),
+            super::show(sample_rate_hz)
+        ),
+        crate::limits::saturating_count(ratio).max(1),
+    )?;
+    Ok(usize::try_from(n).unwrap_or(usize::MAX))
+}
+
 /// Integrates from `(x0, v0)` at `t = 0` and returns the state at `samples` instants
 /// `k / sample_rate_hz`. Before each sample period `applied_force(t, state)` is called
 /// once and its value held for the period. Internal steps are at most
@@ -154,7 +172,8 @@ fn advance(osc: &Oscillator, mass: f64, c: f64, force: f64, mut state: State, mu
 ///
 /// # Errors
 /// [`FrictionError::InvalidParameter`] for invalid parameters or a non-positive sample
-/// rate.
+/// rate; [`FrictionError::Limit`] when `samples` exceeds [`crate::limits::SAMPLES`] or
+/// the steps exceed [`crate::limits::STEPS`] (checked before anything is allocated).
 pub fn integrate(
     osc: &Oscillator,
     x0: f64,
@@ -173,8 +192,12 @@ pub fn integrate(
     }
     let (mass, c) = (osc.mass(), osc.viscous_coefficient());
     let period = 1.0 / sample_rate_hz;
-    let max_step = 1.0 / (2000.0 * osc.natural_frequency_hz);
-    let substeps = (period / max_step).ceil().max(1.0) as usize;
+    let substeps = substeps_per_sample(osc, sample_rate_hz)?;
+    crate::limits::SAMPLES.check("samples", samples as u64)?;
+    crate::limits::STEPS.check_product(
+        "integration (samples x steps per sample)",
+        &[samples as u64, substeps as u64],
+    )?;
     let h = period / substeps as f64;
     let mut state = State { x: x0, v: v0 };
     let mut out = Vec::with_capacity(samples);
@@ -235,7 +258,11 @@ pub struct DecayRecord {
 /// Simulates a free-decay record.
 ///
 /// # Errors
-/// [`FrictionError::InvalidParameter`] for invalid parameters.
+/// [`FrictionError::InvalidParameter`] for invalid parameters,
+/// [`FrictionError::Limit`] when the record would exceed [`crate::limits::SAMPLES`] or
+/// the integration [`crate::limits::STEPS`], [`FrictionError::NonFiniteResult`] when the
+/// parameters are beyond double precision (the record is never returned with NaN or
+/// infinite samples).
 pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
     let osc = &spec.oscillator;
     osc.validate()?;
@@ -244,11 +271,14 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
         return bad("x0", spec.x0, "the initial displacement must be non-zero");
     }
     if !(spec.sample_rate_hz.is_finite() && spec.sample_rate_hz > 4.0 * osc.natural_frequency_hz) {
-        return bad(
+        return Err(FrictionError::invalid(
             "sample-rate",
             spec.sample_rate_hz,
-            "must exceed 4 x the natural frequency",
-        );
+            format!(
+                "must exceed 4 x the natural frequency (natural-frequency-hz {})",
+                osc.natural_frequency_hz
+            ),
+        ));
     }
     if !(spec.hold_s.is_finite() && spec.hold_s >= 0.0) {
         return bad("hold", spec.hold_s, "must be >= 0");
@@ -270,7 +300,25 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
             (half_cycles * 0.5 * period).min(40.0 * period) + 1.0
         }
     };
-    let samples = ((spec.hold_s + duration) * spec.sample_rate_hz).round() as usize + 1;
+    // rate x (hold + duration) + 1, saturating: 1e9 s at 1e9 Hz is refused, not wrapped.
+    let duration_from = match spec.duration_s {
+        Some(_) => "--duration".to_string(),
+        None => format!(
+            "until the mass sticks at natural-frequency-hz {}",
+            super::show(osc.natural_frequency_hz)
+        ),
+    };
+    let samples = crate::limits::SAMPLES.check_product(
+        format!(
+            "samples: sample-rate {} x (hold {} + duration {} s, {duration_from}) + 1",
+            super::show(spec.sample_rate_hz),
+            super::show(spec.hold_s),
+            super::show(duration)
+        ),
+        &[crate::limits::saturating_count(
+            ((spec.hold_s + duration) * spec.sample_rate_hz).round() + 1.0,
+        )],
+    )?;
     let time_s: Vec<f64> = (0..samples)
         .map(|k| k as f64 / spec.sample_rate_hz)
         .collect();
@@ -293,6 +341,9 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
             s
         }
     };
+    if states.iter().any(|s| !(s.x.is_finite() && s.v.is_finite())) {
+        return Err(non_finite(spec, "the simulated motion"));
+    }
     let mut rng = Minstd::new(spec.seed);
     let v_amp = (spec.x0.abs() - osc.coulomb_force / osc.stiffness).max(0.0) * osc.omega();
     let (nv, nx) = (
@@ -312,12 +363,94 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
         record.velocity.push(s.v + nv * ev);
         record.displacement.push(s.x + nx * ex);
     }
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if record.time_s.is_empty()
+        || !finite(&record.time_s)
+        || !finite(&record.velocity)
+        || !finite(&record.displacement)
+    {
+        return Err(non_finite(spec, "the simulated record (with its noise)"));
+    }
     Ok(record)
+}
+
+/// [`FrictionError::NonFiniteResult`] naming every parameter of `spec`.
+fn non_finite(spec: &DecaySpec, what: &'static str) -> FrictionError {
+    let o = &spec.oscillator;
+    FrictionError::NonFiniteResult {
+        what,
+        parameters: format!(
+            "stiffness {}, natural-frequency-hz {}, coulomb-force {}, viscous-damping-ratio {}, x0 {}, sample-rate {}, hold {}, noise {}",
+            super::show(o.stiffness),
+            super::show(o.natural_frequency_hz),
+            super::show(o.coulomb_force),
+            super::show(o.viscous_damping_ratio),
+            super::show(spec.x0),
+            super::show(spec.sample_rate_hz),
+            super::show(spec.hold_s),
+            super::show(spec.noise_fraction)
+        ),
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn decay() -> DecaySpec {
+        DecaySpec {
+            oscillator: Oscillator::coulomb(1.0, 1.5, 0.05),
+            x0: 1.5,
+            sample_rate_hz: 200.0,
+            hold_s: 0.5,
+            duration_s: None,
+            noise_fraction: 0.0,
+            seed: 1,
+            method: Method::Exact,
+        }
+    }
+
+    #[test]
+    fn huge_records_are_refused_before_allocating() {
+        for (rate, hold, duration) in [
+            (1e9, 0.5, None),
+            (200.0, 0.5, Some(1e9)),
+            (200.0, 1e300, None),
+            (1e300, 0.5, Some(1e300)),
+        ] {
+            for method in [Method::Exact, Method::Integrate] {
+                let s = DecaySpec {
+                    sample_rate_hz: rate,
+                    hold_s: hold,
+                    duration_s: duration,
+                    method,
+                    ..decay()
+                };
+                match free_decay_record(&s) {
+                    Err(FrictionError::Limit(e)) => assert!(e.asked > e.allowed, "{e}"),
+                    other => panic!("{rate} {hold} {duration:?}: {other:?}"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_motion_is_an_error_not_a_record() {
+        // x0 near the largest double: the velocity x0·ω overflows.
+        let s = DecaySpec {
+            x0: 1e308,
+            oscillator: Oscillator::coulomb(1.0, 100.0, 0.0),
+            sample_rate_hz: 1000.0,
+            duration_s: Some(1.0),
+            ..decay()
+        };
+        match free_decay_record(&s) {
+            Err(e @ FrictionError::NonFiniteResult { .. }) => {
+                assert!(e.to_string().contains("x0 1e308"), "{e}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
 
     #[test]
     fn exact_solution_follows_eqs_3_6_and_3_9() {

@@ -47,6 +47,14 @@ pub struct TuneResult {
     pub iterations: usize,
 }
 
+/// Doublings of the upper bracket at most.
+const BRACKET_DOUBLINGS: usize = 20;
+/// Bisection steps at most.
+const BISECTIONS: usize = 60;
+/// Trials of one tuning run at most: the bracket's first try, its doublings, the
+/// bisections.
+pub const MAX_TRIALS: usize = 1 + BRACKET_DOUBLINGS + BISECTIONS;
+
 /// Velocity amplitude trend of the compensated free decay with coefficient `c`:
 /// (last peak − first peak) / first peak over the simulated cycles.
 ///
@@ -81,7 +89,10 @@ pub fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> {
 /// Bisection for the neutral coefficient between 0 and `4·F_C + drop` of the model.
 ///
 /// # Errors
-/// [`FrictionError::InvalidParameter`] for invalid settings.
+/// [`FrictionError::InvalidParameter`] for invalid settings; [`FrictionError::Limit`]
+/// when the trials together would take more than [`crate::limits::STEPS`] integrator
+/// steps (checked before the first trial); [`FrictionError::NonFiniteResult`] when the
+/// neutral coefficient is not a positive finite number.
 pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     spec.oscillator.validate()?;
     let bad = |name, value: f64, reason: &str| Err(FrictionError::invalid(name, value, reason));
@@ -104,13 +115,42 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     if !(spec.sample_rate_hz.is_finite()
         && spec.sample_rate_hz > 4.0 * spec.oscillator.natural_frequency_hz)
     {
-        return bad(
+        return Err(FrictionError::invalid(
             "sample-rate",
             spec.sample_rate_hz,
-            "must exceed 4 x the natural frequency",
-        );
+            format!(
+                "must exceed 4 x the natural frequency (natural-frequency-hz {})",
+                spec.oscillator.natural_frequency_hz
+            ),
+        ));
     }
     let o = &spec.oscillator;
+    if !(o.stiffness * spec.x0.abs() > o.coulomb_force) {
+        return Err(FrictionError::invalid(
+            "coulomb-force",
+            super::show(o.coulomb_force),
+            format!(
+                "the mass never moves: the spring force at release, stiffness {} x x0 {}, does not exceed the friction force, so no coefficient is neutral",
+                super::show(o.stiffness),
+                super::show(spec.x0)
+            ),
+        ));
+    }
+    // Bound the work before any trial runs: every trial integrates
+    // cycles x sample-rate / f_n samples of `substeps` steps each.
+    let substeps = super::simulate::substeps_per_sample(o, spec.sample_rate_hz)?;
+    let samples = crate::limits::saturating_count(
+        spec.cycles as f64 * spec.sample_rate_hz / o.natural_frequency_hz,
+    );
+    crate::limits::STEPS.check_product(
+        format!(
+            "--cycles {} at sample-rate {} and natural-frequency-hz {} ({MAX_TRIALS} bisection trials x samples x steps per sample)",
+            spec.cycles,
+            super::show(spec.sample_rate_hz),
+            super::show(o.natural_frequency_hz)
+        ),
+        &[MAX_TRIALS as u64, samples, substeps as u64],
+    )?;
     // Upper bracket: enough force to beat friction and the viscous loss at x0.
     let viscous = o.viscous_coefficient() * o.omega() * spec.x0.abs();
     let (mut lo, mut hi) = (
@@ -118,12 +158,12 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
         2.0 * (o.coulomb_force + viscous).max(1e-12 * o.stiffness * spec.x0.abs()),
     );
     let mut guard = 0;
-    while amplitude_trend(spec, hi)? < 0.0 && guard < 20 {
+    while amplitude_trend(spec, hi)? < 0.0 && guard < BRACKET_DOUBLINGS {
         hi *= 2.0;
         guard += 1;
     }
     let mut iterations = 0;
-    while hi - lo > 1e-5 * hi && iterations < 60 {
+    while hi - lo > 1e-5 * hi && iterations < BISECTIONS {
         let mid = 0.5 * (lo + hi);
         if amplitude_trend(spec, mid)? < 0.0 {
             lo = mid;
@@ -133,6 +173,21 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
         iterations += 1;
     }
     let neutral = 0.5 * (lo + hi);
+    if !(neutral.is_finite() && neutral > 0.0) {
+        return Err(FrictionError::NonFiniteResult {
+            what: "the neutral coefficient",
+            parameters: format!(
+                "stiffness {}, natural-frequency-hz {}, coulomb-force {}, viscous-damping-ratio {}, x0 {}, dead-zone {}, sample-rate {}",
+                super::show(o.stiffness),
+                super::show(o.natural_frequency_hz),
+                super::show(o.coulomb_force),
+                super::show(o.viscous_damping_ratio),
+                super::show(spec.x0),
+                super::show(spec.dead_zone),
+                super::show(spec.sample_rate_hz)
+            ),
+        });
+    }
     Ok(TuneResult {
         neutral_coefficient: neutral,
         applied_coefficient: spec.fraction * neutral,
@@ -145,4 +200,73 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
 /// neutral one: negative means the compensated actuator oscillates.
 pub fn stability_margin(coefficient: f64, fraction: f64, neutral: f64) -> f64 {
     1.0 - fraction * coefficient / neutral
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec() -> TuneSpec {
+        TuneSpec {
+            oscillator: Oscillator::coulomb(1.0, 1.5, 0.05),
+            x0: 1.5,
+            dead_zone: 0.2,
+            sample_rate_hz: 200.0,
+            cycles: 6,
+            fraction: 0.85,
+        }
+    }
+
+    #[test]
+    fn the_work_is_bounded_before_the_first_trial() {
+        // 100 000 cycles ran for minutes; a tiny natural frequency asked for more
+        // samples than usize holds (a capacity-overflow panic).
+        for s in [
+            TuneSpec {
+                cycles: 100_000,
+                ..spec()
+            },
+            TuneSpec {
+                cycles: usize::MAX,
+                ..spec()
+            },
+            TuneSpec {
+                oscillator: Oscillator::coulomb(1.0, 1e-300, 0.05),
+                ..spec()
+            },
+        ] {
+            match tune(&s) {
+                Err(FrictionError::Limit(e)) => assert_eq!(e.env, "ERA_MAX_STEPS", "{e}"),
+                other => panic!("{s:?}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn an_infinite_or_meaningless_neutral_coefficient_is_an_error() {
+        // k·x0 overflows: the bracket started at infinity ("neutral coefficient inf").
+        let s = TuneSpec {
+            oscillator: Oscillator::coulomb(1e300, 1.5, 0.05),
+            x0: 1e300,
+            ..spec()
+        };
+        match tune(&s) {
+            Err(e @ FrictionError::NonFiniteResult { .. }) => {
+                assert!(e.to_string().contains("x0 1e300"), "{e}")
+            }
+            other => panic!("{other:?}"),
+        }
+        // Friction above the spring force: the mass never moves, any coefficient is
+        // "neutral" (a bisection to nowhere gave 8.7e281).
+        let s = TuneSpec {
+            oscillator: Oscillator::coulomb(1.0, 1.5, 1e300),
+            ..spec()
+        };
+        match tune(&s) {
+            Err(e @ FrictionError::InvalidParameter { .. }) => {
+                assert!(e.to_string().contains("never moves"), "{e}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
 }
