@@ -222,7 +222,9 @@ pub fn remove_stale(folder: &Path) -> usize {
             continue;
         }
         // DirEntry::file_type does not follow a symbolic link.
-        let Ok(kind) = entry.file_type() else { continue };
+        let Ok(kind) = entry.file_type() else {
+            continue;
+        };
         let path = entry.path();
         let gone = if is_staging && kind.is_dir() {
             // std's remove_dir_all does not follow symbolic links inside.
@@ -553,9 +555,18 @@ mod tests {
             assert!(r.is_err());
         }
         assert_eq!(std::fs::read(&decoy).unwrap(), b"precious");
-        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
-        assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
-        assert_eq!(names(dir.path()), ["decoy", "folder.csv", "link.csv", "pipe.csv"]);
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert!(std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo());
+        assert_eq!(
+            names(dir.path()),
+            ["decoy", "folder.csv", "link.csv", "pipe.csv"]
+        );
     }
 
     #[test]
@@ -585,7 +596,10 @@ mod tests {
             symlink(&decoy, tmp).unwrap();
             Ok(())
         });
-        assert!(r.unwrap_err().to_string().contains("replaced while writing"));
+        assert!(r
+            .unwrap_err()
+            .to_string()
+            .contains("replaced while writing"));
         assert!(!target.exists());
         assert_eq!(std::fs::read(&decoy).unwrap(), b"precious");
     }
@@ -608,9 +622,18 @@ mod tests {
     #[test]
     fn era_names_are_told_apart_exactly() {
         let r = "a".repeat(RANDOM_CHARS);
-        assert_eq!(era_pid(&format!(".era-tmp-77-{r}.png"), TEMPORARY_PREFIX, true), Some(77));
-        assert_eq!(era_pid(&format!(".era-tmp-77-{r}"), TEMPORARY_PREFIX, true), Some(77));
-        assert_eq!(era_pid(&format!(".era-staging-5-{r}"), STAGING_PREFIX, false), Some(5));
+        assert_eq!(
+            era_pid(&format!(".era-tmp-77-{r}.png"), TEMPORARY_PREFIX, true),
+            Some(77)
+        );
+        assert_eq!(
+            era_pid(&format!(".era-tmp-77-{r}"), TEMPORARY_PREFIX, true),
+            Some(77)
+        );
+        assert_eq!(
+            era_pid(&format!(".era-staging-5-{r}"), STAGING_PREFIX, false),
+            Some(5)
+        );
         for bad in [
             format!(".era-tmp-77-{r}x"),
             format!(".era-tmp-77-{}", "a".repeat(RANDOM_CHARS - 1)),
@@ -623,7 +646,10 @@ mod tests {
         ] {
             assert_eq!(era_pid(&bad, TEMPORARY_PREFIX, true), None, "{bad}");
         }
-        assert_eq!(era_pid(&format!(".era-staging-5-{r}.x"), STAGING_PREFIX, false), None);
+        assert_eq!(
+            era_pid(&format!(".era-staging-5-{r}.x"), STAGING_PREFIX, false),
+            None
+        );
     }
 
     #[test]
@@ -718,8 +744,16 @@ mod tests {
         let elsewhere = tempfile::tempdir().unwrap();
         symlink(elsewhere.path(), d.join("pairs")).unwrap();
         let mut set = OutputSet::new(d).unwrap();
-        assert!(set.stage("link.json").unwrap_err().to_string().contains("symbolic link"));
-        assert!(set.stage("pairs/x.svg").unwrap_err().to_string().contains("real folders"));
+        assert!(set
+            .stage("link.json")
+            .unwrap_err()
+            .to_string()
+            .contains("symbolic link"));
+        assert!(set
+            .stage("pairs/x.svg")
+            .unwrap_err()
+            .to_string()
+            .contains("real folders"));
         assert!(set.stage("../x.svg").is_err());
         assert!(set.stage("/tmp/x.svg").is_err());
         write_atomic(&set.stage("a.json").unwrap(), b"a").unwrap();
@@ -764,7 +798,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let f = dir.path().join("file");
         std::fs::write(&f, b"x").unwrap();
-        assert!(OutputSet::new(&f).unwrap_err().to_string().contains("not a folder"));
+        assert!(OutputSet::new(&f)
+            .unwrap_err()
+            .to_string()
+            .contains("not a folder"));
         assert!(OutputSet::new(&dir.path().join("missing")).is_err());
     }
 }
