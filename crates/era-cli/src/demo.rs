@@ -2,7 +2,7 @@
 //! with the thesis settings, without and with noise, beside the exact truth.
 
 use crate::args::DemoArgs;
-use crate::identify::prepare_out_dir;
+use crate::identify::{prepare_out_dir, write_output};
 use crate::report::{parameter_echo, parameters, print_json, timings_table, Human};
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
@@ -12,6 +12,7 @@ use era_io::csv::write_frf_csv;
 use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson};
 use serde_json::json;
 use std::fmt::Write as _;
+use std::path::Path;
 use std::time::Instant;
 
 fn max_errors(truth: &[Mode], found: &[Mode]) -> serde_json::Value {
@@ -40,9 +41,10 @@ fn cell(mode: Option<&Mode>) -> String {
 pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     crate::simulate::check_noise(a.noise)?;
-    if let Some(dir) = &a.out {
-        prepare_out_dir(dir)?;
-    }
+    let mut outputs = match &a.out {
+        Some(dir) => Some(prepare_out_dir(dir)?),
+        None => None,
+    };
     let options = EraOptions::thesis_truth_model();
     human.print("era demo: the thesis's truth model (Woods 1994, section 4.2, Table 5.2)\n");
     human.print("  4 masses, 3 force inputs, 3 displacement outputs; ZOH at 25 600 Hz, 1025 lines 0..12 800 Hz\n");
@@ -121,35 +123,44 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
         }
     }
 
-    if let Some(dir) = &a.out {
+    if let (Some(dir), Some(mut set)) = (&a.out, outputs.take()) {
         let clock = Instant::now();
         let seed = a.seed.to_string();
         let noise = a.noise.to_string();
-        write_frf_csv(
-            &dir.join("truth_frf.csv"),
-            &clean_frf,
-            &[("source", "era demo"), ("noise_fraction", "0")],
-        )?;
-        write_frf_csv(
-            &dir.join("truth_frf_noisy.csv"),
-            &noisy_frf,
-            &[
-                ("source", "era demo"),
-                ("noise_fraction", &noise),
-                ("seed", &seed),
-            ],
-        )?;
+        write_output(&mut set, "truth_frf.csv", |p| {
+            Ok(write_frf_csv(
+                p,
+                &clean_frf,
+                &[("source", "era demo"), ("noise_fraction", "0")],
+            )?)
+        })?;
+        write_output(&mut set, "truth_frf_noisy.csv", |p| {
+            Ok(write_frf_csv(
+                p,
+                &noisy_frf,
+                &[
+                    ("source", "era demo"),
+                    ("noise_fraction", &noise),
+                    ("seed", &seed),
+                ],
+            )?)
+        })?;
         for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
-            let sub = dir.join(label);
-            prepare_out_dir(&sub)?;
-            ModelJson::from_identification(found, parameters(&options), None)
-                .write(&sub.join("model.json"))?;
-            FitJson::from_report(&found.fit).write(&sub.join("fit.json"))?;
-            era_io::mat::write_model_mat(&sub.join("model.mat"), &found.model, &found.modal)?;
+            let sub = Path::new(label);
+            write_output(&mut set, sub.join("model.json"), |p| {
+                Ok(ModelJson::from_identification(found, parameters(&options), None).write(p)?)
+            })?;
+            write_output(&mut set, sub.join("fit.json"), |p| {
+                Ok(FitJson::from_report(&found.fit).write(p)?)
+            })?;
+            write_output(&mut set, sub.join("model.mat"), |p| {
+                Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
+            })?;
             let title = format!("era demo: the truth model, {}", label.replace('_', " "));
             let bar = crate::progress::bar(&a.common, 9, &format!("figures ({label})"));
             crate::figures::write_all(
-                &sub,
+                &mut set,
+                sub,
                 &title,
                 &parameter_echo(&options),
                 found,
@@ -159,6 +170,8 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             )?;
             bar.finish_and_clear();
         }
+        // Both runs' outputs take their place together, or none does.
+        set.commit()?;
         human.print(&format!(
             "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, model.mat, fit.json, report.html and figures ({1:.3} s)\n",
             dir.display(),

@@ -1,41 +1,79 @@
-//! Writing the figures and `report.html` of one identification into a folder.
+//! Writing the figures and `report.html` of one identification into an [`OutputSet`].
 
+use crate::identify::write_output;
 use era::identify::Identification;
 use era::preprocess::zero_leading_lines;
 use era::FrfData;
-use era_io::atomic::{write_atomic, write_via};
+use era_io::atomic::{write_atomic, write_via, OutputSet};
+use era_io::IoError;
 use era_plot::report::{report_html, ReportInput};
 use era_plot::{frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure};
 use std::path::Path;
 
-/// Writes `stem.svg` and `stem.png` for a figure; returns the SVG text.
-pub fn write_figure(dir: &Path, stem: &str, figure: &Figure) -> anyhow::Result<String> {
+/// The last 12 bytes of every complete PNG: the empty IEND chunk and its CRC.
+const PNG_END: [u8; 12] = [0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82];
+
+/// Renders `figure` as PNG into `path` and checks that the file is complete: the
+/// encoder's buffered writer may drop a failed last write (a full disk) silently.
+fn write_png(figure: &Figure, path: &Path) -> Result<(), IoError> {
+    let failed = |message: String| IoError::Format {
+        path: path.to_path_buf(),
+        location: String::new(),
+        message,
+    };
+    write_via(path, |tmp| {
+        // The SVG of the same figure has just been drawn: a failure here is the file's.
+        render_png(figure, tmp).map_err(|e| failed(format!("cannot write the PNG: {e}")))?;
+        let bytes = std::fs::read(tmp).map_err(|e| IoError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        if !bytes.ends_with(&PNG_END) {
+            return Err(failed(format!(
+                "the PNG encoder stopped after {} bytes (disk full?)",
+                bytes.len()
+            )));
+        }
+        Ok(())
+    })
+}
+
+/// Writes `folder/stem.svg` and `folder/stem.png` of a figure into `set`; returns the
+/// SVG text.
+pub fn write_figure(
+    set: &mut OutputSet,
+    folder: &Path,
+    stem: &str,
+    figure: &Figure,
+) -> anyhow::Result<String> {
     let svg = render_svg(figure)?;
-    write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())?;
-    write_via(&dir.join(format!("{stem}.png")), |tmp| {
-        render_png(figure, tmp).map_err(anyhow::Error::from)
+    write_output(set, folder.join(format!("{stem}.svg")), |p| {
+        Ok(write_atomic(p, svg.as_bytes())?)
+    })?;
+    write_output(set, folder.join(format!("{stem}.png")), |p| {
+        Ok(write_png(figure, p)?)
     })?;
     Ok(svg)
 }
 
 /// The overview grid and every pair's overlay of `measured` (and `model` when given)
-/// into `dir` and `dir/pairs`; returns the grid SVG and the (title, SVG) per pair.
+/// into `folder` and `folder/pairs` of `set`; returns the grid SVG and the (title, SVG)
+/// per pair.
 pub fn write_frf_figures(
-    dir: &Path,
+    set: &mut OutputSet,
+    folder: &Path,
     measured: &FrfData,
     model: Option<&FrfData>,
     progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<(String, Vec<(String, String)>)> {
     let square = measured.outputs() == measured.inputs();
-    let grid_svg = write_figure(dir, "grid", &frf_grid(measured, model, square))?;
-    let pairs = dir.join("pairs");
-    std::fs::create_dir_all(&pairs)
-        .map_err(|e| crate::UsageError(format!("{}: {e}", pairs.display())))?;
+    let grid_svg = write_figure(set, folder, "grid", &frf_grid(measured, model, square))?;
+    let pairs = folder.join("pairs");
     let mut overlays = Vec::new();
     for i in 0..measured.outputs() {
         for j in 0..measured.inputs() {
             let figure = frf_overlay(measured, model, i, j, square && i == j);
-            let svg = write_figure(&pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
+            let svg = write_figure(set, &pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
             overlays.push((figure.title.clone(), svg));
             progress.inc(1);
         }
@@ -43,10 +81,12 @@ pub fn write_frf_figures(
     Ok((grid_svg, overlays))
 }
 
-/// Figures and report of `found` into `dir`: `singular_values`, `grid`,
+/// Figures and report of `found` into `folder` of `set`: `singular_values`, `grid`,
 /// `pairs/pair_I_J` (SVG and PNG) and `report.html`.
+#[allow(clippy::too_many_arguments)]
 pub fn write_all(
-    dir: &Path,
+    set: &mut OutputSet,
+    folder: &Path,
     title: &str,
     parameters: &str,
     found: &Identification,
@@ -64,11 +104,12 @@ pub fn write_all(
         measured.quantity(),
     )?;
     let sv_svg = write_figure(
-        dir,
+        set,
+        folder,
         "singular_values",
         &singular_value_figure(&found.realization.singular_values, states),
     )?;
-    let (grid_svg, overlays) = write_frf_figures(dir, &measured, Some(&model), progress)?;
+    let (grid_svg, overlays) = write_frf_figures(set, folder, &measured, Some(&model), progress)?;
     let html = report_html(&ReportInput {
         title,
         parameters,
@@ -77,6 +118,8 @@ pub fn write_all(
         grid_svg: &grid_svg,
         overlays: &overlays,
     });
-    write_atomic(&dir.join("report.html"), html.as_bytes())?;
+    write_output(set, folder.join("report.html"), |p| {
+        Ok(write_atomic(p, html.as_bytes())?)
+    })?;
     Ok(())
 }

@@ -2,10 +2,11 @@
 //! `era identify --from-time`.
 
 use crate::args::{DetrendArg, EstimatorArg, FrfArgs, QuantityArg, WelchArgs, WindowArg};
-use crate::identify::{shape_line, InputFrf};
+use crate::identify::{output_name, shape_line, write_output, InputFrf};
 use crate::report::{finish_output, Human};
 use anyhow::Context as _;
 use era::frf::estimate::{self, Detrend, Estimator, FrfEstimate, WelchOptions, Window};
+use era_io::atomic::OutputSet;
 use era_io::csv::FrfFile;
 use era_io::format::FrfFormat;
 use era_io::time::{parse_channels, read_time_file, TimeHistory, TimeSelection};
@@ -468,8 +469,9 @@ pub fn write_coherence(path: &Path, est: &FrfEstimate, source: &str) -> anyhow::
     Ok(())
 }
 
-/// Writes the FRFs (the estimation settings kept as CSV metadata) and the coherence.
-pub fn write_estimate(out: &Path, found: &FromTime, binary: bool) -> anyhow::Result<PathBuf> {
+/// Checks `--out` (its format, and that it and its coherence file beside it can be
+/// written) and opens the [`OutputSet`] that [`write_estimate`] fills, before the work.
+pub fn prepare_estimate(out: &Path, binary: bool) -> anyhow::Result<OutputSet> {
     let format = FrfFormat::from_extension(out).ok_or_else(|| {
         crate::UsageError(format!(
             "--out {}: cannot tell the format from the extension: use .csv, .uff (or .unv) or .mat",
@@ -482,21 +484,44 @@ pub fn write_estimate(out: &Path, found: &FromTime, binary: bool) -> anyhow::Res
             out.display()
         ));
     }
+    let mut set = OutputSet::beside(out)?;
+    set.stage(crate::identify::output_name("--out", out)?)?;
+    set.stage(crate::identify::output_name("--out", &coherence_path(out))?)?;
+    Ok(set)
+}
+
+/// Writes the FRFs (the estimation settings kept as CSV metadata) and the coherence
+/// into `set` (from [`prepare_estimate`]) and puts both in place together: when either
+/// cannot be written, neither changes.
+pub fn write_estimate(
+    mut set: OutputSet,
+    out: &Path,
+    found: &FromTime,
+    binary: bool,
+) -> anyhow::Result<PathBuf> {
+    let format = FrfFormat::from_extension(out)
+        .ok_or_else(|| crate::UsageError(format!("--out {}: no format", out.display())))?;
     let file = &found.input.file;
-    match format {
-        // The estimation settings stay with the FRFs as `# key: value` lines.
-        FrfFormat::Csv => era_io::format::write_frf_csv_keeping(out, file, |_| true)?,
-        _ => era_io::format::write_frf_file(
-            out,
-            file,
-            UffWriteOptions {
-                binary,
-                single: false,
-            },
-        )?,
-    }
+    write_output(&mut set, output_name("--out", out)?, |staged| {
+        match format {
+            // The estimation settings stay with the FRFs as `# key: value` lines.
+            FrfFormat::Csv => era_io::format::write_frf_csv_keeping(staged, file, |_| true)?,
+            _ => era_io::format::write_frf_file(
+                staged,
+                file,
+                UffWriteOptions {
+                    binary,
+                    single: false,
+                },
+            )?,
+        }
+        Ok(())
+    })?;
     let coherence = coherence_path(out);
-    write_coherence(&coherence, &found.estimate, &out.display().to_string())?;
+    write_output(&mut set, output_name("--out", &coherence)?, |staged| {
+        write_coherence(staged, &found.estimate, &out.display().to_string())
+    })?;
+    set.commit()?;
     Ok(coherence)
 }
 
@@ -504,21 +529,7 @@ pub fn write_estimate(out: &Path, found: &FromTime, binary: bool) -> anyhow::Res
 pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     // Refuse a bad --out before reading anything.
-    match FrfFormat::from_extension(&a.out) {
-        None => {
-            return crate::usage(format!(
-            "--out {}: cannot tell the format from the extension: use .csv, .uff (or .unv) or .mat",
-            a.out.display()
-        ))
-        }
-        Some(f) if a.binary && f != FrfFormat::Uff => {
-            return crate::usage(format!(
-                "--binary applies to UFF output, not to {}",
-                a.out.display()
-            ))
-        }
-        _ => {}
-    }
+    let set = prepare_estimate(&a.out, a.binary)?;
     let found = estimate_from_time(
         &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, &a.common,
     )?;
@@ -533,7 +544,7 @@ pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
         shape_line(&found.input.file.frf)
     ));
     let clock = Instant::now();
-    let coherence = write_estimate(&a.out, &found, a.binary)?;
+    let coherence = write_estimate(set, &a.out, &found, a.binary)?;
     let write_s = clock.elapsed().as_secs_f64();
     human.print(&format!(
         "wrote {} and {}\n",

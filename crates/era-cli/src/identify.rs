@@ -10,6 +10,7 @@ use anyhow::Context;
 use era::identify::{identify_observed, EraOptions, ModelDomain};
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
+use era_io::atomic::OutputSet;
 use era_io::format::{read_frf_file, FrfFormat, ReadOptions};
 use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::path::Path;
@@ -162,28 +163,50 @@ pub fn describe_input(input: &InputFrf) -> String {
     text
 }
 
-/// Creates `--out DIR` and checks that it takes files, before any long work.
-pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<()> {
+/// Creates `--out DIR` and opens the run's [`OutputSet`] there (a private staging
+/// folder), before any long work: a folder that cannot take files is refused now.
+pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<OutputSet> {
     std::fs::create_dir_all(dir).map_err(|e| {
         crate::UsageError(format!(
             "--out {}: cannot create the folder: {e}",
             dir.display()
         ))
     })?;
-    let probe = dir.join(format!(".era-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| {
-        crate::UsageError(format!("--out {}: cannot write there: {e}", dir.display()))
-    })?;
-    let _ = std::fs::remove_file(probe);
-    Ok(())
+    OutputSet::new(dir).map_err(|e| {
+        crate::UsageError(format!("--out {}: cannot write there: {e}", dir.display())).into()
+    })
+}
+
+/// Stages the output `name` of `set` and runs `write` on its staged path; an error
+/// names the output's final place.
+pub fn write_output(
+    set: &mut OutputSet,
+    name: impl AsRef<Path>,
+    write: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let name = name.as_ref();
+    let staged = set.stage(name)?;
+    write(&staged).with_context(|| format!("writing {}", set.target(name).display()))
+}
+
+/// The file name of an output file given on the command line, for [`OutputSet::stage`].
+pub fn output_name<'a>(flag: &str, path: &'a Path) -> anyhow::Result<&'a std::ffi::OsStr> {
+    path.file_name().ok_or_else(|| {
+        crate::UsageError(format!("{flag} {}: not a file name", path.display())).into()
+    })
 }
 
 pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let opts = options(a)?;
-    if let Some(dir) = &a.out {
-        prepare_out_dir(dir)?;
-    }
+    let mut outputs = match &a.out {
+        Some(dir) => Some(prepare_out_dir(dir)?),
+        None => None,
+    };
+    let mut frf_outputs = match &a.save_frf {
+        Some(path) if a.from_time => Some(crate::frf::prepare_estimate(path, false)?),
+        _ => None,
+    };
     let clock = Instant::now();
     let mut estimate_s = None;
     let input = if a.from_time {
@@ -205,8 +228,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             a.file.display(),
             found.summary
         ));
-        if let Some(path) = &a.save_frf {
-            let coherence = crate::frf::write_estimate(path, &found, false)?;
+        if let (Some(path), Some(set)) = (&a.save_frf, frf_outputs.take()) {
+            let coherence = crate::frf::write_estimate(set, path, &found, false)?;
             human.print(&format!(
                 "  wrote {} and {}\n",
                 path.display(),
@@ -259,11 +282,13 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         model.stability = Some(v);
     }
     let fit = FitJson::from_report(&found.fit);
-    if let Some(dir) = &a.out {
+    if let Some(set) = outputs.as_mut() {
         let clock = Instant::now();
-        model.write(&dir.join("model.json"))?;
-        fit.write(&dir.join("fit.json"))?;
-        era_io::mat::write_model_mat(&dir.join("model.mat"), &found.model, &found.modal)?;
+        write_output(set, "model.json", |p| Ok(model.write(p)?))?;
+        write_output(set, "fit.json", |p| Ok(fit.write(p)?))?;
+        write_output(set, "model.mat", |p| {
+            Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
+        })?;
         // The model's synthesised FRFs on the measurement's lines, after the same
         // integrations, for tools that overlay them on the measurement.
         let processed = &found.processed;
@@ -274,27 +299,32 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             found.model_response.clone(),
             processed.quantity(),
         )?;
-        era_io::uff::write_uff58(
-            &dir.join("model_frf.uff"),
-            &synthesised,
-            input.file.channels.as_ref(),
-            (None, None),
-            era_io::uff::UffWriteOptions {
-                binary: true,
-                single: false,
-            },
-        )?;
-        era_io::uff::write_uff55(
-            &dir.join("modes.uff"),
-            &found.modal,
-            input.file.channels.as_ref(),
-            // The shapes are of the integrated quantity, as the model is.
-            found.processed.quantity(),
-        )?;
+        write_output(set, "model_frf.uff", |p| {
+            Ok(era_io::uff::write_uff58(
+                p,
+                &synthesised,
+                input.file.channels.as_ref(),
+                (None, None),
+                era_io::uff::UffWriteOptions {
+                    binary: true,
+                    single: false,
+                },
+            )?)
+        })?;
+        write_output(set, "modes.uff", |p| {
+            Ok(era_io::uff::write_uff55(
+                p,
+                &found.modal,
+                input.file.channels.as_ref(),
+                // The shapes are of the integrated quantity, as the model is.
+                found.processed.quantity(),
+            )?)
+        })?;
         let title = format!("era identify {}", a.file.display());
         let bar = crate::progress::bar(&a.common, (frf.outputs() * frf.inputs()) as u64, "figures");
         crate::figures::write_all(
-            dir,
+            set,
+            Path::new(""),
             &title,
             &parameter_echo(&opts),
             &found,
@@ -304,18 +334,22 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         )?;
         bar.finish_and_clear();
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
-        human.print(&format!(
-            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
-            dir.display()
-        ));
     }
     if a.common.timings {
         human.print(&timings_table(&timings));
         human.print(&svd_path_line(&found.realization));
         model.timings_s = Some(timings);
-        if let Some(dir) = &a.out {
-            model.write(&dir.join("model.json"))?;
+        if let Some(set) = outputs.as_mut() {
+            write_output(set, "model.json", |p| Ok(model.write(p)?))?;
         }
+    }
+    // Every output is in the staging folder: they all take their place now, or none.
+    if let (Some(dir), Some(set)) = (&a.out, outputs) {
+        set.commit()?;
+        human.print(&format!(
+            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
+            dir.display()
+        ));
     }
     if a.common.json {
         print_json(&model)?;

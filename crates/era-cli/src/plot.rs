@@ -12,10 +12,11 @@ use era::response::model_frf;
 use era_io::model_json::ModelJson;
 use era_plot::singular_value_figure;
 use serde_json::json;
+use std::path::Path;
 
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
-    prepare_out_dir(&a.out)?;
+    let mut set = prepare_out_dir(&a.out)?;
     let frf = read_frf(&a.file, a.quantity, a.outputs)?.file.frf;
     let model = match &a.model {
         Some(path) => {
@@ -57,7 +58,8 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
             let ss = m.state_space().map_err(crate::UsageError)?;
             if m.states > 0 {
                 write_figure(
-                    &a.out,
+                    &mut set,
+                    Path::new(""),
                     "singular_values",
                     &singular_value_figure(&m.singular_values, m.states),
                 )?;
@@ -71,8 +73,10 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         (measured.outputs() * measured.inputs()) as u64,
         "figures",
     );
-    let (_, overlays) = write_frf_figures(&a.out, &measured, model_frf.as_ref(), &bar)?;
+    let (_, overlays) =
+        write_frf_figures(&mut set, Path::new(""), &measured, model_frf.as_ref(), &bar)?;
     bar.finish_and_clear();
+    set.commit()?;
     human.print(&format!(
         "wrote {0}/grid.{{svg,png}} and {1} pair overlays in {0}/pairs{2} ({3} FRFs, {4} integration(s), {5} zeroed line(s))\n",
         a.out.display(),

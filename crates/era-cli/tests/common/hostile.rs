@@ -118,6 +118,24 @@ pub fn run_capped_env(
     stdin: Option<&[u8]>,
     env: &[(&str, &str)],
 ) -> Outcome {
+    run_capped_full(args, cwd, stdin, env, None)
+}
+
+/// [`run_capped`] as on a disk that fills up after `file_size` bytes of any one file:
+/// RLIMIT_FSIZE is set, and SIGXFSZ ignored so that a write past it fails with EFBIG
+/// (as a full disk fails with ENOSPC) instead of killing the process.
+pub fn run_capped_disk_full(args: &[&str], cwd: Option<&Path>, file_size: u64) -> Outcome {
+    run_capped_full(args, cwd, None, &[], Some(file_size))
+}
+
+/// [`run_capped_env`] with an optional file size cap (see [`run_capped_disk_full`]).
+pub fn run_capped_full(
+    args: &[&str],
+    cwd: Option<&Path>,
+    stdin: Option<&[u8]>,
+    env: &[(&str, &str)],
+    file_size: Option<u64>,
+) -> Outcome {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_era"));
     cmd.args(args)
         .stdout(Stdio::piped())
@@ -134,15 +152,27 @@ pub fn run_capped_env(
     if let Some(dir) = cwd {
         cmd.current_dir(dir);
     }
-    // SAFETY: setrlimit is async-signal-safe and touches no state of the parent.
+    // SAFETY: setrlimit and signal are async-signal-safe and touch no state of the
+    // parent.
     unsafe {
-        cmd.pre_exec(|| {
+        cmd.pre_exec(move || {
             let lim = libc::rlimit {
                 rlim_cur: ADDRESS_SPACE_CAP as libc::rlim_t,
                 rlim_max: ADDRESS_SPACE_CAP as libc::rlim_t,
             };
             if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
                 return Err(std::io::Error::last_os_error());
+            }
+            if let Some(bytes) = file_size {
+                let lim = libc::rlimit {
+                    rlim_cur: bytes as libc::rlim_t,
+                    rlim_max: bytes as libc::rlim_t,
+                };
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0
+                    || libc::signal(libc::SIGXFSZ, libc::SIG_IGN) == libc::SIG_ERR
+                {
+                    return Err(std::io::Error::last_os_error());
+                }
             }
             Ok(())
         });
