@@ -62,7 +62,7 @@ pub fn safe_range((a, b): (f64, f64), log: bool) -> (f64, f64) {
         let min_span = (lo.abs().max(hi.abs()) * 1e-9).max(1e-300);
         if hi - lo < min_span {
             let mid = 0.5 * (lo + hi);
-            (mid - min_span, mid + min_span)
+            ((mid - min_span).max(-BIG), (mid + min_span).min(BIG))
         } else {
             (lo, hi)
         }

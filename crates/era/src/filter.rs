@@ -60,7 +60,7 @@ impl LowPass {
         }
         let normalised = 2.0 * cutoff_hz * sample_time_s;
         let nyquist = 0.5 / sample_time_s;
-        if !(normalised >= MIN_NORMALISED_CUTOFF && normalised <= 1.0 - MIN_NORMALISED_CUTOFF) {
+        if !(MIN_NORMALISED_CUTOFF..=1.0 - MIN_NORMALISED_CUTOFF).contains(&normalised) {
             return Err(EraError::InvalidParameter {
                 name: "lowpass-hz",
                 value: cutoff_hz.to_string(),

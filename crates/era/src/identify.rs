@@ -413,14 +413,13 @@ mod tests {
                 ((f / factor) / r - 1.0).abs() < 1e-9,
                 "x {factor:e}: sigma {f:e} vs {r:e}"
             );
-            for (m, g) in found
-                .model_response
-                .iter()
-                .zip(&found.processed.values()[..])
-            {
-                assert!(m.re.is_finite() && m.im.is_finite());
-                let _ = g;
-            }
+            // The model's response is of the data as given: finite, and of its size.
+            let peak = |v: &[crate::Complex64]| v.iter().map(|z| z.norm()).fold(0.0, f64::max);
+            let (m, g) = (peak(&found.model_response), peak(found.processed.values()));
+            assert!(
+                m.is_finite() && (m / g - 1.0).abs() < 0.5,
+                "x {factor:e}: {m:e} vs {g:e}"
+            );
             let rel = found.fit.pairs[0].relative_error;
             let rel0 = reference.fit.pairs[0].relative_error;
             assert!(

@@ -125,7 +125,8 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
         ));
     }
     let o = &spec.oscillator;
-    if !(o.stiffness * spec.x0.abs() > o.coulomb_force) {
+    // Both are finite and positive (validated), so the product is never NaN.
+    if o.stiffness * spec.x0.abs() <= o.coulomb_force {
         return Err(FrictionError::invalid(
             "coulomb-force",
             super::show(o.coulomb_force),
