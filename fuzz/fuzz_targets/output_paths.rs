@@ -36,7 +36,9 @@ enum Entry {
 
 fn snapshot(root: &Path) -> BTreeMap<String, Entry> {
     fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Entry>) {
-        let Ok(rd) = std::fs::read_dir(dir) else { return };
+        let Ok(rd) = std::fs::read_dir(dir) else {
+            return;
+        };
         for e in rd.flatten() {
             let p = e.path();
             let rel = p.strip_prefix(root).unwrap().to_string_lossy().into_owned();
@@ -123,7 +125,10 @@ fuzz_target!(|data: &[u8]| {
         let b = data[1 + k];
         plant(&out, &decoys, NAMES[(b as usize) % NAMES.len()], b / 8);
     }
-    for (step, chunk) in data[1 + planted.min(data.len() - 1)..].chunks(2).enumerate() {
+    for (step, chunk) in data[1 + planted.min(data.len() - 1)..]
+        .chunks(2)
+        .enumerate()
+    {
         let before = snapshot(&out);
         let payload = format!("step {step}").into_bytes();
         let op = chunk[0];
@@ -168,7 +173,11 @@ fuzz_target!(|data: &[u8]| {
             )
         };
         let after = snapshot(&out);
-        assert_eq!(ok.0, ok.1, "{targets:?}: success {} expected {}", ok.0, ok.1);
+        assert_eq!(
+            ok.0, ok.1,
+            "{targets:?}: success {} expected {}",
+            ok.0, ok.1
+        );
         if ok.0 {
             for t in &targets {
                 assert_eq!(after.get(t), Some(&Entry::File(payload.clone())), "{t}");
@@ -181,7 +190,9 @@ fuzz_target!(|data: &[u8]| {
             for name in after.keys() {
                 assert!(
                     before.contains_key(name)
-                        || targets.iter().any(|t| t == name || t.starts_with(&format!("{name}/"))),
+                        || targets
+                            .iter()
+                            .any(|t| t == name || t.starts_with(&format!("{name}/"))),
                     "{name} appeared"
                 );
             }
