@@ -368,7 +368,7 @@ impl MatMatrix {
 /// candidates and no name, a complex, N-D or non-numeric variable, NaN or infinity
 /// (row and column given).
 pub fn read_mat_matrix(path: &Path, variable: Option<&str>) -> Result<MatMatrix, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::input::read_input(path)?;
     parse_mat_matrix(&bytes, path, variable)
 }
 
@@ -475,8 +475,16 @@ pub fn parse_mat_matrix(
 /// # Errors
 /// [`IoError`] when the file is not a readable MAT v5 file.
 pub fn list_variables(path: &Path) -> Result<Vec<(String, String)>, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let vars = parse_variables(&bytes, path)?;
+    let bytes = crate::input::read_input(path)?;
+    list_variables_in(&bytes, path)
+}
+
+/// [`list_variables`] on bytes already read.
+///
+/// # Errors
+/// As [`list_variables`].
+pub fn list_variables_in(bytes: &[u8], path: &Path) -> Result<Vec<(String, String)>, IoError> {
+    let vars = parse_variables(bytes, path)?;
     Ok(vars
         .numeric
         .iter()
@@ -505,12 +513,20 @@ pub fn list_variables(path: &Path) -> Result<Vec<(String, String)>, IoError> {
 /// # Errors
 /// As [`read_frf_mat`].
 pub fn parse_frf_mat(bytes: &[u8], path: &Path) -> Result<FrfFile, IoError> {
-    frf_from_arrays(
-        path,
-        &numeric_arrays(bytes, path)?,
-        None,
-        Quantity::Acceleration,
-    )
+    parse_frf_mat_with(bytes, path, None, Quantity::Acceleration)
+}
+
+/// [`read_frf_mat`] on bytes already read; `path` names them in messages.
+///
+/// # Errors
+/// As [`read_frf_mat`].
+pub fn parse_frf_mat_with(
+    bytes: &[u8],
+    path: &Path,
+    outputs: Option<usize>,
+    quantity: Quantity,
+) -> Result<FrfFile, IoError> {
+    frf_from_arrays(path, &numeric_arrays(bytes, path)?, outputs, quantity)
 }
 
 fn scalar(vars: &BTreeMap<String, Array>, name: &str) -> Option<usize> {
@@ -549,7 +565,7 @@ pub fn read_frf_mat(
     outputs: Option<usize>,
     quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::input::read_input(path)?;
     frf_from_arrays(path, &numeric_arrays(&bytes, path)?, outputs, quantity)
 }
 

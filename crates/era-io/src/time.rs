@@ -131,7 +131,7 @@ pub struct TimeSelection {
 /// # Errors
 /// [`IoError`] naming the file and what is wrong (with the line for CSV).
 pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHistory, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::input::read_input(path)?;
     let format = TimeFormat::detect(&bytes, path)?;
     let misplaced = |flag: &str, fmt: &str| {
         Err(IoError::format(
@@ -151,20 +151,22 @@ pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHist
     }
     match format {
         TimeFormat::Csv => {
-            let text = String::from_utf8(bytes).map_err(|e| {
-                IoError::format(
+            let text = crate::input::utf8(&bytes, path).map_err(|e| match e {
+                IoError::Format {
                     path,
-                    "",
-                    format!(
-                        "not UTF-8 text at byte {} (neither MAT v5 nor HDF5 either)",
-                        e.utf8_error().valid_up_to()
-                    ),
-                )
+                    location,
+                    message,
+                } => IoError::Format {
+                    path,
+                    location,
+                    message: format!("{message} (neither MAT v5 nor HDF5 either)"),
+                },
+                other => other,
             })?;
-            parse_time_csv(&text, path)
+            parse_time_csv(text, path)
         }
         TimeFormat::Mat => read_mat(&bytes, path, &selection.variables),
-        TimeFormat::Hdf5 => read_hdf5(bytes, path, &selection.datasets),
+        TimeFormat::Hdf5 => read_hdf5(bytes.into_vec(), path, &selection.datasets),
     }
 }
 
@@ -173,6 +175,7 @@ pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHist
 /// # Errors
 /// [`IoError`] naming the line and column.
 pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let (metadata, header) = crate::text::metadata_and_header(text);
     let Some((header_line, header)) = header else {
         return Err(IoError::format(
