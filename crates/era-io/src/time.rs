@@ -26,6 +26,7 @@
 
 use crate::mat::{contain, parse_mat_matrix};
 use crate::IoError;
+use era::limits::Saturated;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -375,6 +376,7 @@ fn read_hdf5(bytes: Vec<u8>, path: &Path, datasets: &[String]) -> Result<TimeHis
         bytes
     };
     let fail = |m: String| IoError::format(path, "", m);
+    let file_len = bytes.len() as u64;
     let outcome = contain(move || -> Result<TimeHistory, String> {
         let file = hdf5_reader::Hdf5File::from_vec(bytes)
             .map_err(|e| format!("not a readable HDF5 file: {e}"))?;
@@ -419,6 +421,7 @@ fn read_hdf5(bytes: Vec<u8>, path: &Path, datasets: &[String]) -> Result<TimeHis
             let Some((_, shape)) = all.iter().find(|(p, _)| p == name) else {
                 return Err(format!("no dataset {name} (the file has: {})", listing()));
             };
+            check_declared_shape(name, shape, file_len)?;
             let ds = file
                 .dataset(name)
                 .map_err(|e| format!("dataset {name}: {e}"))?;
@@ -524,6 +527,31 @@ fn is_float(file: &hdf5_reader::Hdf5File, path: &str) -> bool {
 }
 
 /// A dataset's values as f64, whatever its numeric type (row-major order).
+/// Deflate cannot shrink data more than about 1032 to 1 (LZ4 about 255 to 1).
+const MAX_COMPRESSION: u64 = 1032;
+
+/// Checks the shape an HDF5 dataset declares before its values are read: each side
+/// against [`era::limits::SAMPLES`], and the element count against what the file can
+/// hold (its length times the best compression ratio, at one byte per element). A
+/// 1.4 kB file declaring an unwritten 1e8×2 dataset would otherwise read gigabytes of
+/// fill values.
+fn check_declared_shape(name: &str, shape: &[u64], file_len: u64) -> Result<(), String> {
+    for &side in shape {
+        era::limits::SAMPLES
+            .check(format!("dataset {name} declares shape {shape:?}"), side)
+            .map_err(|e| e.to_string())?;
+    }
+    let elements = shape.iter().fold(1u64, |a, &d| a.saturating_mul(d));
+    let can_hold = file_len.saturating_mul(MAX_COMPRESSION);
+    if elements > can_hold {
+        return Err(format!(
+            "dataset {name} declares shape {shape:?} ({} values) but a file of {file_len} bytes can hold at most {can_hold} even compressed: its data is missing",
+            Saturated(usize::try_from(elements).ok())
+        ));
+    }
+    Ok(())
+}
+
 fn read_numeric(ds: &hdf5_reader::Dataset) -> Result<Vec<f64>, String> {
     use hdf5_reader::Datatype as D;
     let err = |e: hdf5_reader::error::Error| e.to_string();
