@@ -71,10 +71,13 @@ impl IoError {
         location: impl Into<String>,
         message: impl Into<String>,
     ) -> Self {
+        // Every format error passes here: text quoted from the file (names, headers,
+        // cells) is shown with its control characters escaped, never sent raw to a
+        // terminal.
         IoError::Format {
             path: path.into(),
-            location: location.into(),
-            message: message.into(),
+            location: text::escaped_message(&location.into()),
+            message: text::escaped_message(&message.into()),
         }
     }
     pub(crate) fn limit(path: impl Into<PathBuf>, limit: era::limits::LimitError) -> Self {
