@@ -197,6 +197,15 @@ pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
             ),
         ));
     }
+    era::limits::CHANNELS
+        .check(
+            format!(
+                "the header names {} channels",
+                names.len().saturating_sub(1)
+            ),
+            names.len().saturating_sub(1) as u64,
+        )
+        .map_err(|e| IoError::limit(path, e))?;
     if names.len() < 2 {
         return Err(IoError::at(
             path,
