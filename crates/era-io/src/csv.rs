@@ -135,11 +135,6 @@ pub fn parse_frf_csv(
         q = q.max(i);
         p = p.max(j);
     }
-    for (count, side) in [(q, "outputs"), (p, "inputs")] {
-        era::limits::CHANNELS
-            .check(format!("the header names {count} {side}"), count as u64)
-            .map_err(|e| IoError::limit(path, e))?;
-    }
     let Some(frequency_col) = frequency_col else {
         return Err(fail(header_line, "frequency_hz", "missing column".into()));
     };
@@ -182,6 +177,11 @@ pub fn parse_frf_csv(
         ));
     }
 
+    for (count, side) in [(q, "outputs"), (p, "inputs")] {
+        era::limits::CHANNELS
+            .check(format!("the header names {count} {side}"), count as u64)
+            .map_err(|e| IoError::limit(path, e))?;
+    }
     // Rows.
     let mut frequency_hz = Vec::new();
     let mut rows: Vec<Vec<f64>> = Vec::new();
