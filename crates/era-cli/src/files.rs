@@ -2,7 +2,7 @@
 //! in another format.
 
 use crate::args::{ConvertArgs, InfoArgs};
-use crate::identify::{describe_input, read_frf, shape_line};
+use crate::identify::{describe_input, read_frf, read_frf_bytes, shape_line};
 use crate::report::{finish_output, Human};
 use anyhow::Context;
 use era_io::format::{write_frf_file, FrfFormat};
@@ -74,12 +74,15 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
 pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let clock = Instant::now();
-    let format =
-        FrfFormat::detect(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    // Read once: a pipe or `/dev/stdin` cannot be read a second time.
+    let bytes = era_io::input::read_input(&a.file)
+        .with_context(|| format!("reading {}", a.file.display()))?;
+    let format = FrfFormat::detect_bytes(&bytes, &a.file)
+        .with_context(|| format!("reading {}", a.file.display()))?;
     let (text, summary) = match format {
-        FrfFormat::Uff => uff_info(a)?,
-        FrfFormat::Mat => mat_info(a)?,
-        FrfFormat::Csv => csv_info(a)?,
+        FrfFormat::Uff => uff_info(a, &bytes)?,
+        FrfFormat::Mat => mat_info(a, &bytes)?,
+        FrfFormat::Csv => csv_info(a, &bytes)?,
     };
     human.print(&text);
     finish_output(
@@ -90,8 +93,8 @@ pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
     )
 }
 
-fn uff_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
-    let contents = era_io::uff::read_uff(&a.file, false)
+fn uff_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
+    let contents = era_io::uff::parse_uff(bytes, &a.file, false)
         .with_context(|| format!("reading {}", a.file.display()))?;
     let mut text = format!("{}: UFF\n", a.file.display());
     let mut by_type: BTreeMap<String, usize> = BTreeMap::new();
@@ -235,8 +238,8 @@ fn uff_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
     Ok((text, summary))
 }
 
-fn mat_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
-    let vars = era_io::mat::list_variables(&a.file)
+fn mat_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
+    let vars = era_io::mat::list_variables_in(bytes, &a.file)
         .with_context(|| format!("reading {}", a.file.display()))?;
     let mut text = format!("{}: MAT v5\n  variables:\n", a.file.display());
     for (name, what) in &vars {
@@ -244,7 +247,7 @@ fn mat_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
     }
     let mut summary = json!({"file": a.file, "format": "MAT",
         "variables": vars.iter().map(|(n, w)| json!({"name": n, "what": w})).collect::<Vec<_>>()});
-    match read_frf(&a.file, None, None) {
+    match read_frf_bytes(bytes, &a.file, None, None) {
         Ok(input) => {
             let frf = &input.file.frf;
             text.push_str(&format!(
@@ -269,8 +272,8 @@ fn root(e: &anyhow::Error) -> String {
     e.root_cause().to_string()
 }
 
-fn csv_info(a: &InfoArgs) -> anyhow::Result<(String, serde_json::Value)> {
-    let input = read_frf(&a.file, None, None)?;
+fn csv_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
+    let input = read_frf_bytes(bytes, &a.file, None, None)?;
     let frf = &input.file.frf;
     let meta = &input.file.metadata;
     let unit = |k: &str| meta.get(k).cloned().unwrap_or_else(|| "not stated".into());

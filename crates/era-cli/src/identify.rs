@@ -11,7 +11,7 @@ use era::identify::{identify_observed, EraOptions, ModelDomain};
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
 use era_io::atomic::OutputSet;
-use era_io::format::{read_frf_file, FrfFormat, ReadOptions};
+use era_io::format::{parse_frf_bytes, FrfFormat, ReadOptions};
 use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::path::Path;
 use std::time::Instant;
@@ -110,12 +110,25 @@ pub fn read_frf(
     quantity: Option<QuantityArg>,
     outputs: Option<usize>,
 ) -> anyhow::Result<InputFrf> {
+    let bytes =
+        era_io::input::read_input(path).with_context(|| format!("reading {}", path.display()))?;
+    read_frf_bytes(&bytes, path, quantity, outputs)
+}
+
+/// [`read_frf`] on the bytes of a file already read once (`era info` looks at them
+/// twice); `path` names them in messages.
+pub fn read_frf_bytes(
+    bytes: &[u8],
+    path: &std::path::Path,
+    quantity: Option<QuantityArg>,
+    outputs: Option<usize>,
+) -> anyhow::Result<InputFrf> {
     let opts = ReadOptions {
         default_quantity: Quantity::Acceleration,
         outputs,
     };
-    let (mut file, format) =
-        read_frf_file(path, &opts).with_context(|| format!("reading {}", path.display()))?;
+    let (mut file, format) = parse_frf_bytes(bytes, path, &opts)
+        .with_context(|| format!("reading {}", path.display()))?;
     let layout = file
         .metadata
         .get("layout")

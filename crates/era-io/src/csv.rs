@@ -49,8 +49,9 @@ fn parse_column(name: &str) -> Option<(usize, usize, Part)> {
 /// column for a missing or unknown column, a non-numeric cell, NaN or infinity, a short
 /// row, non-uniform frequencies or a first line other than 0 Hz.
 pub fn read_frf_csv(path: &Path, default_quantity: Quantity) -> Result<FrfFile, IoError> {
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-    parse_frf_csv(&text, path, default_quantity)
+    let bytes = crate::input::read_input(path)?;
+    let text = crate::input::utf8(&bytes, path)?;
+    parse_frf_csv(text, path, default_quantity)
 }
 
 /// [`read_frf_csv`] on text already read; `path` names it in messages.
@@ -62,6 +63,7 @@ pub fn parse_frf_csv(
     path: &Path,
     default_quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let fail =
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
 
@@ -175,6 +177,11 @@ pub fn parse_frf_csv(
         ));
     }
 
+    for (count, side) in [(q, "outputs"), (p, "inputs")] {
+        era::limits::CHANNELS
+            .check(format!("the header names {count} {side}"), count as u64)
+            .map_err(|e| IoError::limit(path, e))?;
+    }
     // Rows.
     let mut frequency_hz = Vec::new();
     let mut rows: Vec<Vec<f64>> = Vec::new();

@@ -37,8 +37,9 @@ pub struct DecayFile {
 /// # Errors
 /// [`IoError`] naming the file, line and column.
 pub fn read_decay_csv(path: &Path) -> Result<DecayFile, IoError> {
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-    parse_decay_csv(&text, path)
+    let bytes = crate::input::read_input(path)?;
+    let text = crate::input::utf8(&bytes, path)?;
+    parse_decay_csv(text, path)
 }
 
 /// [`read_decay_csv`] on text already read; `path` names it in messages.
@@ -46,6 +47,7 @@ pub fn read_decay_csv(path: &Path) -> Result<DecayFile, IoError> {
 /// # Errors
 /// As [`read_decay_csv`].
 pub fn parse_decay_csv(text: &str, path: &Path) -> Result<DecayFile, IoError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let fail =
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
     let mut metadata = BTreeMap::new();

@@ -98,6 +98,16 @@ impl FrfFormat {
         std::fs::File::open(path)
             .and_then(|f| f.take(4096).read_to_end(&mut head))
             .map_err(|e| IoError::io(path, e))?;
+        FrfFormat::detect_bytes(&head, path)
+    }
+
+    /// [`FrfFormat::detect`] on the bytes of a file already read (only the first 4 kB
+    /// are looked at); `path` names it and gives the extension.
+    ///
+    /// # Errors
+    /// As [`FrfFormat::detect`].
+    pub fn detect_bytes(bytes: &[u8], path: &Path) -> Result<FrfFormat, IoError> {
+        let head = &bytes[..bytes.len().min(4096)];
         if head.is_empty() {
             return Err(IoError::format(path, "", "the file is empty"));
         }
@@ -109,7 +119,7 @@ impl FrfFormat {
                 "",
                 "MAT v7.3 (HDF5) files are not read: save with -v7 (the default) or -v6",
             ));
-        } else if crate::uff::looks_like_uff(&head) {
+        } else if crate::uff::looks_like_uff(head) {
             Some(FrfFormat::Uff)
         } else {
             None
@@ -122,7 +132,7 @@ impl FrfFormat {
                 format!(
                     "the name says {} but the content does not start like one ('{}')",
                     named.name(),
-                    first_line(&head)
+                    first_line(head)
                 ),
             )),
             (None, _) => Ok(FrfFormat::Csv),
@@ -196,8 +206,36 @@ pub fn write_frf_csv_keeping(
 /// # Errors
 /// As [`FrfFormat::detect`] and the format's reader.
 pub fn read_frf_file(path: &Path, opts: &ReadOptions) -> Result<(FrfFile, FrfFormat), IoError> {
-    let format = FrfFormat::detect(path)?;
-    Ok((format.read_frf(path, opts)?, format))
+    let bytes = crate::input::read_input(path)?;
+    parse_frf_bytes(&bytes, path, opts)
+}
+
+/// Detects the format of bytes already read (see [`crate::input::read_input`]) and parses
+/// them; `path` names them in messages.
+///
+/// # Errors
+/// As [`FrfFormat::detect_bytes`] and the format's parser.
+pub fn parse_frf_bytes(
+    bytes: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<(FrfFile, FrfFormat), IoError> {
+    let format = FrfFormat::detect_bytes(bytes, path)?;
+    let file = match format {
+        FrfFormat::Csv => crate::csv::parse_frf_csv(
+            crate::input::utf8(bytes, path)?,
+            path,
+            opts.default_quantity,
+        )?,
+        FrfFormat::Uff => {
+            let contents = crate::uff::parse_uff(bytes, path, true)?;
+            crate::uff::frf_from_uff(path, &contents, opts.default_quantity)?
+        }
+        FrfFormat::Mat => {
+            crate::mat::parse_frf_mat_with(bytes, path, opts.outputs, opts.default_quantity)?
+        }
+    };
+    Ok((file, format))
 }
 
 /// Writes in the format the extension names.

@@ -9,6 +9,7 @@
 //! - [`frf_file`]: the types every FRF format shares ([`frf_file::FrfFile`],
 //!   [`frf_file::ChannelTable`]);
 //! - [`text`]: CSV metadata lines, shared by the CSV readers;
+//! - [`input`]: every input is read once, into memory, with a cap on streams;
 //! - [`mod@format`]: detection by content and one reader/writer trait over CSV, UFF and MAT;
 //! - [`atomic`]: every write goes to a temporary file in the destination folder and is
 //!   renamed into place, so a failed run never leaves a half-written file.
@@ -20,6 +21,7 @@ pub mod csv;
 pub mod decay_csv;
 pub mod format;
 pub mod frf_file;
+pub mod input;
 pub mod mat;
 mod mat_check;
 pub mod model_json;
@@ -34,13 +36,22 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum IoError {
-    /// The file could not be opened, read or written.
-    #[error("{path}: {source}")]
+    /// The file could not be opened, read or written. The OS error is part of the
+    /// message and not a separate cause, so that a chain of causes prints it once.
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The OS error.
-        source: std::io::Error,
+        error: std::io::Error,
+    },
+    /// A size in the file, or the file itself, is above one of `era::limits`.
+    #[error("{path}: {limit}")]
+    Limit {
+        /// The file.
+        path: PathBuf,
+        /// What was asked and what is allowed.
+        limit: era::limits::LimitError,
     },
     /// The content is malformed.
     #[error("{path}: {location}{message}")]
@@ -60,16 +71,25 @@ impl IoError {
         location: impl Into<String>,
         message: impl Into<String>,
     ) -> Self {
+        // Every format error passes here: text quoted from the file (names, headers,
+        // cells) is shown with its control characters escaped, never sent raw to a
+        // terminal.
         IoError::Format {
             path: path.into(),
-            location: location.into(),
-            message: message.into(),
+            location: text::escaped_message(&location.into()),
+            message: text::escaped_message(&message.into()),
+        }
+    }
+    pub(crate) fn limit(path: impl Into<PathBuf>, limit: era::limits::LimitError) -> Self {
+        IoError::Limit {
+            path: path.into(),
+            limit,
         }
     }
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         IoError::Io {
             path: path.into(),
-            source,
+            error: source,
         }
     }
 }

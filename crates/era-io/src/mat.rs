@@ -220,6 +220,22 @@ fn class_of(v: &MatVariable) -> &'static str {
 /// Parses MAT bytes with `matrw`. Its parser can panic on malformed input (an index
 /// out of range, an allocation of a size read from the file); the panic is contained
 /// here and reported as a malformed file.
+/// matrw only reads a header text that starts `MATLAB 5.0 MAT-file, ` (with the
+/// comma); the format leaves that text free, and `scipy.io.savemat` writes
+/// `MATLAB 5.0 MAT-file Platform: posix, …`. The text carries nothing era uses, so a
+/// copy with the comma put in (over the first two characters after `MAT-file`) is
+/// given to matrw. `None` when the header is already in matrw's form.
+fn matrw_header(bytes: &[u8]) -> Option<Vec<u8>> {
+    const MAGIC: &[u8] = b"MATLAB 5.0 MAT-file";
+    let after = bytes.strip_prefix(MAGIC)?;
+    if after.starts_with(b", ") || bytes.len() < 128 {
+        return None;
+    }
+    let mut copy = bytes.to_vec();
+    copy[MAGIC.len()..MAGIC.len() + 2].copy_from_slice(b", ");
+    Some(copy)
+}
+
 fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
     if bytes.is_empty() {
         return Err(IoError::format(path, "", "the file is empty"));
@@ -240,6 +256,8 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
     }
     crate::mat_check::check(bytes)
         .map_err(|e| IoError::format(path, "", format!("not a readable MAT v5 file: {e}")))?;
+    let patched = matrw_header(bytes);
+    let bytes: &[u8] = patched.as_deref().unwrap_or(bytes);
     let parsed = contain(|| matrw::load_matfile_from_u8(bytes).map_err(|e| e.to_string()));
     let mut file =
         match parsed {
@@ -368,7 +386,7 @@ impl MatMatrix {
 /// candidates and no name, a complex, N-D or non-numeric variable, NaN or infinity
 /// (row and column given).
 pub fn read_mat_matrix(path: &Path, variable: Option<&str>) -> Result<MatMatrix, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::input::read_input(path)?;
     parse_mat_matrix(&bytes, path, variable)
 }
 
@@ -475,8 +493,16 @@ pub fn parse_mat_matrix(
 /// # Errors
 /// [`IoError`] when the file is not a readable MAT v5 file.
 pub fn list_variables(path: &Path) -> Result<Vec<(String, String)>, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let vars = parse_variables(&bytes, path)?;
+    let bytes = crate::input::read_input(path)?;
+    list_variables_in(&bytes, path)
+}
+
+/// [`list_variables`] on bytes already read.
+///
+/// # Errors
+/// As [`list_variables`].
+pub fn list_variables_in(bytes: &[u8], path: &Path) -> Result<Vec<(String, String)>, IoError> {
+    let vars = parse_variables(bytes, path)?;
     Ok(vars
         .numeric
         .iter()
@@ -505,12 +531,20 @@ pub fn list_variables(path: &Path) -> Result<Vec<(String, String)>, IoError> {
 /// # Errors
 /// As [`read_frf_mat`].
 pub fn parse_frf_mat(bytes: &[u8], path: &Path) -> Result<FrfFile, IoError> {
-    frf_from_arrays(
-        path,
-        &numeric_arrays(bytes, path)?,
-        None,
-        Quantity::Acceleration,
-    )
+    parse_frf_mat_with(bytes, path, None, Quantity::Acceleration)
+}
+
+/// [`read_frf_mat`] on bytes already read; `path` names them in messages.
+///
+/// # Errors
+/// As [`read_frf_mat`].
+pub fn parse_frf_mat_with(
+    bytes: &[u8],
+    path: &Path,
+    outputs: Option<usize>,
+    quantity: Quantity,
+) -> Result<FrfFile, IoError> {
+    frf_from_arrays(path, &numeric_arrays(bytes, path)?, outputs, quantity)
 }
 
 fn scalar(vars: &BTreeMap<String, Array>, name: &str) -> Option<usize> {
@@ -549,7 +583,7 @@ pub fn read_frf_mat(
     outputs: Option<usize>,
     quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::input::read_input(path)?;
     frf_from_arrays(path, &numeric_arrays(&bytes, path)?, outputs, quantity)
 }
 

@@ -239,8 +239,9 @@ impl ModelJson {
     /// # Errors
     /// [`IoError`] naming the file and the JSON line for unreadable or malformed files.
     pub fn read(path: &Path) -> Result<Self, IoError> {
-        let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-        let model: ModelJson = serde_json::from_str(&text)
+        let bytes = crate::input::read_input(path)?;
+        let text = crate::input::utf8(&bytes, path)?;
+        let model: ModelJson = serde_json::from_str(text)
             .map_err(|e| IoError::format(path, format!("line {}: ", e.line()), e.to_string()))?;
         model
             .state_space()

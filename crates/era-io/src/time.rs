@@ -26,6 +26,7 @@
 
 use crate::mat::{contain, parse_mat_matrix};
 use crate::IoError;
+use era::limits::Saturated;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -131,7 +132,7 @@ pub struct TimeSelection {
 /// # Errors
 /// [`IoError`] naming the file and what is wrong (with the line for CSV).
 pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHistory, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::input::read_input(path)?;
     let format = TimeFormat::detect(&bytes, path)?;
     let misplaced = |flag: &str, fmt: &str| {
         Err(IoError::format(
@@ -151,20 +152,22 @@ pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHist
     }
     match format {
         TimeFormat::Csv => {
-            let text = String::from_utf8(bytes).map_err(|e| {
-                IoError::format(
+            let text = crate::input::utf8(&bytes, path).map_err(|e| match e {
+                IoError::Format {
                     path,
-                    "",
-                    format!(
-                        "not UTF-8 text at byte {} (neither MAT v5 nor HDF5 either)",
-                        e.utf8_error().valid_up_to()
-                    ),
-                )
+                    location,
+                    message,
+                } => IoError::Format {
+                    path,
+                    location,
+                    message: format!("{message} (neither MAT v5 nor HDF5 either)"),
+                },
+                other => other,
             })?;
-            parse_time_csv(&text, path)
+            parse_time_csv(text, path)
         }
         TimeFormat::Mat => read_mat(&bytes, path, &selection.variables),
-        TimeFormat::Hdf5 => read_hdf5(bytes, path, &selection.datasets),
+        TimeFormat::Hdf5 => read_hdf5(bytes.into_vec(), path, &selection.datasets),
     }
 }
 
@@ -173,6 +176,7 @@ pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHist
 /// # Errors
 /// [`IoError`] naming the line and column.
 pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let (metadata, header) = crate::text::metadata_and_header(text);
     let Some((header_line, header)) = header else {
         return Err(IoError::format(
@@ -193,6 +197,15 @@ pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
             ),
         ));
     }
+    era::limits::CHANNELS
+        .check(
+            format!(
+                "the header names {} channels",
+                names.len().saturating_sub(1)
+            ),
+            names.len().saturating_sub(1) as u64,
+        )
+        .map_err(|e| IoError::limit(path, e))?;
     if names.len() < 2 {
         return Err(IoError::at(
             path,
@@ -372,6 +385,7 @@ fn read_hdf5(bytes: Vec<u8>, path: &Path, datasets: &[String]) -> Result<TimeHis
         bytes
     };
     let fail = |m: String| IoError::format(path, "", m);
+    let file_len = bytes.len() as u64;
     let outcome = contain(move || -> Result<TimeHistory, String> {
         let file = hdf5_reader::Hdf5File::from_vec(bytes)
             .map_err(|e| format!("not a readable HDF5 file: {e}"))?;
@@ -416,6 +430,7 @@ fn read_hdf5(bytes: Vec<u8>, path: &Path, datasets: &[String]) -> Result<TimeHis
             let Some((_, shape)) = all.iter().find(|(p, _)| p == name) else {
                 return Err(format!("no dataset {name} (the file has: {})", listing()));
             };
+            check_declared_shape(name, shape, file_len)?;
             let ds = file
                 .dataset(name)
                 .map_err(|e| format!("dataset {name}: {e}"))?;
@@ -521,6 +536,31 @@ fn is_float(file: &hdf5_reader::Hdf5File, path: &str) -> bool {
 }
 
 /// A dataset's values as f64, whatever its numeric type (row-major order).
+/// Deflate cannot shrink data more than about 1032 to 1 (LZ4 about 255 to 1).
+const MAX_COMPRESSION: u64 = 1032;
+
+/// Checks the shape an HDF5 dataset declares before its values are read: each side
+/// against [`era::limits::SAMPLES`], and the element count against what the file can
+/// hold (its length times the best compression ratio, at one byte per element). A
+/// 1.4 kB file declaring an unwritten 1e8×2 dataset would otherwise read gigabytes of
+/// fill values.
+fn check_declared_shape(name: &str, shape: &[u64], file_len: u64) -> Result<(), String> {
+    for &side in shape {
+        era::limits::SAMPLES
+            .check(format!("dataset {name} declares shape {shape:?}"), side)
+            .map_err(|e| e.to_string())?;
+    }
+    let elements = shape.iter().fold(1u64, |a, &d| a.saturating_mul(d));
+    let can_hold = file_len.saturating_mul(MAX_COMPRESSION);
+    if elements > can_hold {
+        return Err(format!(
+            "dataset {name} declares shape {shape:?} ({} values) but a file of {file_len} bytes can hold at most {can_hold} even compressed: its data is missing",
+            Saturated(usize::try_from(elements).ok())
+        ));
+    }
+    Ok(())
+}
+
 fn read_numeric(ds: &hdf5_reader::Dataset) -> Result<Vec<f64>, String> {
     use hdf5_reader::Datatype as D;
     let err = |e: hdf5_reader::error::Error| e.to_string();

@@ -157,15 +157,11 @@ impl Fields<'_, '_> {
 /// # Errors
 /// [`IoError`] naming the file and the line (and record) of a malformed record.
 pub fn read_uff(path: &Path, with_data: bool) -> Result<UffContents, IoError> {
-    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
-    let len = file.metadata().map_err(|e| IoError::io(path, e))?.len();
-    if len == 0 {
+    let bytes = crate::input::read_input(path)?;
+    if bytes.is_empty() {
         return Err(IoError::format(path, "", "the file is empty"));
     }
-    // SAFETY: the map is read-only and lives only during the parse; a file shrunk by
-    // another process meanwhile would fault, as reading any changing file can fail.
-    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| IoError::io(path, e))?;
-    parse_uff(&map, path, with_data)
+    parse_uff(&bytes, path, with_data)
 }
 
 /// Parses the bytes of a UFF file (see [`read_uff`]); `path` names it in messages.
