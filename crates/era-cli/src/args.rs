@@ -1,4 +1,4 @@
-//! Command-line arguments (clap). Flags follow DESIGN.md §1's table.
+//! Command-line arguments (clap). Flags follow docs/design.md §1's table.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -17,7 +17,7 @@ pub enum Command {
     /// The thesis's truth-model validation (Table 5.2): truth, ERA without noise, ERA with
     /// noise, side by side.
     Demo(DemoArgs),
-    /// Identify a model from an FRF file (DESIGN.md §1), or from time histories with
+    /// Identify a model from an FRF file (docs/design.md §1), or from time histories with
     /// --from-time.
     Identify(IdentifyArgs),
     /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
@@ -256,7 +256,7 @@ impl From<QuantityArg> for era::Quantity {
 
 #[derive(Debug, Args)]
 pub struct IdentifyArgs {
-    /// FRF file: CSV (DESIGN.md §4), UFF 58/58b, or MAT v5 (FRF + FreqV, xferIJ +
+    /// FRF file: CSV (docs/design.md §4), UFF 58/58b, or MAT v5 (FRF + FreqV, xferIJ +
     /// FreqV, or a q × p × lines array + FreqV), told apart by content.
     pub file: PathBuf,
     /// Model order: first-order states (thesis ns). Two per mode.
@@ -349,7 +349,7 @@ pub struct SimulateCommon {
 pub enum SimulateModel {
     /// The thesis's 4-mass truth model: 3×3 displacement FRFs, 1025 lines 0…12.8 kHz.
     TruthModel(SimulateCommon),
-    /// A seeded lightly damped structure with real normal modes (DESIGN.md §3).
+    /// A seeded lightly damped structure with real normal modes (docs/design.md §3).
     Modal(ModalArgs),
 }
 

@@ -26,7 +26,7 @@ fn write_png(figure: &Figure, path: &Path) -> Result<(), IoError> {
         render_png(figure, tmp).map_err(|e| failed(format!("cannot write the PNG: {e}")))?;
         let bytes = std::fs::read(tmp).map_err(|e| IoError::Io {
             path: path.to_path_buf(),
-            source: e,
+            error: e,
         })?;
         if !bytes.ends_with(&PNG_END) {
             return Err(failed(format!(

@@ -1,4 +1,4 @@
-//! `era identify FILE`: the pipeline of DESIGN.md §1 on an FRF file.
+//! `era identify FILE`: the pipeline of docs/design.md §1 on an FRF file.
 
 use crate::args::{DirectTermArg, IdentifyArgs, QuantityArg, SvdArg, TimeDomainArg};
 use crate::report::{

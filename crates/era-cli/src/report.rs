@@ -49,7 +49,7 @@ pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     }
 }
 
-/// Every parameter by its JSON name (DESIGN.md §1 table).
+/// Every parameter by its JSON name (docs/design.md §1 table).
 pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     use serde_json::json;
     let mut m = BTreeMap::new();

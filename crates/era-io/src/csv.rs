@@ -1,4 +1,4 @@
-//! The FRF CSV of DESIGN.md §4.
+//! The FRF CSV of docs/design.md §4.
 //!
 //! ```text
 //! # quantity: acceleration

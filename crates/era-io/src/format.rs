@@ -22,7 +22,7 @@ use std::path::Path;
 /// A file format for FRFs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FrfFormat {
-    /// Our CSV (DESIGN.md §4).
+    /// Our CSV (docs/design.md §4).
     Csv,
     /// Universal File Format dataset 58 (ASCII or binary 58b).
     Uff,

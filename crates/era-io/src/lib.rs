@@ -1,6 +1,6 @@
 //! File formats of `era`: one module per format.
 //!
-//! - [`csv`]: our self-describing FRF CSV (DESIGN.md §4), read and written;
+//! - [`csv`]: our self-describing FRF CSV (docs/design.md §4), read and written;
 //! - [`decay_csv`]: free-decay records (time, velocity, displacement) for `era friction`;
 //! - [`model_json`]: `model.json` and `fit.json`;
 //! - [`mat`]: MATLAB MAT files (model and FRFs) for MATLAB, Octave and scipy;

@@ -1,4 +1,4 @@
-//! `model.json` and `fit.json` (DESIGN.md §4).
+//! `model.json` and `fit.json` (docs/design.md §4).
 //!
 //! `model.json`: `outputs`, `inputs`, `states`, `time_domain` (`"discrete"` or
 //! `"continuous"`), `sample_time_s` (null when continuous), `a`, `b`, `c`, `d` (row-major

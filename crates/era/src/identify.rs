@@ -1,4 +1,4 @@
-//! The whole pipeline of DESIGN.md §1 (the thesis's `frffilt`): FRFs in, a model, its
+//! The whole pipeline of docs/design.md §1 (the thesis's `frffilt`): FRFs in, a model, its
 //! singular values, modes and fit out.
 
 use crate::error::{EraError, Result};
@@ -22,7 +22,7 @@ pub enum ModelDomain {
     Continuous,
 }
 
-/// Every parameter of the pipeline (DESIGN.md §1 table).
+/// Every parameter of the pipeline (docs/design.md §1 table).
 #[derive(Debug, Clone, PartialEq)]
 pub struct EraOptions {
     /// Model order (thesis `ns`).
@@ -227,7 +227,7 @@ enum Path {
     Naive,
 }
 
-/// Runs DESIGN.md §1 on `frf`.
+/// Runs docs/design.md §1 on `frf`.
 ///
 /// # Errors
 /// [`EraError::AllZero`] when there is nothing to identify, and every error of the

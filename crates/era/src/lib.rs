@@ -3,7 +3,7 @@
 //! Measured frequency response functions (FRFs) in, a state-space model `(A, B, C, D)`,
 //! its Hankel singular values, modal parameters and fit out. The pipeline restates the
 //! thesis's `frffilt` (Woods 1994, §III.2 and Appendix J; Juang & Pappa 1985), as
-//! DESIGN.md §1 lists it:
+//! docs/design.md §1 lists it:
 //!
 //! 1. [`preprocess`]: integrate `ni` times, `G ← G/(j2πf)`; pad to `ndpts + 1` lines;
 //!    sample time `Ts = 1/(2Δf(N−1))`; zero the first `nz` lines.

@@ -1,4 +1,4 @@
-//! Realization by singular value decomposition (DESIGN.md §1.8–1.9; thesis `mimoera`,
+//! Realization by singular value decomposition (docs/design.md §1.8–1.9; thesis `mimoera`,
 //! Appendix J.1.3; Juang & Pappa, 1985).
 //!
 //! With `H0 = U S Vᵀ` and the `n` largest singular values kept, the balanced realization
@@ -233,7 +233,7 @@ fn direct_term(markov: &MarkovSequence, which: DirectTerm) -> Mat<f64> {
     }
 }
 
-/// ERA on a Markov sequence with samples `sample_time_s` apart (DESIGN.md §1.7–1.9).
+/// ERA on a Markov sequence with samples `sample_time_s` apart (docs/design.md §1.7–1.9).
 ///
 /// # Errors
 /// [`EraError::InvalidParameter`], [`EraError::NotEnoughMarkovSamples`],

@@ -1,4 +1,4 @@
-//! The model's frequency response and its fit to the measurement (DESIGN.md §1.12).
+//! The model's frequency response and its fit to the measurement (docs/design.md §1.12).
 //!
 //! `G(f) = C (zI − A)⁻¹ B + D` with `z = exp(j2πf·Ts)` for a discrete model, or
 //! `C (j2πf I − A)⁻¹ B + D` for a continuous one.
@@ -278,7 +278,7 @@ pub struct PairFit {
     pub rms_log_magnitude_db: f64,
 }
 
-/// Per-pair fit and its means (DESIGN.md §1.12).
+/// Per-pair fit and its means (docs/design.md §1.12).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitReport {
     /// One entry per pair, `[output][input]` order.

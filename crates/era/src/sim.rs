@@ -1,10 +1,11 @@
-//! Simulators: the thesis's truth model (DESIGN.md §2, thesis §4.2 and Table 5.2),
+//! Simulators: the thesis's truth model (docs/design.md §2, thesis §4.2 and Table 5.2),
 //! seeded synthetic lightly damped structures (§3), and FRF measurement noise.
 //!
 //! All random numbers come from [`Minstd`], the Park–Miller generator with Box–Muller
-//! normals. It is a few lines, and it is portable: the Octave peer in
-//! `shared/reference/octave` (`addnoise.m`, `mkdta.m`) draws the same stream in the same
-//! order, so a seed gives bit-identical noise and structures in both.
+//! normals. It is a few lines, and it is portable: the Octave peer (the thesis's own
+//! routines run in GNU Octave by `scripts/octave_peer.sh`; they are not shipped with the
+//! repository) draws the same stream in the same order, so a seed gives bit-identical
+//! noise and structures in both.
 
 use crate::error::{EraError, Result};
 use crate::frf::{uniform_lines, FrfData, Quantity};
@@ -57,7 +58,7 @@ impl Minstd {
 pub const MAX_NOISE_FRACTION: f64 = 1000.0;
 
 /// Adds complex Gaussian noise to every FRF: the noise on each pair has an RMS of exactly
-/// `fraction` times that pair's RMS magnitude (DESIGN.md §2; thesis "15 % noise").
+/// `fraction` times that pair's RMS magnitude (docs/design.md §2; thesis "15 % noise").
 ///
 /// Draw order, for bit-for-bit agreement with the peer's `addnoise.m`: pairs input-major
 /// (input 1: outputs 1…q, then input 2, …), and within a pair every line in order.
@@ -111,7 +112,7 @@ pub const TABLE_5_2_ERA_NOISY: [(f64, f64); 4] = [
     (9457.83, 6.03),
 ];
 
-/// Sample rate of the truth-model FRFs, Hz (DESIGN.md §2).
+/// Sample rate of the truth-model FRFs, Hz (docs/design.md §2).
 pub const TRUTH_SAMPLE_RATE_HZ: f64 = 25_600.0;
 /// Number of truth-model FRF lines (0 … 12 800 Hz).
 pub const TRUTH_LINES: usize = 1025;
@@ -176,7 +177,7 @@ pub fn truth_model_frf(noise: Option<(f64, u64)>) -> Result<FrfData> {
     }
 }
 
-/// How to draw a synthetic structure (DESIGN.md §3).
+/// How to draw a synthetic structure (docs/design.md §3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalSpec {
     /// Outputs `q`.
