@@ -240,7 +240,16 @@ impl ModelJson {
     /// [`IoError`] naming the file and the JSON line for unreadable or malformed files.
     pub fn read(path: &Path) -> Result<Self, IoError> {
         let bytes = crate::input::read_input(path)?;
-        let text = crate::input::utf8(&bytes, path)?;
+        Self::parse(crate::input::utf8(&bytes, path)?, path)
+    }
+
+    /// Parses the text of a `model.json` and checks its shapes; `path` names the file in
+    /// messages.
+    ///
+    /// # Errors
+    /// [`IoError`] naming the file and the JSON line for malformed text.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, IoError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let model: ModelJson = serde_json::from_str(text)
             .map_err(|e| IoError::format(path, format!("line {}: ", e.line()), e.to_string()))?;
         model

@@ -132,7 +132,19 @@ pub struct TimeSelection {
 /// # Errors
 /// [`IoError`] naming the file and what is wrong (with the line for CSV).
 pub fn read_time_file(path: &Path, selection: &TimeSelection) -> Result<TimeHistory, IoError> {
-    let bytes = crate::input::read_input(path)?;
+    parse_time_input(crate::input::read_input(path)?, path, selection)
+}
+
+/// Parses the bytes of a time-history file of any of the three formats, told apart by
+/// content; `path` names the file in messages.
+///
+/// # Errors
+/// [`IoError`] naming the file and what is wrong (with the line for CSV).
+pub fn parse_time_input(
+    bytes: crate::input::InputBytes,
+    path: &Path,
+    selection: &TimeSelection,
+) -> Result<TimeHistory, IoError> {
     let format = TimeFormat::detect(&bytes, path)?;
     let misplaced = |flag: &str, fmt: &str| {
         Err(IoError::format(
