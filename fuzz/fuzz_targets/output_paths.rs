@@ -78,13 +78,31 @@ fn writable(tree: &BTreeMap<String, Entry>, name: &str) -> bool {
 
 fn plant(out: &Path, decoys: &Path, name: &str, kind: u8) {
     let p = out.join(name);
-    if let Some(parent) = p.parent() {
-        if std::fs::symlink_metadata(parent).is_err() {
-            let _ = std::fs::create_dir_all(parent);
+    // Every folder on the way, inside `out`, must be a real folder (created when
+    // missing): planting through a link would reach the decoys, and the harness itself
+    // must not touch them.
+    let parts: Vec<&str> = name.split('/').collect();
+    let mut dir = out.to_path_buf();
+    for part in &parts[..parts.len() - 1] {
+        dir.push(part);
+        match std::fs::symlink_metadata(&dir) {
+            Ok(m) if m.file_type().is_dir() => {}
+            Ok(_) => return,
+            Err(_) => {
+                if std::fs::create_dir(&dir).is_err() {
+                    return;
+                }
+            }
         }
     }
     let _ = match kind % 5 {
-        0 => std::fs::write(&p, b"old"),
+        // create_new: an entry planted earlier under the same name (a FIFO would block
+        // a plain open) is left as it is.
+        0 => std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&p)
+            .and_then(|mut f| std::io::Write::write_all(&mut f, b"old")),
         1 => std::fs::create_dir(&p),
         2 => std::os::unix::fs::symlink(decoys.join("decoy.txt"), &p),
         3 => std::os::unix::fs::symlink(decoys.join("dir"), &p),
