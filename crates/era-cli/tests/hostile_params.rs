@@ -629,4 +629,18 @@ fn counts_in_messages_never_wrap() {
             assert!(!o.stderr.contains(wrapped), "{args:?}: {}", o.stderr);
         }
     }
+    // A product that saturated is said as such, not as a 20-digit number that reads like
+    // a wrapped one (friction tune's work estimate at a vanishing natural frequency).
+    let o = run(&[
+        "friction",
+        "tune",
+        "--stiffness",
+        "1",
+        "--coulomb-force",
+        "0.05",
+        "--natural-frequency-hz",
+        "1e-300",
+    ]);
+    o.assert_input_error().says("more than 1.8e19");
+    assert!(!o.stderr.contains("18446744073709551615"), "{}", o.stderr);
 }

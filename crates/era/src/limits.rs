@@ -105,7 +105,10 @@ pub fn saturating_count(x: f64) -> u64 {
 
 /// A request above a [`Limit`].
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-#[error("{context}: {asked} {what} asked for, the limit is {allowed} (set {env} to raise it)")]
+#[error(
+    "{context}: {} {what} asked for, the limit is {allowed} (set {env} to raise it)",
+    AskedCount(*.asked)
+)]
 pub struct LimitError {
     /// What asked: a flag, a file field ("--pad-to", "UFF record 3: number of lines").
     pub context: String,
@@ -167,8 +170,23 @@ impl Limit {
     }
 }
 
+/// An amount asked for, in a message: a product that saturated at `u64::MAX` is shown
+/// as "more than 1.8e19", never as a number that looks like a wrapped integer.
+struct AskedCount(u64);
+
+impl std::fmt::Display for AskedCount {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0 == u64::MAX {
+            f.write_str("more than 1.8e19")
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
 /// A count for a message: `a + b` or `a * b` without wrapping (saturated at
-/// `usize::MAX`, printed as "more than 18446744073709551615" by [`Saturated`]).
+/// `usize::MAX`, printed as "more than 1.8e19" by [`Saturated`], never as a number that
+/// looks like a wrapped integer).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Saturated(pub Option<usize>);
 
@@ -176,7 +194,7 @@ impl std::fmt::Display for Saturated {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.0 {
             Some(v) => write!(f, "{v}"),
-            None => write!(f, "more than {}", usize::MAX),
+            None => f.write_str("more than 1.8e19"),
         }
     }
 }
@@ -217,10 +235,10 @@ mod tests {
             .check_product("shape", &[u64::MAX, 3, 5])
             .unwrap_err();
         assert_eq!(e.asked, u64::MAX);
-        assert_eq!(
-            Saturated(None).to_string(),
-            format!("more than {}", usize::MAX)
-        );
+        let m = e.to_string();
+        assert!(m.contains("more than 1.8e19 FRF values"), "{m}");
+        assert!(!m.contains("18446744073709551615"), "{m}");
+        assert_eq!(Saturated(None).to_string(), "more than 1.8e19");
         assert_eq!(Saturated(5usize.checked_add(2)).to_string(), "7");
     }
 }
