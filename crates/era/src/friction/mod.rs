@@ -164,6 +164,18 @@ impl Oscillator {
         }
     }
 
+    /// The four parameters by their flag names, for messages ("stiffness 1,
+    /// natural-frequency-hz 1.5, coulomb-force 0.05, viscous-damping-ratio 0").
+    pub fn describe(&self) -> String {
+        format!(
+            "stiffness {}, natural-frequency-hz {}, coulomb-force {}, viscous-damping-ratio {}",
+            show(self.stiffness),
+            show(self.natural_frequency_hz),
+            show(self.coulomb_force),
+            show(self.viscous_damping_ratio)
+        )
+    }
+
     /// Checks every parameter.
     ///
     /// # Errors

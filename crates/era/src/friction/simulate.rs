@@ -376,15 +376,11 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
 
 /// [`FrictionError::NonFiniteResult`] naming every parameter of `spec`.
 fn non_finite(spec: &DecaySpec, what: &'static str) -> FrictionError {
-    let o = &spec.oscillator;
     FrictionError::NonFiniteResult {
         what,
         parameters: format!(
-            "stiffness {}, natural-frequency-hz {}, coulomb-force {}, viscous-damping-ratio {}, x0 {}, sample-rate {}, hold {}, noise {}",
-            super::show(o.stiffness),
-            super::show(o.natural_frequency_hz),
-            super::show(o.coulomb_force),
-            super::show(o.viscous_damping_ratio),
+            "{}, x0 {}, sample-rate {}, hold {}, noise {}",
+            spec.oscillator.describe(),
             super::show(spec.x0),
             super::show(spec.sample_rate_hz),
             super::show(spec.hold_s),

@@ -178,11 +178,8 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
         return Err(FrictionError::NonFiniteResult {
             what: "the neutral coefficient",
             parameters: format!(
-                "stiffness {}, natural-frequency-hz {}, coulomb-force {}, viscous-damping-ratio {}, x0 {}, dead-zone {}, sample-rate {}",
-                super::show(o.stiffness),
-                super::show(o.natural_frequency_hz),
-                super::show(o.coulomb_force),
-                super::show(o.viscous_damping_ratio),
+                "{}, x0 {}, dead-zone {}, sample-rate {}",
+                o.describe(),
                 super::show(spec.x0),
                 super::show(spec.dead_zone),
                 super::show(spec.sample_rate_hz)
