@@ -16,7 +16,6 @@ pub use crate::frf_file::{channel_metadata, channels_from_metadata};
 use crate::uff::UffWriteOptions;
 use crate::IoError;
 use era::Quantity;
-use std::io::Read;
 use std::path::Path;
 
 /// A file format for FRFs.
@@ -88,17 +87,15 @@ impl FrfFormat {
     }
 
     /// The format of a file from its first bytes; the extension only breaks ties and
-    /// catches a file that is not what its name says.
+    /// catches a file that is not what its name says. The file is opened through
+    /// [`crate::input::read_input`] like every input (mapped when regular, so nothing past
+    /// the head is read; refused when a folder; a FIFO cannot block the open).
     ///
     /// # Errors
     /// [`IoError`] when the file cannot be read, is empty, is a MAT v7.3 (HDF5) file, or
     /// is named `.uff`/`.mat` but does not start like one.
     pub fn detect(path: &Path) -> Result<FrfFormat, IoError> {
-        let mut head = Vec::with_capacity(4096);
-        std::fs::File::open(path)
-            .and_then(|f| f.take(4096).read_to_end(&mut head))
-            .map_err(|e| IoError::io(path, e))?;
-        FrfFormat::detect_bytes(&head, path)
+        FrfFormat::detect_bytes(&crate::input::read_input(path)?, path)
     }
 
     /// [`FrfFormat::detect`] on the bytes of a file already read (only the first 4 kB
