@@ -24,14 +24,25 @@ fn write_png(figure: &Figure, path: &Path) -> Result<(), IoError> {
     write_via(path, |tmp| {
         // The SVG of the same figure has just been drawn: a failure here is the file's.
         render_png(figure, tmp).map_err(|e| failed(format!("cannot write the PNG: {e}")))?;
-        let bytes = std::fs::read(tmp).map_err(|e| IoError::Io {
+        // Only the closing chunk is read back, not the whole image.
+        let (len, tail) = (|| {
+            use std::io::{Read, Seek, SeekFrom};
+            let mut file = std::fs::File::open(tmp)?;
+            let len = file.metadata()?.len();
+            let mut tail = [0u8; PNG_END.len()];
+            if len >= PNG_END.len() as u64 {
+                file.seek(SeekFrom::End(-(PNG_END.len() as i64)))?;
+                file.read_exact(&mut tail)?;
+            }
+            Ok((len, tail))
+        })()
+        .map_err(|e| IoError::Io {
             path: path.to_path_buf(),
             error: e,
         })?;
-        if !bytes.ends_with(&PNG_END) {
+        if tail != PNG_END {
             return Err(failed(format!(
-                "the PNG encoder stopped after {} bytes (disk full?)",
-                bytes.len()
+                "the PNG encoder stopped after {len} bytes (disk full?)"
             )));
         }
         Ok(())
