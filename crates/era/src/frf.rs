@@ -243,6 +243,22 @@ pub fn validate_frequencies(frequency_hz: &[f64]) -> Result<()> {
     Ok(())
 }
 
+/// The largest `|re|` or `|im|` among the finite values of `values` (0 when none is).
+pub(crate) fn largest_component<'a>(values: impl IntoIterator<Item = &'a Complex64>) -> f64 {
+    values
+        .into_iter()
+        .map(|z| z.re.abs().max(z.im.abs()))
+        .filter(|m| m.is_finite())
+        .fold(0.0f64, f64::max)
+}
+
+/// The exponent `e` for which `largest · 2^e` is nearest 1, kept within ±1000 so that
+/// `2^e` is a normal double: scaling by it is exact, and keeps squares of such values
+/// from overflowing or underflowing.
+pub(crate) fn exponent_toward_one(largest: f64) -> i32 {
+    (-(largest.log2().round() as i32)).clamp(-1000, 1000)
+}
+
 /// `n` uniformly spaced lines `0, Δf, …, (n-1)Δf`.
 pub fn uniform_lines(lines: usize, spacing_hz: f64) -> Vec<f64> {
     (0..lines).map(|k| k as f64 * spacing_hz).collect()

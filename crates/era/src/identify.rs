@@ -172,18 +172,14 @@ struct MagnitudeScale {
 
 impl MagnitudeScale {
     fn of(frf: &FrfData) -> Option<Self> {
-        let max = frf
-            .values()
-            .iter()
-            .map(|v| v.re.abs().max(v.im.abs()))
-            .fold(0.0f64, f64::max);
+        let max = crate::frf::largest_component(frf.values());
         if max == 0.0 || (SAFE_MAGNITUDE_MIN..=SAFE_MAGNITUDE_MAX).contains(&max) {
             return None;
         }
-        // Bring the largest magnitude near 1; an even exponent so √s is exact, and within
-        // ±1000 so 2^e is a normal double.
-        let e = -(max.log2().round() as i32);
-        let e = (e - e.rem_euclid(2)).clamp(-1000, 1000);
+        // Bring the largest magnitude near 1, with an even exponent so √s is exact (±1000
+        // are even, so the bound holds).
+        let e = crate::frf::exponent_toward_one(max);
+        let e = e - e.rem_euclid(2);
         Some(MagnitudeScale { exponent: e })
     }
 

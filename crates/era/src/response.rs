@@ -330,14 +330,9 @@ pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -
                 // Squares of magnitudes beyond about 1e154 overflow, below 1e-154 they
                 // underflow: sum them at an exact power-of-two scale instead (the ratio
                 // is the same). Ordinary data never takes this path.
-                let top = g
-                    .iter()
-                    .chain(h)
-                    .map(|z| z.re.abs().max(z.im.abs()))
-                    .filter(|m| m.is_finite())
-                    .fold(0.0f64, f64::max);
+                let top = crate::frf::largest_component(g.iter().chain(h));
                 if top > 0.0 {
-                    let k = 2f64.powi((-(top.log2().round() as i32)).clamp(-1000, 1000));
+                    let k = 2f64.powi(crate::frf::exponent_toward_one(top));
                     num = g
                         .iter()
                         .zip(h)
