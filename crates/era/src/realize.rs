@@ -146,6 +146,46 @@ pub struct Realization {
     pub svd_path: SvdPath,
     /// Iterations of the truncated SVD (matrix-free path).
     pub svd_iterations: Option<usize>,
+    /// The identified observability and controllability tails (for EMAC,
+    /// [`crate::modal::indicators`]).
+    pub tails: HankelTails,
+}
+
+/// The last block row of the identified observability matrix `U_n S_n^(½)` and the last
+/// block column of the controllability matrix `S_n^(½) V_nᵀ`: what the data says
+/// `C A^(R−1)` and `A^(C−1) B` are, where `R × C` are the block rows and columns of `H0`.
+/// The model predicts them from its eigenvalues; how well the two agree is the extended
+/// modal amplitude coherence (EMAC).
+#[derive(Debug, Clone)]
+pub struct HankelTails {
+    /// Last block row of `U_n S_n^(½)`, `q × n`.
+    pub observability: Mat<f64>,
+    /// Last block column of `S_n^(½) V_nᵀ`, `n × p`.
+    pub controllability: Mat<f64>,
+    /// `R − 1`: the power of `A` the observability tail stands for.
+    pub observability_power: usize,
+    /// `C − 1`: the power of `A` the controllability tail stands for.
+    pub controllability_power: usize,
+}
+
+impl HankelTails {
+    fn of(
+        singular_values: &[f64],
+        un: faer::MatRef<'_, f64>,
+        vn: faer::MatRef<'_, f64>,
+        outputs: usize,
+        inputs: usize,
+    ) -> Self {
+        let n = singular_values.len();
+        let (rows, cols) = (un.nrows(), vn.nrows());
+        let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
+        HankelTails {
+            observability: Mat::from_fn(outputs, n, |i, r| un[(rows - outputs + i, r)] * root[r]),
+            controllability: Mat::from_fn(n, inputs, |r, j| root[r] * vn[(cols - inputs + j, r)]),
+            observability_power: rows / outputs - 1,
+            controllability_power: cols / inputs - 1,
+        }
+    }
 }
 
 /// Checks the options against the data before any heavy work.
@@ -322,6 +362,7 @@ fn realize_shapes(
     let h1 = hankel::build(markov, h1_shape)?;
     let ut_h1_v = un.transpose() * (&h1 * vn);
     let (a, b, c, d) = balanced_matrices(&singular_values[..n], un, vn, &ut_h1_v, markov, options);
+    let tails = HankelTails::of(&singular_values[..n], un, vn, markov.outputs(), markov.inputs());
     Ok(Realization {
         model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
         singular_values,
@@ -331,6 +372,7 @@ fn realize_shapes(
         products_seconds: clock.elapsed().as_secs_f64(),
         svd_path: SvdPath::Dense,
         svd_iterations: None,
+        tails,
     })
 }
 
@@ -383,6 +425,13 @@ pub fn realize_naive(
     let b = Mat::from_fn(n, p, |r, j| singular_values[r].sqrt() * v[(j, r)]);
     let c = Mat::from_fn(q, n, |i, r| u[(i, r)] * singular_values[r].sqrt());
     let d = direct_term(markov, options.direct_term);
+    let tails = HankelTails::of(
+        &singular_values[..n],
+        u.subcols(0, n),
+        v.subcols(0, n),
+        q,
+        p,
+    );
     Ok(Realization {
         model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
         singular_values,
@@ -392,6 +441,7 @@ pub fn realize_naive(
         products_seconds: clock.elapsed().as_secs_f64(),
         svd_path: SvdPath::Dense,
         svd_iterations: None,
+        tails,
     })
 }
 
@@ -441,6 +491,7 @@ fn realize_matrix_free(
     let h1_v = op1.apply(vn);
     let ut_h1_v = un.transpose() * &h1_v;
     let (a, b, c, d) = balanced_matrices(&svd.s[..n], un, vn, &ut_h1_v, markov, options);
+    let tails = HankelTails::of(&svd.s[..n], un, vn, markov.outputs(), markov.inputs());
     let mut singular_values = svd.s;
     singular_values.truncate(n); // only these passed the residual test
     Ok(Realization {
@@ -452,5 +503,264 @@ fn realize_matrix_free(
         products_seconds: clock.elapsed().as_secs_f64(),
         svd_path: SvdPath::MatrixFree,
         svd_iterations: Some(svd.iterations),
+        tails,
     })
+}
+
+/// Extra singular triplets the matrix-free factorization computes past the largest order,
+/// so that the singular-value plot shows whether a gap follows it.
+pub const EXTRA_SINGULAR_VALUES: usize = 20;
+
+/// The SVD of `H0`, kept so that a balanced realization of any order up to
+/// [`Factorization::max_states`] costs only small products (docs/design.md §1.9).
+///
+/// With `H0 = U S Vᵀ`, the realization at order `n` uses `U_n`, `S_n`, `V_n` — the leading
+/// `n` columns — and `U_nᵀ H1 V_n`, the leading `n × n` block of `U_Nᵀ H1 V_N` for any
+/// `N ≥ n`. That block product is formed once at the largest order `N`, so a scan over
+/// many orders costs one factorisation, one `H1` product and an `n × n` slice per order.
+/// On the matrix-free path `H1` is never formed: `H1 V_N` is one operator product.
+#[derive(Debug, Clone)]
+pub struct Factorization {
+    u: Mat<f64>,
+    v: Mat<f64>,
+    ut_h1_v: Mat<f64>,
+    y0: Mat<f64>,
+    singular_values: Vec<f64>,
+    max_states: usize,
+    rank: usize,
+    sample_time_s: f64,
+    hankel_size: (usize, usize),
+    svd_path: SvdPath,
+    svd_iterations: Option<usize>,
+    warnings: Vec<RealizeWarning>,
+    seconds: f64,
+}
+
+impl Factorization {
+    /// Factors the thesis Hankel of `max_states` states and `hankel_factor` (the `H0` that
+    /// [`realize`] would build at that order).
+    ///
+    /// # Errors
+    /// As [`realize`] at `max_states`, except that a numerical rank below `max_states`
+    /// is allowed (orders above it are refused by [`Factorization::realize`]).
+    pub fn thesis(
+        markov: &MarkovSequence,
+        sample_time_s: f64,
+        max_states: usize,
+        hankel_factor: usize,
+        svd: SvdPath,
+    ) -> Result<Self> {
+        let options = RealizeOptions {
+            svd,
+            ..RealizeOptions::new(max_states, hankel_factor)
+        };
+        let (shapes, warnings) = plan(markov, &options)?;
+        Self::with_shapes(markov, sample_time_s, &options, shapes.h0, shapes.h1, warnings)
+    }
+
+    /// Factors a general `H0` of `shape` (`H1` one sample later), as [`realize_general`].
+    ///
+    /// # Errors
+    /// As [`realize_general`].
+    pub fn general(
+        markov: &MarkovSequence,
+        sample_time_s: f64,
+        max_states: usize,
+        svd: SvdPath,
+        shape: HankelShape,
+    ) -> Result<Self> {
+        let (rows, cols) = (
+            shape.block_rows * markov.outputs(),
+            shape.block_cols * markov.inputs(),
+        );
+        if max_states == 0 || rows.min(cols) < max_states {
+            return Err(EraError::HankelTooSmall {
+                rows,
+                cols,
+                available: rows.min(cols),
+                states: max_states,
+            });
+        }
+        let h1 = HankelShape {
+            first_sample: shape.first_sample + 1,
+            ..shape
+        };
+        hankel::check_shape(markov, h1)?;
+        let options = RealizeOptions {
+            svd,
+            ..RealizeOptions::new(max_states, 1)
+        };
+        Self::with_shapes(markov, sample_time_s, &options, shape, h1, Vec::new())
+    }
+
+    fn with_shapes(
+        markov: &MarkovSequence,
+        sample_time_s: f64,
+        options: &RealizeOptions,
+        h0_shape: HankelShape,
+        h1_shape: HankelShape,
+        warnings: Vec<RealizeWarning>,
+    ) -> Result<Self> {
+        let clock = Instant::now();
+        let max_states = options.states;
+        let (rows, cols) = (
+            h0_shape.block_rows * markov.outputs(),
+            h0_shape.block_cols * markov.inputs(),
+        );
+        let matrix_free = match options.svd {
+            SvdPath::Dense => false,
+            SvdPath::MatrixFree => true,
+            SvdPath::Auto => rows.min(cols) >= AUTO_MATRIX_FREE_MIN_DIM,
+        };
+        let (u, s, v, ut_h1_v, path, iterations) = if matrix_free {
+            let op0 = HankelOperator::new(markov, h0_shape)?;
+            let keep = (max_states + EXTRA_SINGULAR_VALUES).min(rows.min(cols));
+            let tsvd_options = TruncatedSvdOptions {
+                tolerance: options.svd_tolerance,
+                ..TruncatedSvdOptions::new(keep)
+            };
+            let mut svd = truncated_svd(&op0, &tsvd_options)?;
+            svd.s.truncate(keep);
+            let u = svd.u.subcols(0, keep).to_owned();
+            let v = svd.v.subcols(0, keep).to_owned();
+            let op1 = HankelOperator::new(markov, h1_shape)?;
+            let vn = v.subcols(0, max_states);
+            let ut_h1_v = u.subcols(0, max_states).transpose() * op1.apply(vn);
+            (u, svd.s, v, ut_h1_v, SvdPath::MatrixFree, Some(svd.iterations))
+        } else {
+            let h0 = hankel::build(markov, h0_shape)?;
+            let svd = h0
+                .thin_svd()
+                .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
+            drop(h0);
+            let s: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
+            let h1 = hankel::build(markov, h1_shape)?;
+            let (un, vn) = (svd.U().subcols(0, max_states), svd.V().subcols(0, max_states));
+            let ut_h1_v = un.transpose() * (&h1 * vn);
+            (
+                svd.U().to_owned(),
+                s,
+                svd.V().to_owned(),
+                ut_h1_v,
+                SvdPath::Dense,
+                None,
+            )
+        };
+        let (rank, _) = numerical_rank(&s, rows, cols);
+        let (q, p) = (markov.outputs(), markov.inputs());
+        Ok(Factorization {
+            u,
+            v,
+            ut_h1_v,
+            y0: Mat::from_fn(q, p, |i, j| markov.get(0, i, j)),
+            singular_values: s,
+            max_states,
+            rank,
+            sample_time_s,
+            hankel_size: (rows, cols),
+            svd_path: path,
+            svd_iterations: iterations,
+            warnings,
+            seconds: clock.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The largest order this factorization realizes.
+    pub fn max_states(&self) -> usize {
+        self.max_states
+    }
+
+    /// Numerical rank of `H0` (as [`numerical_rank`]; on the matrix-free path, among the
+    /// singular values computed).
+    pub fn rank(&self) -> usize {
+        self.rank
+    }
+
+    /// Singular values of `H0`, largest first: all of them on the dense path, the largest
+    /// order plus [`EXTRA_SINGULAR_VALUES`] on the matrix-free path.
+    pub fn singular_values(&self) -> &[f64] {
+        &self.singular_values
+    }
+
+    /// Rows and columns of `H0`.
+    pub fn hankel_size(&self) -> (usize, usize) {
+        self.hankel_size
+    }
+
+    /// The SVD path taken (never `Auto`).
+    pub fn svd_path(&self) -> SvdPath {
+        self.svd_path
+    }
+
+    /// Wall time of the Hankel, SVD and `H1` product, s.
+    pub fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    /// The balanced realization at `states` (docs/design.md §1.9) from the kept factors.
+    ///
+    /// # Errors
+    /// [`EraError::InvalidParameter`] for 0 states or more than [`Self::max_states`];
+    /// [`EraError::RankDeficient`] above the numerical rank of `H0`.
+    pub fn realize(&self, states: usize, direct: DirectTerm) -> Result<Realization> {
+        if states == 0 || states > self.max_states {
+            return Err(EraError::InvalidParameter {
+                name: "states",
+                value: states.to_string(),
+                reason: format!(
+                    "the factorization realizes 1 to {} states",
+                    self.max_states
+                ),
+            });
+        }
+        if states > self.rank {
+            return Err(EraError::RankDeficient {
+                rank: self.rank,
+                states,
+                threshold: self.singular_values.first().copied().unwrap_or(0.0)
+                    * self.hankel_size.0.max(self.hankel_size.1) as f64
+                    * f64::EPSILON,
+            });
+        }
+        let clock = Instant::now();
+        let n = states;
+        let (q, p) = (self.y0.nrows(), self.y0.ncols());
+        let sv = &self.singular_values[..n];
+        let root: Vec<f64> = sv.iter().map(|s| s.sqrt()).collect();
+        let (un, vn) = (self.u.subcols(0, n), self.v.subcols(0, n));
+        let a = Mat::from_fn(n, n, |r, c| self.ut_h1_v[(r, c)] / (root[r] * root[c]));
+        let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
+        let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
+        let d = match direct {
+            DirectTerm::Zero => Mat::zeros(q, p),
+            DirectTerm::FirstMarkov => self.y0.clone(),
+        };
+        let mut warnings = self.warnings.clone();
+        let available = self.hankel_size.0.min(self.hankel_size.1);
+        if available < 2 * n {
+            warnings.push(RealizeWarning::FewSingularValues {
+                available,
+                states: n,
+            });
+        }
+        Ok(Realization {
+            model: StateSpace::new(
+                a,
+                b,
+                c,
+                d,
+                TimeDomain::Discrete {
+                    sample_time_s: self.sample_time_s,
+                },
+            ),
+            singular_values: self.singular_values.clone(),
+            hankel_size: self.hankel_size,
+            warnings,
+            hankel_svd_seconds: self.seconds,
+            products_seconds: clock.elapsed().as_secs_f64(),
+            svd_path: self.svd_path,
+            svd_iterations: self.svd_iterations,
+            tails: HankelTails::of(sv, un, vn, q, p),
+        })
+    }
 }

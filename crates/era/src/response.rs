@@ -165,7 +165,7 @@ impl HessenbergForm {
     }
 }
 
-fn evaluation_point(domain: TimeDomain, frequency_hz: f64) -> Complex64 {
+pub(crate) fn evaluation_point(domain: TimeDomain, frequency_hz: f64) -> Complex64 {
     let w = 2.0 * std::f64::consts::PI * frequency_hz;
     match domain {
         TimeDomain::Discrete { sample_time_s } => Complex64::from_polar(1.0, w * sample_time_s),

@@ -24,6 +24,12 @@ pub struct ModalForm {
     pub participations: Vec<Vec<Complex64>>,
     /// `‖V‖_F ‖V⁻¹‖_F`, an estimate of the eigenvector condition number.
     pub eigenvector_condition: f64,
+    /// Right eigenvectors `φ_k` (columns), each divided by the entry of `C φ_k` that
+    /// scales its shape, so that `shapes[k] = C φ_k`.
+    pub right: Mat<Complex64>,
+    /// Left eigenvectors `ψ_k` (rows of `V⁻¹`), scaled inversely, so that
+    /// `participations[k] = ψ_k B` and `ψ_k φ_k = 1`.
+    pub left: Mat<Complex64>,
 }
 
 impl ModalForm {
@@ -41,6 +47,8 @@ impl ModalForm {
         let cv = complex(&model.c) * &v;
         let vib = &v_inv * complex(&model.b);
         let (q, p) = (model.outputs(), model.inputs());
+        let mut right = v.clone();
+        let mut left = v_inv.clone();
         let mut eigenvalues = Vec::with_capacity(n);
         let mut shapes = Vec::with_capacity(n);
         let mut participations = Vec::with_capacity(n);
@@ -61,6 +69,10 @@ impl ModalForm {
             if largest.norm() > 0.0 {
                 shape.iter_mut().for_each(|x| *x /= largest);
                 part.iter_mut().for_each(|x| *x *= largest);
+                for r in 0..n {
+                    right[(r, k)] /= largest;
+                    left[(k, r)] *= largest;
+                }
             }
             shapes.push(shape);
             participations.push(part);
@@ -71,6 +83,8 @@ impl ModalForm {
             shapes,
             participations,
             eigenvector_condition,
+            right,
+            left,
         })
     }
 }
@@ -157,3 +171,6 @@ pub fn modal_parameters_of(form: &ModalForm, domain: TimeDomain) -> ModalParamet
         .sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
     out
 }
+
+pub mod indicators;
+pub mod stabilization;

@@ -1,0 +1,374 @@
+//! Quality indicators of identified modes: which poles describe the structure and which
+//! only fit noise or truncation error (docs/design.md §10).
+//!
+//! Each indicator is a pure function of the mode and, for EMAC, of what the Hankel
+//! matrix said about it. None depends on the state basis: a similarity transform
+//! `A' = T⁻¹AT`, `B' = T⁻¹B`, `C' = CT` changes the eigenvectors to `T⁻¹φ` and `ψT`,
+//! and every quantity below is a product in which `T` cancels.
+//!
+//! **MPC**, modal phase collinearity (Pappa, Elliott & Schenk 1993). A lightly damped
+//! structure with proportional damping has real normal modes: every entry of the shape
+//! `Cφ` has the same phase, up to sign. With `x = Re(Cφ)`, `y = Im(Cφ)` and the 2 × 2
+//! scatter matrix `S = [[xᵀx, xᵀy], [xᵀy, yᵀy]]` of eigenvalues `λ₁ ≥ λ₂`,
+//!
+//! ```text
+//! MPC = ((λ₁ − λ₂)/(λ₁ + λ₂))² = ((xᵀx − yᵀy)² + 4 (xᵀy)²) / (xᵀx + yᵀy)²
+//! ```
+//!
+//! 1 when the entries lie on a line through 0 of the complex plane (any common phase), 0
+//! when they spread evenly in all directions. Invariant to the complex scale of `φ`.
+//!
+//! **EMAC**, extended modal amplitude coherence (Juang & Pappa 1985's modal amplitude
+//! coherence, extended by Pappa, Elliott & Schenk 1993). The Hankel's SVD gives the data's
+//! own estimate of the observability matrix, `U_n S_n^(½)`, whose last block row stands
+//! for `C A^(R−1)`. The model *predicts* that block for mode `k` from its eigenvalue:
+//! `C A^(R−1) φ_k = λ_k^(R−1) C φ_k`. A real mode is consistent over the whole record, so
+//! the identified `(U_n S_n^(½))_tail φ_k` and the predicted `λ_k^(R−1) C φ_k` agree; a
+//! computational mode that fits one stretch of noise does not. Per output `j`, with
+//! identified `a_j` and predicted `b_j`,
+//!
+//! ```text
+//! R_j = min(|a_j|/|b_j|, |b_j|/|a_j|)            (amplitude agreement)
+//! W_j = max(0, 1 − |arg(a_j/b_j)| / (π/4))        (phase agreement, 0 past 45°)
+//! EMAC_out = Σ_j R_j W_j |b_j|² / Σ_j |b_j|²
+//! ```
+//!
+//! and the same on the input side with the controllability tail `(S_n^(½) V_nᵀ)_tail`,
+//! `ψ_k (…)_tail` against `λ_k^(C−1) ψ_k B`. `EMAC = EMAC_out · EMAC_in`.
+//!
+//! **CMI**, consistent-mode indicator: `CMI = EMAC · MPC` (same paper).
+//!
+//! **Contribution**: the mode's share of the FRF, `‖G_k‖_F / ‖G‖_F` over the fitted lines
+//! and all pairs, where `G_k` is the mode's pole pair's term of the model's FRF and `G`
+//! the measured FRF.
+//!
+//! Everything here is a few lines of complex arithmetic per mode; no crate provides these
+//! modal-analysis indicators, so they are written here.
+
+use crate::modal::ModalForm;
+use crate::realize::HankelTails;
+use crate::statespace::TimeDomain;
+use num_complex::Complex64;
+
+/// Modal phase collinearity of a shape, in [0, 1] (0 for a zero shape).
+pub fn mpc(shape: &[Complex64]) -> f64 {
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for v in shape {
+        sxx += v.re * v.re;
+        syy += v.im * v.im;
+        sxy += v.re * v.im;
+    }
+    let total = sxx + syy;
+    if total <= 0.0 {
+        return 0.0;
+    }
+    let spread = (sxx - syy).powi(2) + 4.0 * sxy * sxy;
+    (spread / (total * total)).clamp(0.0, 1.0)
+}
+
+/// Amplitude coherence of an identified vector with a predicted one: `Σ R_j W_j |b_j|² /
+/// Σ |b_j|²` (module doc). 0 when the prediction is zero.
+pub fn amplitude_coherence(identified: &[Complex64], predicted: &[Complex64]) -> f64 {
+    let mut weighted = 0.0;
+    let mut total = 0.0;
+    for (a, b) in identified.iter().zip(predicted) {
+        let w = b.norm_sqr();
+        total += w;
+        let (na, nb) = (a.norm(), b.norm());
+        if na == 0.0 || nb == 0.0 {
+            continue;
+        }
+        let ratio = (na / nb).min(nb / na);
+        let phase = (a / b).arg().abs();
+        let agreement = (1.0 - phase / std::f64::consts::FRAC_PI_4).max(0.0);
+        weighted += ratio * agreement * w;
+    }
+    if total > 0.0 && total.is_finite() {
+        weighted / total
+    } else {
+        0.0
+    }
+}
+
+/// Output and input EMAC of every eigenvalue of `form`, from the tails of the Hankel's
+/// factors (module doc). The model must be the discrete one the tails belong to.
+pub fn emac(form: &ModalForm, tails: &HankelTails) -> Vec<(f64, f64)> {
+    let n = form.eigenvalues.len();
+    let (q, p) = (tails.observability.nrows(), tails.controllability.ncols());
+    (0..n)
+        .map(|k| {
+            let lambda = form.eigenvalues[k];
+            let rise_out = power(lambda, tails.observability_power);
+            let rise_in = power(lambda, tails.controllability_power);
+            let identified_out: Vec<Complex64> = (0..q)
+                .map(|i| {
+                    (0..n)
+                        .map(|r| form.right[(r, k)] * tails.observability[(i, r)])
+                        .sum()
+                })
+                .collect();
+            let predicted_out: Vec<Complex64> =
+                form.shapes[k].iter().map(|c| c * rise_out).collect();
+            let identified_in: Vec<Complex64> = (0..p)
+                .map(|j| {
+                    (0..n)
+                        .map(|r| form.left[(k, r)] * tails.controllability[(r, j)])
+                        .sum()
+                })
+                .collect();
+            let predicted_in: Vec<Complex64> =
+                form.participations[k].iter().map(|b| b * rise_in).collect();
+            (
+                amplitude_coherence(&identified_out, &predicted_out),
+                amplitude_coherence(&identified_in, &predicted_in),
+            )
+        })
+        .collect()
+}
+
+/// `λ^k` by repeated squaring (exact powers of the eigenvalue; underflows to 0 cleanly).
+fn power(lambda: Complex64, k: usize) -> Complex64 {
+    let mut result = Complex64::new(1.0, 0.0);
+    let mut base = lambda;
+    let mut e = k;
+    while e > 0 {
+        if e & 1 == 1 {
+            result *= base;
+        }
+        base *= base;
+        e >>= 1;
+    }
+    result
+}
+
+/// `‖G_k‖_F / ‖G‖_F` of every eigenvalue of `form` (its conjugate's term included for a
+/// complex pole) over the lines `frequency_hz`; `measured` is the FRF `[out][in][line]`
+/// on those lines. 0 for all when the measurement is zero.
+pub fn contributions(
+    form: &ModalForm,
+    domain: TimeDomain,
+    frequency_hz: &[f64],
+    measured: &[Complex64],
+) -> Vec<f64> {
+    let reference: f64 = measured.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
+    let points: Vec<Complex64> = frequency_hz
+        .iter()
+        .map(|f| crate::response::evaluation_point(domain, *f))
+        .collect();
+    form.eigenvalues
+        .iter()
+        .enumerate()
+        .map(|(k, lambda)| {
+            if reference <= 0.0 || !reference.is_finite() {
+                return 0.0;
+            }
+            let shape = &form.shapes[k];
+            let part = &form.participations[k];
+            let pair = lambda.im != 0.0;
+            let mut sum = 0.0;
+            for z in &points {
+                let w = 1.0 / (z - lambda);
+                let wc = if pair {
+                    1.0 / (z - lambda.conj())
+                } else {
+                    Complex64::new(0.0, 0.0)
+                };
+                for c in shape {
+                    for b in part {
+                        let r = c * b;
+                        let g = r * w + r.conj() * wc;
+                        sum += g.norm_sqr();
+                    }
+                }
+            }
+            sum.sqrt() / reference
+        })
+        .collect()
+}
+
+/// The indicators of one mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModeIndicators {
+    /// Modal phase collinearity of the shape.
+    pub mpc: f64,
+    /// Extended modal amplitude coherence, output side times input side (`None` when the
+    /// model did not come with Hankel factors, e.g. a refined model).
+    pub emac: Option<f64>,
+    /// `EMAC · MPC` (`None` with EMAC).
+    pub cmi: Option<f64>,
+    /// The mode's share of the measured FRF (`None` when not computed).
+    pub contribution: Option<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::markov::MarkovSequence;
+    use crate::realize::{realize, RealizeOptions};
+    use crate::statespace::StateSpace;
+    use faer::Mat;
+
+    fn c(re: f64, im: f64) -> Complex64 {
+        Complex64::new(re, im)
+    }
+
+    #[test]
+    fn mpc_is_one_for_collinear_and_zero_for_circular_shapes() {
+        let phase = Complex64::from_polar(1.0, 0.7);
+        let real: Vec<Complex64> = [1.0, -0.5, 0.25, 2.0].iter().map(|v| phase * v).collect();
+        assert!((mpc(&real) - 1.0).abs() < 1e-14);
+        // Four points at 90° steps: no preferred direction.
+        let round = [c(1.0, 0.0), c(0.0, 1.0), c(-1.0, 0.0), c(0.0, -1.0)];
+        assert!(mpc(&round) < 1e-14);
+        assert_eq!(mpc(&[c(0.0, 0.0)]), 0.0);
+    }
+
+    #[test]
+    fn amplitude_coherence_penalises_amplitude_and_phase() {
+        let a = [c(1.0, 0.0), c(0.0, 2.0)];
+        assert!((amplitude_coherence(&a, &a) - 1.0).abs() < 1e-15);
+        let half: Vec<Complex64> = a.iter().map(|v| v * 0.5).collect();
+        assert!((amplitude_coherence(&half, &a) - 0.5).abs() < 1e-15);
+        let turned: Vec<Complex64> = a
+            .iter()
+            .map(|v| v * Complex64::from_polar(1.0, std::f64::consts::FRAC_PI_8))
+            .collect();
+        assert!((amplitude_coherence(&turned, &a) - 0.5).abs() < 1e-12);
+        let opposite: Vec<Complex64> = a.iter().map(|v| -v).collect();
+        assert_eq!(amplitude_coherence(&opposite, &a), 0.0);
+    }
+
+    /// Exact Markov blocks of a discrete model with real normal modes (proportional
+    /// damping): the modes of `y(k) = Σ φ φᵀ … ` with real shapes.
+    fn real_mode_model() -> StateSpace {
+        let ts = 0.01;
+        let modes = [(3.0, 0.02), (7.5, 0.01), (12.0, 0.03)];
+        let shapes = [[1.0, 0.4, -0.3], [0.5, -1.0, 0.8], [-0.2, 0.6, 1.0]];
+        let n = 2 * modes.len();
+        let mut a = Mat::<f64>::zeros(n, n);
+        let mut b = Mat::<f64>::zeros(n, 3);
+        let mut cm = Mat::<f64>::zeros(3, n);
+        for (k, (f, z)) in modes.iter().enumerate() {
+            let w = 2.0 * std::f64::consts::PI * f;
+            a[(2 * k, 2 * k + 1)] = 1.0;
+            a[(2 * k + 1, 2 * k)] = -w * w;
+            a[(2 * k + 1, 2 * k + 1)] = -2.0 * z * w;
+            for i in 0..3 {
+                b[(2 * k + 1, i)] = shapes[k][i];
+                cm[(i, 2 * k)] = shapes[k][i];
+            }
+        }
+        StateSpace::new(a, b, cm, Mat::zeros(3, 3), TimeDomain::Continuous)
+            .c2d(ts)
+            .unwrap()
+    }
+
+    fn markov_of(model: &StateSpace, samples: usize) -> MarkovSequence {
+        let mut seq = MarkovSequence::zeros(model.outputs(), model.inputs(), samples);
+        let mut ak_b = model.b.clone();
+        for k in 1..samples {
+            let y = &model.c * &ak_b;
+            for i in 0..model.outputs() {
+                for j in 0..model.inputs() {
+                    seq.set(k, i, j, y[(i, j)]);
+                }
+            }
+            ak_b = &model.a * &ak_b;
+        }
+        seq
+    }
+
+    #[test]
+    fn real_normal_modes_on_exact_data_score_one() {
+        let truth = real_mode_model();
+        let markov = markov_of(&truth, 200);
+        let r = realize(&markov, 0.01, &RealizeOptions::new(6, 20)).unwrap();
+        let form = ModalForm::new(&r.model).unwrap();
+        let e = emac(&form, &r.tails);
+        for (k, lambda) in form.eigenvalues.iter().enumerate() {
+            assert!((mpc(&form.shapes[k]) - 1.0).abs() < 1e-8, "MPC of {lambda}");
+            assert!((e[k].0 - 1.0).abs() < 1e-8, "EMAC out of {lambda}: {}", e[k].0);
+            assert!((e[k].1 - 1.0).abs() < 1e-8, "EMAC in of {lambda}: {}", e[k].1);
+        }
+    }
+
+    #[test]
+    fn a_mode_fitted_to_noise_scores_low() {
+        // The exact data plus a little noise, identified with many more states than the
+        // 6 it has: the extra poles fit the noise and are not consistent over the record.
+        let truth = real_mode_model();
+        let mut markov = markov_of(&truth, 400);
+        let mut rng = crate::sim::Minstd::new(4);
+        let peak = (1..400)
+            .map(|k| markov.get(k, 0, 0).abs())
+            .fold(0.0, f64::max);
+        for k in 1..400 {
+            for i in 0..3 {
+                for j in 0..3 {
+                    let v = markov.get(k, i, j);
+                    markov.set(k, i, j, v + 1e-3 * peak * rng.normal());
+                }
+            }
+        }
+        let r = realize(&markov, 0.01, &RealizeOptions::new(20, 10)).unwrap();
+        let form = ModalForm::new(&r.model).unwrap();
+        let e = emac(&form, &r.tails);
+        let truth_poles: Vec<Complex64> = ModalForm::new(&truth).unwrap().eigenvalues;
+        let mut real_scores = Vec::new();
+        let mut computational = Vec::new();
+        for (k, lambda) in form.eigenvalues.iter().enumerate() {
+            let near = truth_poles.iter().any(|t| (t - lambda).norm() < 1e-3);
+            let score = e[k].0 * e[k].1 * mpc(&form.shapes[k]);
+            if near {
+                real_scores.push(score);
+            } else {
+                computational.push(score);
+            }
+        }
+        assert_eq!(
+            real_scores.len(),
+            6,
+            "the six true poles are found: {:?}",
+            form.eigenvalues
+        );
+        assert!(real_scores.iter().all(|s| *s > 0.9), "{real_scores:?}");
+        let worst_real = real_scores.iter().copied().fold(1.0, f64::min);
+        let median = {
+            let mut c = computational.clone();
+            c.sort_by(f64::total_cmp);
+            c[c.len() / 2]
+        };
+        assert!(
+            median < 0.5 && median < worst_real,
+            "computational CMI {computational:?}"
+        );
+    }
+
+    #[test]
+    fn contributions_of_a_single_mode_model_cover_its_response() {
+        let truth = real_mode_model();
+        let form = ModalForm::new(&truth).unwrap();
+        let f: Vec<f64> = (1..400).map(|k| k as f64 * 0.05).collect();
+        let g = crate::response::frequency_response_modal(&truth, &form, &f);
+        let share = contributions(&form, truth.domain, &f, &g);
+        // Each pole and its conjugate give the same share (their pair's); the three
+        // shares lie in (0, 1), and by the triangle inequality they sum to at least 1.
+        let total: f64 = share.iter().sum::<f64>() / 2.0;
+        assert!(share.iter().all(|s| *s > 0.01 && *s < 1.0), "{share:?}");
+        for pair in share.chunks(2) {
+            assert!((pair[0] - pair[1]).abs() < 1e-12 * pair[0], "{share:?}");
+        }
+        assert!(total >= 1.0 - 1e-12, "{total}");
+        // A model of one of the modes alone has that mode's share.
+        let one = ModalForm {
+            eigenvalues: form.eigenvalues[..2].to_vec(),
+            shapes: form.shapes[..2].to_vec(),
+            participations: form.participations[..2].to_vec(),
+            ..form.clone()
+        };
+        let g1 = crate::response::frequency_response_modal(&truth, &one, &f);
+        let alone: f64 = g1.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt()
+            / g.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
+        assert!((alone - share[0]).abs() < 1e-9 * alone, "{alone} vs {}", share[0]);
+    }
+}
