@@ -5,9 +5,16 @@ use crate::error::{EraError, Result};
 use crate::filter::LowPass;
 use crate::frf::FrfData;
 use crate::markov::{impulse_responses, impulse_responses_naive, MarkovSequence};
-use crate::modal::{modal_parameters_of, ModalForm, ModalParameters};
+use crate::modal::indicators::{contributions, emac, mpc, ModeIndicators};
+use crate::modal::stabilization::{
+    hard_rejection, scan, select, DiagramCriteria, OrderRange, Scan, Selection, SelectionCriteria,
+};
+use crate::modal::{continuous_pole, modal_parameters_of, ModalForm, ModalParameters};
 use crate::preprocess::{integrate, preprocess, zero_leading_lines};
-use crate::realize::{realize, realize_naive, DirectTerm, Realization, RealizeOptions, SvdPath};
+use crate::realize::{
+    realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
+    SvdPath,
+};
 use crate::response::{fit_metrics, frequency_response_naive, FitReport, HessenbergForm};
 use crate::statespace::StateSpace;
 use std::time::Instant;
@@ -151,6 +158,62 @@ pub struct Identification {
     pub model_response: Vec<crate::Complex64>,
     /// Stage times.
     pub timings: StageTimings,
+    /// Per mode of `modal.modes` (same order): indicators, and whether to trust it.
+    pub quality: Vec<ModeQuality>,
+    /// The fitted band, Hz: the frequencies of the first and last fitted lines.
+    pub band_hz: (f64, f64),
+    /// The scan across orders, when one was asked for (`--orders` or `--states auto`).
+    pub stabilization: Option<Stabilization>,
+}
+
+/// Whether a mode is to be trusted, and why not.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModeQuality {
+    /// Judged a mode of the structure.
+    pub physical: bool,
+    /// Why not, when not.
+    pub reason: Option<String>,
+    /// The indicators.
+    pub indicators: ModeIndicators,
+    /// Orders of the scan in which the mode's cluster has a pole, when a scan ran.
+    pub stable_orders: Option<usize>,
+}
+
+/// A scan across orders, its diagram and (for `--states auto`) the automatic choice.
+#[derive(Debug, Clone)]
+pub struct Stabilization {
+    /// The orders asked for.
+    pub range: OrderRange,
+    /// Every pole of every order.
+    pub scan: Scan,
+    /// The clusters and the rule.
+    pub selection: Selection,
+    /// Singular values of the factored `H0`: all (dense) or the largest order plus
+    /// [`crate::realize::EXTRA_SINGULAR_VALUES`] (matrix-free).
+    pub singular_values: Vec<f64>,
+    /// `H0` size of the factorization.
+    pub hankel_size: (usize, usize),
+    /// The CMIF: singular values of the measured FRF matrix at each line of the
+    /// processed data, `[line][k]`, largest first.
+    pub cmif: Vec<Vec<f64>>,
+    /// Wall time of the scan (factorization, realizations, diagram), s.
+    pub seconds: f64,
+    /// Of which the factorization of `H0` (Hankel, SVD, `H1` product), s.
+    pub factor_seconds: f64,
+    /// Iterations of the truncated SVD (matrix-free path).
+    pub svd_iterations: Option<usize>,
+    /// How the model of `--states auto` was built, in words (`None` for a scan beside a
+    /// fixed order).
+    pub model_note: Option<String>,
+}
+
+/// What order to identify at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OrderChoice {
+    /// The order of [`EraOptions::states`], the thesis's way.
+    Fixed,
+    /// Choose the physical modes from a scan ([`identify_auto`]).
+    Auto,
 }
 
 /// The largest FRF magnitude identified as given: `2^300` (about 2e90). Above it the
@@ -213,6 +276,25 @@ impl MagnitudeScale {
         for sv in &mut r.singular_values {
             *sv *= inv;
         }
+        for mat in [&mut r.tails.observability, &mut r.tails.controllability] {
+            for j in 0..mat.ncols() {
+                for i in 0..mat.nrows() {
+                    mat[(i, j)] *= inv_sqrt;
+                }
+            }
+        }
+    }
+
+    fn undo_model(self, m: &mut StateSpace) {
+        let inv = Self::factor(-self.exponent);
+        let inv_sqrt = Self::factor(-self.exponent / 2);
+        for (mat, k) in [(&mut m.b, inv_sqrt), (&mut m.c, inv_sqrt), (&mut m.d, inv)] {
+            for j in 0..mat.ncols() {
+                for i in 0..mat.nrows() {
+                    mat[(i, j)] *= k;
+                }
+            }
+        }
     }
 }
 
@@ -254,22 +336,24 @@ pub fn identify_naive(frf: &FrfData, options: &EraOptions) -> Result<Identificat
     run(frf, options, Path::Naive, &mut |_| {})
 }
 
-fn run(
+/// What the front of the pipeline (§1.1–1.3) hands on.
+struct Front {
+    scale: Option<MagnitudeScale>,
+    markov: MarkovSequence,
+    sample_time_s: f64,
+}
+
+fn front(
     frf: &FrfData,
     options: &EraOptions,
     path: Path,
     observer: &mut dyn FnMut(Stage),
-) -> Result<Identification> {
+    timings: &mut StageTimings,
+) -> Result<Front> {
     if frf.is_all_zero() {
         return Err(EraError::AllZero);
     }
-    let mut timings = StageTimings::default();
     let mut clock = Instant::now();
-    let mut lap = |slot: &mut f64| {
-        *slot = clock.elapsed().as_secs_f64();
-        clock = Instant::now();
-    };
-
     // Magnitudes far from 1 overflow (or underflow) the squares inside the SVD: such data
     // is identified at an exact power-of-two scale, and the model is scaled back below.
     // Data inside the safe range is untouched (the thesis results stay bit for bit).
@@ -293,7 +377,8 @@ fn run(
     if pre.frf.is_all_zero() {
         return Err(EraError::AllZero);
     }
-    lap(&mut timings.preprocess);
+    timings.preprocess = clock.elapsed().as_secs_f64();
+    clock = Instant::now();
 
     observer(Stage::Markov);
     let mut series = match path {
@@ -307,8 +392,23 @@ fn run(
         }
     }
     let markov = MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series);
-    lap(&mut timings.markov);
+    timings.markov = clock.elapsed().as_secs_f64();
+    Ok(Front {
+        scale,
+        markov,
+        sample_time_s: pre.sample_time_s,
+    })
+}
 
+fn run(
+    frf: &FrfData,
+    options: &EraOptions,
+    path: Path,
+    observer: &mut dyn FnMut(Stage),
+) -> Result<Identification> {
+    let mut timings = StageTimings::default();
+    let f = front(frf, options, path, observer, &mut timings)?;
+    let clock = Instant::now();
     let realize_options = RealizeOptions {
         direct_term: options.direct_term,
         svd: options.svd,
@@ -316,24 +416,54 @@ fn run(
     };
     observer(Stage::HankelSvd);
     let mut realization = match path {
-        Path::Fast => realize(&markov, pre.sample_time_s, &realize_options)?,
-        Path::Naive => realize_naive(&markov, pre.sample_time_s, &realize_options)?,
+        Path::Fast => realize(&f.markov, f.sample_time_s, &realize_options)?,
+        Path::Naive => realize_naive(&f.markov, f.sample_time_s, &realize_options)?,
     };
-    if let Some(sc) = scale {
+    if let Some(sc) = f.scale {
         sc.undo(&mut realization);
     }
-    let mut realize_call = 0.0;
-    lap(&mut realize_call);
+    let realize_call = clock.elapsed().as_secs_f64();
+    timings.hankel_svd = realization.hankel_svd_seconds;
+    timings.realize = realize_call - realization.hankel_svd_seconds;
+    let discrete = realization.model.clone();
+    back(
+        frf,
+        options,
+        path,
+        observer,
+        timings,
+        realization,
+        discrete,
+        f.sample_time_s,
+    )
+}
 
+/// The back of the pipeline: continuous conversion, modes, indicators and fit of a
+/// discrete `model` (the realization's own, or one assembled from chosen modes).
+#[allow(clippy::too_many_arguments)]
+fn back(
+    frf: &FrfData,
+    options: &EraOptions,
+    path: Path,
+    observer: &mut dyn FnMut(Stage),
+    mut timings: StageTimings,
+    realization: Realization,
+    discrete: StateSpace,
+    sample_time_s: f64,
+) -> Result<Identification> {
+    let mut clock = Instant::now();
+    let mut lap = |slot: &mut f64| {
+        *slot = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+    };
     observer(Stage::Realize);
     let model = match options.domain {
-        ModelDomain::Discrete => realization.model.clone(),
-        ModelDomain::Continuous => realization.model.d2c()?,
+        ModelDomain::Discrete => discrete.clone(),
+        ModelDomain::Continuous => discrete.d2c()?,
     };
-    lap(&mut timings.realize);
-    // realize() did the Hankel and SVD, then the products: split it into its stages.
-    timings.hankel_svd = realization.hankel_svd_seconds;
-    timings.realize += realize_call - realization.hankel_svd_seconds;
+    let mut convert = 0.0;
+    lap(&mut convert);
+    timings.realize += convert;
 
     observer(Stage::Modes);
     let form = ModalForm::new(&model)?;
@@ -351,6 +481,16 @@ fn run(
         .zero_lines
         .max(usize::from(options.integrations > 0));
     let fit = fit_metrics(&measured, &response, first_line);
+    let band_hz = fitted_band(&measured, first_line);
+    let quality = mode_quality(
+        &modal,
+        &form,
+        &model,
+        &realization,
+        &measured,
+        first_line,
+        band_hz,
+    );
     lap(&mut timings.fit);
 
     Ok(Identification {
@@ -359,10 +499,468 @@ fn run(
         modal,
         fit,
         processed,
-        sample_time_s: pre.sample_time_s,
+        sample_time_s,
         model_response: response,
         timings,
+        quality,
+        band_hz,
+        stabilization: None,
     })
+}
+
+/// Frequencies of the first and last fitted lines.
+fn fitted_band(measured: &FrfData, first_line: usize) -> (f64, f64) {
+    let f = measured.frequency_hz();
+    let last = f.len().saturating_sub(1);
+    (f[first_line.min(last)], f[last])
+}
+
+/// Indicators and the hard criteria of every mode of an identification. EMAC comes from
+/// the realization's Hankel tails when the model's state basis is the realization's
+/// (its own model, discrete or converted); `None` otherwise.
+fn mode_quality(
+    modal: &ModalParameters,
+    form: &ModalForm,
+    model: &StateSpace,
+    realization: &Realization,
+    measured: &FrfData,
+    first_line: usize,
+    band_hz: (f64, f64),
+) -> Vec<ModeQuality> {
+    let criteria = SelectionCriteria::default();
+    let same_basis = realization.model.states() == model.states()
+        && realization.tails.observability.ncols() == model.states();
+    // EMAC needs the discrete eigenvalues of the realization's basis.
+    let emacs: Option<(ModalForm, Vec<(f64, f64)>)> = if same_basis {
+        ModalForm::new(&realization.model)
+            .ok()
+            .map(|f| {
+                let e = emac(&f, &realization.tails);
+                (f, e)
+            })
+            .filter(|_| model.states() == realization.model.states())
+    } else {
+        None
+    };
+    let lines = &measured.frequency_hz()[first_line..];
+    let (q, p, all) = (measured.outputs(), measured.inputs(), measured.lines());
+    let mut band_values = Vec::with_capacity(q * p * lines.len());
+    for pair in 0..q * p {
+        band_values
+            .extend_from_slice(&measured.values()[pair * all + first_line..(pair + 1) * all]);
+    }
+    let shares = contributions(form, model.domain, lines, &band_values);
+    modal
+        .modes
+        .iter()
+        .map(|m| {
+            // The eigenvalue of `form` this mode came from (same pole).
+            let k = nearest(&form.eigenvalues, m.eigenvalue);
+            let emac_value = emacs.as_ref().map(|(df, e)| {
+                let j = nearest_continuous(df, realization.model.domain, m.continuous_pole);
+                e[j].0 * e[j].1
+            });
+            let m_pc = mpc(&m.shape);
+            let indicators = ModeIndicators {
+                mpc: m_pc,
+                emac: emac_value,
+                cmi: emac_value.map(|e| e * m_pc),
+                contribution: Some(shares[k]),
+            };
+            let mut reason = hard_rejection(
+                m.frequency_hz,
+                m.damping_ratio,
+                indicators.cmi,
+                band_hz,
+                &criteria,
+            );
+            if reason.is_none() && shares[k] < criteria.contribution_minimum {
+                reason = Some(crate::modal::stabilization::Rejection::NoContribution(
+                    shares[k],
+                ));
+            }
+            ModeQuality {
+                physical: reason.is_none(),
+                reason: reason.map(|r| r.to_string()),
+                indicators,
+                stable_orders: None,
+            }
+        })
+        .collect()
+}
+
+fn nearest(values: &[crate::Complex64], target: crate::Complex64) -> usize {
+    (0..values.len())
+        .min_by(|&a, &b| {
+            (values[a] - target)
+                .norm()
+                .total_cmp(&(values[b] - target).norm())
+        })
+        .unwrap_or(0)
+}
+
+fn nearest_continuous(
+    form: &ModalForm,
+    domain: crate::TimeDomain,
+    pole: crate::Complex64,
+) -> usize {
+    let s: Vec<crate::Complex64> = form
+        .eigenvalues
+        .iter()
+        .map(|z| continuous_pole(*z, domain))
+        .collect();
+    nearest(&s, pole)
+}
+
+/// Settings of a scan across orders.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanOptions {
+    /// Orders to scan; `None` for the default range of the data ([`default_orders`]).
+    pub orders: Option<OrderRange>,
+    /// Residual tolerance of the truncated SVD on the matrix-free path, relative to `σ₁`
+    /// (1e-6: the scan needs the leading subspace, not 12 digits of the noise floor; on
+    /// noise-free DTA-like sets the poles still come out to 1e-11).
+    pub svd_tolerance: f64,
+    /// Diagram tolerances.
+    pub diagram: DiagramCriteria,
+    /// Automatic-choice thresholds.
+    pub selection: SelectionCriteria,
+}
+
+impl Default for ScanOptions {
+    fn default() -> Self {
+        ScanOptions {
+            orders: None,
+            svd_tolerance: 1e-6,
+            diagram: DiagramCriteria::default(),
+            selection: SelectionCriteria::default(),
+        }
+    }
+}
+
+/// The largest order whose thesis Hankel at `hankel_factor` stays within the first half
+/// of a circular impulse response of `markov_samples` samples (`n·lh ≤ samples/2`, where
+/// the inverse FFT does not wrap around), capped at [`DEFAULT_MAX_ORDER`]: the `H0` a scan
+/// factors.
+pub fn supported_hankel_states(markov_samples: usize, hankel_factor: usize) -> usize {
+    (markov_samples / 2 / hankel_factor.max(1)).min(DEFAULT_MAX_ORDER)
+}
+
+/// The default orders of a scan: from a quarter to [`DEFAULT_ORDER_STRETCH`] times the
+/// supported Hankel order ([`supported_hankel_states`]), within half the short side of
+/// `H0`, in even steps, at most 40 orders.
+///
+/// # Errors
+/// [`EraError::InvalidParameter`] naming `states` when the data is too short for any
+/// scan.
+pub fn default_orders(
+    markov_samples: usize,
+    hankel_factor: usize,
+    outputs: usize,
+    inputs: usize,
+) -> Result<OrderRange> {
+    let base = supported_hankel_states(markov_samples, hankel_factor);
+    let shapes = crate::hankel::ThesisHankel::new(base.max(2), hankel_factor.max(1));
+    let short_side = shapes
+        .map(|t| t.h0.block_rows * outputs.min(inputs))
+        .unwrap_or(0);
+    let max = ((base as f64 * DEFAULT_ORDER_STRETCH) as usize).min(short_side / 2) / 2 * 2;
+    if base < 8 || max < 8 {
+        return Err(EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: format!(
+                "{markov_samples} Markov samples at hankel-factor {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with --pad-to, lower --hankel-factor, or give --states N"
+            ),
+        });
+    }
+    let min = (base / 4).max(2) / 2 * 2;
+    let step = (max - min).div_ceil(39).max(2).next_multiple_of(2);
+    OrderRange::new(min, max, step)
+}
+
+/// The largest Hankel order of a default scan.
+pub const DEFAULT_MAX_ORDER: usize = 400;
+
+/// How far past the supported Hankel order a default scan realizes (weak modes appear
+/// only at high orders).
+pub const DEFAULT_ORDER_STRETCH: f64 = 1.5;
+
+/// CMIF: singular values of the FRF matrix at each line, largest first.
+pub fn cmif(frf: &FrfData) -> Vec<Vec<f64>> {
+    let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+    (0..lines)
+        .map(|k| {
+            let g = faer::Mat::<faer::c64>::from_fn(q, p, |i, j| {
+                let v = frf.values()[(i * p + j) * lines + k];
+                faer::c64::new(v.re, v.im)
+            });
+            match g.singular_values() {
+                Ok(s) => s,
+                Err(_) => vec![f64::NAN; q.min(p)],
+            }
+        })
+        .collect()
+}
+
+fn scan_front(
+    frf: &FrfData,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+    timings: &mut StageTimings,
+) -> Result<(Front, Factorization, OrderRange, Scan, f64)> {
+    let f = front(frf, options, Path::Fast, observer, timings)?;
+    let range = match scan_options.orders {
+        Some(r) => r,
+        None => default_orders(
+            f.markov.samples(),
+            options.hankel_factor,
+            frf.outputs(),
+            frf.inputs(),
+        )?,
+    };
+    let hankel_states = range
+        .max
+        .min(supported_hankel_states(
+            f.markov.samples(),
+            options.hankel_factor,
+        ))
+        .max(1);
+    let clock = Instant::now();
+    observer(Stage::HankelSvd);
+    let factorization = Factorization::thesis(
+        &f.markov,
+        f.sample_time_s,
+        &FactorOptions {
+            hankel_states,
+            max_states: range.max,
+            hankel_factor: options.hankel_factor,
+            svd: options.svd,
+            svd_tolerance: scan_options.svd_tolerance,
+        },
+    )
+    .map_err(|e| match e {
+        EraError::NotEnoughMarkovSamples { needed, available, .. } => EraError::InvalidParameter {
+            name: "orders",
+            value: range.to_string(),
+            reason: format!(
+                "the largest order needs {needed} Markov samples at hankel-factor {}, the data has {available}: lower the orders or --hankel-factor, or pad with --pad-to",
+                options.hankel_factor
+            ),
+        },
+        EraError::HankelTooSmall { available, .. } => EraError::InvalidParameter {
+            name: "orders",
+            value: range.to_string(),
+            reason: format!(
+                "the data supports a Hankel matrix with {available} singular values, fewer than the largest order: lower the orders"
+            ),
+        },
+        other => other,
+    })?;
+    timings.hankel_svd = factorization.seconds();
+    let s = scan(&factorization, &range, &scan_options.diagram, progress)?;
+    Ok((f, factorization, range, s, clock.elapsed().as_secs_f64()))
+}
+
+/// [`identify`] at the fixed order of `options`, plus a scan across `scan_options`'
+/// orders: the stabilization diagram, and each mode of the fixed-order model judged
+/// physical only when a physical cluster of the scan matches it (within the cluster
+/// tolerances) and it passes the hard criteria.
+///
+/// # Errors
+/// As [`identify`], and [`EraError::InvalidParameter`] naming `orders` for a range the
+/// data does not support.
+pub fn identify_with_scan(
+    frf: &FrfData,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
+    let mut found = run(frf, options, Path::Fast, observer)?;
+    let mut timings = StageTimings::default();
+    let (f, factorization, range, s, seconds) = scan_front(
+        frf,
+        options,
+        scan_options,
+        &mut |_| {},
+        progress,
+        &mut timings,
+    )?;
+    let selection = select(&s, found.band_hz, &scan_options.selection);
+    for (m, q) in found.modal.modes.iter().zip(found.quality.iter_mut()) {
+        let cluster = selection.clusters.iter().filter(|c| c.physical).find(|c| {
+            let rep = &s.poles[c.representative];
+            (rep.frequency_hz - m.frequency_hz).abs()
+                <= scan_options.selection.frequency_tolerance * m.frequency_hz
+                && crate::stability::mac(&rep.shape, &m.shape) >= scan_options.selection.mac_minimum
+        });
+        match cluster {
+            Some(c) => q.stable_orders = Some(c.members.len()),
+            None if q.physical => {
+                q.physical = false;
+                q.reason = Some("not stable across the scanned orders".into());
+            }
+            None => {}
+        }
+    }
+    let _ = f;
+    found.stabilization = Some(Stabilization {
+        range,
+        scan: s,
+        selection,
+        singular_values: factorization.singular_values().to_vec(),
+        hankel_size: factorization.hankel_size(),
+        cmif: cmif(&zero_leading_lines(&found.processed, options.zero_lines)),
+        seconds,
+        factor_seconds: factorization.seconds(),
+        svd_iterations: factorization.svd_iterations(),
+        model_note: None,
+    });
+    Ok(found)
+}
+
+/// `--states auto`: scans the orders of `scan_options`, chooses the physical modes by
+/// clustering ([`crate::modal::stabilization::select`]), and builds the model from them:
+/// a modal model of the chosen poles only (each taken from the highest order its cluster
+/// reached), in real block-diagonal form, discrete at the data's sample time (converted
+/// to continuous on request). `options.states` is ignored.
+///
+/// # Errors
+/// As [`identify_with_scan`], and [`EraError::InvalidParameter`] naming `states` when no
+/// cluster is physical.
+pub fn identify_auto(
+    frf: &FrfData,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
+    let mut timings = StageTimings::default();
+    let (f, factorization, range, s, seconds) =
+        scan_front(frf, options, scan_options, observer, progress, &mut timings)?;
+    let processed = integrate(frf, options.integrations)?;
+    let first_line = options
+        .zero_lines
+        .max(usize::from(options.integrations > 0));
+    let band_hz = fitted_band(&processed, first_line);
+    let selection = select(&s, band_hz, &scan_options.selection);
+    let chosen: Vec<&crate::modal::stabilization::ScanPole> = selection
+        .physical()
+        .map(|c| &s.poles[c.representative])
+        .collect();
+    if chosen.is_empty() {
+        return Err(EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: format!(
+                "no mode is stable across orders {range} (rule: {}): give --states N, or a wider --orders range",
+                selection.rule()
+            ),
+        });
+    }
+    let top = *s.orders.last().expect("a scan has orders");
+    // The realization at the highest order, for its diagnostics (singular values,
+    // warnings); its model is replaced by the chosen modes.
+    let mut realization = factorization.realize(top, options.direct_term)?;
+    let mut discrete = modal_model(&chosen, &realization.model.d, f.sample_time_s);
+    if let Some(sc) = f.scale {
+        sc.undo(&mut realization);
+        sc.undo_model(&mut discrete);
+    }
+    let note = format!(
+        "a modal model of the {} physical modes ({} states), each pole taken from the highest order its cluster reached (of the realizations {range} from one factorization of H0 at {} states)",
+        chosen.len(),
+        2 * chosen.len(),
+        range.max
+    );
+    let mut found = back(
+        frf,
+        options,
+        Path::Fast,
+        observer,
+        timings,
+        realization,
+        discrete,
+        f.sample_time_s,
+    )?;
+    // Indicators of the chosen poles come from the scan (their own order's factors).
+    for (m, q) in found.modal.modes.iter().zip(found.quality.iter_mut()) {
+        let j = (0..chosen.len())
+            .min_by(|&a, &b| {
+                (chosen[a].frequency_hz - m.frequency_hz)
+                    .abs()
+                    .total_cmp(&(chosen[b].frequency_hz - m.frequency_hz).abs())
+            })
+            .expect("chosen is not empty");
+        let p = chosen[j];
+        q.indicators.emac = Some(p.emac);
+        q.indicators.cmi = Some(p.cmi());
+        let cluster = selection
+            .physical()
+            .find(|c| std::ptr::eq(&s.poles[c.representative], p));
+        q.stable_orders = cluster.map(|c| c.members.len());
+        if q.physical && q.indicators.cmi < Some(scan_options.selection.cmi_minimum) {
+            q.physical = false;
+        }
+        if q.physical {
+            q.reason = None;
+        }
+    }
+    found.stabilization = Some(Stabilization {
+        range,
+        scan: s,
+        selection,
+        singular_values: factorization.singular_values().to_vec(),
+        hankel_size: factorization.hankel_size(),
+        cmif: cmif(&zero_leading_lines(&found.processed, options.zero_lines)),
+        seconds,
+        factor_seconds: factorization.seconds(),
+        svd_iterations: factorization.svd_iterations(),
+        model_note: Some(note),
+    });
+    Ok(found)
+}
+
+/// A discrete model of the chosen poles in real block-diagonal form: per pole
+/// `λ = α + iβ` with shape `c = Cφ` and participation `b = ψB`, the block
+/// `A = [[α, −β], [β, α]]`, `B = [Re b; Im b]`, `C = [2 Re c, −2 Im c]`, whose response
+/// `c b/(z − λ) + c̄ b̄/(z − λ̄)` is the pole pair's term. `d` is the realization's `D`.
+pub fn modal_model(
+    poles: &[&crate::modal::stabilization::ScanPole],
+    d: &faer::Mat<f64>,
+    sample_time_s: f64,
+) -> StateSpace {
+    let n = 2 * poles.len();
+    let (q, p) = (d.nrows(), d.ncols());
+    let mut a = faer::Mat::<f64>::zeros(n, n);
+    let mut b = faer::Mat::<f64>::zeros(n, p);
+    let mut c = faer::Mat::<f64>::zeros(q, n);
+    for (k, pole) in poles.iter().enumerate() {
+        let (i0, i1) = (2 * k, 2 * k + 1);
+        let z = pole.eigenvalue;
+        a[(i0, i0)] = z.re;
+        a[(i0, i1)] = -z.im;
+        a[(i1, i0)] = z.im;
+        a[(i1, i1)] = z.re;
+        for j in 0..p {
+            b[(i0, j)] = pole.participation[j].re;
+            b[(i1, j)] = pole.participation[j].im;
+        }
+        for i in 0..q {
+            c[(i, i0)] = 2.0 * pole.shape[i].re;
+            c[(i, i1)] = -2.0 * pole.shape[i].im;
+        }
+    }
+    StateSpace::new(
+        a,
+        b,
+        c,
+        d.clone(),
+        crate::TimeDomain::Discrete { sample_time_s },
+    )
 }
 
 #[cfg(test)]

@@ -151,21 +151,21 @@ pub struct Realization {
     pub tails: HankelTails,
 }
 
-/// The last block row of the identified observability matrix `U_n S_n^(½)` and the last
-/// block column of the controllability matrix `S_n^(½) V_nᵀ`: what the data says
-/// `C A^(R−1)` and `A^(C−1) B` are, where `R × C` are the block rows and columns of `H0`.
-/// The model predicts them from its eigenvalues; how well the two agree is the extended
-/// modal amplitude coherence (EMAC).
+/// The identified observability matrix `U_n S_n^(½)` and controllability matrix
+/// `S_n^(½) V_nᵀ`: what the data says `[C; CA; CA²; …]` and `[B, AB, A²B, …]` are, block
+/// row by block row. The model predicts each block from its eigenvalues; how well the
+/// two agree is the extended modal amplitude coherence (EMAC,
+/// [`crate::modal::indicators`]).
 #[derive(Debug, Clone)]
 pub struct HankelTails {
-    /// Last block row of `U_n S_n^(½)`, `q × n`.
+    /// `U_n S_n^(½)`, `(R·q) × n`.
     pub observability: Mat<f64>,
-    /// Last block column of `S_n^(½) V_nᵀ`, `n × p`.
+    /// `S_n^(½) V_nᵀ`, `n × (C·p)`.
     pub controllability: Mat<f64>,
-    /// `R − 1`: the power of `A` the observability tail stands for.
-    pub observability_power: usize,
-    /// `C − 1`: the power of `A` the controllability tail stands for.
-    pub controllability_power: usize,
+    /// Outputs `q` (block height of `observability`).
+    pub outputs: usize,
+    /// Inputs `p` (block width of `controllability`).
+    pub inputs: usize,
 }
 
 impl HankelTails {
@@ -177,14 +177,23 @@ impl HankelTails {
         inputs: usize,
     ) -> Self {
         let n = singular_values.len();
-        let (rows, cols) = (un.nrows(), vn.nrows());
         let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
         HankelTails {
-            observability: Mat::from_fn(outputs, n, |i, r| un[(rows - outputs + i, r)] * root[r]),
-            controllability: Mat::from_fn(n, inputs, |r, j| root[r] * vn[(cols - inputs + j, r)]),
-            observability_power: rows / outputs - 1,
-            controllability_power: cols / inputs - 1,
+            observability: Mat::from_fn(un.nrows(), n, |i, r| un[(i, r)] * root[r]),
+            controllability: Mat::from_fn(n, vn.nrows(), |r, j| root[r] * vn[(j, r)]),
+            outputs,
+            inputs,
         }
+    }
+
+    /// Block rows `R` of the observability matrix.
+    pub fn block_rows(&self) -> usize {
+        self.observability.nrows() / self.outputs.max(1)
+    }
+
+    /// Block columns `C` of the controllability matrix.
+    pub fn block_cols(&self) -> usize {
+        self.controllability.ncols() / self.inputs.max(1)
     }
 }
 
@@ -362,7 +371,13 @@ fn realize_shapes(
     let h1 = hankel::build(markov, h1_shape)?;
     let ut_h1_v = un.transpose() * (&h1 * vn);
     let (a, b, c, d) = balanced_matrices(&singular_values[..n], un, vn, &ut_h1_v, markov, options);
-    let tails = HankelTails::of(&singular_values[..n], un, vn, markov.outputs(), markov.inputs());
+    let tails = HankelTails::of(
+        &singular_values[..n],
+        un,
+        vn,
+        markov.outputs(),
+        markov.inputs(),
+    );
     Ok(Realization {
         model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
         singular_values,
@@ -511,6 +526,35 @@ fn realize_matrix_free(
 /// so that the singular-value plot shows whether a gap follows it.
 pub const EXTRA_SINGULAR_VALUES: usize = 20;
 
+/// What [`Factorization::thesis`] factors and keeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FactorOptions {
+    /// `H0` is the thesis Hankel of this many states (`M = hankel_states · lh`).
+    pub hankel_states: usize,
+    /// The largest order realized from it.
+    pub max_states: usize,
+    /// Hankel factor `lh`.
+    pub hankel_factor: usize,
+    /// Dense or matrix-free SVD.
+    pub svd: SvdPath,
+    /// Residual tolerance of the truncated SVD, relative to `σ₁`.
+    pub svd_tolerance: f64,
+}
+
+impl FactorOptions {
+    /// `H0` of `max_states` (as [`realize`] at that order), automatic SVD path,
+    /// tolerance 1e-12.
+    pub fn new(max_states: usize, hankel_factor: usize) -> Self {
+        FactorOptions {
+            hankel_states: max_states,
+            max_states,
+            hankel_factor,
+            svd: SvdPath::Auto,
+            svd_tolerance: 1e-12,
+        }
+    }
+}
+
 /// The SVD of `H0`, kept so that a balanced realization of any order up to
 /// [`Factorization::max_states`] costs only small products (docs/design.md §1.9).
 ///
@@ -537,25 +581,49 @@ pub struct Factorization {
 }
 
 impl Factorization {
-    /// Factors the thesis Hankel of `max_states` states and `hankel_factor` (the `H0` that
-    /// [`realize`] would build at that order).
+    /// Factors the thesis Hankel of `options.hankel_states` states at
+    /// `options.hankel_factor` (the `H0` that [`realize`] would build at that order), and
+    /// keeps what realizations up to `options.max_states` need.
     ///
     /// # Errors
-    /// As [`realize`] at `max_states`, except that a numerical rank below `max_states`
-    /// is allowed (orders above it are refused by [`Factorization::realize`]).
+    /// As [`realize`] at `hankel_states`, and [`EraError::HankelTooSmall`] when `H0` has
+    /// fewer singular values than `max_states`. A numerical rank below `max_states` is
+    /// allowed (orders above it are refused by [`Factorization::realize`]).
     pub fn thesis(
         markov: &MarkovSequence,
         sample_time_s: f64,
-        max_states: usize,
-        hankel_factor: usize,
-        svd: SvdPath,
+        options: &FactorOptions,
     ) -> Result<Self> {
-        let options = RealizeOptions {
-            svd,
-            ..RealizeOptions::new(max_states, hankel_factor)
+        let plan_options = RealizeOptions {
+            svd: options.svd,
+            svd_tolerance: options.svd_tolerance,
+            ..RealizeOptions::new(options.hankel_states, options.hankel_factor)
         };
-        let (shapes, warnings) = plan(markov, &options)?;
-        Self::with_shapes(markov, sample_time_s, &options, shapes.h0, shapes.h1, warnings)
+        let (shapes, warnings) = plan(markov, &plan_options)?;
+        let (rows, cols) = (
+            shapes.h0.block_rows * markov.outputs(),
+            shapes.h0.block_cols * markov.inputs(),
+        );
+        if options.max_states == 0 || rows.min(cols) < options.max_states {
+            return Err(EraError::HankelTooSmall {
+                rows,
+                cols,
+                available: rows.min(cols),
+                states: options.max_states,
+            });
+        }
+        let realize_options = RealizeOptions {
+            states: options.max_states,
+            ..plan_options
+        };
+        Self::with_shapes(
+            markov,
+            sample_time_s,
+            &realize_options,
+            shapes.h0,
+            shapes.h1,
+            warnings,
+        )
     }
 
     /// Factors a general `H0` of `shape` (`H1` one sample later), as [`realize_general`].
@@ -614,10 +682,14 @@ impl Factorization {
         };
         let (u, s, v, ut_h1_v, path, iterations) = if matrix_free {
             let op0 = HankelOperator::new(markov, h0_shape)?;
+            // Only the realized triplets must converge; the extra singular values are the
+            // Ritz values of the oversampled block (lower bounds, for the plot).
             let keep = (max_states + EXTRA_SINGULAR_VALUES).min(rows.min(cols));
+            let defaults = TruncatedSvdOptions::new(max_states);
             let tsvd_options = TruncatedSvdOptions {
                 tolerance: options.svd_tolerance,
-                ..TruncatedSvdOptions::new(keep)
+                oversample: defaults.oversample.max(keep - max_states),
+                ..defaults
             };
             let mut svd = truncated_svd(&op0, &tsvd_options)?;
             svd.s.truncate(keep);
@@ -626,7 +698,14 @@ impl Factorization {
             let op1 = HankelOperator::new(markov, h1_shape)?;
             let vn = v.subcols(0, max_states);
             let ut_h1_v = u.subcols(0, max_states).transpose() * op1.apply(vn);
-            (u, svd.s, v, ut_h1_v, SvdPath::MatrixFree, Some(svd.iterations))
+            (
+                u,
+                svd.s,
+                v,
+                ut_h1_v,
+                SvdPath::MatrixFree,
+                Some(svd.iterations),
+            )
         } else {
             let h0 = hankel::build(markov, h0_shape)?;
             let svd = h0
@@ -635,7 +714,10 @@ impl Factorization {
             drop(h0);
             let s: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
             let h1 = hankel::build(markov, h1_shape)?;
-            let (un, vn) = (svd.U().subcols(0, max_states), svd.V().subcols(0, max_states));
+            let (un, vn) = (
+                svd.U().subcols(0, max_states),
+                svd.V().subcols(0, max_states),
+            );
             let ut_h1_v = un.transpose() * (&h1 * vn);
             (
                 svd.U().to_owned(),
@@ -692,6 +774,11 @@ impl Factorization {
         self.svd_path
     }
 
+    /// Iterations of the truncated SVD (matrix-free path).
+    pub fn svd_iterations(&self) -> Option<usize> {
+        self.svd_iterations
+    }
+
     /// Wall time of the Hankel, SVD and `H1` product, s.
     pub fn seconds(&self) -> f64 {
         self.seconds
@@ -707,10 +794,7 @@ impl Factorization {
             return Err(EraError::InvalidParameter {
                 name: "states",
                 value: states.to_string(),
-                reason: format!(
-                    "the factorization realizes 1 to {} states",
-                    self.max_states
-                ),
+                reason: format!("the factorization realizes 1 to {} states", self.max_states),
             });
         }
         if states > self.rank {

@@ -20,12 +20,16 @@
 //!
 //! **EMAC**, extended modal amplitude coherence (Juang & Pappa 1985's modal amplitude
 //! coherence, extended by Pappa, Elliott & Schenk 1993). The Hankel's SVD gives the data's
-//! own estimate of the observability matrix, `U_n S_n^(½)`, whose last block row stands
-//! for `C A^(R−1)`. The model *predicts* that block for mode `k` from its eigenvalue:
-//! `C A^(R−1) φ_k = λ_k^(R−1) C φ_k`. A real mode is consistent over the whole record, so
-//! the identified `(U_n S_n^(½))_tail φ_k` and the predicted `λ_k^(R−1) C φ_k` agree; a
-//! computational mode that fits one stretch of noise does not. Per output `j`, with
-//! identified `a_j` and predicted `b_j`,
+//! own estimate of the observability matrix, `U_n S_n^(½)`, whose block row `k` stands
+//! for `C A^k`. The model *predicts* that block for mode `i` from its eigenvalue:
+//! `C A^k φ_i = λ_i^k C φ_i`. A real mode is consistent over the record, so the
+//! identified `(U_n S_n^(½))_k φ_i` and the predicted `λ_i^k C φ_i` agree; a computational
+//! mode that fits one stretch of noise does not. Pappa et al. compare at the last block
+//! row `k = R − 1`. With the long Hankels a scan uses, a well-damped real mode has
+//! decayed into rounding error long before that, and would score 0; era compares at the
+//! last block row or at the block where the mode's envelope `|λ|^k` has fallen to
+//! [`EMAC_DECAY`] of its start, whichever comes first. Per output `j`, with identified
+//! `a_j` and predicted `b_j`,
 //!
 //! ```text
 //! R_j = min(|a_j|/|b_j|, |b_j|/|a_j|)            (amplitude agreement)
@@ -33,8 +37,8 @@
 //! EMAC_out = Σ_j R_j W_j |b_j|² / Σ_j |b_j|²
 //! ```
 //!
-//! and the same on the input side with the controllability tail `(S_n^(½) V_nᵀ)_tail`,
-//! `ψ_k (…)_tail` against `λ_k^(C−1) ψ_k B`. `EMAC = EMAC_out · EMAC_in`.
+//! and the same on the input side with the controllability matrix `S_n^(½) V_nᵀ`,
+//! `ψ_i (…)_k` against `λ_i^k ψ_i B`. `EMAC = EMAC_out · EMAC_in`.
 //!
 //! **CMI**, consistent-mode indicator: `CMI = EMAC · MPC` (same paper).
 //!
@@ -90,20 +94,43 @@ pub fn amplitude_coherence(identified: &[Complex64], predicted: &[Complex64]) ->
     }
 }
 
-/// Output and input EMAC of every eigenvalue of `form`, from the tails of the Hankel's
-/// factors (module doc). The model must be the discrete one the tails belong to.
+/// Where EMAC compares identified and predicted blocks: the last block of the Hankel, or
+/// earlier, the block at which the mode's envelope `|λ|^k` has decayed to this fraction
+/// of its start.
+pub const EMAC_DECAY: f64 = 0.05;
+
+/// The block index EMAC uses for eigenvalue `lambda` among `blocks` (module doc).
+pub fn emac_block(lambda: Complex64, blocks: usize) -> usize {
+    let last = blocks.saturating_sub(1);
+    let r = lambda.norm();
+    if !(r > 0.0 && r < 1.0) {
+        return last;
+    }
+    let k = (EMAC_DECAY.ln() / r.ln()).ceil();
+    if k.is_finite() && k >= 1.0 {
+        (k as usize).min(last)
+    } else {
+        last.min(1)
+    }
+}
+
+/// Output and input EMAC of every eigenvalue of `form`, from the identified
+/// observability and controllability matrices (module doc). The model must be the
+/// discrete one whose basis they are in.
 pub fn emac(form: &ModalForm, tails: &HankelTails) -> Vec<(f64, f64)> {
     let n = form.eigenvalues.len();
-    let (q, p) = (tails.observability.nrows(), tails.controllability.ncols());
+    let (q, p) = (tails.outputs, tails.inputs);
     (0..n)
         .map(|k| {
             let lambda = form.eigenvalues[k];
-            let rise_out = power(lambda, tails.observability_power);
-            let rise_in = power(lambda, tails.controllability_power);
+            let ko = emac_block(lambda, tails.block_rows());
+            let ki = emac_block(lambda, tails.block_cols());
+            let rise_out = power(lambda, ko);
+            let rise_in = power(lambda, ki);
             let identified_out: Vec<Complex64> = (0..q)
                 .map(|i| {
                     (0..n)
-                        .map(|r| form.right[(r, k)] * tails.observability[(i, r)])
+                        .map(|r| form.right[(r, k)] * tails.observability[(ko * q + i, r)])
                         .sum()
                 })
                 .collect();
@@ -112,7 +139,7 @@ pub fn emac(form: &ModalForm, tails: &HankelTails) -> Vec<(f64, f64)> {
             let identified_in: Vec<Complex64> = (0..p)
                 .map(|j| {
                     (0..n)
-                        .map(|r| form.left[(k, r)] * tails.controllability[(r, j)])
+                        .map(|r| form.left[(k, r)] * tails.controllability[(r, ki * p + j)])
                         .sum()
                 })
                 .collect();
@@ -287,8 +314,16 @@ mod tests {
         let e = emac(&form, &r.tails);
         for (k, lambda) in form.eigenvalues.iter().enumerate() {
             assert!((mpc(&form.shapes[k]) - 1.0).abs() < 1e-8, "MPC of {lambda}");
-            assert!((e[k].0 - 1.0).abs() < 1e-8, "EMAC out of {lambda}: {}", e[k].0);
-            assert!((e[k].1 - 1.0).abs() < 1e-8, "EMAC in of {lambda}: {}", e[k].1);
+            assert!(
+                (e[k].0 - 1.0).abs() < 1e-8,
+                "EMAC out of {lambda}: {}",
+                e[k].0
+            );
+            assert!(
+                (e[k].1 - 1.0).abs() < 1e-8,
+                "EMAC in of {lambda}: {}",
+                e[k].1
+            );
         }
     }
 
@@ -369,6 +404,10 @@ mod tests {
         let g1 = crate::response::frequency_response_modal(&truth, &one, &f);
         let alone: f64 = g1.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt()
             / g.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
-        assert!((alone - share[0]).abs() < 1e-9 * alone, "{alone} vs {}", share[0]);
+        assert!(
+            (alone - share[0]).abs() < 1e-9 * alone,
+            "{alone} vs {}",
+            share[0]
+        );
     }
 }

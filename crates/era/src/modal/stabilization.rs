@@ -1,1 +1,727 @@
-//! placeholder
+//! Stabilization diagram and automatic choice of the physical modes (docs/design.md §10).
+//!
+//! **The scan.** One [`Factorization`] of `H0` at the largest order gives a balanced
+//! realization at every order of an [`OrderRange`] for the price of an `n × n` slice
+//! each. Every complex pole pair of every order becomes a [`ScanPole`] with its frequency,
+//! damping, shape and indicators ([`crate::modal::indicators`]).
+//!
+//! **The diagram.** Each pole is compared with the poles of the previous order in the
+//! range ([`DiagramCriteria`]): the nearest in frequency, if within the frequency
+//! tolerance, makes it *stable in frequency*; if its damping also agrees, *in frequency
+//! and damping*; if the shapes' MAC also passes, *stable* in all three. Otherwise the
+//! pole is *new*. Physical modes show as vertical columns of stable poles; computational
+//! modes scatter.
+//!
+//! **The automatic choice** ([`select`]), in the spirit of the automated modal analysis
+//! literature (Magalhães, Cunha & Caetano 2009; Reynders, Houbrechts & De Roeck 2012;
+//! Neu et al. 2017), in three steps:
+//!
+//! 1. *Hard criteria* remove poles no structure has: damping ≤ 0 (unstable or
+//!    undamped), damping above [`SelectionCriteria::damping_maximum`], a frequency outside
+//!    the fitted band, or a consistent-mode indicator `CMI = EMAC·MPC` below
+//!    [`SelectionCriteria::cmi_minimum`].
+//! 2. *Clustering* across orders. Orders are visited from low to high; each pole joins
+//!    the cluster it is closest to, with distance `d = |Δf|/f + (1 − MAC)`, if the
+//!    frequencies agree within [`SelectionCriteria::frequency_tolerance`] and the shapes
+//!    within [`SelectionCriteria::mac_minimum`]. A cluster takes at most one pole per
+//!    order (assignment is greedy by increasing distance), so two close modes that are
+//!    both present at the same orders stay two clusters. Unmatched poles start clusters.
+//! 3. *Recurrence*. A cluster is physical when it has a pole in at least
+//!    [`SelectionCriteria::recurrence`] of the orders of the upper half of the range
+//!    (where every physical mode has appeared), and never fewer than
+//!    [`SelectionCriteria::min_poles`], and when the median MPC and CMI of those poles are
+//!    at least [`SelectionCriteria::mpc_minimum`] and [`SelectionCriteria::cmi_minimum`]. Its representative is its pole at the highest
+//!    order it reached (the most accurate, being least biased by truncation).
+//! 4. *Duplicates*. Noise can split one mode into two clusters; two physical clusters
+//!    within the frequency tolerance whose shapes agree (MAC) are one mode, and only the
+//!    larger is kept. Close modes of a structure have distinct shapes and stay apart.
+//!
+//! The representatives, with their shapes and participations, form the physical modal
+//! model (see [`crate::identify`] for how it is assembled into `(A, B, C, D)`).
+//!
+//! The clustering and the diagram are plain loops over at most a few thousand poles; no
+//! crate does this domain-specific matching, so it is written here.
+
+use crate::error::{EraError, Result};
+use crate::modal::indicators::{emac, mpc};
+use crate::modal::{continuous_pole, ModalForm};
+use crate::realize::{DirectTerm, Factorization};
+use crate::stability::mac;
+use num_complex::Complex64;
+
+/// Orders `min, min + step, …, ≤ max` of a scan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OrderRange {
+    /// Lowest order.
+    pub min: usize,
+    /// Highest order.
+    pub max: usize,
+    /// Step between orders.
+    pub step: usize,
+}
+
+impl OrderRange {
+    /// Parses `MIN..MAX` or `MIN..MAX:STEP` (step 2 by default: poles come in pairs).
+    ///
+    /// # Errors
+    /// [`EraError::InvalidParameter`] naming `orders` for anything else, a step of 0, a
+    /// minimum of 0 or above the maximum.
+    pub fn parse(text: &str) -> Result<Self> {
+        let bad = |reason: &str| EraError::InvalidParameter {
+            name: "orders",
+            value: text.to_string(),
+            reason: reason.to_string(),
+        };
+        let (range, step) = match text.split_once(':') {
+            Some((r, s)) => (
+                r,
+                s.trim()
+                    .parse::<usize>()
+                    .map_err(|_| bad("the step after ':' must be a whole number"))?,
+            ),
+            None => (text, 2),
+        };
+        let (lo, hi) = range
+            .split_once("..")
+            .ok_or_else(|| bad("expected MIN..MAX or MIN..MAX:STEP, e.g. 20..160:4"))?;
+        let min = lo
+            .trim()
+            .parse::<usize>()
+            .map_err(|_| bad("MIN must be a whole number of states"))?;
+        let max = hi
+            .trim()
+            .parse::<usize>()
+            .map_err(|_| bad("MAX must be a whole number of states"))?;
+        Self::new(min, max, step).map_err(|e| match e {
+            EraError::InvalidParameter { reason, .. } => bad(&reason),
+            other => other,
+        })
+    }
+
+    /// A checked range.
+    ///
+    /// # Errors
+    /// As [`OrderRange::parse`].
+    pub fn new(min: usize, max: usize, step: usize) -> Result<Self> {
+        let bad = |reason: String| EraError::InvalidParameter {
+            name: "orders",
+            value: format!("{min}..{max}:{step}"),
+            reason,
+        };
+        if step == 0 {
+            return Err(bad("the step must be at least 1".into()));
+        }
+        if min == 0 {
+            return Err(bad("an order of 0 states is not a model".into()));
+        }
+        if min > max {
+            return Err(bad(format!("MIN {min} is above MAX {max}")));
+        }
+        crate::limits::STATES.check("orders", max as u64)?;
+        if (max - min) / step + 1 > MAX_SCAN_ORDERS {
+            return Err(bad(format!(
+                "{} orders; at most {MAX_SCAN_ORDERS} per scan (raise the step)",
+                (max - min) / step + 1
+            )));
+        }
+        Ok(OrderRange { min, max, step })
+    }
+
+    /// The orders, ascending; the last is `max` rounded down to the step.
+    pub fn orders(&self) -> Vec<usize> {
+        (self.min..=self.max).step_by(self.step).collect()
+    }
+}
+
+/// The most orders one scan realizes.
+pub const MAX_SCAN_ORDERS: usize = 500;
+
+impl std::fmt::Display for OrderRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}:{}", self.min, self.max, self.step)
+    }
+}
+
+/// How a pole compares with the previous order's poles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum PoleStatus {
+    /// No pole of the previous order is near it in frequency.
+    New,
+    /// Stable in frequency only.
+    Frequency,
+    /// Stable in frequency and damping.
+    FrequencyDamping,
+    /// Stable in frequency, damping and shape.
+    Stable,
+}
+
+impl PoleStatus {
+    /// Short name used in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            PoleStatus::New => "new",
+            PoleStatus::Frequency => "frequency",
+            PoleStatus::FrequencyDamping => "frequency+damping",
+            PoleStatus::Stable => "stable",
+        }
+    }
+}
+
+/// Tolerances of the diagram's order-to-order comparison.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiagramCriteria {
+    /// Relative frequency difference.
+    pub frequency: f64,
+    /// Damping difference relative to the pole's damping.
+    pub damping: f64,
+    /// Smallest MAC of the shapes.
+    pub mac: f64,
+}
+
+impl Default for DiagramCriteria {
+    /// 1 % in frequency, 5 % in damping, MAC 0.98 (the usual choices of commercial
+    /// stabilization diagrams).
+    fn default() -> Self {
+        DiagramCriteria {
+            frequency: 0.01,
+            damping: 0.05,
+            mac: 0.98,
+        }
+    }
+}
+
+/// One complex pole pair of one order of the scan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanPole {
+    /// Model order it came from.
+    pub order: usize,
+    /// `|s|/2π`, Hz.
+    pub frequency_hz: f64,
+    /// `−Re s/|s|`.
+    pub damping_ratio: f64,
+    /// Continuous pole `s` (positive imaginary part), rad/s.
+    pub continuous_pole: Complex64,
+    /// Discrete eigenvalue `z`.
+    pub eigenvalue: Complex64,
+    /// Shape `Cφ`, largest entry 1.
+    pub shape: Vec<Complex64>,
+    /// Participation `ψB`.
+    pub participation: Vec<Complex64>,
+    /// Modal phase collinearity.
+    pub mpc: f64,
+    /// Extended modal amplitude coherence (output × input).
+    pub emac: f64,
+    /// Comparison with the previous order.
+    pub status: PoleStatus,
+}
+
+impl ScanPole {
+    /// `EMAC · MPC`.
+    pub fn cmi(&self) -> f64 {
+        self.emac * self.mpc
+    }
+}
+
+/// Every pole of every order of a scan.
+#[derive(Debug, Clone)]
+pub struct Scan {
+    /// Orders realized, ascending.
+    pub orders: Vec<usize>,
+    /// Poles, grouped by order in the order of `orders`, each group sorted by frequency.
+    pub poles: Vec<ScanPole>,
+    /// Orders asked for but not realized (above the numerical rank of `H0`).
+    pub skipped: Vec<usize>,
+}
+
+impl Scan {
+    /// The poles of one order.
+    pub fn at(&self, order: usize) -> impl Iterator<Item = &ScanPole> {
+        self.poles.iter().filter(move |p| p.order == order)
+    }
+}
+
+/// Realizes every order of `orders` from `factorization` and builds the diagram.
+///
+/// `progress` is called after each order with (done, total).
+///
+/// # Errors
+/// [`EraError::InvalidParameter`] when no order of the range can be realized (all above
+/// the factorization's largest order or its rank); numerical failures of the eigen
+/// solver.
+pub fn scan(
+    factorization: &Factorization,
+    orders: &OrderRange,
+    criteria: &DiagramCriteria,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Scan> {
+    let wanted = orders.orders();
+    if orders.max > factorization.max_states() {
+        return Err(EraError::InvalidParameter {
+            name: "orders",
+            value: orders.to_string(),
+            reason: format!(
+                "the Hankel matrix was factored for at most {} states",
+                factorization.max_states()
+            ),
+        });
+    }
+    let mut done_orders = Vec::new();
+    let mut skipped = Vec::new();
+    let mut poles: Vec<ScanPole> = Vec::new();
+    let mut previous: Vec<ScanPole> = Vec::new();
+    for (k, &n) in wanted.iter().enumerate() {
+        if n > factorization.rank() {
+            skipped.push(n);
+            progress(k + 1, wanted.len());
+            continue;
+        }
+        let r = factorization.realize(n, DirectTerm::Zero)?;
+        let form = ModalForm::new(&r.model)?;
+        let e = emac(&form, &r.tails);
+        let mut here: Vec<ScanPole> = form
+            .eigenvalues
+            .iter()
+            .enumerate()
+            .filter(|(_, z)| z.im > 0.0)
+            .map(|(i, z)| {
+                let s = continuous_pole(*z, r.model.domain);
+                ScanPole {
+                    order: n,
+                    frequency_hz: s.norm() / (2.0 * std::f64::consts::PI),
+                    damping_ratio: -s.re / s.norm(),
+                    continuous_pole: s,
+                    eigenvalue: *z,
+                    shape: form.shapes[i].clone(),
+                    participation: form.participations[i].clone(),
+                    mpc: mpc(&form.shapes[i]),
+                    emac: e[i].0 * e[i].1,
+                    status: PoleStatus::New,
+                }
+            })
+            .collect();
+        here.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+        for p in &mut here {
+            p.status = status_against(p, &previous, criteria);
+        }
+        done_orders.push(n);
+        poles.extend(here.iter().cloned());
+        previous = here;
+        progress(k + 1, wanted.len());
+    }
+    if done_orders.is_empty() {
+        return Err(EraError::InvalidParameter {
+            name: "orders",
+            value: orders.to_string(),
+            reason: format!(
+                "every order is above the numerical rank {} of the Hankel matrix: the data supports no model in this range",
+                factorization.rank()
+            ),
+        });
+    }
+    Ok(Scan {
+        orders: done_orders,
+        poles,
+        skipped,
+    })
+}
+
+/// The diagram status of `pole` against the previous order's poles.
+pub fn status_against(
+    pole: &ScanPole,
+    previous: &[ScanPole],
+    criteria: &DiagramCriteria,
+) -> PoleStatus {
+    let nearest = previous.iter().min_by(|a, b| {
+        (a.frequency_hz - pole.frequency_hz)
+            .abs()
+            .total_cmp(&(b.frequency_hz - pole.frequency_hz).abs())
+    });
+    let Some(o) = nearest else {
+        return PoleStatus::New;
+    };
+    if (o.frequency_hz - pole.frequency_hz).abs() > criteria.frequency * pole.frequency_hz {
+        return PoleStatus::New;
+    }
+    if (o.damping_ratio - pole.damping_ratio).abs() > criteria.damping * pole.damping_ratio.abs() {
+        return PoleStatus::Frequency;
+    }
+    if mac(&o.shape, &pole.shape) < criteria.mac {
+        return PoleStatus::FrequencyDamping;
+    }
+    PoleStatus::Stable
+}
+
+/// Thresholds of the automatic choice (module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SelectionCriteria {
+    /// Largest plausible damping ratio of a structural mode.
+    pub damping_maximum: f64,
+    /// Smallest median modal phase collinearity of a physical cluster's poles in the
+    /// counted orders.
+    pub mpc_minimum: f64,
+    /// Smallest median consistent-mode indicator `EMAC·MPC` of a physical cluster's poles
+    /// in the counted orders.
+    pub cmi_minimum: f64,
+    /// Relative frequency tolerance of a pole joining a cluster.
+    pub frequency_tolerance: f64,
+    /// Smallest MAC of a pole joining a cluster.
+    pub mac_minimum: f64,
+    /// Fraction of the orders of the upper half of the range a physical cluster has a
+    /// pole in.
+    pub recurrence: f64,
+    /// Fewest poles of a physical cluster.
+    pub min_poles: usize,
+    /// Smallest share of the FRF of a physical mode (checked by the caller, who has the
+    /// data; [`crate::identify`]).
+    pub contribution_minimum: f64,
+}
+
+impl Default for SelectionCriteria {
+    /// ζ ≤ 20 %, median MPC ≥ 0.5 and CMI ≥ 0.05, 1 % in frequency, MAC ≥ 0.9, in 50 % of the upper half of the
+    /// orders and at least 3 poles, contribution ≥ 0.1 %.
+    fn default() -> Self {
+        SelectionCriteria {
+            damping_maximum: 0.2,
+            mpc_minimum: 0.5,
+            cmi_minimum: 0.05,
+            frequency_tolerance: 0.01,
+            mac_minimum: 0.9,
+            recurrence: 0.5,
+            min_poles: 3,
+            contribution_minimum: 1e-3,
+        }
+    }
+}
+
+/// Why a pole or cluster is not taken as physical.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rejection {
+    /// Damping ≤ 0.
+    NegativeDamping(f64),
+    /// Damping above the maximum.
+    HighDamping(f64),
+    /// Outside the fitted band `[lo, hi]` Hz.
+    OutsideBand(f64, f64),
+    /// CMI below the minimum.
+    LowCmi(f64),
+    /// MPC below the minimum.
+    LowMpc(f64),
+    /// In too few orders: (orders with a pole, orders counted).
+    Unstable(usize, usize),
+    /// Share of the FRF below the minimum.
+    NoContribution(f64),
+    /// The same mode as the larger cluster at this frequency, Hz.
+    Duplicate(f64),
+}
+
+impl std::fmt::Display for Rejection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Rejection::NegativeDamping(z) => write!(
+                f,
+                "negative damping ({:.3} %): an unstable pole fits no passive structure",
+                z * 100.0
+            ),
+            Rejection::HighDamping(z) => {
+                write!(f, "damping {:.1} % is implausibly high", z * 100.0)
+            }
+            Rejection::OutsideBand(lo, hi) => {
+                write!(f, "outside the fitted band {lo:.4}–{hi:.4} Hz")
+            }
+            Rejection::LowCmi(c) => write!(
+                f,
+                "CMI {c:.2}: not consistent over the record (a computational mode)"
+            ),
+            Rejection::LowMpc(m) => write!(
+                f,
+                "MPC {m:.2}: the shape's phases scatter (a computational mode)"
+            ),
+            Rejection::Unstable(k, of) => {
+                write!(f, "not stable across orders (in {k} of {of} orders)")
+            }
+            Rejection::NoContribution(c) => {
+                write!(f, "contributes {:.2e} of the FRF", c)
+            }
+            Rejection::Duplicate(hz) => {
+                write!(f, "the same mode as the larger cluster at {hz:.4} Hz")
+            }
+        }
+    }
+}
+
+/// The hard criteria of step 1 for one pole: `None` when it passes.
+pub fn hard_rejection(
+    frequency_hz: f64,
+    damping_ratio: f64,
+    cmi: Option<f64>,
+    band_hz: (f64, f64),
+    criteria: &SelectionCriteria,
+) -> Option<Rejection> {
+    if damping_ratio.is_nan() || damping_ratio <= 0.0 {
+        return Some(Rejection::NegativeDamping(damping_ratio));
+    }
+    if damping_ratio > criteria.damping_maximum {
+        return Some(Rejection::HighDamping(damping_ratio));
+    }
+    if frequency_hz < band_hz.0 || frequency_hz > band_hz.1 {
+        return Some(Rejection::OutsideBand(band_hz.0, band_hz.1));
+    }
+    if let Some(c) = cmi {
+        if c < criteria.cmi_minimum {
+            return Some(Rejection::LowCmi(c));
+        }
+    }
+    None
+}
+
+/// A cluster of poles across orders.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cluster {
+    /// Indices into [`Scan::poles`], one per order, ascending order.
+    pub members: Vec<usize>,
+    /// Index of the representative pole (the member at the highest order).
+    pub representative: usize,
+    /// Orders of the upper half of the range in which the cluster has a pole.
+    pub upper_count: usize,
+    /// Whether the rules keep it.
+    pub physical: bool,
+    /// Why not, when not.
+    pub rejection: Option<Rejection>,
+    /// Median CMI of its poles in the counted orders.
+    pub median_cmi: f64,
+    /// Median MPC of its poles in the counted orders.
+    pub median_mpc: f64,
+    /// Median frequency of the members, Hz.
+    pub median_frequency_hz: f64,
+    /// Median damping of the members.
+    pub median_damping_ratio: f64,
+    /// Spread of the members' frequencies (max − min) relative to the median.
+    pub frequency_spread: f64,
+}
+
+/// The automatic choice: clusters and the rule that chose them.
+#[derive(Debug, Clone)]
+pub struct Selection {
+    /// Every cluster, sorted by representative frequency.
+    pub clusters: Vec<Cluster>,
+    /// Orders counted for recurrence (the upper half of the scanned orders).
+    pub counted_orders: Vec<usize>,
+    /// Poles removed by the hard criteria, with the reason (index into the scan's poles).
+    pub rejected: Vec<(usize, Rejection)>,
+    /// The criteria used.
+    pub criteria: SelectionCriteria,
+}
+
+impl Selection {
+    /// Clusters judged physical.
+    pub fn physical(&self) -> impl Iterator<Item = &Cluster> {
+        self.clusters.iter().filter(|c| c.physical)
+    }
+
+    /// The rule in words, with its figures.
+    pub fn rule(&self) -> String {
+        let c = &self.criteria;
+        format!(
+            "poles with 0 < damping <= {:.0} % inside the fitted band, clustered across orders (1 pole per order, within {:.1} % in frequency and MAC >= {:.2}); a cluster is physical with poles in >= {:.0} % of the {} upper orders ({}..{}), >= {} poles, median MPC >= {:.2} and median CMI >= {:.2}; of two such clusters with the same shape, the larger",
+            c.damping_maximum * 100.0,
+            c.frequency_tolerance * 100.0,
+            c.mac_minimum,
+            c.recurrence * 100.0,
+            self.counted_orders.len(),
+            self.counted_orders.first().copied().unwrap_or(0),
+            self.counted_orders.last().copied().unwrap_or(0),
+            c.min_poles,
+            c.mpc_minimum,
+            c.cmi_minimum
+        )
+    }
+}
+
+/// Clusters the poles of `scan` and judges each cluster (module doc, steps 1–3).
+/// `band_hz` is the fitted band.
+pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) -> Selection {
+    let mut rejected = Vec::new();
+    let mut candidate = vec![false; scan.poles.len()];
+    for (i, p) in scan.poles.iter().enumerate() {
+        // CMI is judged per cluster (step 3): a real mode's poles at low orders, before
+        // it has settled, often score low.
+        match hard_rejection(p.frequency_hz, p.damping_ratio, None, band_hz, criteria) {
+            Some(why) => rejected.push((i, why)),
+            None => candidate[i] = true,
+        }
+    }
+    // Step 2: clusters, visiting orders from low to high.
+    struct Open {
+        members: Vec<usize>,
+        frequency_hz: f64,
+        shape: Vec<Complex64>,
+    }
+    let mut clusters: Vec<Open> = Vec::new();
+    for &order in &scan.orders {
+        let here: Vec<usize> = (0..scan.poles.len())
+            .filter(|&i| candidate[i] && scan.poles[i].order == order)
+            .collect();
+        let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+        for &i in &here {
+            let p = &scan.poles[i];
+            for (c, open) in clusters.iter().enumerate() {
+                let df = (p.frequency_hz - open.frequency_hz).abs() / open.frequency_hz;
+                if df > criteria.frequency_tolerance {
+                    continue;
+                }
+                let m = mac(&p.shape, &open.shape);
+                if m < criteria.mac_minimum {
+                    continue;
+                }
+                pairs.push((df + (1.0 - m), i, c));
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut pole_taken = vec![false; scan.poles.len()];
+        let mut cluster_taken = vec![false; clusters.len()];
+        for (_, i, c) in pairs {
+            if pole_taken[i] || cluster_taken[c] {
+                continue;
+            }
+            pole_taken[i] = true;
+            cluster_taken[c] = true;
+            let p = &scan.poles[i];
+            let open = &mut clusters[c];
+            open.members.push(i);
+            open.frequency_hz = p.frequency_hz;
+            open.shape = p.shape.clone();
+        }
+        for &i in &here {
+            if !pole_taken[i] {
+                let p = &scan.poles[i];
+                clusters.push(Open {
+                    members: vec![i],
+                    frequency_hz: p.frequency_hz,
+                    shape: p.shape.clone(),
+                });
+            }
+        }
+    }
+    // Step 3: recurrence over the upper half of the orders.
+    let counted_orders: Vec<usize> = scan.orders[scan.orders.len() / 2..].to_vec();
+    let lowest_counted = counted_orders.first().copied().unwrap_or(0);
+    let counted = counted_orders.len();
+    let needed = ((criteria.recurrence * counted as f64).ceil() as usize).max(1);
+    let mut out: Vec<Cluster> = clusters
+        .into_iter()
+        .map(|open| {
+            let upper_count = open
+                .members
+                .iter()
+                .filter(|&&i| scan.poles[i].order >= lowest_counted)
+                .count();
+            let mut f: Vec<f64> = open
+                .members
+                .iter()
+                .map(|&i| scan.poles[i].frequency_hz)
+                .collect();
+            let mut z: Vec<f64> = open
+                .members
+                .iter()
+                .map(|&i| scan.poles[i].damping_ratio)
+                .collect();
+            f.sort_by(f64::total_cmp);
+            z.sort_by(f64::total_cmp);
+            let median_frequency_hz = f[f.len() / 2];
+            let representative = *open.members.last().expect("clusters are never empty");
+            let mut upper_cmi: Vec<f64> = open
+                .members
+                .iter()
+                .filter(|&&i| scan.poles[i].order >= lowest_counted)
+                .map(|&i| scan.poles[i].cmi())
+                .collect();
+            upper_cmi.sort_by(f64::total_cmp);
+            let median_cmi = upper_cmi.get(upper_cmi.len() / 2).copied().unwrap_or(0.0);
+            let mut upper_mpc: Vec<f64> = open
+                .members
+                .iter()
+                .filter(|&&i| scan.poles[i].order >= lowest_counted)
+                .map(|&i| scan.poles[i].mpc)
+                .collect();
+            upper_mpc.sort_by(f64::total_cmp);
+            let median_mpc = upper_mpc.get(upper_mpc.len() / 2).copied().unwrap_or(0.0);
+            let rejection = if upper_count < needed || open.members.len() < criteria.min_poles {
+                Some(Rejection::Unstable(upper_count, counted))
+            } else if median_mpc < criteria.mpc_minimum {
+                Some(Rejection::LowMpc(median_mpc))
+            } else if median_cmi < criteria.cmi_minimum {
+                Some(Rejection::LowCmi(median_cmi))
+            } else {
+                None
+            };
+            Cluster {
+                physical: rejection.is_none(),
+                rejection,
+                median_cmi,
+                median_mpc,
+                representative,
+                upper_count,
+                median_frequency_hz,
+                median_damping_ratio: z[z.len() / 2],
+                frequency_spread: (f[f.len() - 1] - f[0]) / median_frequency_hz,
+                members: open.members,
+            }
+        })
+        .collect();
+    // Step 4: one mode split into two clusters by noise (same shape, within the frequency
+    // tolerance) keeps only its larger cluster. Close modes have different shapes.
+    let mut order: Vec<usize> = (0..out.len()).collect();
+    order.sort_by(|&a, &b| out[b].members.len().cmp(&out[a].members.len()));
+    for (rank, &a) in order.iter().enumerate() {
+        if !out[a].physical {
+            continue;
+        }
+        for &b in &order[rank + 1..] {
+            if !out[b].physical {
+                continue;
+            }
+            let (pa, pb) = (
+                &scan.poles[out[a].representative],
+                &scan.poles[out[b].representative],
+            );
+            if (pa.frequency_hz - pb.frequency_hz).abs()
+                <= criteria.frequency_tolerance * pa.frequency_hz
+                && mac(&pa.shape, &pb.shape) >= criteria.mac_minimum
+            {
+                let f = pa.frequency_hz;
+                out[b].physical = false;
+                out[b].rejection = Some(Rejection::Duplicate(f));
+            }
+        }
+    }
+    out.sort_by(|a, b| {
+        scan.poles[a.representative]
+            .frequency_hz
+            .total_cmp(&scan.poles[b.representative].frequency_hz)
+    });
+    Selection {
+        clusters: out,
+        counted_orders,
+        rejected,
+        criteria: *criteria,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn order_ranges_parse_and_refuse_nonsense() {
+        let r = OrderRange::parse("20..30:4").unwrap();
+        assert_eq!(r.orders(), vec![20, 24, 28]);
+        assert_eq!(OrderRange::parse("4..8").unwrap().orders(), vec![4, 6, 8]);
+        for bad in [
+            "", "20", "20..", "..30", "30..20", "0..10", "4..8:0", "a..b", "4..8:x",
+        ] {
+            let e = OrderRange::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("orders"), "{bad}: {e}");
+        }
+        assert!(OrderRange::parse("1..100000:1").is_err());
+    }
+}
