@@ -254,14 +254,35 @@ impl From<QuantityArg> for era::Quantity {
     }
 }
 
+/// `--states N` or `--states auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StatesArg {
+    /// A fixed order.
+    Fixed(usize),
+    /// Choose the physical modes automatically.
+    Auto,
+}
+
+fn parse_states(text: &str) -> Result<StatesArg, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Ok(StatesArg::Auto);
+    }
+    text.trim()
+        .parse::<usize>()
+        .map(StatesArg::Fixed)
+        .map_err(|_| format!("'{text}' is neither a number of states nor 'auto'"))
+}
+
 #[derive(Debug, Args)]
 pub struct IdentifyArgs {
     /// FRF file: CSV (docs/design.md §4), UFF 58/58b, or MAT v5 (FRF + FreqV, xferIJ +
     /// FreqV, or a q × p × lines array + FreqV), told apart by content.
     pub file: PathBuf,
-    /// Model order: first-order states (thesis ns). Two per mode.
-    #[arg(long)]
-    pub states: usize,
+    /// Model order: first-order states (thesis ns), two per mode; or `auto`: scan the
+    /// orders of --orders, cluster the stable poles and keep the physical modes
+    /// (docs/design.md §10).
+    #[arg(long, value_name = "N | auto", value_parser = parse_states)]
+    pub states: StatesArg,
     /// M = states × hankel-factor Markov samples go into the Hankel matrix (thesis lh).
     #[arg(long, default_value_t = 5)]
     pub hankel_factor: usize,
@@ -299,11 +320,12 @@ pub struct IdentifyArgs {
     /// era frf --outputs).
     #[arg(long, value_name = "N | CHANNELS")]
     pub outputs: Option<String>,
-    /// Other model orders (states) to identify for a stability check of the modes,
-    /// e.g. 40,50,70: a mode is stable when every order has one within 0.5 % in
-    /// frequency, 30 % in damping and MAC 0.9 in shape, and it is damped below 10 %.
-    #[arg(long, value_name = "STATES", value_delimiter = ',')]
-    pub orders: Vec<usize>,
+    /// Model orders of the stabilization diagram, MIN..MAX[:STEP] (step 2 by default)
+    /// or a list such as 50,70,80; all are realized from one SVD. With --states N the
+    /// modes of that model are judged against the scan; with --states auto the default
+    /// is a range the data supports (docs/design.md §10).
+    #[arg(long, value_name = "MIN..MAX[:STEP]")]
+    pub orders: Option<String>,
     /// FILE holds time histories: estimate the FRFs first (as era frf), then identify.
     #[arg(long, requires = "inputs")]
     pub from_time: bool,

@@ -7,6 +7,7 @@ use era::FrfData;
 use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::IoError;
 use era_plot::report::{report_html, ReportInput};
+use era_plot::stabilization::{stabilization_png, stabilization_svg, StabilizationPlot};
 use era_plot::{frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure};
 use std::path::Path;
 
@@ -16,6 +17,14 @@ const PNG_END: [u8; 12] = [0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60,
 /// Renders `figure` as PNG into `path` and checks that the file is complete: the
 /// encoder's buffered writer may drop a failed last write (a full disk) silently.
 fn write_png(figure: &Figure, path: &Path) -> Result<(), IoError> {
+    write_png_with(path, |tmp| render_png(figure, tmp))
+}
+
+/// [`write_png`] for any renderer.
+fn write_png_with(
+    path: &Path,
+    render: impl FnOnce(&Path) -> Result<(), era_plot::PlotError>,
+) -> Result<(), IoError> {
     let failed = |message: String| IoError::Format {
         path: path.to_path_buf(),
         location: String::new(),
@@ -23,7 +32,7 @@ fn write_png(figure: &Figure, path: &Path) -> Result<(), IoError> {
     };
     write_via(path, |tmp| {
         // The SVG of the same figure has just been drawn: a failure here is the file's.
-        render_png(figure, tmp).map_err(|e| failed(format!("cannot write the PNG: {e}")))?;
+        render(tmp).map_err(|e| failed(format!("cannot write the PNG: {e}")))?;
         // Only the closing chunk is read back, not the whole image.
         let (len, tail) = (|| {
             use std::io::{Read, Seek, SeekFrom};
@@ -114,18 +123,53 @@ pub fn write_all(
         found.model_response.clone(),
         measured.quantity(),
     )?;
+    // With a scan, the factored H0's values: on the matrix-free path they run past the
+    // largest order, so the gap after the physical modes shows.
+    let singular_values = match &found.stabilization {
+        Some(st) => &st.singular_values,
+        None => &found.realization.singular_values,
+    };
     let sv_svg = write_figure(
         set,
         folder,
         "singular_values",
-        &singular_value_figure(&found.realization.singular_values, states),
+        &singular_value_figure(singular_values, states),
     )?;
+    let stabilization_svg = match &found.stabilization {
+        Some(st) => {
+            let physical: Vec<f64> = found
+                .modal
+                .modes
+                .iter()
+                .zip(&found.quality)
+                .filter(|(_, q)| q.physical)
+                .map(|(m, _)| m.frequency_hz)
+                .collect();
+            let plot = StabilizationPlot::new(
+                &format!("Stabilization diagram, orders {}", st.range),
+                st,
+                (0.0, found.band_hz.1),
+                measured.frequency_hz(),
+                physical,
+            );
+            let svg = stabilization_svg(&plot)?;
+            write_output(set, folder.join("stabilization.svg"), |p| {
+                Ok(write_atomic(p, svg.as_bytes())?)
+            })?;
+            write_output(set, folder.join("stabilization.png"), |p| {
+                Ok(write_png_with(p, |tmp| stabilization_png(&plot, tmp))?)
+            })?;
+            Some(svg)
+        }
+        None => None,
+    };
     let (grid_svg, overlays) = write_frf_figures(set, folder, &measured, Some(&model), progress)?;
     let html = report_html(&ReportInput {
         title,
         parameters,
         found,
         singular_values_svg: &sv_svg,
+        stabilization_svg: stabilization_svg.as_deref(),
         grid_svg: &grid_svg,
         overlays: &overlays,
     });

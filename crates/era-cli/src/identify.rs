@@ -1,13 +1,16 @@
 //! `era identify FILE`: the pipeline of docs/design.md §1 on an FRF file.
 
-use crate::args::{DirectTermArg, IdentifyArgs, QuantityArg, SvdArg, TimeDomainArg};
+use crate::args::{DirectTermArg, IdentifyArgs, QuantityArg, StatesArg, SvdArg, TimeDomainArg};
 use crate::report::{
-    identification_summary, parameter_echo, parameters, print_json, svd_path_line, timings_table,
-    Human,
+    identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
+    svd_path_line, timings_table, Human,
 };
 use crate::usage;
 use anyhow::Context;
-use era::identify::{identify_observed, EraOptions, ModelDomain};
+use era::identify::{
+    identify_auto, identify_observed, identify_with_scan, EraOptions, ModelDomain, ScanOptions,
+};
+use era::modal::stabilization::OrderRange;
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
 use era_io::atomic::OutputSet;
@@ -16,24 +19,24 @@ use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::path::Path;
 use std::time::Instant;
 
-/// The most `--orders` one run identifies.
-const MAX_ORDERS: usize = 64;
-
 /// Options from flags, with the checks clap cannot do.
 pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
-    if a.states == 0 {
-        return usage("--states 0: the model needs at least one state");
-    }
+    let states = match a.states {
+        StatesArg::Fixed(0) => return usage("--states 0: the model needs at least one state"),
+        StatesArg::Fixed(n) => n,
+        // The scan sets its own orders; this is only echoed.
+        StatesArg::Auto => 0,
+    };
     if a.hankel_factor == 0 {
         return usage("--hankel-factor 0: must be at least 1");
     }
     // Sizes are checked against their limits here, under the flag's name, before anything
     // is read or allocated (the core checks them again for library users).
     use era::limits::{LINES, SAMPLES, STATES};
-    STATES.check("--states", a.states as u64)?;
+    STATES.check("--states", states as u64)?;
     SAMPLES.check_product(
         "--states x --hankel-factor (Markov samples)",
-        &[a.states as u64, a.hankel_factor as u64],
+        &[states as u64, a.hankel_factor as u64],
     )?;
     if a.pad_to != 0 {
         LINES.check(
@@ -41,20 +44,10 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
             (a.pad_to as u64).saturating_add(1),
         )?;
     }
-    if a.orders.len() > MAX_ORDERS {
-        return usage(format!(
-            "--orders: {} orders given, at most {MAX_ORDERS} (each is a whole identification)",
-            a.orders.len()
-        ));
-    }
-    for &order in &a.orders {
-        if order == 0 {
-            return usage("--orders: an order of 0 states is not a model");
-        }
-        STATES.check(format!("--orders {order}"), order as u64)?;
+    if let Some(range) = scan_orders(a)? {
         SAMPLES.check_product(
-            format!("--orders {order} x --hankel-factor (Markov samples)"),
-            &[order as u64, a.hankel_factor as u64],
+            format!("--orders {} x --hankel-factor (Markov samples)", range.max),
+            &[range.max as u64, a.hankel_factor as u64],
         )?;
     }
     if !(1..=20).contains(&a.lowpass_order) {
@@ -71,7 +64,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
         None => None,
     };
     Ok(EraOptions {
-        states: a.states,
+        states,
         hankel_factor: a.hankel_factor,
         integrations: a.integrations,
         lowpass,
@@ -91,6 +84,23 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
             SvdArg::Auto => SvdPath::Auto,
         },
     })
+}
+
+/// `--orders` parsed, naming the flag in errors.
+pub fn scan_orders(a: &IdentifyArgs) -> anyhow::Result<Option<OrderRange>> {
+    match &a.orders {
+        None => Ok(None),
+        Some(text) => OrderRange::parse(text)
+            .map(Some)
+            .map_err(|e| crate::UsageError(format!("--orders {text}: {}", reason_of(&e))).into()),
+    }
+}
+
+fn reason_of(e: &era::EraError) -> String {
+    match e {
+        era::EraError::InvalidParameter { reason, .. } => reason.clone(),
+        other => other.to_string(),
+    }
 }
 
 /// An FRF file as `identify`, `plot` and `convert` see it.
@@ -268,32 +278,67 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let frf = &input.file.frf;
     human.print(&format!("  {}{}\n", shape_line(frf), input.note));
     human.print(&describe_input(&input));
-    human.print(&parameter_echo(&opts));
+    let auto = a.states == StatesArg::Auto;
+    let echo = parameter_echo_states(
+        &opts,
+        auto.then_some("auto (from the stabilization diagram)"),
+    );
+    human.print(&echo);
 
+    let scan_options = ScanOptions {
+        orders: scan_orders(a)?,
+        ..ScanOptions::default()
+    };
     let spinner = crate::progress::spinner(&a.common);
-    let found = identify_observed(frf, &opts, &mut |stage| spinner.set_message(stage.name()))
-        .with_context(|| format!("identifying {}", a.file.display()));
+    let mut on_stage = |stage: era::Stage| spinner.set_message(stage.name());
+    let mut on_order = |done: usize, total: usize| {
+        spinner.set_message(format!("stabilization: order {done} of {total}"));
+    };
+    let found = if auto {
+        identify_auto(frf, &opts, &scan_options, &mut on_stage, &mut on_order)
+    } else if scan_options.orders.is_some() {
+        identify_with_scan(frf, &opts, &scan_options, &mut on_stage, &mut on_order)
+    } else {
+        identify_observed(frf, &opts, &mut on_stage)
+    }
+    .map_err(|e| match e {
+        era::EraError::InvalidParameter {
+            name,
+            value,
+            reason,
+        } if name == "orders" || (name == "states" && value == "auto") => {
+            anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}")))
+        }
+        other => anyhow::Error::from(other),
+    })
+    .with_context(|| format!("identifying {}", a.file.display()));
     spinner.finish_and_clear();
     let found = found?;
-    human.print(&identification_summary(&found, opts.states));
+    let states = found.model.states();
+    let mut opts = opts;
+    if auto {
+        opts.states = states;
+    }
+    human.print(&identification_summary(&found, states));
     human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
-    let stability = if a.orders.is_empty() {
-        None
-    } else {
-        let (text, value) = stability_check(frf, &opts, &a.orders, &found)?;
-        human.print(&text);
-        Some(value)
-    };
+    if let Some(st) = &found.stabilization {
+        human.print(&stabilization_summary(st));
+    }
 
     let mut timings = timings_map(&found.timings);
     timings.insert("read".into(), read_s);
     if let Some(t) = estimate_s {
         timings.insert("frf_estimate".into(), t);
     }
-    let mut model = ModelJson::from_identification(&found, parameters(&opts), None);
-    if let Some(v) = stability {
-        model.stability = Some(v);
+    let mut params = parameters(&opts);
+    if auto {
+        params.insert("states".into(), serde_json::json!("auto"));
+        params.insert("model_states".into(), serde_json::json!(states));
     }
+    if let Some(st) = &found.stabilization {
+        params.insert("orders".into(), serde_json::json!(st.range.to_string()));
+    }
+    let mut model = ModelJson::from_identification(&found, params, None);
     let fit = FitJson::from_report(&found.fit);
     if let Some(set) = outputs.as_mut() {
         let clock = Instant::now();
@@ -339,10 +384,10 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             set,
             Path::new(""),
             &title,
-            &parameter_echo(&opts),
+            &echo,
             &found,
             opts.zero_lines,
-            opts.states,
+            states,
             &bar,
         )?;
         bar.finish_and_clear();
@@ -400,82 +445,4 @@ fn pair_fit_table(fit: &era::response::FitReport, q: usize, p: usize) -> String 
         s.push('\n');
     }
     s
-}
-
-/// Identifies at the other `orders` and matches the modes (era::stability).
-fn stability_check(
-    frf: &era::FrfData,
-    opts: &EraOptions,
-    orders: &[usize],
-    found: &era::Identification,
-) -> anyhow::Result<(String, serde_json::Value)> {
-    use era::stability::{stability, StabilityCriteria};
-    use std::fmt::Write as _;
-    let mut others = Vec::new();
-    for &order in orders {
-        if order == 0 {
-            return usage("--orders: an order of 0 states is not a model");
-        }
-        let mut o = opts.clone();
-        o.states = order;
-        let other =
-            era::identify(frf, &o).with_context(|| format!("identifying at --orders {order}"))?;
-        others.push(other.modal.modes);
-    }
-    let lists: Vec<&[era::modal::Mode]> = others.iter().map(Vec::as_slice).collect();
-    let criteria = StabilityCriteria::default();
-    let table = stability(&found.modal.modes, &lists, &criteria);
-    let mut s = format!(
-        "\nstability of the {} modes of the {}-state model across orders {} (0.5 % in f, 30 % in zeta, MAC >= 0.9, zeta < 10 %)\n",
-        table.len(),
-        opts.states,
-        orders.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
-    );
-    let _ = write!(s, "{:>5} {:>12} {:>9}", "mode", "f (Hz)", "zeta (%)");
-    for o in orders {
-        let _ = write!(s, " {:>11}", format!("{o} states"));
-    }
-    let _ = writeln!(s, "  stable");
-    let mut rows = Vec::new();
-    for t in &table {
-        let m = &found.modal.modes[t.mode];
-        let _ = write!(
-            s,
-            "{:>5} {:>12.4} {:>9.4}",
-            t.mode + 1,
-            m.frequency_hz,
-            100.0 * m.damping_ratio
-        );
-        for (k, hit) in t.matches.iter().enumerate() {
-            match hit {
-                Some((j, mac)) => {
-                    let f = others[k][*j].frequency_hz;
-                    let _ = write!(s, " {:>11}", format!("{f:.2} {mac:.2}"));
-                }
-                None => {
-                    let _ = write!(s, " {:>11}", "-");
-                }
-            }
-        }
-        let _ = writeln!(s, "  {}", if t.stable { "yes" } else { "" });
-        rows.push(serde_json::json!({
-            "mode": t.mode + 1, "frequency_hz": m.frequency_hz, "damping_ratio": m.damping_ratio,
-            "stable": t.stable,
-            "matches": t.matches.iter().enumerate().map(|(k, h)| serde_json::json!({
-                "states": orders[k],
-                "frequency_hz": h.map(|(j, _)| others[k][j].frequency_hz),
-                "mac": h.map(|(_, mac)| mac),
-            })).collect::<Vec<_>>(),
-        }));
-    }
-    let stable = table.iter().filter(|t| t.stable).count();
-    let _ = writeln!(
-        s,
-        "{stable} of {} modes stable (columns: the matching mode's f in Hz and its MAC)",
-        table.len()
-    );
-    Ok((
-        s,
-        serde_json::json!({"orders": orders, "modes": rows, "stable": stable}),
-    ))
 }

@@ -78,8 +78,122 @@ pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     m
 }
 
+/// The modal table: frequency, damping, the indicators and whether to trust each mode
+/// (docs/design.md §10). Suspect modes are marked `?` with the reason below the table;
+/// negative damping is always called out.
+pub fn mode_table(found: &Identification) -> String {
+    let mut s = String::new();
+    let num = |v: Option<f64>, w: usize| v.map_or(format!("{:>w$}", "-"), |x| format!("{x:>w$.2}"));
+    let _ = writeln!(
+        s,
+        "{:>5} {:>14} {:>10} {:>6} {:>6} {:>6} {:>9} {:>7}  trust",
+        "mode", "f (Hz)", "zeta (%)", "MPC", "EMAC", "CMI", "share", "orders"
+    );
+    let mut reasons = Vec::new();
+    for (k, m) in found.modal.modes.iter().enumerate() {
+        let q = found.quality.get(k);
+        let mark = match q {
+            Some(q) if q.physical => "yes",
+            Some(q) => {
+                reasons.push(format!(
+                    "  mode {} ({:.4} Hz): {}",
+                    k + 1,
+                    m.frequency_hz,
+                    q.reason.as_deref().unwrap_or("suspect")
+                ));
+                "?"
+            }
+            None => "",
+        };
+        let i = q.map(|q| q.indicators);
+        let _ = writeln!(
+            s,
+            "{:>5} {:>14.4} {:>10.4} {} {} {} {:>9} {:>7}  {mark}",
+            k + 1,
+            m.frequency_hz,
+            100.0 * m.damping_ratio,
+            num(i.map(|i| i.mpc), 6),
+            num(i.and_then(|i| i.emac), 6),
+            num(i.and_then(|i| i.cmi), 6),
+            i.and_then(|i| i.contribution)
+                .map_or("-".into(), |c| format!("{c:.2e}")),
+            q.and_then(|q| q.stable_orders)
+                .map_or("-".into(), |n| n.to_string()),
+        );
+    }
+    let negative = found
+        .modal
+        .modes
+        .iter()
+        .filter(|m| m.damping_ratio <= 0.0)
+        .count();
+    if !reasons.is_empty() {
+        let _ = writeln!(
+            s,
+            "{} of {} modes are suspect (?), not to be trusted as modes of the structure:",
+            reasons.len(),
+            found.modal.modes.len()
+        );
+        for r in reasons {
+            let _ = writeln!(s, "{r}");
+        }
+    }
+    if negative > 0 {
+        let _ = writeln!(
+            s,
+            "warning: {negative} mode(s) with zero or negative damping: the model is unstable there; no passive structure has such a mode"
+        );
+    }
+    let _ = writeln!(
+        s,
+        "(MPC: phase collinearity of the shape, 1 = real mode; EMAC: consistency over the record; CMI = MPC x EMAC; share: the mode's part of the measured FRF; orders: scanned orders with the mode)"
+    );
+    s
+}
+
+/// The scan's summary: the diagram's extent, the rule and how many modes it kept.
+pub fn stabilization_summary(st: &era::identify::Stabilization) -> String {
+    let mut s = String::new();
+    let physical = st.selection.physical().count();
+    let candidates = st
+        .selection
+        .clusters
+        .iter()
+        .filter(|c| c.members.len() >= st.selection.criteria.min_poles)
+        .count();
+    let _ = writeln!(
+        s,
+        "\nstabilization: {} orders ({}) from one SVD of a {} x {} H0 in {:.2} s; {} poles, {} clusters of 3+ poles, {} physical",
+        st.scan.orders.len(),
+        st.range,
+        st.hankel_size.0,
+        st.hankel_size.1,
+        st.seconds,
+        st.scan.poles.len(),
+        candidates,
+        physical
+    );
+    if !st.scan.skipped.is_empty() {
+        let _ = writeln!(
+            s,
+            "  orders {:?} skipped: above the numerical rank of H0",
+            st.scan.skipped
+        );
+    }
+    let _ = writeln!(s, "  rule: {}", st.selection.rule());
+    if let Some(note) = &st.model_note {
+        let _ = writeln!(s, "  model: {note}");
+    }
+    s
+}
+
 /// The parameter echo printed before a run.
 pub fn parameter_echo(o: &EraOptions) -> String {
+    parameter_echo_states(o, None)
+}
+
+/// [`parameter_echo`], with the states line replaced by `states` when given (`auto`).
+pub fn parameter_echo_states(o: &EraOptions, states: Option<&str>) -> String {
     let markov = o.states * o.hankel_factor / 4 * 4;
     let lowpass = match o.lowpass {
         Some((order, hz)) => format!("order {order}, {hz} Hz (zero phase)"),
@@ -87,12 +201,20 @@ pub fn parameter_echo(o: &EraOptions) -> String {
     };
     let mut s = String::new();
     let _ = writeln!(s, "ERA parameters");
-    let _ = writeln!(s, "  states (ns)             {}", o.states);
-    let _ = writeln!(
-        s,
-        "  hankel factor (lh)      {}  (M = {markov} Markov samples)",
-        o.hankel_factor
-    );
+    match states {
+        Some(text) => {
+            let _ = writeln!(s, "  states (ns)             {text}");
+            let _ = writeln!(s, "  hankel factor (lh)      {}", o.hankel_factor);
+        }
+        None => {
+            let _ = writeln!(s, "  states (ns)             {}", o.states);
+            let _ = writeln!(
+                s,
+                "  hankel factor (lh)      {}  (M = {markov} Markov samples)",
+                o.hankel_factor
+            );
+        }
+    }
     let _ = writeln!(s, "  integrations (ni)       {}", o.integrations);
     let _ = writeln!(s, "  low-pass (ford, Hz)     {lowpass}");
     let _ = writeln!(s, "  zero lines (nz)         {}", o.zero_lines);
@@ -154,16 +276,7 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
             format!(", {} real poles", found.modal.real_poles.len())
         }
     );
-    let _ = writeln!(s, "{:>5} {:>14} {:>10}", "mode", "f (Hz)", "zeta (%)");
-    for (k, m) in modes.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "{:>5} {:>14.4} {:>10.4}",
-            k + 1,
-            m.frequency_hz,
-            100.0 * m.damping_ratio
-        );
-    }
+    s.push_str(&mode_table(found));
     for r in &found.modal.real_poles {
         let _ = writeln!(
             s,

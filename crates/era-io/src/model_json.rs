@@ -42,6 +42,31 @@ pub struct ModeJson {
     /// `Im(ψB)`.
     #[serde(default)]
     pub participation_im: Vec<f64>,
+    /// Judged a mode of the structure (docs/design.md §10); absent in older files.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub physical: Option<bool>,
+    /// Why not, when `physical` is false.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub reason: Option<String>,
+    /// MPC, EMAC, CMI and the share of the FRF.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub indicators: Option<IndicatorsJson>,
+    /// Orders of the scan in which the mode's cluster has a pole.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub stable_orders: Option<usize>,
+}
+
+/// A mode's quality indicators as stored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IndicatorsJson {
+    /// Modal phase collinearity.
+    pub mpc: f64,
+    /// Extended modal amplitude coherence (null when not known).
+    pub emac: Option<f64>,
+    /// EMAC × MPC.
+    pub cmi: Option<f64>,
+    /// Share of the measured FRF.
+    pub contribution: Option<f64>,
 }
 
 impl ModeJson {
@@ -56,6 +81,27 @@ impl ModeJson {
             shape_im: m.shape.iter().map(|c| c.im).collect(),
             participation_re: m.participation.iter().map(|c| c.re).collect(),
             participation_im: m.participation.iter().map(|c| c.im).collect(),
+            physical: None,
+            reason: None,
+            indicators: None,
+            stable_orders: None,
+        }
+    }
+
+    /// From a library mode and its quality.
+    pub fn from_mode_quality(m: &Mode, q: &era::identify::ModeQuality) -> Self {
+        let i = &q.indicators;
+        ModeJson {
+            physical: Some(q.physical),
+            reason: q.reason.clone(),
+            indicators: Some(IndicatorsJson {
+                mpc: i.mpc,
+                emac: i.emac,
+                cmi: i.cmi,
+                contribution: i.contribution,
+            }),
+            stable_orders: q.stable_orders,
+            ..Self::from_mode(m)
         }
     }
 }
@@ -124,6 +170,10 @@ pub struct ModelJson {
     /// The stability check across model orders (`era identify --orders`), when run.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stability: Option<serde_json::Value>,
+    /// The stabilization diagram's data and the automatic choice (`--orders`,
+    /// `--states auto`), when run.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub stabilization: Option<serde_json::Value>,
 }
 
 /// Row-major nested vectors of a matrix.
@@ -178,7 +228,16 @@ impl ModelJson {
         timings_s: Option<BTreeMap<String, f64>>,
     ) -> Self {
         let m = &found.model;
-        let (modes, real_poles) = modal_json(&found.modal);
+        let (mut modes, real_poles) = modal_json(&found.modal);
+        if found.quality.len() == found.modal.modes.len() {
+            modes = found
+                .modal
+                .modes
+                .iter()
+                .zip(&found.quality)
+                .map(|(m, q)| ModeJson::from_mode_quality(m, q))
+                .collect();
+        }
         ModelJson {
             outputs: m.outputs(),
             inputs: m.inputs(),
@@ -210,6 +269,7 @@ impl ModelJson {
                 .collect(),
             timings_s,
             stability: None,
+            stabilization: found.stabilization.as_ref().map(stabilization_json),
         }
     }
 
@@ -385,4 +445,47 @@ mod tests {
         let err = ModelJson::read(&path).unwrap_err().to_string();
         assert!(err.contains("bad.json") && err.contains("line 2"), "{err}");
     }
+}
+
+/// The scan as stored: the range, the rule, the clusters and every pole (the diagram's
+/// data), the factored singular values and the CMIF.
+pub fn stabilization_json(st: &era::identify::Stabilization) -> serde_json::Value {
+    use serde_json::json;
+    let poles: Vec<serde_json::Value> = st
+        .scan
+        .poles
+        .iter()
+        .map(|p| {
+            json!({"order": p.order, "frequency_hz": p.frequency_hz, "damping_ratio": p.damping_ratio,
+                "status": p.status.name(), "mpc": p.mpc, "emac": p.emac})
+        })
+        .collect();
+    let clusters: Vec<serde_json::Value> = st
+        .selection
+        .clusters
+        .iter()
+        .filter(|c| c.members.len() >= 2)
+        .map(|c| {
+            let rep = &st.scan.poles[c.representative];
+            json!({"frequency_hz": rep.frequency_hz, "damping_ratio": rep.damping_ratio,
+                "representative_order": rep.order, "poles": c.members.len(), "upper_orders": c.upper_count,
+                "median_frequency_hz": c.median_frequency_hz, "median_damping_ratio": c.median_damping_ratio,
+                "frequency_spread": c.frequency_spread, "median_mpc": c.median_mpc, "median_cmi": c.median_cmi,
+                "physical": c.physical, "reason": c.rejection.map(|r| r.to_string())})
+        })
+        .collect();
+    json!({
+        "orders": st.scan.orders,
+        "range": st.range.to_string(),
+        "skipped_orders": st.scan.skipped,
+        "rule": st.selection.rule(),
+        "model": st.model_note,
+        "physical_modes": st.selection.physical().count(),
+        "hankel": {"rows": st.hankel_size.0, "cols": st.hankel_size.1},
+        "singular_values": st.singular_values,
+        "seconds": st.seconds,
+        "clusters": clusters,
+        "poles": poles,
+        "cmif": st.cmif,
+    })
 }

@@ -11,6 +11,7 @@
 pub mod figures;
 pub mod render;
 pub mod report;
+pub mod stabilization;
 
 pub use figures::{
     frf_grid, frf_overlay, singular_value_figure, Figure, Panel, Series, SeriesKind, YScale,

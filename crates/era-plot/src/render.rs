@@ -16,7 +16,7 @@ pub struct PlotError(pub String);
 static FONT: Once = Once::new();
 
 /// Registers DejaVu Sans (embedded) as `sans-serif` once.
-fn fonts() {
+pub(crate) fn fonts() {
     FONT.call_once(|| {
         let _ = register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
     });

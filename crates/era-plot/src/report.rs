@@ -15,6 +15,8 @@ pub struct ReportInput<'a> {
     pub found: &'a Identification,
     /// Singular-value figure, SVG.
     pub singular_values_svg: &'a str,
+    /// Stabilization diagram, SVG, when a scan ran.
+    pub stabilization_svg: Option<&'a str>,
     /// Overview grid, SVG.
     pub grid_svg: &'a str,
     /// One (title, SVG) per pair.
@@ -40,7 +42,7 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n<style>\
 body{{font-family:sans-serif;margin:2em;max-width:1100px;color:#222}} h1{{font-size:1.6em}} h2{{margin-top:2em;border-bottom:1px solid #ccc}}\
 table{{border-collapse:collapse;margin:1em 0}} td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}} th{{background:#f3f3f3}}\
-pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%;height:auto}} .col{{background:#eef6ff}}\
+pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%;height:auto}} .col{{background:#eef6ff}} .bad{{background:#fff1f0}} .suspect{{color:#a8071a}}\
 </style></head><body>\n<h1>{}</h1>\n",
         escape(input.title),
         escape(input.title)
@@ -58,15 +60,46 @@ pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%
         f.sample_time_s,
         input.singular_values_svg
     );
-    let _ = write!(h, "<h2 id=\"modes\">Modes</h2>\n<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th></tr>\n");
+    if let (Some(svg), Some(st)) = (input.stabilization_svg, f.stabilization.as_ref()) {
+        let _ = write!(
+            h,
+            "<h2 id=\"stabilization\">Stabilization diagram</h2>\n<p>Every pole of the models of orders {} (all from one SVD of H0, {} × {}), against frequency. A pole is <em>new</em> (grey ×), or agrees with the previous order in frequency (blue ○), in frequency and damping (orange ▲), or in frequency, damping and shape (green ●). Physical modes stand as vertical columns of green; the dashed red lines are the modes judged physical. The grey curves are the CMIF, the singular values of the FRF matrix at each line (right axis): its peaks are the modes, and two curves peaking together are close modes.</p>\n<p>Rule: {}.{}</p>\n<figure class=\"plot\" id=\"fig-stabilization\">{}</figure>\n",
+            escape(&st.range.to_string()),
+            st.hankel_size.0,
+            st.hankel_size.1,
+            escape(&st.selection.rule()),
+            st.model_note
+                .as_ref()
+                .map_or(String::new(), |n| format!(" Model: {}.", escape(n))),
+            svg
+        );
+    }
+    let _ = write!(h, "<h2 id=\"modes\">Modes</h2>\n<p>MPC: modal phase collinearity (1 for a real normal mode). EMAC: extended modal amplitude coherence, how consistently the mode appears over the record (1 = fully). CMI = MPC × EMAC. Share: the mode's part of the measured FRF. Orders: scanned orders in which the mode's cluster has a pole. A mode not judged physical is marked, with the reason.</p>\n<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th><th>MPC</th><th>EMAC</th><th>CMI</th><th>share</th><th>orders</th><th>physical</th></tr>\n");
     for (k, m) in f.modal.modes.iter().enumerate() {
+        let q = f.quality.get(k);
+        let i = q.map(|q| q.indicators);
+        let trust = match q {
+            Some(q) if q.physical => "yes".to_string(),
+            Some(q) => format!(
+                "<span class=\"suspect\">no: {}</span>",
+                escape(q.reason.as_deref().unwrap_or("suspect"))
+            ),
+            None => String::new(),
+        };
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.6}</td></tr>",
+            "<tr{}><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.6}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            if q.is_some_and(|q| !q.physical) { " class=\"bad\"" } else { "" },
             k + 1,
             m.frequency_hz,
             100.0 * m.damping_ratio,
-            m.eigenvalue.norm()
+            m.eigenvalue.norm(),
+            opt(i.map(|i| i.mpc), 3),
+            opt(i.and_then(|i| i.emac), 3),
+            opt(i.and_then(|i| i.cmi), 3),
+            i.and_then(|i| i.contribution).map_or("–".into(), |c| format!("{c:.2e}")),
+            q.and_then(|q| q.stable_orders).map_or("–".into(), |n| n.to_string()),
+            trust
         );
     }
     h.push_str("</table>\n");

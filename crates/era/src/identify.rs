@@ -613,7 +613,7 @@ fn nearest_continuous(
 }
 
 /// Settings of a scan across orders.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct ScanOptions {
     /// Orders to scan; `None` for the default range of the data ([`default_orders`]).
     pub orders: Option<OrderRange>,
@@ -712,7 +712,7 @@ fn scan_front(
     timings: &mut StageTimings,
 ) -> Result<(Front, Factorization, OrderRange, Scan, f64)> {
     let f = front(frf, options, Path::Fast, observer, timings)?;
-    let range = match scan_options.orders {
+    let range = match scan_options.orders.clone() {
         Some(r) => r,
         None => default_orders(
             f.markov.samples(),

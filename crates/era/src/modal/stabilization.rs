@@ -49,19 +49,22 @@ use crate::realize::{DirectTerm, Factorization};
 use crate::stability::mac;
 use num_complex::Complex64;
 
-/// Orders `min, min + step, …, ≤ max` of a scan.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Orders `min, min + step, …, ≤ max` of a scan, or an explicit list.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct OrderRange {
     /// Lowest order.
     pub min: usize,
     /// Highest order.
     pub max: usize,
-    /// Step between orders.
+    /// Step between orders (0 for a list).
     pub step: usize,
+    /// The orders of a list, ascending without repeats.
+    pub list: Option<Vec<usize>>,
 }
 
 impl OrderRange {
-    /// Parses `MIN..MAX` or `MIN..MAX:STEP` (step 2 by default: poles come in pairs).
+    /// Parses `MIN..MAX`, `MIN..MAX:STEP` (step 2 by default: poles come in pairs) or a
+    /// list `A,B,C`.
     ///
     /// # Errors
     /// [`EraError::InvalidParameter`] naming `orders` for anything else, a step of 0, a
@@ -72,6 +75,31 @@ impl OrderRange {
             value: text.to_string(),
             reason: reason.to_string(),
         };
+        if !text.contains("..") && text.contains(',') || text.trim().parse::<usize>().is_ok() {
+            let mut list = Vec::new();
+            for part in text.split(',') {
+                let n = part
+                    .trim()
+                    .parse::<usize>()
+                    .map_err(|_| bad("a list of orders is whole numbers separated by commas"))?;
+                if n == 0 {
+                    return Err(bad("an order of 0 states is not a model"));
+                }
+                crate::limits::STATES.check("orders", n as u64)?;
+                list.push(n);
+            }
+            list.sort_unstable();
+            list.dedup();
+            if list.len() > MAX_SCAN_ORDERS {
+                return Err(bad(&format!("at most {MAX_SCAN_ORDERS} orders per scan")));
+            }
+            return Ok(OrderRange {
+                min: list[0],
+                max: *list.last().expect("not empty"),
+                step: 0,
+                list: Some(list),
+            });
+        }
         let (range, step) = match text.split_once(':') {
             Some((r, s)) => (
                 r,
@@ -124,12 +152,20 @@ impl OrderRange {
                 (max - min) / step + 1
             )));
         }
-        Ok(OrderRange { min, max, step })
+        Ok(OrderRange {
+            min,
+            max,
+            step,
+            list: None,
+        })
     }
 
     /// The orders, ascending; the last is `max` rounded down to the step.
     pub fn orders(&self) -> Vec<usize> {
-        (self.min..=self.max).step_by(self.step).collect()
+        match &self.list {
+            Some(list) => list.clone(),
+            None => (self.min..=self.max).step_by(self.step).collect(),
+        }
     }
 }
 
@@ -138,7 +174,13 @@ pub const MAX_SCAN_ORDERS: usize = 500;
 
 impl std::fmt::Display for OrderRange {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}..{}:{}", self.min, self.max, self.step)
+        match &self.list {
+            Some(list) => {
+                let text: Vec<String> = list.iter().map(ToString::to_string).collect();
+                write!(f, "{}", text.join(","))
+            }
+            None => write!(f, "{}..{}:{}", self.min, self.max, self.step),
+        }
     }
 }
 
@@ -723,5 +765,11 @@ mod tests {
             assert!(e.contains("orders"), "{bad}: {e}");
         }
         assert!(OrderRange::parse("1..100000:1").is_err());
+        let l = OrderRange::parse("70, 50,80,50").unwrap();
+        assert_eq!(l.orders(), vec![50, 70, 80]);
+        assert_eq!(l.to_string(), "50,70,80");
+        for bad in ["50,0", "50,x", "50,,60"] {
+            assert!(OrderRange::parse(bad).is_err(), "{bad}");
+        }
     }
 }
