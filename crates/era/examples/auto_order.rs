@@ -42,7 +42,7 @@ fn main() -> era::Result<()> {
             }
             let options = EraOptions::thesis_dta();
             let mut scan = ScanOptions {
-                orders,
+                orders: orders.clone(),
                 ..ScanOptions::default()
             };
             if let Ok(v) = std::env::var("TOL") {
@@ -109,7 +109,27 @@ fn main() -> era::Result<()> {
                     let mut cmis: Vec<f64> =
                         c.members.iter().map(|&i| st.scan.poles[i].cmi()).collect();
                     cmis.sort_by(f64::total_cmp);
-                    println!("  {} f {:.4} z {:.4} members {} upper {} rep cmi {:.2} median cmi {:.2} mpc {:.2} truth-dist {:.1e}", if t < 0.005 {"  "} else {"!!"}, rep.frequency_hz, rep.damping_ratio, c.members.len(), c.upper_count, rep.cmi(), cmis[cmis.len()/2], rep.mpc, t);
+                    let orders: Vec<usize> =
+                        c.members.iter().map(|&i| st.scan.poles[i].order).collect();
+                    println!("  {} f {:.4} z {:.4} members {} upper {} rep cmi {:.2} median cmi {:.2} mpc {:.2} truth-dist {:.1e} orders {}..{}", if t < 0.005 {"  "} else {"!!"}, rep.frequency_hz, rep.damping_ratio, c.members.len(), c.upper_count, rep.cmi(), cmis[cmis.len()/2], rep.mpc, t, orders[0], orders[orders.len()-1]);
+                    if std::env::var("MACS").is_ok() {
+                        for d in st.selection.clusters.iter().filter(|d| {
+                            d.physical
+                                && (st.scan.poles[d.representative].frequency_hz - rep.frequency_hz)
+                                    .abs()
+                                    < 0.03 * rep.frequency_hz
+                                && d.representative != c.representative
+                        }) {
+                            println!(
+                                "      vs {:.4}: mac {:.3}",
+                                st.scan.poles[d.representative].frequency_hz,
+                                era::stability::mac(
+                                    &rep.shape,
+                                    &st.scan.poles[d.representative].shape
+                                )
+                            );
+                        }
+                    }
                 }
             }
             if std::env::var("DEBUG").is_ok() {

@@ -34,7 +34,10 @@
 //!    order it reached (the most accurate, being least biased by truncation).
 //! 4. *Duplicates*. Noise can split one mode into two clusters; two physical clusters
 //!    within the frequency tolerance whose shapes agree (MAC) are one mode, and only the
-//!    larger is kept. Close modes of a structure have distinct shapes and stay apart.
+//!    larger is kept. A pole can also drift by more than the tolerance between two orders
+//!    as the model settles; two clusters with the same shape within three tolerances that
+//!    share at most a fifth of the smaller one's orders are that mode, and the one that
+//!    reached the higher order is kept. Close modes of a structure have distinct shapes and stay apart.
 //!
 //! The representatives, with their shapes and participations, form the physical modal
 //! model (see [`crate::identify`] for how it is assembled into `(A, B, C, D)`).
@@ -711,29 +714,48 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
         })
         .collect();
     // Step 4: one mode split into two clusters by noise (same shape, within the frequency
-    // tolerance) keeps only its larger cluster. Close modes have different shapes.
-    let mut order: Vec<usize> = (0..out.len()).collect();
-    order.sort_by(|&a, &b| out[b].members.len().cmp(&out[a].members.len()));
-    for (rank, &a) in order.iter().enumerate() {
+    // tolerance) keeps only its larger cluster; one mode whose pole drifted by more than
+    // the tolerance between orders (same shape, within three tolerances, the two
+    // clusters sharing at most one order) keeps the cluster that reached the higher
+    // order. Close modes have different shapes.
+    let orders_of =
+        |c: &Cluster| -> Vec<usize> { c.members.iter().map(|&i| scan.poles[i].order).collect() };
+    let mut by_size: Vec<usize> = (0..out.len()).collect();
+    by_size.sort_by(|&a, &b| out[b].members.len().cmp(&out[a].members.len()));
+    for (rank, &a) in by_size.iter().enumerate() {
         if !out[a].physical {
             continue;
         }
-        for &b in &order[rank + 1..] {
-            if !out[b].physical {
+        for &b in &by_size[rank + 1..] {
+            if !out[b].physical || !out[a].physical {
                 continue;
             }
             let (pa, pb) = (
                 &scan.poles[out[a].representative],
                 &scan.poles[out[b].representative],
             );
-            if (pa.frequency_hz - pb.frequency_hz).abs()
-                <= criteria.frequency_tolerance * pa.frequency_hz
-                && mac(&pa.shape, &pb.shape) >= criteria.mac_minimum
-            {
-                let f = pa.frequency_hz;
-                out[b].physical = false;
-                out[b].rejection = Some(Rejection::Duplicate(f));
+            if mac(&pa.shape, &pb.shape) < criteria.mac_minimum {
+                continue;
             }
+            let df = (pa.frequency_hz - pb.frequency_hz).abs() / pa.frequency_hz;
+            let (oa, ob) = (orders_of(&out[a]), orders_of(&out[b]));
+            let shared = oa.iter().filter(|o| ob.contains(o)).count();
+            let (keep, drop) = if df <= criteria.frequency_tolerance {
+                (a, b)
+            } else if df <= 3.0 * criteria.frequency_tolerance
+                && shared * 5 <= oa.len().min(ob.len())
+            {
+                if pb.order > pa.order {
+                    (b, a)
+                } else {
+                    (a, b)
+                }
+            } else {
+                continue;
+            };
+            let f = scan.poles[out[keep].representative].frequency_hz;
+            out[drop].physical = false;
+            out[drop].rejection = Some(Rejection::Duplicate(f));
         }
     }
     out.sort_by(|a, b| {
