@@ -14,4 +14,7 @@ trap 'rm -rf "$work"' EXIT
 cp "$work/demo/noisy/pairs/pair_1_2.png" docs/img/truth_noisy_y1_f2.png
 cp "$work/demo/noisy/singular_values.png" docs/img/truth_noisy_singular_values.png
 cp "$work/dta/grid.png" docs/img/dta_grid.png
-echo "wrote docs/img/truth_noisy_y1_f2.png, truth_noisy_singular_values.png, dta_grid.png"
+"$era" simulate modal -q --collocated --seed 1 --noise 0.05 --out "$work/dtan.csv"
+"$era" identify "$work/dtan.csv" -q --states auto --hankel-factor 5 --integrations 1 --zero-lines 3 --pad-to 1024 --out "$work/auto"
+cp "$work/auto/stabilization.png" docs/img/dta_stabilization.png
+echo "wrote docs/img/truth_noisy_y1_f2.png, truth_noisy_singular_values.png, dta_grid.png, dta_stabilization.png"
