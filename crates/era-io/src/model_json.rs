@@ -409,44 +409,6 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), IoError> {
     write_atomic(path, text.as_bytes())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use era::identify::{identify, EraOptions};
-    use era::sim::truth_model_frf;
-
-    #[test]
-    fn model_json_round_trips_the_state_space() {
-        let found = identify(
-            &truth_model_frf(None).unwrap(),
-            &EraOptions::thesis_truth_model(),
-        )
-        .unwrap();
-        let mut params = BTreeMap::new();
-        params.insert("states".to_string(), serde_json::json!(8));
-        let json = ModelJson::from_identification(&found, params, None);
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("model.json");
-        json.write(&path).unwrap();
-        let back = ModelJson::read(&path).unwrap();
-        assert_eq!(back, json);
-        assert_eq!(back.state_space().unwrap(), found.model);
-        assert_eq!(back.modes.len(), 4);
-        assert_eq!(back.singular_values.len(), 45);
-        let text = std::fs::read_to_string(&path).unwrap();
-        assert!(!text.contains("timings_s"));
-    }
-
-    #[test]
-    fn malformed_model_json_names_the_file() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("bad.json");
-        std::fs::write(&path, "{\"outputs\": 1,\n \"inputs\": }").unwrap();
-        let err = ModelJson::read(&path).unwrap_err().to_string();
-        assert!(err.contains("bad.json") && err.contains("line 2"), "{err}");
-    }
-}
-
 /// The scan as stored: the range, the rule, the clusters and every pole (the diagram's
 /// data), the factored singular values and the CMIF.
 pub fn stabilization_json(st: &era::identify::Stabilization) -> serde_json::Value {
@@ -488,4 +450,42 @@ pub fn stabilization_json(st: &era::identify::Stabilization) -> serde_json::Valu
         "poles": poles,
         "cmif": st.cmif,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use era::identify::{identify, EraOptions};
+    use era::sim::truth_model_frf;
+
+    #[test]
+    fn model_json_round_trips_the_state_space() {
+        let found = identify(
+            &truth_model_frf(None).unwrap(),
+            &EraOptions::thesis_truth_model(),
+        )
+        .unwrap();
+        let mut params = BTreeMap::new();
+        params.insert("states".to_string(), serde_json::json!(8));
+        let json = ModelJson::from_identification(&found, params, None);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.json");
+        json.write(&path).unwrap();
+        let back = ModelJson::read(&path).unwrap();
+        assert_eq!(back, json);
+        assert_eq!(back.state_space().unwrap(), found.model);
+        assert_eq!(back.modes.len(), 4);
+        assert_eq!(back.singular_values.len(), 45);
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("timings_s"));
+    }
+
+    #[test]
+    fn malformed_model_json_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bad.json");
+        std::fs::write(&path, "{\"outputs\": 1,\n \"inputs\": }").unwrap();
+        let err = ModelJson::read(&path).unwrap_err().to_string();
+        assert!(err.contains("bad.json") && err.contains("line 2"), "{err}");
+    }
 }
