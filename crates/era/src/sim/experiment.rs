@@ -77,6 +77,7 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex};
 
 /// Table 5.1 of the thesis, per actuator (1, 2, 3, 4, 5, 6, 9, 10): the Coulomb
 /// coefficient calculated from free decay and the adjusted one used by the compensator,
@@ -261,7 +262,9 @@ impl Structure {
             return Err(EraError::InvalidParameter {
                 name: "structure",
                 value: format!("pole {:.6}{:+.6}j", p.re, p.im),
-                reason: "the structure model is not stable: a time simulation would grow without bound".into(),
+                reason:
+                    "the structure model is not stable: a time simulation would grow without bound"
+                        .into(),
             });
         }
         let (c, d) = match quantity {
@@ -656,11 +659,21 @@ pub fn run_experiment(
         Drive::Simultaneous => vec![(0..a).collect()],
     };
     let done = std::sync::atomic::AtomicUsize::new(0);
+    let sys = System::new(spec)?;
+    let shared: SharedConfigs = Mutex::new(HashMap::new());
     let records: Vec<Result<RunRecord>> = runs
         .par_iter()
         .enumerate()
         .map(|(r, excited)| {
-            let out = simulate_run(spec, excited, r as u64, None);
+            let out = simulate_run_shared(
+                spec,
+                &sys,
+                &shared,
+                excited,
+                r as u64,
+                RunOptions::default(),
+            )
+            .map(|o| o.record);
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
             out
         })
@@ -950,17 +963,16 @@ struct Config {
     mount_f: Vec<f64>,
     /// `(B_S)_{ż_j, j}` for sliding j (impact impulse).
     bz: Vec<f64>,
-    cache: HashMap<usize, StepCoeffs>,
 }
 
 fn phi_coeffs(lam: Complex64, h: f64) -> (Complex64, Complex64, Complex64) {
     let z = lam * h;
     let e = z.exp();
-    if z.norm() < 0.5 {
-        // φ₁/h = Σ z^k/(k+1)!, φ₂/h² = Σ z^k/(k+2)!.
+    if z.norm_sqr() < 0.0025 {
+        // φ₁/h = Σ z^k/(k+1)!, φ₂/h² = Σ z^k/(k+2)!; 9 terms reach 0.05⁹/9! ≈ 5e-18.
         let (mut t1, mut t2) = (Complex64::new(1.0, 0.0), Complex64::new(0.5, 0.0));
         let (mut s1, mut s2) = (t1, t2);
-        for k in 1..20 {
+        for k in 1..9 {
             t1 = t1 * z / (k as f64 + 1.0);
             t2 = t2 * z / (k as f64 + 2.0);
             s1 += t1;
@@ -968,8 +980,10 @@ fn phi_coeffs(lam: Complex64, h: f64) -> (Complex64, Complex64, Complex64) {
         }
         (e, s1 * h, s2 * h * h)
     } else {
-        let p1 = (e - 1.0) / lam;
-        (e, p1, (p1 - h) / lam)
+        // One complex division: 1/λ = conj(λ)/|λ|².
+        let inv = lam.conj() / lam.norm_sqr();
+        let p1 = (e - 1.0) * inv;
+        (e, p1, (p1 - h) * inv)
     }
 }
 
@@ -984,7 +998,11 @@ impl Config {
         let lu = vectors.partial_piv_lu();
         let inv = lu.solve(&Mat::<Complex64>::identity(n, n));
         // Keep one of each conjugate pair (weight 2) and the real eigenvalues (weight 1).
-        let scale = values.iter().map(|l| l.norm()).fold(0.0, f64::max).max(1e-300);
+        let scale = values
+            .iter()
+            .map(|l| l.norm())
+            .fold(0.0, f64::max)
+            .max(1e-300);
         let mut keep: Vec<(usize, f64)> = Vec::new();
         for (k, l) in values.iter().enumerate() {
             if l.im > 1e-10 * scale {
@@ -1057,7 +1075,6 @@ impl Config {
             v,
             w,
             bz,
-            cache: HashMap::new(),
         })
     }
 
@@ -1068,33 +1085,19 @@ impl Config {
         self.lam.len()
     }
 
-    /// ξ after `h` from `xi` under `f0 + f1 τ` (b0 = w f0, b1 = w f1 precomputed).
+    /// ξ after `h` from `xi` under `f0 + f1 τ` (b0 = w f0, b1 = w f1 precomputed), with
+    /// the step coefficients `c` for this `h` when given.
     fn advance_into(
-        &mut self,
+        &self,
         xi: &[Complex64],
         b0: &[Complex64],
         b1: &[Complex64],
         h: f64,
-        ticks: Option<usize>,
+        c: Option<&StepCoeffs>,
         out: &mut [Complex64],
     ) {
         let m = self.m();
-        if let Some(t) = ticks {
-            if !self.cache.contains_key(&t) {
-                let mut c = StepCoeffs {
-                    e: Vec::with_capacity(m),
-                    p1: Vec::with_capacity(m),
-                    p2: Vec::with_capacity(m),
-                };
-                for l in &self.lam {
-                    let (e, p1, p2) = phi_coeffs(*l, h);
-                    c.e.push(e);
-                    c.p1.push(p1);
-                    c.p2.push(p2);
-                }
-                self.cache.insert(t, c);
-            }
-            let c = &self.cache[&t];
+        if let Some(c) = c {
             for k in 0..m {
                 out[k] = c.e[k] * xi[k] + c.p1[k] * b0[k] + c.p2[k] * b1[k];
             }
@@ -1104,6 +1107,22 @@ impl Config {
                 out[k] = e * xi[k] + p1 * b0[k] + p2 * b1[k];
             }
         }
+    }
+
+    fn step_coeffs(&self, h: f64) -> StepCoeffs {
+        let m = self.m();
+        let mut c = StepCoeffs {
+            e: Vec::with_capacity(m),
+            p1: Vec::with_capacity(m),
+            p2: Vec::with_capacity(m),
+        };
+        for l in &self.lam {
+            let (e, p1, p2) = phi_coeffs(*l, h);
+            c.e.push(e);
+            c.p1.push(p1);
+            c.p2.push(p2);
+        }
+        c
     }
 
     /// `b = w f`.
@@ -1202,15 +1221,6 @@ pub struct RunOutput {
     pub probes: Vec<Vec<(f64, f64)>>,
 }
 
-fn simulate_run(
-    spec: &ExperimentSpec,
-    excited: &[usize],
-    run: u64,
-    opts: Option<&RunOptions>,
-) -> Result<RunRecord> {
-    simulate_run_with(spec, excited, run, opts.cloned().unwrap_or_default()).map(|o| o.record)
-}
-
 /// FIR low-pass, windowed sinc (Blackman), `taps` odd, cutoff `fc/fs`.
 fn lowpass(taps: usize, cutoff: f64) -> Vec<f64> {
     let mid = (taps / 2) as f64;
@@ -1260,6 +1270,20 @@ pub fn simulate_run_with(
 ) -> Result<RunOutput> {
     spec.validate()?;
     let sys = System::new(spec)?;
+    simulate_run_shared(spec, &sys, &Mutex::new(HashMap::new()), excited, run, opts)
+}
+
+/// Stuck-set configurations shared by the runs of one experiment.
+type SharedConfigs = Mutex<HashMap<u64, Arc<Config>>>;
+
+fn simulate_run_shared(
+    spec: &ExperimentSpec,
+    sys: &System,
+    shared: &SharedConfigs,
+    excited: &[usize],
+    run: u64,
+    opts: RunOptions,
+) -> Result<RunOutput> {
     let a = spec.actuators.len();
     let q = spec.structure.sensors();
     let ns = sys.n_s();
@@ -1324,7 +1348,8 @@ pub fn simulate_run_with(
     // Initial state: at rest; masses released at their initial strokes.
     let init = opts.initial_stroke.clone().unwrap_or_else(|| vec![0.0; a]);
     let mut modes: Vec<Mode> = (0..a).map(|_| Mode::Sliding(1.0)).collect();
-    let mut configs: HashMap<u64, Config> = HashMap::new();
+    let mut configs: HashMap<u64, Arc<Config>> = HashMap::new();
+    let mut steps: HashMap<(u64, usize), StepCoeffs> = HashMap::new();
     let mut phys_xs = vec![0.0; ns];
     let mut phys_z = init.clone();
     let mut phys_zd = vec![0.0; a];
@@ -1345,10 +1370,22 @@ pub fn simulate_run_with(
             .fold(0u64, |acc, (j, _)| acc | 1 << j)
     };
     let mut mask = mask_of(&modes);
-    let get = |configs: &mut HashMap<u64, Config>, mask: u64| -> Result<()> {
-        if let std::collections::hash_map::Entry::Vacant(e) = configs.entry(mask) {
-            e.insert(Config::new(&sys, mask)?);
+    let get = |configs: &mut HashMap<u64, Arc<Config>>, mask: u64| -> Result<()> {
+        if configs.contains_key(&mask) {
+            return Ok(());
         }
+        let found = shared.lock().map(|m| m.get(&mask).cloned()).unwrap_or(None);
+        let cfg = match found {
+            Some(c) => c,
+            None => {
+                let c = Arc::new(Config::new(sys, mask)?);
+                if let Ok(mut m) = shared.lock() {
+                    m.entry(mask).or_insert_with(|| c.clone());
+                }
+                c
+            }
+        };
+        configs.insert(mask, cfg);
         Ok(())
     };
     let pack = |cfg: &Config, xs: &[f64], z: &[f64], zd: &[f64]| -> Vec<f64> {
@@ -1406,8 +1443,7 @@ pub fn simulate_run_with(
     let stick_force =
         |cfg: &Config, xi: &[Complex64], f: &[f64], j: usize, z: f64, motor: f64| -> f64 {
             let m = sys.mass[j];
-            m * Config::row_value(&cfg.mount_x, &cfg.mount_f, j, xi, f)
-                + sys.act[j].stiffness * z
+            m * Config::row_value(&cfg.mount_x, &cfg.mount_f, j, xi, f) + sys.act[j].stiffness * z
                 - motor
         };
 
@@ -1485,8 +1521,7 @@ pub fn simulate_run_with(
         }
         let cfg = configs.get(&mask).expect("config present");
         if t_ticks >= settle_knots * ticks_per_knot
-            && (t_ticks - settle_knots * ticks_per_knot) % (ticks_per_knot * KNOTS_PER_SAMPLE)
-                == 0
+            && (t_ticks - settle_knots * ticks_per_knot) % (ticks_per_knot * KNOTS_PER_SAMPLE) == 0
             && record.acceleration[0].len() < samples
         {
             for j in 0..a {
@@ -1533,7 +1568,7 @@ pub fn simulate_run_with(
         let mut elapsed = 0.0;
         events_this_step = 0;
         loop {
-            let cfg = configs.get_mut(&mask).expect("config present");
+            let cfg = configs.get(&mask).expect("config present");
             let mm = cfg.m();
             if b0.len() != mm {
                 b0.resize(mm, Complex64::new(0.0, 0.0));
@@ -1542,7 +1577,12 @@ pub fn simulate_run_with(
             }
             cfg.input(&f0, &mut b0);
             cfg.input(&f1, &mut b1);
-            cfg.advance_into(&xi, &b0, &b1, remaining, full_step, &mut next);
+            let coeffs = full_step.map(|t| {
+                &*steps
+                    .entry((mask, t))
+                    .or_insert_with(|| cfg.step_coeffs(remaining))
+            });
+            cfg.advance_into(&xi, &b0, &b1, remaining, coeffs, &mut next);
             if !any_friction && spec.actuators.iter().all(|x| x.stroke.is_infinite()) {
                 std::mem::swap(&mut xi, &mut next);
                 break;
@@ -1550,25 +1590,26 @@ pub fn simulate_run_with(
             // Event functions, positive while nothing happens.
             let cfg = configs.get(&mask).expect("config present");
             let fend: Vec<f64> = f0.iter().zip(&f1).map(|(x, s)| x + s * remaining).collect();
-            let event_value = |cfg: &Config, xi_t: &[Complex64], f_t: &[f64], j: usize, kind: u8| -> f64 {
-                match (kind, modes[j], cfg.slot[j]) {
-                    (0, Mode::Sliding(s), Some(k)) => s * cfg.state(xi_t, ns + cfg.nf + k),
-                    (1, Mode::Sliding(_), Some(k)) => {
-                        spec.actuators[j].stroke - cfg.state(xi_t, ns + k).abs()
-                    }
-                    (2, Mode::Stuck { z, stop }, None) => {
-                        // f_t[j] holds the motor force of a stuck actuator.
-                        let ff = stick_force(cfg, xi_t, f_t, j, z, f_t[j]);
-                        let dir = -ff.signum();
-                        if stop != 0.0 && dir == stop {
-                            1.0
-                        } else {
-                            fc[j] - ff.abs()
+            let event_value =
+                |cfg: &Config, xi_t: &[Complex64], f_t: &[f64], j: usize, kind: u8| -> f64 {
+                    match (kind, modes[j], cfg.slot[j]) {
+                        (0, Mode::Sliding(s), Some(k)) => s * cfg.state(xi_t, ns + cfg.nf + k),
+                        (1, Mode::Sliding(_), Some(k)) => {
+                            spec.actuators[j].stroke - cfg.state(xi_t, ns + k).abs()
                         }
+                        (2, Mode::Stuck { z, stop }, None) => {
+                            // f_t[j] holds the motor force of a stuck actuator.
+                            let ff = stick_force(cfg, xi_t, f_t, j, z, f_t[j]);
+                            let dir = -ff.signum();
+                            if stop != 0.0 && dir == stop {
+                                1.0
+                            } else {
+                                fc[j] - ff.abs()
+                            }
+                        }
+                        _ => 1.0,
                     }
-                    _ => 1.0,
-                }
-            };
+                };
             let mut candidates = Vec::new();
             for j in 0..a {
                 for kind in 0..3u8 {
@@ -1594,26 +1635,31 @@ pub fn simulate_run_with(
                     t_ticks as f64 * tick + elapsed
                 )));
             }
-            // Earliest crossing.
-            let lam = cfg.lam.clone();
-            let at = |tau: f64, buf: &mut Vec<Complex64>| {
-                buf.clear();
-                for k in 0..lam.len() {
-                    let (e, p1, p2) = phi_coeffs(lam[k], tau);
-                    buf.push(e * xi[k] + p1 * b0[k] + p2 * b1[k]);
-                }
-            };
-            let mut buf = Vec::with_capacity(mm);
+            // Earliest crossing. Each event function is affine in the modal coordinates
+            // and the inputs, g(τ) = Re Σ r_k ξ_k(τ) + d·f(τ) + c₀, so value and slope
+            // cost one pass over the modes: safeguarded Newton in the bracket.
+            let lam = &cfg.lam;
             let mut best = (remaining, candidates[0]);
             for &(j, kind) in &candidates {
-                let g = |tau: f64, buf: &mut Vec<Complex64>| -> f64 {
-                    at(tau, buf);
-                    let ft: Vec<f64> = f0.iter().zip(&f1).map(|(x, s)| x + s * tau).collect();
-                    event_value(cfg, buf, &ft, j, kind)
+                let (r, d, c0) =
+                    event_row(cfg, &modes, &next, &fend, j, kind, spec, &sys.mass, &fc, ns);
+                let coef: Vec<(Complex64, Complex64, Complex64)> = (0..mm)
+                    .map(|k| (r[k] * xi[k], r[k] * b0[k], r[k] * b1[k]))
+                    .collect();
+                let df0: f64 = d.iter().zip(&f0).map(|(x, y)| x * y).sum();
+                let df1: f64 = d.iter().zip(&f1).map(|(x, y)| x * y).sum();
+                let g = |tau: f64| -> (f64, f64) {
+                    let (mut v, mut dv) = (0.0, 0.0);
+                    for (k, &(ca, cb, cc)) in coef.iter().enumerate() {
+                        let (e, p1, p2) = phi_coeffs(lam[k], tau);
+                        let y = e * ca + p1 * cb + p2 * cc;
+                        v += y.re;
+                        dv += (lam[k] * y + e * cb + p1 * cc).re;
+                    }
+                    (v + df0 + df1 * tau + c0, dv + df1)
                 };
-                let g_hi = g(remaining, &mut buf);
                 let mut lo = 0.0;
-                let mut g_lo = g(0.0, &mut buf);
+                let (mut g_lo, _) = g(0.0);
                 if g_lo <= 0.0 {
                     // Just after an event at this actuator: find where it is positive.
                     let mut found = false;
@@ -1622,7 +1668,7 @@ pub fn simulate_run_with(
                         if tau >= best.0 {
                             break;
                         }
-                        let gv = g(tau, &mut buf);
+                        let (gv, _) = g(tau);
                         if gv > 0.0 {
                             lo = tau;
                             g_lo = gv;
@@ -1635,39 +1681,35 @@ pub fn simulate_run_with(
                         continue;
                     }
                 }
-                let (mut hi, mut g_h) = (remaining.min(best.0), g_hi);
-                if hi < remaining {
-                    g_h = g(hi, &mut buf);
-                    if g_h >= 0.0 {
-                        continue; // crosses after the best so far
-                    }
+                let mut hi = remaining.min(best.0);
+                let (mut g_hi, _) = g(hi);
+                if g_hi > 0.0 {
+                    continue; // crosses after the best so far (or not at all)
                 }
-                // Illinois regula falsi.
-                let mut side = 0i8;
-                for _ in 0..100 {
-                    let mid = (lo * g_h - hi * g_lo) / (g_h - g_lo);
-                    let mid = if mid.is_finite() && mid > lo && mid < hi {
-                        mid
+                let mut tau = lo - g_lo * (hi - lo) / (g_hi - g_lo);
+                for _ in 0..60 {
+                    if !(tau > lo && tau < hi) {
+                        tau = 0.5 * (lo + hi);
+                    }
+                    let (gv, dg) = g(tau);
+                    if gv > 0.0 {
+                        lo = tau;
+                        g_lo = gv;
                     } else {
-                        0.5 * (lo + hi)
-                    };
-                    let gm = g(mid, &mut buf);
-                    if gm > 0.0 {
-                        lo = mid;
-                        g_lo = gm;
-                        if side == 1 {
-                            g_h *= 0.5;
-                        }
-                        side = 1;
-                    } else {
-                        hi = mid;
-                        g_h = gm;
-                        if side == -1 {
-                            g_lo *= 0.5;
-                        }
-                        side = -1;
+                        hi = tau;
+                        g_hi = gv;
                     }
                     if hi - lo <= 1e-13 * (1.0 + remaining) {
+                        break;
+                    }
+                    let newton = tau - gv / dg;
+                    let step_ok = dg != 0.0 && newton > lo && newton < hi;
+                    tau = if step_ok {
+                        newton
+                    } else {
+                        lo - g_lo * (hi - lo) / (g_hi - g_lo)
+                    };
+                    if (newton - tau).abs() < 1e-14 && step_ok && (gv.abs() < 1e-300) {
                         break;
                     }
                 }
@@ -1675,6 +1717,14 @@ pub fn simulate_run_with(
                     best = (hi, (j, kind));
                 }
             }
+            let mut buf: Vec<Complex64> = Vec::with_capacity(mm);
+            let at = |tau: f64, buf: &mut Vec<Complex64>| {
+                buf.clear();
+                for k in 0..mm {
+                    let (e, p1, p2) = phi_coeffs(lam[k], tau);
+                    buf.push(e * xi[k] + p1 * b0[k] + p2 * b1[k]);
+                }
+            };
             let (tau, (j, kind)) = best;
             // Advance to the event.
             at(tau, &mut buf);
@@ -1770,10 +1820,16 @@ pub fn simulate_run_with(
                     record.counts.breakaways += 1;
                 }
             }
-            mask = mask_of(&modes);
-            get(&mut configs, mask)?;
-            let cfg = &configs[&mask];
-            xi = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+            let new_mask = mask_of(&modes);
+            if new_mask == mask && kind == 0 {
+                // A reversal keeps the configuration: continue from the modal state.
+                xi.clone_from(&buf);
+            } else {
+                mask = new_mask;
+                get(&mut configs, mask)?;
+                let cfg = &configs[&mask];
+                xi = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+            }
             if remaining <= 0.0 {
                 break;
             }
@@ -1791,6 +1847,58 @@ pub fn simulate_run_with(
         compensator: trace,
         probes,
     })
+}
+
+/// The event function of actuator `j` as an affine form `(r, d, c₀)`:
+/// `g = Re Σ r_k ξ_k + d·f + c₀`, positive while nothing happens. Kind 0: velocity zero of
+/// a sliding mass; 1: end stop; 2: a stuck mass's holding force reaching `F_C`. The sign
+/// of two-sided functions is fixed from the state at the end of the step (`xi_end`).
+#[allow(clippy::too_many_arguments)]
+fn event_row(
+    cfg: &Config,
+    modes: &[Mode],
+    xi_end: &[Complex64],
+    f_end: &[f64],
+    j: usize,
+    kind: u8,
+    spec: &ExperimentSpec,
+    mass: &[f64],
+    fc: &[f64],
+    ns: usize,
+) -> (Vec<Complex64>, Vec<f64>, f64) {
+    let m = cfg.m();
+    let a = f_end.len();
+    let row = |c: usize| cfg.v[c * m..(c + 1) * m].to_vec();
+    let scaled = |v: Vec<Complex64>, s: f64| v.into_iter().map(|x| x * s).collect::<Vec<_>>();
+    match (kind, modes[j], cfg.slot[j]) {
+        (0, Mode::Sliding(s), Some(k)) => (scaled(row(ns + cfg.nf + k), s), vec![0.0; a], 0.0),
+        (1, Mode::Sliding(_), Some(k)) => {
+            let sigma = cfg.state(xi_end, ns + k).signum();
+            (
+                scaled(row(ns + k), -sigma),
+                vec![0.0; a],
+                spec.actuators[j].stroke,
+            )
+        }
+        (2, Mode::Stuck { z, .. }, None) => {
+            let mj = mass[j];
+            let ff = mj * Config::row_value(&cfg.mount_x, &cfg.mount_f, j, xi_end, f_end)
+                + spec.actuators[j].stiffness * z
+                - f_end[j];
+            let sigma = ff.signum();
+            let r = cfg.mount_x[j * m..(j + 1) * m]
+                .iter()
+                .map(|x| x * (-sigma * mj))
+                .collect();
+            let mut d: Vec<f64> = cfg.mount_f[j * a..(j + 1) * a]
+                .iter()
+                .map(|x| -sigma * mj * x)
+                .collect();
+            d[j] += sigma;
+            (r, d, fc[j] - sigma * spec.actuators[j].stiffness * z)
+        }
+        _ => (vec![Complex64::new(0.0, 0.0); m], vec![0.0; a], 1.0),
+    }
 }
 
 /// Splits a dynamic state into structure states, strokes and velocities of all
