@@ -100,6 +100,10 @@ pub const MOTOR_LBF_PER_VOLT: f64 = 0.2;
 /// Rebound speed (in/s) below which a mass is left resting on its end stop.
 pub const REST_SPEED: f64 = 1e-3;
 
+/// Relative speed (in/s) below which a sliding mass's velocity of the wrong sign is
+/// roundoff, not motion.
+pub const GRAZING_SPEED: f64 = 1e-9;
+
 /// Events allowed within one grid step before the simulation gives up (a chattering
 /// that the event logic cannot resolve).
 pub const MAX_EVENTS_PER_STEP: usize = 10_000;
@@ -1490,6 +1494,37 @@ fn simulate_run_shared(
         // Free masses whose holding force exceeds F_C right now (start, release).
         loop {
             let cfg = configs.get(&mask).expect("config present");
+            // A sliding mass whose velocity has the wrong sign (a grazing stop missed
+            // within the last step) is stopped here; the test below frees it again if
+            // the forces move it, in their direction.
+            let wrong = (0..a).find(|&j| match (modes[j], cfg.slot[j]) {
+                (Mode::Sliding(s), Some(k)) => {
+                    fc[j] > 0.0 && s * cfg.state(&xi, ns + cfg.nf + k) < -GRAZING_SPEED
+                }
+                _ => false,
+            });
+            if let Some(j) = wrong {
+                let x = cfg.full_state(&xi);
+                let (xs, z, zd) = unpack(cfg, &x, &modes, &phys_z, ns, a);
+                phys_xs = xs;
+                phys_z = z;
+                phys_zd = zd;
+                phys_zd[j] = 0.0;
+                let Mode::Sliding(s) = modes[j] else {
+                    unreachable!()
+                };
+                f0[j] += fc[j] * s;
+                modes[j] = Mode::Stuck {
+                    z: phys_z[j],
+                    stop: 0.0,
+                };
+                mask = mask_of(&modes);
+                get(&mut configs, mask)?;
+                let cfg = &configs[&mask];
+                xi = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+                record.counts.sticks += 1;
+                continue;
+            }
             let mut freed = None;
             for j in 0..a {
                 if let Mode::Stuck { z, stop } = modes[j] {
@@ -1567,6 +1602,9 @@ fn simulate_run_shared(
         let mut full_step = Some(t_next - t_ticks);
         let mut elapsed = 0.0;
         events_this_step = 0;
+        // Actuators whose event function has no positive value just after their last
+        // event (a grazing contact): left as they are until the next grid point.
+        let mut grazing: u64 = 0;
         loop {
             let cfg = configs.get(&mask).expect("config present");
             let mm = cfg.m();
@@ -1612,6 +1650,9 @@ fn simulate_run_shared(
                 };
             let mut candidates = Vec::new();
             for j in 0..a {
+                if grazing >> j & 1 == 1 {
+                    continue;
+                }
                 for kind in 0..3u8 {
                     if kind == 0 && fc[j] == 0.0 {
                         continue;
@@ -1639,8 +1680,9 @@ fn simulate_run_shared(
             // and the inputs, g(τ) = Re Σ r_k ξ_k(τ) + d·f(τ) + c₀, so value and slope
             // cost one pass over the modes: safeguarded Newton in the bracket.
             let lam = &cfg.lam;
-            let mut best = (remaining, candidates[0]);
+            let mut best: Option<(f64, (usize, u8))> = None;
             for &(j, kind) in &candidates {
+                let cap = best.map_or(remaining, |b| b.0);
                 let (r, d, c0) =
                     event_row(cfg, &modes, &next, &fend, j, kind, spec, &sys.mass, &fc, ns);
                 let coef: Vec<(Complex64, Complex64, Complex64)> = (0..mm)
@@ -1665,7 +1707,7 @@ fn simulate_run_shared(
                     let mut found = false;
                     for p in (1..=30).rev() {
                         let tau = remaining * 0.5f64.powi(p);
-                        if tau >= best.0 {
+                        if tau >= cap {
                             break;
                         }
                         let (gv, _) = g(tau);
@@ -1677,11 +1719,11 @@ fn simulate_run_shared(
                         }
                     }
                     if !found {
-                        best = (0.0, (j, kind));
+                        grazing |= 1 << j;
                         continue;
                     }
                 }
-                let mut hi = remaining.min(best.0);
+                let mut hi = cap;
                 let (mut g_hi, _) = g(hi);
                 if g_hi > 0.0 {
                     continue; // crosses after the best so far (or not at all)
@@ -1713,8 +1755,8 @@ fn simulate_run_shared(
                         break;
                     }
                 }
-                if hi < best.0 {
-                    best = (hi, (j, kind));
+                if hi <= cap {
+                    best = Some((hi, (j, kind)));
                 }
             }
             let mut buf: Vec<Complex64> = Vec::with_capacity(mm);
@@ -1725,7 +1767,12 @@ fn simulate_run_shared(
                     buf.push(e * xi[k] + p1 * b0[k] + p2 * b1[k]);
                 }
             };
-            let (tau, (j, kind)) = best;
+            let Some((tau, (j, kind))) = best else {
+                // Every candidate grazes, or its crossing lies beyond the step (end-point
+                // roundoff): the step stands.
+                std::mem::swap(&mut xi, &mut next);
+                break;
+            };
             // Advance to the event.
             at(tau, &mut buf);
             let cfg = configs.get(&mask).expect("config present");
