@@ -3,11 +3,9 @@
 //! sets (zero difference, MAC 1).
 
 mod common;
-#[path = "common/hostile.rs"]
-mod hostile;
 
 use common::era;
-use hostile::run_capped;
+use common::hostile::run_capped;
 
 /// A small, fast experiment: 3 DOFs, 8 modes, 3 actuators, 1 average.
 const SMALL: &[&str] = &[
@@ -76,7 +74,11 @@ fn frictionless_experiment_matches_its_exact_frfs_through_the_files() {
             "--friction-scale",
             "0",
             "--averages",
-            "4",
+            "10",
+            // Damping the analyzer's 0.025 Hz lines resolve (the Hann window's bias on
+            // sharper peaks is the analyzer's, not the simulation's).
+            "--damping",
+            "0.02..0.05",
             "--out",
             "h1.uff",
             "--exact-out",

@@ -184,7 +184,7 @@ impl Actuator {
                 "the Coulomb force must be >= 0",
             );
         }
-        if !(self.stroke > 0.0) {
+        if self.stroke.is_nan() || self.stroke <= 0.0 {
             return bad("stroke", self.stroke, "must be positive (inf: no stops)");
         }
         if !(self.restitution.is_finite() && (0.0..=1.0).contains(&self.restitution)) {
@@ -262,7 +262,7 @@ impl Structure {
             TimeDomain::Continuous => model.clone(),
             TimeDomain::Discrete { .. } => model.d2c()?,
         };
-        if let Some(p) = cont.poles()?.iter().find(|p| !(p.re < 0.0)) {
+        if let Some(p) = cont.poles()?.iter().find(|p| p.re.is_nan() || p.re >= 0.0) {
             return Err(EraError::InvalidParameter {
                 name: "structure",
                 value: format!("pole {:.6}{:+.6}j", p.re, p.im),
@@ -1155,7 +1155,7 @@ impl Config {
         (0..self.n()).map(|c| self.state(xi, c)).collect()
     }
 
-    fn from_state(&self, x: &[f64]) -> Vec<Complex64> {
+    fn modal_of(&self, x: &[f64]) -> Vec<Complex64> {
         let n = self.n();
         (0..self.m())
             .map(|r| {
@@ -1280,6 +1280,8 @@ pub fn simulate_run_with(
 /// Stuck-set configurations shared by the runs of one experiment.
 type SharedConfigs = Mutex<HashMap<u64, Arc<Config>>>;
 
+// Per-actuator arrays (modes, forces, friction, slots) are indexed together by actuator.
+#[allow(clippy::needless_range_loop)]
 fn simulate_run_shared(
     spec: &ExperimentSpec,
     sys: &System,
@@ -1408,7 +1410,7 @@ fn simulate_run_shared(
     // without friction), it is freed before the first step (below).
     let mut xi = {
         let cfg = &configs[&mask];
-        cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd))
+        cfg.modal_of(&pack(cfg, &phys_xs, &phys_z, &phys_zd))
     };
     let mut comp_v = vec![0.0; a];
     let mut record = RunRecord {
@@ -1427,7 +1429,7 @@ fn simulate_run_shared(
     let mut t_ticks = 0usize;
     let mut f0 = vec![0.0; a];
     let mut f1 = vec![0.0; a];
-    let mut b0 = vec![Complex64::new(0.0, 0.0); 0];
+    let mut b0: Vec<Complex64> = Vec::new();
     let mut b1 = b0.clone();
     let mut next = b0.clone();
 
@@ -1455,15 +1457,15 @@ fn simulate_run_shared(
     while t_ticks <= total_ticks {
         // --- Grid point: LVT/compensator sample, analyzer sample, probes.
         let cfg = configs.get(&mask).expect("config present");
-        if t_ticks % ticks_per_lvt == 0 {
-            let mut read = vec![0.0; a];
-            for j in 0..a {
-                let v = match cfg.slot[j] {
-                    Some(k) => cfg.state(&xi, ns + cfg.nf + k),
-                    None => 0.0,
-                };
-                read[j] = v + spec.lvt_noise_rms * lvt_rng.normal();
-            }
+        if t_ticks.is_multiple_of(ticks_per_lvt) {
+            let read: Vec<f64> = cfg
+                .slot
+                .iter()
+                .map(|slot| {
+                    let v = slot.map_or(0.0, |k| cfg.state(&xi, ns + cfg.nf + k));
+                    v + spec.lvt_noise_rms * lvt_rng.normal()
+                })
+                .collect();
             if let Some(c) = &compensator {
                 c.step(&read, &mut comp_v)
                     .map_err(|e| EraError::Numerical(e.to_string()))?;
@@ -1521,7 +1523,7 @@ fn simulate_run_shared(
                 mask = mask_of(&modes);
                 get(&mut configs, mask)?;
                 let cfg = &configs[&mask];
-                xi = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+                xi = cfg.modal_of(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
                 record.counts.sticks += 1;
                 continue;
             }
@@ -1549,14 +1551,15 @@ fn simulate_run_shared(
             mask = mask_of(&modes);
             get(&mut configs, mask)?;
             let cfg = &configs[&mask];
-            xi = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+            xi = cfg.modal_of(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
             if any_friction {
                 record.counts.breakaways += 1;
             }
         }
         let cfg = configs.get(&mask).expect("config present");
         if t_ticks >= settle_knots * ticks_per_knot
-            && (t_ticks - settle_knots * ticks_per_knot) % (ticks_per_knot * KNOTS_PER_SAMPLE) == 0
+            && (t_ticks - settle_knots * ticks_per_knot)
+                .is_multiple_of(ticks_per_knot * KNOTS_PER_SAMPLE)
             && record.acceleration[0].len() < samples
         {
             for j in 0..a {
@@ -1804,7 +1807,7 @@ fn simulate_run_shared(
                         z: phys_z[j],
                         stop: 0.0,
                     };
-                    let xi_s = sc.from_state(&pack(sc, &phys_xs, &phys_z, &phys_zd));
+                    let xi_s = sc.modal_of(&pack(sc, &phys_xs, &phys_z, &phys_zd));
                     let mut fs = f0.clone();
                     fs[j] = motor_j;
                     let ff = stick_force(sc, &xi_s, &fs, j, phys_z[j], motor_j);
@@ -1831,7 +1834,7 @@ fn simulate_run_shared(
                     let v_in = phys_zd[j];
                     let impulse = -(1.0 + act.restitution) * v_in / bz;
                     // Δx = B_S[:, j]·P, through the modal form: Δξ = w_j P.
-                    let mut xi_new = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+                    let mut xi_new = cfg.modal_of(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
                     let am = f0.len();
                     for (r, v) in xi_new.iter_mut().enumerate() {
                         *v += cfg.w[r * am + j] * impulse;
@@ -1875,7 +1878,7 @@ fn simulate_run_shared(
                 mask = new_mask;
                 get(&mut configs, mask)?;
                 let cfg = &configs[&mask];
-                xi = cfg.from_state(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
+                xi = cfg.modal_of(&pack(cfg, &phys_xs, &phys_z, &phys_zd));
             }
             if remaining <= 0.0 {
                 break;
