@@ -51,7 +51,7 @@ pub struct ExperimentArgs {
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub friction_scale: f64,
     /// Compensator coefficients, lbf, one per actuator (e.g. from `era friction tune`);
-    /// default: the adjusted coefficients of Table 5.1.
+    /// default: the adjusted coefficients of Table 5.1 times --friction-scale.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub coefficients: Option<Vec<f64>>,
     /// Excitation RMS voltage, V; default 0.6 without compensation, 0.3 with (§4.5).
@@ -210,6 +210,10 @@ fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
     let compensation = if compensated {
         let mut c = Compensation::thesis();
         c.coefficients.truncate(a.actuators);
+        // The default coefficients follow the friction they were tuned for.
+        c.coefficients
+            .iter_mut()
+            .for_each(|x| *x *= a.friction_scale);
         if let Some(list) = &a.coefficients {
             if list.len() != a.actuators {
                 return usage(format!(
