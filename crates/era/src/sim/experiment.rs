@@ -38,8 +38,10 @@
 //! φ₁ = (e^{λτ} − 1)/λ,   φ₂ = (e^{λτ} − 1 − λτ)/λ²       (w = V⁻¹B_S)
 //! ```
 //!
-//! (series for small `|λτ|`): an exact ZOH/FOH step, with no integration error. Events are
-//! found on the way by regula falsi (Illinois) on their closed forms:
+//! (series for small `|λτ|`): an exact ZOH/FOH step, with no integration error. Each
+//! event function is affine in `ξ` and `f`, `g(τ) = Re Σ r_k ξ_k(τ) + d·f(τ) + c₀`, so its
+//! value and slope cost one pass over the modes; events are located on the way by
+//! safeguarded Newton in a sign-change bracket:
 //! - a sliding mass's velocity reaches 0: it sticks when the holding force is within
 //!   `F_C` (`|F_f| ≤ F_C`), else it reverses;
 //! - a stuck mass's holding force leaves `[−F_C, F_C]`: it breaks away, sliding against it;
@@ -49,7 +51,10 @@
 //!   resting on the stop (held against any push into the stop, freed by a pull above `F_C`).
 //!
 //! Between grid points a velocity that goes to zero and back within one step (5 ms at the
-//! defaults) is not seen: the check is at the step's ends.
+//! defaults) is not seen: the check is at the step's ends. A contact that grazes (no
+//! positive value of its event function just after its last event, roundoff at the
+//! level of 1e-16) is left as it is until the next grid point, where a sliding mass whose
+//! velocity has the wrong sign is stopped and the stick/break-away test decides again.
 //!
 //! # Compensator, excitation, analyzer
 //! The [`FrictionCompensator`] samples the LVT velocities (with seeded noise) at 200 Hz;
