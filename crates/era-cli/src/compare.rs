@@ -3,7 +3,7 @@
 //! and the fit of each model to its own data.
 
 use crate::args::{CommonArgs, IdentifyArgs};
-use crate::identify::{output_name, write_output};
+use crate::identify::write_output;
 use crate::report::{finish_output, Human};
 use crate::usage;
 use clap::{Args, Parser};
@@ -298,7 +298,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
         "fit_percent": fit.map(|(x, y)| json!({"a": x, "b": y, "band_hz": a.fit_band})),
         "modes": modes.iter().map(|m| json!({"frequency_a_hz": m.0, "damping_a": m.1, "frequency_b_hz": m.2, "damping_b": m.3, "mac": m.4})).collect::<Vec<_>>(),
     });
-    if let (Some(set), Some(dir)) = (set.as_mut(), &a.out) {
+    if let Some(set) = set.as_mut() {
         let bar = crate::progress::bar(&a.common, (q * p) as u64, "figures");
         let mut overlays = Vec::new();
         for i in 0..q {
@@ -334,7 +334,6 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
             era_io::atomic::write_atomic(staged, js.as_bytes())?;
             Ok(())
         })?;
-        let _ = output_name("--out", dir);
     }
     if let Some(set) = set {
         set.commit()?;
