@@ -35,6 +35,9 @@ pub enum Command {
     /// Convert FRFs between CSV, UFF 58 (ASCII or binary 58b) and MAT. The input format
     /// is told by content, the output format by the extension (.csv, .uff/.unv, .mat).
     Convert(ConvertArgs),
+    /// Compare two FRF sets of one structure: overlays, differences by band, and the
+    /// modes and fits of their models (given or identified).
+    Compare(Box<crate::compare::CompareArgs>),
 }
 
 #[derive(Debug, Args)]
@@ -373,6 +376,10 @@ pub enum SimulateModel {
     TruthModel(SimulateCommon),
     /// A seeded lightly damped structure with real normal modes (docs/design.md §3).
     Modal(ModalArgs),
+    /// The thesis's FRF test (§4.5) in the time domain: a structure, reaction-mass
+    /// actuators with Coulomb friction and end stops, the 200 Hz compensator, random
+    /// excitation and the H1 analyzer.
+    Experiment(Box<crate::experiment::ExperimentArgs>),
 }
 
 #[derive(Debug, Args)]

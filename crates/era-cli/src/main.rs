@@ -5,7 +5,9 @@
 //! reported as an internal error.
 
 mod args;
+mod compare;
 mod demo;
+mod experiment;
 mod figures;
 mod files;
 mod frf;
@@ -76,6 +78,7 @@ fn main() -> ExitCode {
         args::Command::Plot(a) => plot::run(a),
         args::Command::Info(a) => files::run_info(a),
         args::Command::Convert(a) => files::run_convert(a),
+        args::Command::Compare(a) => compare::run(a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -11,7 +11,7 @@ use era_io::uff::UffWriteOptions;
 use serde_json::json;
 use std::time::Instant;
 
-fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
+pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
     let Some((lo, hi)) = text.split_once("..") else {
         return usage(format!(
             "--damping {text}: expected MIN..MAX, e.g. 0.005..0.02"
@@ -201,5 +201,6 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     match &a.model {
         SimulateModel::TruthModel(sim) => truth(sim),
         SimulateModel::Modal(m) => modal(m),
+        SimulateModel::Experiment(e) => crate::experiment::run(e),
     }
 }

@@ -8,6 +8,7 @@
 //! with DejaVu Sans embedded from the `dejavu` crate, so no system font is needed.
 //! [`report::report_html`] puts everything into one file with inline SVG.
 
+pub mod compare;
 pub mod figures;
 pub mod render;
 pub mod report;

@@ -7,6 +7,8 @@
 //! repository) draws the same stream in the same order, so a seed gives bit-identical
 //! noise and structures in both.
 
+pub mod experiment;
+
 use crate::error::{EraError, Result};
 use crate::frf::{uniform_lines, FrfData, Quantity};
 use crate::response::frequency_response;

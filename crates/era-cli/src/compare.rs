@@ -1,0 +1,342 @@
+//! `era compare A B`: two FRF sets of one structure side by side (thesis Figs. 5.8, 5.9,
+//! 5.12): the difference per pair and per band, the modes of their models matched by MAC,
+//! and the fit of each model to its own data.
+
+use crate::args::{CommonArgs, IdentifyArgs};
+use crate::identify::write_output;
+use crate::report::{finish_output, Human};
+use crate::usage;
+use clap::{Args, Parser};
+use era::modal::modal_parameters;
+use era::response::model_frf;
+use era::stability::mac;
+use era::{Complex64, FrfData, StateSpace};
+use era_io::atomic::OutputSet;
+use era_io::format::{read_frf_file, ReadOptions};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// First FRF set (CSV, UFF or MAT).
+    pub a: PathBuf,
+    /// Second FRF set, of the same shape and lines.
+    pub b: PathBuf,
+    /// Model of A (model.json), for the modes and the fit.
+    #[arg(long, value_name = "MODEL_JSON", requires = "model_b")]
+    pub model_a: Option<PathBuf>,
+    /// Model of B (model.json).
+    #[arg(long, value_name = "MODEL_JSON", requires = "model_a")]
+    pub model_b: Option<PathBuf>,
+    /// Band edges, Hz, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "0,1,2,5,10,14,20")]
+    pub bands: Vec<f64>,
+    /// Lowest and highest frequency of the fit error, Hz.
+    #[arg(long, value_delimiter = ',', default_value = "0.1,14")]
+    pub fit_band: Vec<f64>,
+    /// Folder for compare.html, compare.json and one PNG per pair.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Identify both sets with these `era identify` flags (everything after --identify),
+    /// e.g. --identify --states 80 --hankel-factor 5 --integrations 1.
+    #[arg(long, num_args = 1.., allow_hyphen_values = true, conflicts_with_all = ["model_a", "model_b"])]
+    pub identify: Option<Vec<String>>,
+}
+
+#[derive(Debug, Parser)]
+#[command(name = "--identify", no_binary_name = true)]
+struct IdentifyFlags {
+    #[command(flatten)]
+    args: IdentifyArgs,
+}
+
+/// Relative RMS difference `‖A − B‖ / ‖B‖` over the lines `lo ≤ f < hi` (NaN when B has
+/// no power there).
+pub fn band_difference(a: &[Complex64], b: &[Complex64], f: &[f64], lo: f64, hi: f64) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for k in 0..f.len() {
+        if f[k] >= lo && f[k] < hi {
+            num += (a[k] - b[k]).norm_sqr();
+            den += b[k].norm_sqr();
+        }
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else if num == 0.0 {
+        0.0
+    } else {
+        f64::NAN
+    }
+}
+
+/// `G / (j2πf)^n` on every line above 0 Hz (0 at 0 Hz): what ERA fitted after `n`
+/// integrations.
+fn integrate(frf: &FrfData, n: usize) -> anyhow::Result<FrfData> {
+    let f = frf.frequency_hz().to_vec();
+    let lines = f.len();
+    let mut v = frf.values().to_vec();
+    for (idx, x) in v.iter_mut().enumerate() {
+        let k = idx % lines;
+        *x = if f[k] > 0.0 {
+            *x / Complex64::new(0.0, 2.0 * std::f64::consts::PI * f[k]).powi(n as i32)
+        } else {
+            Complex64::new(0.0, 0.0)
+        };
+    }
+    Ok(FrfData::new(
+        f,
+        frf.outputs(),
+        frf.inputs(),
+        v,
+        frf.quantity(),
+    )?)
+}
+
+/// Mean relative error `‖G − Ĝ‖/‖G‖` over pairs, on the lines in `band`.
+fn fit_error(data: &FrfData, model: &FrfData, band: (f64, f64)) -> f64 {
+    let f = data.frequency_hz();
+    let (q, p) = (data.outputs(), data.inputs());
+    let mut total = 0.0;
+    for i in 0..q {
+        for j in 0..p {
+            total += band_difference(model.pair(i, j), data.pair(i, j), f, band.0, band.1 + 1e-9);
+        }
+    }
+    total / (q * p) as f64
+}
+
+struct Side {
+    model: StateSpace,
+    integrations: usize,
+}
+
+fn model_from_json(flag: &str, path: &Path) -> anyhow::Result<Side> {
+    let m = era_io::model_json::ModelJson::read(path)?;
+    let model = m
+        .state_space()
+        .map_err(|e| crate::UsageError(format!("{flag} {}: {e}", path.display())))?;
+    let integrations = m
+        .parameters
+        .get("integrations")
+        .and_then(|v| v.as_u64())
+        .unwrap_or(0) as usize;
+    Ok(Side {
+        model,
+        integrations,
+    })
+}
+
+fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Side> {
+    let mut argv = vec![path.display().to_string()];
+    argv.extend(flags.iter().cloned());
+    let parsed = IdentifyFlags::try_parse_from(&argv)
+        .map_err(|e| crate::UsageError(format!("--identify: {e}")))?;
+    let opts = crate::identify::options(&parsed.args)?;
+    let found = era::identify(frf, &opts)?;
+    Ok(Side {
+        model: found.model,
+        integrations: opts.integrations,
+    })
+}
+
+pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    if a.bands.len() < 2
+        || a.bands.iter().any(|b| !b.is_finite() || *b < 0.0)
+        || a.bands.windows(2).any(|w| w[1] <= w[0])
+    {
+        return usage(format!(
+            "--bands {:?}: need at least two increasing frequencies >= 0",
+            a.bands
+        ));
+    }
+    if a.fit_band.len() != 2 || !(a.fit_band[0] >= 0.0 && a.fit_band[1] > a.fit_band[0]) {
+        return usage(format!(
+            "--fit-band {:?}: need LOW,HIGH with LOW < HIGH",
+            a.fit_band
+        ));
+    }
+    let mut set = match &a.out {
+        Some(dir) => Some(OutputSet::new(dir)?),
+        None => None,
+    };
+    let opts = ReadOptions::default();
+    let (fa, _) = read_frf_file(&a.a, &opts)?;
+    let (fb, _) = read_frf_file(&a.b, &opts)?;
+    let (ga, gb) = (&fa.frf, &fb.frf);
+    if (ga.outputs(), ga.inputs(), ga.lines()) != (gb.outputs(), gb.inputs(), gb.lines())
+        || ga
+            .frequency_hz()
+            .iter()
+            .zip(gb.frequency_hz())
+            .any(|(x, y)| (x - y).abs() > 1e-9 * (1.0 + x.abs()))
+    {
+        return usage(format!(
+            "{} ({} x {}, {} lines) and {} ({} x {}, {} lines) are not on the same pairs and lines",
+            a.a.display(),
+            ga.outputs(),
+            ga.inputs(),
+            ga.lines(),
+            a.b.display(),
+            gb.outputs(),
+            gb.inputs(),
+            gb.lines()
+        ));
+    }
+    let clock = Instant::now();
+    let (q, p) = (ga.outputs(), ga.inputs());
+    let f = ga.frequency_hz();
+    let label = |s: &Path| {
+        s.file_name()
+            .map_or("?".into(), |n| n.to_string_lossy().into_owned())
+    };
+    let (la, lb) = (label(&a.a), label(&a.b));
+    let mut differences = Vec::new();
+    let mut worst: Vec<f64> = vec![0.0; a.bands.len() - 1];
+    for i in 0..q {
+        for j in 0..p {
+            let row: Vec<f64> = a
+                .bands
+                .windows(2)
+                .map(|w| 100.0 * band_difference(ga.pair(i, j), gb.pair(i, j), f, w[0], w[1]))
+                .collect();
+            for (w, v) in worst.iter_mut().zip(&row) {
+                if v.is_finite() {
+                    *w = w.max(*v);
+                }
+            }
+            differences.push((format!("{}/{}", i + 1, j + 1), row));
+        }
+    }
+    let median_band: Vec<f64> = (0..a.bands.len() - 1)
+        .map(|b| {
+            let mut v: Vec<f64> = differences
+                .iter()
+                .map(|d| d.1[b])
+                .filter(|x| x.is_finite())
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+        })
+        .collect();
+    // Models: given or identified.
+    let sides = match (&a.model_a, &a.model_b, &a.identify) {
+        (Some(ma), Some(mb), _) => Some((
+            model_from_json("--model-a", ma)?,
+            model_from_json("--model-b", mb)?,
+        )),
+        (_, _, Some(flags)) => Some((identified(flags, &a.a, ga)?, identified(flags, &a.b, gb)?)),
+        _ => None,
+    };
+    let mut modes = Vec::new();
+    let mut fit = None;
+    if let Some((sa, sb)) = &sides {
+        let band = (a.fit_band[0], a.fit_band[1]);
+        let da = integrate(ga, sa.integrations)?;
+        let db = integrate(gb, sb.integrations)?;
+        let ma = model_frf(&sa.model, &da)?;
+        let mb = model_frf(&sb.model, &db)?;
+        fit = Some((
+            100.0 * fit_error(&da, &ma, band),
+            100.0 * fit_error(&db, &mb, band),
+        ));
+        let pa = modal_parameters(&sa.model)?;
+        let pb = modal_parameters(&sb.model)?;
+        for m in &pa.modes {
+            // The mode of B with the highest MAC among those within 10 % in frequency.
+            let best = pb
+                .modes
+                .iter()
+                .filter(|n| (n.frequency_hz - m.frequency_hz).abs() <= 0.1 * m.frequency_hz)
+                .map(|n| (mac(&m.shape, &n.shape), n))
+                .max_by(|x, y| x.0.total_cmp(&y.0));
+            if let Some((value, n)) = best {
+                modes.push((
+                    m.frequency_hz,
+                    m.damping_ratio,
+                    n.frequency_hz,
+                    n.damping_ratio,
+                    value,
+                ));
+            }
+        }
+    }
+    let compare_s = clock.elapsed().as_secs_f64();
+    // Human summary.
+    let mut text = format!(
+        "era compare {} {}\n  differences by band (median over pairs, worst pair), ‖A − B‖/‖B‖:\n",
+        a.a.display(),
+        a.b.display()
+    );
+    for (k, w) in a.bands.windows(2).enumerate() {
+        text.push_str(&format!(
+            "    {:>5}–{:<5} Hz  {:8.2} %  {:8.2} %\n",
+            w[0], w[1], median_band[k], worst[k]
+        ));
+    }
+    if let Some((x, y)) = fit {
+        text.push_str(&format!(
+            "  fit of each model to its own data, {}–{} Hz (mean relative error): {la} {x:.2} %, {lb} {y:.2} %\n",
+            a.fit_band[0], a.fit_band[1]
+        ));
+    }
+    if !modes.is_empty() {
+        let mean_mac = modes.iter().map(|m| m.4).sum::<f64>() / modes.len() as f64;
+        text.push_str(&format!(
+            "  modes matched: {} of the first model's, mean MAC {mean_mac:.4}\n",
+            modes.len()
+        ));
+    }
+    human.print(&text);
+    let json_out = json!({
+        "a": a.a, "b": a.b, "bands_hz": a.bands,
+        "median_difference_percent": median_band, "worst_difference_percent": worst,
+        "pairs": differences.iter().map(|(l, r)| json!({"pair": l, "difference_percent": r})).collect::<Vec<_>>(),
+        "fit_percent": fit.map(|(x, y)| json!({"a": x, "b": y, "band_hz": a.fit_band})),
+        "modes": modes.iter().map(|m| json!({"frequency_a_hz": m.0, "damping_a": m.1, "frequency_b_hz": m.2, "damping_b": m.3, "mac": m.4})).collect::<Vec<_>>(),
+    });
+    if let Some(set) = set.as_mut() {
+        let bar = crate::progress::bar(&a.common, (q * p) as u64, "figures");
+        let mut overlays = Vec::new();
+        for i in 0..q {
+            for j in 0..p {
+                let fig = era_plot::compare::compare_overlay(ga, gb, (&la, &lb), i, j);
+                overlays.push((fig.title.clone(), era_plot::render_svg(&fig)?));
+                let name = format!("pair_{}_{}.png", i + 1, j + 1);
+                write_output(set, &name, |staged| {
+                    era_plot::render_png(&fig, staged)?;
+                    Ok(())
+                })?;
+                bar.inc(1);
+            }
+        }
+        bar.finish_and_clear();
+        let notes = text.clone();
+        let page = era_plot::compare::compare_html(&era_plot::compare::ComparePage {
+            title: &format!("era compare: {la} and {lb}"),
+            labels: (&la, &lb),
+            bands: &a.bands,
+            differences: &differences,
+            modes: &modes,
+            fit,
+            notes: &notes,
+            overlays: &overlays,
+        });
+        write_output(set, "compare.html", |staged| {
+            era_io::atomic::write_atomic(staged, page.as_bytes())?;
+            Ok(())
+        })?;
+        let js = serde_json::to_string_pretty(&json_out)?;
+        write_output(set, "compare.json", |staged| {
+            era_io::atomic::write_atomic(staged, js.as_bytes())?;
+            Ok(())
+        })?;
+    }
+    if let Some(set) = set {
+        set.commit()?;
+    }
+    finish_output(&human, &a.common, json_out, &[("compare", compare_s)])
+}

@@ -1,0 +1,485 @@
+//! `era simulate experiment`: the thesis's FRF test (§4.5) simulated in the time domain
+//! (`era::sim::experiment`), written as an FRF file with its coherence beside it.
+
+use crate::args::CommonArgs;
+use crate::identify::{output_name, write_output};
+use crate::report::{finish_output, Human};
+use crate::usage;
+use clap::{Args, ValueEnum};
+use era::sim::experiment::{
+    dta_like_structure, run_experiment, thesis_actuators, Compensation, Drive, Experiment,
+    ExperimentSpec, Structure, TABLE_5_1,
+};
+use era::sim::{ModalSpec, ModalStructure};
+use era::Quantity;
+use era_io::atomic::OutputSet;
+use era_io::csv::FrfFile;
+use era_io::format::FrfFormat;
+use era_io::uff::UffWriteOptions;
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StructureQuantity {
+    Velocity,
+    Acceleration,
+}
+
+#[derive(Debug, Args)]
+pub struct ExperimentArgs {
+    /// Friction compensation in the actuators (thesis §4.4: 200 Hz, dead zone 0.2 in/s,
+    /// 85 % of the coefficient).
+    #[arg(long, value_enum, default_value_t = OnOff::Off)]
+    pub compensation: OnOff,
+    /// Frames of 2048 samples (40 s) averaged per excited actuator.
+    #[arg(long, default_value_t = 20)]
+    pub averages: usize,
+    /// Seed of the excitation and the sensor noise (and of a --modes structure).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Multiplies every actuator's true Coulomb force (Table 5.1); 0 gives the linear
+    /// system.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub friction_scale: f64,
+    /// Compensator coefficients, lbf, one per actuator (e.g. from `era friction tune`);
+    /// default: the adjusted coefficients of Table 5.1 times --friction-scale.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub coefficients: Option<Vec<f64>>,
+    /// Excitation RMS voltage, V; default 0.6 without compensation, 0.3 with (§4.5).
+    #[arg(long, allow_negative_numbers = true)]
+    pub excitation: Option<f64>,
+    /// Drive every actuator at once with uncorrelated noise (one run), instead of one
+    /// at a time.
+    #[arg(long)]
+    pub simultaneous: bool,
+    /// Number of actuators, on structure inputs 1, 2, … (at most 8: Table 5.1 has 8).
+    #[arg(long, default_value_t = 8)]
+    pub actuators: usize,
+    /// Accelerometer noise RMS, in/s².
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    pub accel_noise: f64,
+    /// LVT (relative velocity) noise RMS, in/s.
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+    pub lvt_noise: f64,
+    /// Structure: a model.json (square, outputs collocated with the inputs); default: the
+    /// DTA-like modal structure (40 modes under 14 Hz and 4 up to 20 Hz).
+    #[arg(long, value_name = "MODEL_JSON", conflicts_with_all = ["modes", "fmin", "fmax", "damping", "dofs"])]
+    pub structure: Option<PathBuf>,
+    /// What the --structure model's outputs measure.
+    #[arg(long, value_enum, default_value_t = StructureQuantity::Velocity)]
+    pub structure_quantity: StructureQuantity,
+    /// A seeded modal structure (as `simulate modal`, collocated): number of modes.
+    #[arg(long)]
+    pub modes: Option<usize>,
+    /// Its DOFs (inputs = outputs).
+    #[arg(long)]
+    pub dofs: Option<usize>,
+    /// Its lowest natural frequency, Hz.
+    #[arg(long, allow_negative_numbers = true)]
+    pub fmin: Option<f64>,
+    /// Its highest natural frequency, Hz.
+    #[arg(long, allow_negative_numbers = true)]
+    pub fmax: Option<f64>,
+    /// Its damping ratio range MIN..MAX (fractions).
+    #[arg(long)]
+    pub damping: Option<String>,
+    /// FRF file to write: .csv, .uff/.unv or .mat; the coherence goes beside it, to
+    /// <name>.coherence.csv.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Also write the exact FRFs of the linear system (no friction) on the same lines.
+    #[arg(long, value_name = "FILE")]
+    pub exact_out: Option<PathBuf>,
+    /// Write the analyzer's time histories, one CSV per run (time_s, voltages,
+    /// accelerations, strokes, LVT velocities, compensation voltages), into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub time_histories: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
+    if !(v.is_finite() && v >= 0.0) {
+        return usage(format!("{flag} {v}: must be a number >= 0"));
+    }
+    Ok(())
+}
+
+/// The structure the flags describe.
+fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
+    if let Some(path) = &a.structure {
+        let model = era_io::model_json::ModelJson::read(path)?;
+        let ss = model
+            .state_space()
+            .map_err(|e| crate::UsageError(format!("--structure {}: {e}", path.display())))?;
+        let quantity = match a.structure_quantity {
+            StructureQuantity::Velocity => Quantity::Velocity,
+            StructureQuantity::Acceleration => Quantity::Acceleration,
+        };
+        return Structure::from_state_space(&ss, quantity).map_err(|e| {
+            crate::UsageError(format!(
+                "--structure {}: {e} (the structure needs one output collocated with each input)",
+                path.display()
+            ))
+            .into()
+        });
+    }
+    if a.modes.is_none()
+        && a.dofs.is_none()
+        && a.fmin.is_none()
+        && a.fmax.is_none()
+        && a.damping.is_none()
+    {
+        return Ok(Structure::from_modal(&dta_like_structure()));
+    }
+    let d = ModalSpec::default();
+    let (damping_min, damping_max) = match &a.damping {
+        Some(text) => crate::simulate::parse_range(text)?,
+        None => (d.damping_min, d.damping_max),
+    };
+    let dofs = a.dofs.unwrap_or(8);
+    era::limits::CHANNELS.check("--dofs", dofs as u64)?;
+    let modes = a.modes.unwrap_or(40);
+    era::limits::STATES.check_product("--modes (2 states each)", &[modes as u64, 2])?;
+    let spec = ModalSpec {
+        outputs: dofs,
+        inputs: dofs,
+        modes,
+        fmin_hz: a.fmin.unwrap_or(d.fmin_hz),
+        fmax_hz: a.fmax.unwrap_or(d.fmax_hz),
+        damping_min,
+        damping_max,
+        collocated: true,
+        seed: a.seed,
+    };
+    let s = ModalStructure::random(&spec).map_err(|e| crate::UsageError(e.to_string()))?;
+    Ok(Structure::from_modal(&s))
+}
+
+/// Validated flags → the experiment.
+fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
+    check_nonnegative("--friction-scale", a.friction_scale)?;
+    check_nonnegative("--accel-noise", a.accel_noise)?;
+    check_nonnegative("--lvt-noise", a.lvt_noise)?;
+    if a.averages == 0 {
+        return usage("--averages 0: need at least one frame");
+    }
+    era::limits::SAMPLES.check_product("--averages x 2048 samples", &[a.averages as u64, 2048])?;
+    if a.actuators == 0 || a.actuators > TABLE_5_1.len() {
+        return usage(format!(
+            "--actuators {}: must be 1 to {} (the actuators of Table 5.1)",
+            a.actuators,
+            TABLE_5_1.len()
+        ));
+    }
+    let compensated = a.compensation == OnOff::On;
+    let excitation = a.excitation.unwrap_or(if compensated { 0.3 } else { 0.6 });
+    if !(excitation.is_finite() && excitation > 0.0 && excitation <= 1000.0) {
+        return usage(format!(
+            "--excitation {excitation}: must be a positive RMS voltage up to 1000 V"
+        ));
+    }
+    let structure = structure(a)?;
+    if a.actuators > structure.mounts() {
+        return usage(format!(
+            "--actuators {}: the structure has only {} input DOF(s) to mount them on",
+            a.actuators,
+            structure.mounts()
+        ));
+    }
+    let mut actuators = thesis_actuators();
+    actuators.truncate(a.actuators);
+    for act in &mut actuators {
+        act.coulomb_force *= a.friction_scale;
+        if !act.coulomb_force.is_finite() {
+            return usage(format!(
+                "--friction-scale {}: the Coulomb forces overflow",
+                a.friction_scale
+            ));
+        }
+    }
+    let compensation = if compensated {
+        let mut c = Compensation::thesis();
+        c.coefficients.truncate(a.actuators);
+        // The default coefficients follow the friction they were tuned for.
+        c.coefficients
+            .iter_mut()
+            .for_each(|x| *x *= a.friction_scale);
+        if let Some(list) = &a.coefficients {
+            if list.len() != a.actuators {
+                return usage(format!(
+                    "--coefficients: {} value(s) for {} actuators",
+                    list.len(),
+                    a.actuators
+                ));
+            }
+            if let Some(bad) = list.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                return usage(format!("--coefficients: {bad} is not a force >= 0"));
+            }
+            c.coefficients = list.clone();
+        }
+        Some(c)
+    } else {
+        if a.coefficients.is_some() {
+            return usage("--coefficients needs --compensation on");
+        }
+        None
+    };
+    let mut spec = ExperimentSpec::thesis(compensated, a.averages, a.seed);
+    spec.structure = structure;
+    spec.actuators = actuators;
+    spec.compensation = compensation;
+    spec.excitation_rms_v = excitation;
+    spec.accel_noise_rms = a.accel_noise;
+    spec.lvt_noise_rms = a.lvt_noise;
+    spec.drive = if a.simultaneous {
+        Drive::Simultaneous
+    } else {
+        Drive::OneAtATime
+    };
+    spec.validate()
+        .map_err(|e| crate::UsageError(format!("era simulate experiment: {e}")))?;
+    Ok(spec)
+}
+
+/// The coherence as CSV: `frequency_hz`, `coh{i}_{j}` (the ordinary coherence of output
+/// `i` with input `j`, from the run that excited input `j`).
+fn coherence_csv(e: &Experiment, source: &str) -> String {
+    let (q, p, lines) = (e.frf.outputs(), e.frf.inputs(), e.frf.lines());
+    let mut out = String::with_capacity(lines * (q * p + 1) * 22);
+    let _ = writeln!(out, "# coherence of {source}");
+    let _ = writeln!(
+        out,
+        "# coh<i>_<j>: ordinary coherence of output i with input j (from the run exciting input j)"
+    );
+    out.push_str("frequency_hz");
+    for i in 1..=q {
+        for j in 1..=p {
+            let _ = write!(out, ",coh{i}_{j}");
+        }
+    }
+    out.push('\n');
+    for k in 0..lines {
+        let _ = write!(out, "{}", e.frf.frequency_hz()[k]);
+        for i in 0..q {
+            for j in 0..p {
+                let _ = write!(out, ",{}", e.coherence[(i * p + j) * lines + k]);
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+fn frf_file(frf: &era::FrfData, meta: &[(&str, String)]) -> FrfFile {
+    FrfFile {
+        frf: frf.clone(),
+        quantity_given: true,
+        metadata: meta
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect::<BTreeMap<_, _>>(),
+        channels: None,
+    }
+}
+
+fn write_frf(staged: &Path, file: &FrfFile) -> anyhow::Result<()> {
+    match FrfFormat::from_extension(staged) {
+        Some(FrfFormat::Csv) | None => {
+            era_io::format::write_frf_csv_keeping(staged, file, |_| true)?
+        }
+        Some(_) => era_io::format::write_frf_file(staged, file, UffWriteOptions::default())?,
+    }
+    Ok(())
+}
+
+fn frf_format(flag: &str, path: &Path) -> anyhow::Result<()> {
+    if FrfFormat::from_extension(path).is_none() {
+        return usage(format!(
+            "{flag} {}: cannot tell the format from the extension: use .csv, .uff (or .unv) or .mat",
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
+/// One run's analyzer record as a time-history CSV `era frf` reads.
+fn time_csv(e: &Experiment, run: usize, rate_hz: f64) -> String {
+    let rec = &e.records[run];
+    let a = rec.voltage.len();
+    let q = rec.acceleration.len();
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# era simulate experiment: run {} (excited actuator(s) {})",
+        run + 1,
+        rec.excited
+            .iter()
+            .map(|j| (j + 1).to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    out.push_str("time_s");
+    for j in 1..=a {
+        let _ = write!(out, ",volt{j}");
+    }
+    for i in 1..=q {
+        let _ = write!(out, ",acc{i}");
+    }
+    for j in 1..=a {
+        let _ = write!(out, ",stroke{j},lvt{j},comp{j}");
+    }
+    out.push('\n');
+    for k in 0..rec.acceleration[0].len() {
+        let _ = write!(out, "{}", k as f64 / rate_hz);
+        for v in &rec.voltage {
+            let _ = write!(out, ",{}", v[k]);
+        }
+        for v in &rec.acceleration {
+            let _ = write!(out, ",{}", v[k]);
+        }
+        for j in 0..a {
+            let _ = write!(
+                out,
+                ",{},{},{}",
+                rec.stroke[j][k], rec.relative_velocity[j][k], rec.compensation_v[j][k]
+            );
+        }
+        out.push('\n');
+    }
+    out
+}
+
+pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    frf_format("--out", &a.out)?;
+    if let Some(p) = &a.exact_out {
+        frf_format("--exact-out", p)?;
+    }
+    // Refuse bad outputs before the work.
+    let mut set = OutputSet::beside(&a.out)?;
+    set.stage(output_name("--out", &a.out)?)?;
+    let coherence = crate::frf::coherence_path(&a.out);
+    set.stage(output_name("--out", &coherence)?)?;
+    let mut exact_set = match &a.exact_out {
+        Some(p) => {
+            let mut s = OutputSet::beside(p)?;
+            s.stage(output_name("--exact-out", p)?)?;
+            Some(s)
+        }
+        None => None,
+    };
+    let mut th_set =
+        match &a.time_histories {
+            Some(dir) => Some(OutputSet::new(dir).map_err(|e| {
+                crate::UsageError(format!("--time-histories {}: {e}", dir.display()))
+            })?),
+            None => None,
+        };
+    let spec = spec(a)?;
+    let runs = match spec.drive {
+        Drive::OneAtATime => spec.actuators.len(),
+        Drive::Simultaneous => 1,
+    };
+    let clock = Instant::now();
+    let bar = crate::progress::bar(&a.common, runs as u64, "simulating runs");
+    let found = run_experiment(&spec, a.time_histories.is_some(), &|done| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let simulate_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let mut meta = vec![
+        ("source", "era simulate experiment".to_string()),
+        (
+            "compensation",
+            format!("{:?}", a.compensation).to_lowercase(),
+        ),
+        ("averages", a.averages.to_string()),
+        ("seed", a.seed.to_string()),
+        ("friction_scale", a.friction_scale.to_string()),
+        ("excitation_rms_v", spec.excitation_rms_v.to_string()),
+        ("input_unit", "V".to_string()),
+        ("response_unit", "in/s^2".to_string()),
+    ];
+    let file = frf_file(&found.frf, &meta);
+    write_output(&mut set, output_name("--out", &a.out)?, |staged| {
+        write_frf(staged, &file)
+    })?;
+    let text = coherence_csv(&found, &a.out.display().to_string());
+    write_output(&mut set, output_name("--out", &coherence)?, |staged| {
+        era_io::atomic::write_atomic(staged, text.as_bytes())?;
+        Ok(())
+    })?;
+    set.commit()?;
+    if let (Some(mut s), Some(p)) = (exact_set.take(), &a.exact_out) {
+        meta[0].1 = "era simulate experiment (exact FRFs of the linear system)".into();
+        let exact = frf_file(&found.exact, &meta);
+        write_output(&mut s, output_name("--exact-out", p)?, |staged| {
+            write_frf(staged, &exact)
+        })?;
+        s.commit()?;
+    }
+    if let Some(mut s) = th_set.take() {
+        for r in 0..found.records.len() {
+            let text = time_csv(&found, r, spec.analyzer_rate_hz);
+            write_output(&mut s, format!("run{}.csv", r + 1), |staged| {
+                era_io::atomic::write_atomic(staged, text.as_bytes())?;
+                Ok(())
+            })?;
+        }
+        s.commit()?;
+    }
+    let write_s = clock.elapsed().as_secs_f64();
+    let c = found.counts;
+    human.print(&format!(
+        "wrote {} and {}: {} outputs x {} inputs, {} lines at {} Hz (acceleration per volt)\n  \
+         {} run(s) of {} x 40 s, compensation {}, friction x{}: {} reversals, {} sticks, {} break-aways, {} end-stop impacts\n  \
+         largest stroke per actuator (in): {}\n",
+        a.out.display(),
+        coherence.display(),
+        found.frf.outputs(),
+        found.frf.inputs(),
+        found.frf.lines(),
+        found.frf.spacing_hz(),
+        runs,
+        a.averages,
+        if spec.compensation.is_some() { "on" } else { "off" },
+        a.friction_scale,
+        c.reversals,
+        c.sticks,
+        c.breakaways,
+        c.impacts,
+        found
+            .max_stroke
+            .iter()
+            .map(|s| format!("{s:.3}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    ));
+    let summary = json!({
+        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
+        "time_histories": a.time_histories,
+        "outputs": found.frf.outputs(), "inputs": found.frf.inputs(), "lines": found.frf.lines(),
+        "spacing_hz": found.frf.spacing_hz(), "compensation": spec.compensation.is_some(),
+        "averages": a.averages, "seed": a.seed, "friction_scale": a.friction_scale,
+        "excitation_rms_v": spec.excitation_rms_v,
+        "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
+        "max_stroke_in": found.max_stroke,
+    });
+    finish_output(
+        &human,
+        &a.common,
+        summary,
+        &[("simulate", simulate_s), ("write", write_s)],
+    )
+}
