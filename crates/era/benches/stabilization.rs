@@ -45,8 +45,7 @@ fn stabilization(c: &mut Criterion) {
     });
     g.bench_function("stabilization_40_orders_to_160", |b| {
         b.iter(|| {
-            identify_with_scan(black_box(&frf), &small, &scan, &mut |_| {}, &mut |_, _| {})
-                .unwrap()
+            identify_with_scan(black_box(&frf), &small, &scan, &mut |_| {}, &mut |_, _| {}).unwrap()
         })
     });
     g.finish();
