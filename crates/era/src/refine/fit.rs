@@ -126,7 +126,11 @@ pub(crate) fn run(
         theta: problem.parameters.theta(&poles),
         ids,
     };
-    let weighted_norm2: f64 = problem.blocks.iter().map(|b| b.rhs.squared_norm_l2()).sum();
+    let weighted_norm2: f64 = problem
+        .blocks
+        .iter()
+        .map(|b| b.rhs.squared_norm_l2() + b.cost_offset)
+        .sum();
     let mut current = settle(&problem, &mut state, evaluate, &mut dropped)?;
     let cost_before = current.cost;
     let fit_before = fit_of(&problem, &state.theta, &current.coefficients);

@@ -156,7 +156,8 @@ pub struct RefineOptions {
     /// Levenberg–Marquardt iterations at most (default 100).
     pub max_iterations: usize,
     /// Converged when an accepted step lowers the cost by less than this fraction
-    /// (default 1e-10).
+    /// (default 1e-6: with noise, smaller decreases only move the parameters that the
+    /// data does not determine).
     pub tolerance: f64,
     /// Lines fitted, `first..end` (0-based, end exclusive); default every line above 0 Hz.
     pub band: Option<(usize, usize)>,
@@ -172,7 +173,7 @@ impl Default for RefineOptions {
             real_modes: false,
             enforce_stability: true,
             max_iterations: 100,
-            tolerance: 1e-10,
+            tolerance: 1e-6,
             band: None,
             weighting: Weighting::Uniform,
         }

@@ -199,13 +199,31 @@ pub(crate) fn basis_derivatives(
 pub(crate) struct Block {
     /// Square-root weights of each stacked segment per band line (`None`: 1).
     pub segment_weights: Vec<Option<Vec<f64>>>,
-    /// For each unit, the pair index (`i·p + j`) of each segment.
+    /// For each unit, the pair indices (`i·p + j`) sharing its coefficients: one per
+    /// segment, or all fitted through their mean when `averaged`.
     pub units: Vec<Vec<usize>>,
+    /// Uniform weights: the pairs of a unit are fitted through `√n·ȳ` (the same
+    /// minimiser, Jacobian and gradient as fitting each pair, one basis for all), the
+    /// coefficients come out scaled by `√n`, and the cost misses `Σ‖y − ȳ‖²`, which
+    /// is `cost_offset`.
+    pub averaged: bool,
+    /// The part of the cost that no parameter changes.
+    pub cost_offset: f64,
     /// Weighted data, `segments·2L × units`.
     pub rhs: Mat<f64>,
 }
 
 impl Block {
+    /// `√n` for an averaged unit of `n` pairs, 1 otherwise: its coefficients are
+    /// divided by this.
+    pub fn unit_scale(&self, u: usize) -> f64 {
+        if self.averaged {
+            (self.units[u].len() as f64).sqrt()
+        } else {
+            1.0
+        }
+    }
+
     /// The basis (or its derivative columns) stacked and weighted per segment.
     pub fn stack(&self, unweighted: &Mat<f64>) -> Mat<f64> {
         let rows = unweighted.nrows();
@@ -320,24 +338,22 @@ impl Problem {
         let mut blocks = Vec::new();
         match &weights {
             None => {
-                // Uniform: units with the same number of segments share one basis.
-                for segments in [1, 2] {
-                    let members: Vec<Vec<usize>> =
-                        units.iter().filter(|u| u.len() == segments).cloned().collect();
-                    if !members.is_empty() {
-                        blocks.push(Block {
-                            segment_weights: vec![None; segments],
-                            units: members,
-                            rhs: Mat::zeros(0, 0),
-                        });
-                    }
-                }
+                // Uniform: every unit shares one basis.
+                blocks.push(Block {
+                    segment_weights: vec![None],
+                    units: units.clone(),
+                    averaged: true,
+                    cost_offset: 0.0,
+                    rhs: Mat::zeros(0, 0),
+                });
             }
             Some(w) => {
                 for unit in &units {
                     blocks.push(Block {
                         segment_weights: unit.iter().map(|&pair| Some(w[pair].clone())).collect(),
                         units: vec![unit.clone()],
+                        averaged: false,
+                        cost_offset: 0.0,
                         rhs: Mat::zeros(0, 0),
                     });
                 }
@@ -356,6 +372,17 @@ impl Problem {
             let segments = block.segment_weights.len();
             let mut rhs = Mat::<f64>::zeros(segments * 2 * nl, block.units.len());
             for (u, unit) in block.units.iter().enumerate() {
+                if block.averaged {
+                    let n = unit.len() as f64;
+                    for k in 0..nl {
+                        let mean = unit.iter().map(|&pair| data[pair][k]).sum::<Complex64>() / n;
+                        rhs[(k, u)] = n.sqrt() * mean.re;
+                        rhs[(nl + k, u)] = n.sqrt() * mean.im;
+                        block.cost_offset +=
+                            unit.iter().map(|&pair| (data[pair][k] - mean).norm_sqr()).sum::<f64>();
+                    }
+                    continue;
+                }
                 for (seg, &pair) in unit.iter().enumerate() {
                     for k in 0..nl {
                         let w = block.segment_weights[seg].as_ref().map_or(1.0, |w| w[k]);

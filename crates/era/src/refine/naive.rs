@@ -36,9 +36,10 @@ fn residual(problem: &Problem, theta: &[f64]) -> Result<std::result::Result<(Vec
             let c = qr.solve_lstsq(&y);
             let fitted = &phi_b * &c;
             r.extend((0..y.nrows()).map(|i| y[(i, 0)] - fitted[(i, 0)]));
+            let scale = block.unit_scale(u);
             for &pair in unit {
                 for k in 0..n_col {
-                    coefficients[(k, pair)] = c[(k, 0)];
+                    coefficients[(k, pair)] = c[(k, 0)] / scale;
                 }
             }
         }
@@ -79,7 +80,8 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64]) -> Result<Outcome> {
     let jtj = jac.transpose() * &jac;
     let jtr_m = jac.transpose() * &rv;
     Ok(Outcome::Ready(Evaluation {
-        cost: r0.iter().map(|x| x * x).sum(),
+        cost: r0.iter().map(|x| x * x).sum::<f64>()
+            + problem.blocks.iter().map(|b| b.cost_offset).sum::<f64>(),
         jtj,
         jtr: (0..n_par).map(|k| jtr_m[(k, 0)]).collect(),
         coefficients,

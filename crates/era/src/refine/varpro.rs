@@ -56,7 +56,7 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64]) -> Result<Outcome> {
         let mut theta_b = qty.clone();
         r.solve_upper_triangular_in_place(&mut theta_b);
         let res = &block.rhs - &q * &qty;
-        cost += res.squared_norm_l2();
+        cost += res.squared_norm_l2() + block.cost_offset;
         let d_b = block.stack(&deriv);
         let e = &d_b - &q * (q.transpose() * &d_b);
         let g = e.transpose() * &e;
@@ -78,9 +78,10 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64]) -> Result<Outcome> {
             }
         }
         for (u, unit) in block.units.iter().enumerate() {
+            let scale = block.unit_scale(u);
             for &pair in unit {
                 for c in 0..n_col {
-                    coefficients[(c, pair)] = theta_b[(c, u)];
+                    coefficients[(c, pair)] = theta_b[(c, u)] / scale;
                 }
             }
         }
