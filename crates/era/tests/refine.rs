@@ -141,3 +141,41 @@ fn dbg_bench_case() {
     eprintln!("found {found} median f {:e} z {:e} fit {:e} -> {:e}", median(fe.clone()), median(ze.clone()), r.fit_before, r.fit_after);
     if env("MODES").is_some() { for m in &r.modes { eprintln!("{:.5} {:.3e} ± {:.2e} {:.2e}  c {:.2e}", m.frequency_hz, m.damping_ratio, m.frequency_std_hz, m.damping_ratio_std, m.contribution); } }
 }
+
+#[test]
+#[ignore]
+fn dbg_truth() {
+    use era::identify::{identify, EraOptions};
+    use era::sim::{truth_model, truth_model_frf};
+    let exact: Vec<Complex64> = truth_model().poles().unwrap().into_iter().filter(|s| s.im > 0.0).collect();
+    let mut fe = [0.0f64; 4];
+    for seed in 1..=5u64 {
+        let frf = truth_model_frf(Some((0.15, seed))).unwrap();
+        let found = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
+        let start: Vec<Complex64> = found.modal.modes.iter().map(|m| m.continuous_pole).collect();
+        let mut options = RefineOptions::default();
+        options.residuals = Residuals::Upper;
+        options.sample_time_s = Some(1.0 / era::sim::TRUTH_SAMPLE_RATE_HZ);
+        if std::env::var("REAL").is_ok() { options.real_modes = true; }
+        if std::env::var("RECIP").is_ok() { options.reciprocal = true; }
+        if std::env::var("IV").is_ok() {
+            let nl = frf.lines();
+            let mut w = Vec::new();
+            for pair in 0..9 {
+                let v = &frf.values()[pair * nl..(pair + 1) * nl];
+                let ms = v.iter().map(|x| x.norm_sqr()).sum::<f64>() / nl as f64;
+                w.extend(std::iter::repeat(ms).take(nl));
+            }
+            options.weighting = era::refine::Weighting::InverseVariance(w);
+        }
+        let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+        for (k, e) in exact.iter().enumerate() {
+            let fe_true = e.norm() / (2.0 * PI);
+            let era = found.modal.modes.iter().map(|m| (m.frequency_hz - fe_true).abs()).fold(f64::INFINITY, f64::min);
+            let refd = r.modes.iter().map(|m| (m.frequency_hz - fe_true).abs()).fold(f64::INFINITY, f64::min);
+            eprint!("[{k}: era {era:.2} ref {refd:.2}] ");
+            fe[k] += refd;
+        }
+        eprintln!(" it {} fit {:.3}->{:.3} dropped {:?}", r.iterations, r.fit_before, r.fit_after, r.dropped);
+    }
+}

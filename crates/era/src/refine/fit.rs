@@ -464,6 +464,7 @@ fn finish(
         outputs: q,
         inputs: p,
         band: problem.band,
+        sample_time_s: problem.layout.sample_time_s,
     })
 }
 

@@ -110,7 +110,7 @@ use crate::error::{EraError, Result};
 use crate::frf::{FrfData, Quantity};
 use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
-use model::{jw_power, order, power};
+use model::{order, partial_fraction, power, residual_factor};
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
@@ -163,6 +163,10 @@ pub struct RefineOptions {
     pub band: Option<(usize, usize)>,
     /// Weighting (default uniform).
     pub weighting: Weighting,
+    /// `Some(Ts)`: fit the zero-order-hold image of the model, `z = e^(jωTs)` (module
+    /// doc), for FRFs of a sampled system such as the truth model's; default `None`
+    /// (continuous).
+    pub sample_time_s: Option<f64>,
 }
 
 impl Default for RefineOptions {
@@ -176,6 +180,7 @@ impl Default for RefineOptions {
             tolerance: 1e-6,
             band: None,
             weighting: Weighting::Uniform,
+            sample_time_s: None,
         }
     }
 }
@@ -233,6 +238,8 @@ pub struct Refinement {
     pub inputs: usize,
     /// Lines fitted, `first..end`.
     pub band: (usize, usize),
+    /// The sample time of a z-domain fit ([`RefineOptions::sample_time_s`]).
+    pub sample_time_s: Option<f64>,
 }
 
 /// Refines `start_poles` (continuous, one per mode; conjugates, real poles and
@@ -276,19 +283,37 @@ impl Refinement {
     /// The model's FRF of `quantity` at `frequency_hz`, `[output][input][line]`:
     /// `Σ_r [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + U (jω)^(κ'−κ)` with `κ'` the order
     /// of `quantity` and `κ` the data's (module doc). A negative power at 0 Hz is
-    /// infinite.
+    /// infinite. A z-domain fit gives `Σ_r [R/(z − e^(sTs)) + c.c.]` plus the residual
+    /// terms' zero-order-hold images, of the data's quantity only.
+    ///
+    /// # Panics
+    /// For a z-domain fit and a `quantity` other than the data's.
+    #[track_caller]
     pub fn response(&self, frequency_hz: &[f64], quantity: Quantity) -> Vec<Complex64> {
         let (q, p, nl) = (self.outputs, self.inputs, frequency_hz.len());
         let k_out = order(quantity);
         let k_data = order(self.quantity);
+        let ts = self.sample_time_s;
+        assert!(
+            ts.is_none() || quantity == self.quantity,
+            "a z-domain refinement has only the data's quantity"
+        );
         let mut out = vec![Complex64::new(0.0, 0.0); q * p * nl];
         for (k, f) in frequency_hz.iter().enumerate() {
             let w = 2.0 * PI * f;
             let jw = Complex64::new(0.0, w);
             for mode in &self.modes {
                 let s = mode.pole;
-                let a = power(s, k_out) / (jw - s);
-                let b = power(s.conj(), k_out) / (jw - s.conj());
+                let (a, b) = match ts {
+                    Some(_) => (
+                        partial_fraction(s, w, k_out, ts).0,
+                        partial_fraction(s.conj(), w, k_out, ts).0,
+                    ),
+                    None => (
+                        power(s, k_out) / (jw - s),
+                        power(s.conj(), k_out) / (jw - s.conj()),
+                    ),
+                };
                 for pair in 0..q * p {
                     let r = mode.residue[pair];
                     out[pair * nl + k] += r * a + r.conj() * b;
@@ -296,7 +321,7 @@ impl Refinement {
             }
             for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
                 if let Some(m) = term {
-                    let factor = jw_power(w, e);
+                    let factor = residual_factor(w, e, ts);
                     for i in 0..q {
                         for j in 0..p {
                             out[(i * p + j) * nl + k] += factor * m[(i, j)];
@@ -321,11 +346,25 @@ impl Refinement {
         let (q, p) = (self.outputs, self.inputs);
         let k_out = order(quantity);
         let k_data = order(self.quantity);
+        if self.sample_time_s.is_some() && quantity != self.quantity {
+            return Err(EraError::InvalidParameter {
+                name: "quantity",
+                value: quantity.name().into(),
+                reason: format!(
+                    "a z-domain refinement models only the data's quantity, {}",
+                    self.quantity
+                ),
+            });
+        }
         // Rank-one terms (pole, u, v) of every mode.
         let mut terms: Vec<(Complex64, Vec<Complex64>, Vec<Complex64>)> = Vec::new();
         for mode in &self.modes {
             let s = mode.pole;
-            let scale = power(s, k_out);
+            // The z-domain residue is of the data's quantity already.
+            let scale = match self.sample_time_s {
+                Some(_) => Complex64::new(1.0, 0.0),
+                None => power(s, k_out),
+            };
             let r = Mat::from_fn(q, p, |i, j| scale * mode.residue[i * p + j]);
             let svd = r
                 .thin_svd()
@@ -338,7 +377,13 @@ impl Refinement {
                 }
                 let root = sk.sqrt();
                 let u = (0..q).map(|i| svd.U()[(i, k)] * root).collect();
-                let v = (0..p).map(|j| svd.V()[(j, k)].conj() * root).collect();
+                // z-domain: B_c = A_c (A_d − I)⁻¹ B_d, which for the 2 × 2 block of a
+                // complex number is multiplication by μ = s/(e^(sTs) − 1).
+                let mu = match self.sample_time_s {
+                    Some(ts) => s / ((s * ts).exp() - 1.0),
+                    None => Complex64::new(1.0, 0.0),
+                };
+                let v = (0..p).map(|j| svd.V()[(j, k)].conj() * root * mu).collect();
                 terms.push((s, u, v));
             }
         }

@@ -28,6 +28,22 @@ pub(crate) fn jw_power(omega: f64, e: i32) -> Complex64 {
     Complex64::new(0.0, omega).powi(e)
 }
 
+/// The residual term `(jω)^e`, or in the z-domain its zero-order-hold image: `1`,
+/// `Ts/(z − 1)` for `1/s`, `Ts²(z + 1)/(2(z − 1)²)` for `1/s²`.
+pub(crate) fn residual_factor(omega: f64, e: i32, sample_time_s: Option<f64>) -> Complex64 {
+    match sample_time_s {
+        None => jw_power(omega, e),
+        Some(ts) => {
+            let z = Complex64::from_polar(1.0, omega * ts);
+            match e {
+                -1 => ts / (z - 1.0),
+                -2 => ts * ts * (z + 1.0) / (2.0 * (z - 1.0) * (z - 1.0)),
+                _ => Complex64::new(1.0, 0.0),
+            }
+        }
+    }
+}
+
 /// Which residual term a basis column carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum ResidualKind {
@@ -40,6 +56,8 @@ pub(crate) enum ResidualKind {
 #[derive(Debug, Clone)]
 pub(crate) struct Layout {
     pub kappa: i32,
+    /// `Some(Ts)`: the zero-order-hold (z-domain) model, `z = e^(jωTs)`.
+    pub sample_time_s: Option<f64>,
     pub per_mode: usize,
     /// `(kind, exponent e of (jω)^e in the data's quantity)`.
     pub residuals: Vec<(ResidualKind, i32)>,
@@ -60,6 +78,7 @@ impl Layout {
         };
         Layout {
             kappa,
+            sample_time_s: options.sample_time_s,
             per_mode: if options.real_modes { 1 } else { 2 },
             residuals,
         }
@@ -69,8 +88,20 @@ impl Layout {
     }
 }
 
-/// `g(s) = s^κ/(jω − s)` and `g'(s) = κ s^(κ−1)/(jω − s) + s^κ/(jω − s)²`.
-fn partial_fraction(s: Complex64, omega: f64, kappa: i32) -> (Complex64, Complex64) {
+/// `g(s) = s^κ/(jω − s)` and `g'(s) = κ s^(κ−1)/(jω − s) + s^κ/(jω − s)²`; in the
+/// z-domain `g = 1/(z − e^(sTs))`, `g' = Ts e^(sTs)/(z − e^(sTs))²`.
+pub(crate) fn partial_fraction(
+    s: Complex64,
+    omega: f64,
+    kappa: i32,
+    sample_time_s: Option<f64>,
+) -> (Complex64, Complex64) {
+    if let Some(ts) = sample_time_s {
+        let z = Complex64::from_polar(1.0, omega * ts);
+        let lambda = (s * ts).exp();
+        let inv = 1.0 / (z - lambda);
+        return (inv, ts * lambda * inv * inv);
+    }
     let inv = 1.0 / (Complex64::new(0.0, omega) - s);
     let sk = power(s, kappa);
     let g = sk * inv;
@@ -84,10 +115,10 @@ fn partial_fraction(s: Complex64, omega: f64, kappa: i32) -> (Complex64, Complex
 
 /// The mode's columns at one line: `Re R` multiplies `g(s) + g(s̄)`, `Im R` multiplies
 /// `j(g(s) − g(s̄))`, so that `R g(s) + R̄ g(s̄) = Re R·(…) + Im R·(…)`.
-fn mode_columns(s: Complex64, omega: f64, kappa: i32) -> [Complex64; 2] {
+fn mode_columns(s: Complex64, omega: f64, layout: &Layout) -> [Complex64; 2] {
     let j = Complex64::new(0.0, 1.0);
-    let (g1, _) = partial_fraction(s, omega, kappa);
-    let (g2, _) = partial_fraction(s.conj(), omega, kappa);
+    let (g1, _) = partial_fraction(s, omega, layout.kappa, layout.sample_time_s);
+    let (g2, _) = partial_fraction(s.conj(), omega, layout.kappa, layout.sample_time_s);
     [g1 + g2, j * (g1 - g2)]
 }
 
@@ -95,12 +126,12 @@ fn mode_columns(s: Complex64, omega: f64, kappa: i32) -> [Complex64; 2] {
 fn mode_column_derivatives(
     s: Complex64,
     omega: f64,
-    kappa: i32,
+    layout: &Layout,
     delta: Complex64,
 ) -> [Complex64; 2] {
     let j = Complex64::new(0.0, 1.0);
-    let (_, d1) = partial_fraction(s, omega, kappa);
-    let (_, d2) = partial_fraction(s.conj(), omega, kappa);
+    let (_, d1) = partial_fraction(s, omega, layout.kappa, layout.sample_time_s);
+    let (_, d2) = partial_fraction(s.conj(), omega, layout.kappa, layout.sample_time_s);
     let (a, b) = (d1 * delta, d2 * delta.conj());
     [a + b, j * (a - b)]
 }
@@ -146,7 +177,7 @@ pub(crate) fn basis(layout: &Layout, omega: &[f64], poles: &[Complex64]) -> Mat<
     let pm = layout.per_mode;
     for (r, &s) in poles.iter().enumerate() {
         for (k, &w) in omega.iter().enumerate() {
-            let c = mode_columns(s, w, layout.kappa);
+            let c = mode_columns(s, w, layout);
             for local in 0..pm {
                 let v = c[local + 2 - pm];
                 out[(k, r * pm + local)] = v.re;
@@ -157,7 +188,7 @@ pub(crate) fn basis(layout: &Layout, omega: &[f64], poles: &[Complex64]) -> Mat<
     for (m, &(_, e)) in layout.residuals.iter().enumerate() {
         let col = poles.len() * pm + m;
         for (k, &w) in omega.iter().enumerate() {
-            let v = jw_power(w, e);
+            let v = residual_factor(w, e, layout.sample_time_s);
             out[(k, col)] = v.re;
             out[(lines + k, col)] = v.im;
         }
@@ -180,7 +211,7 @@ pub(crate) fn basis_derivatives(
     for (r, &s) in poles.iter().enumerate() {
         for (t, delta) in parameters.deltas(s).into_iter().enumerate() {
             for (k, &w) in omega.iter().enumerate() {
-                let c = mode_column_derivatives(s, w, layout.kappa, delta);
+                let c = mode_column_derivatives(s, w, layout, delta);
                 for local in 0..pm {
                     let v = c[local + 2 - pm];
                     let col = (2 * r + t) * pm + local;
@@ -295,6 +326,29 @@ impl Problem {
                 (first, lines)
             }
         };
+        if let Some(ts) = options.sample_time_s {
+            if !(ts.is_finite() && ts > 0.0) {
+                return Err(invalid(
+                    "sample time",
+                    ts.to_string(),
+                    "must be positive and finite",
+                ));
+            }
+            if options.real_modes {
+                return Err(invalid(
+                    "real-modes",
+                    "true".into(),
+                    "the residues of a sampled (z-domain) model are not imaginary: real modes need the continuous model",
+                ));
+            }
+            if let Some(&f) = freq[band.0..band.1].iter().find(|&&f| f * ts > 0.5 * (1.0 + 1e-9)) {
+                return Err(invalid(
+                    "band",
+                    format!("{}..{}", band.0, band.1),
+                    format!("{f} Hz is above the Nyquist frequency {} Hz of the sample time {ts} s", 0.5 / ts),
+                ));
+            }
+        }
         if options.reciprocal && q != p {
             return Err(invalid(
                 "reciprocal",
