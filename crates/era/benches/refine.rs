@@ -62,11 +62,25 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("refine_2x2_4modes_401lines");
     g.sample_size(10);
     g.bench_function("fast", |b| {
-        b.iter(|| refine(black_box(&small_frf), &small_start, &options, &mut |_, _| {}).unwrap())
+        b.iter(|| {
+            refine(
+                black_box(&small_frf),
+                &small_start,
+                &options,
+                &mut |_, _| {},
+            )
+            .unwrap()
+        })
     });
     g.bench_function("naive", |b| {
         b.iter(|| {
-            refine_naive(black_box(&small_frf), &small_start, &options, &mut |_, _| {}).unwrap()
+            refine_naive(
+                black_box(&small_frf),
+                &small_start,
+                &options,
+                &mut |_, _| {},
+            )
+            .unwrap()
         })
     });
     g.finish();

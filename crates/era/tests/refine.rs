@@ -3,7 +3,9 @@
 use era::identify::{identify, EraOptions};
 use era::refine::{refine, RefineOptions, Refinement, Residuals};
 use era::response::frequency_response;
-use era::sim::{add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure, TRUTH_SAMPLE_RATE_HZ};
+use era::sim::{
+    add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure, TRUTH_SAMPLE_RATE_HZ,
+};
 use era::{Complex64, FrfData, Quantity};
 use std::f64::consts::PI;
 
@@ -51,7 +53,11 @@ fn errors(s: &ModalStructure, r: &Refinement) -> (Vec<f64>, Vec<f64>, usize) {
         let best = r
             .modes
             .iter()
-            .min_by(|a, b| (a.frequency_hz - f).abs().total_cmp(&(b.frequency_hz - f).abs()))
+            .min_by(|a, b| {
+                (a.frequency_hz - f)
+                    .abs()
+                    .total_cmp(&(b.frequency_hz - f).abs())
+            })
             .unwrap();
         let e = (best.frequency_hz - f).abs() / f;
         if e < 1e-3 {
@@ -90,7 +96,6 @@ fn state_space_error(frf: &FrfData, r: &Refinement) -> f64 {
     (num / den).sqrt()
 }
 
-
 #[test]
 fn dta_noise_free_is_recovered_to_round_off() {
     // 39 of the 40 poles perturbed, one left out with a computational pole near it, and
@@ -106,7 +111,11 @@ fn dta_noise_free_is_recovered_to_round_off() {
     // The computational pole in the gap has nothing to fit and is said to be dropped.
     assert_eq!(r.dropped.len(), 1);
     assert_eq!(r.dropped[0].0, 40);
-    assert!(r.dropped[0].1.contains("contribution"), "{}", r.dropped[0].1);
+    assert!(
+        r.dropped[0].1.contains("contribution"),
+        "{}",
+        r.dropped[0].1
+    );
     assert!(median(fe.clone()) <= 1e-9, "{:e}", median(fe));
     assert!(median(ze.clone()) <= 1e-7, "{:e}", median(ze));
     assert!(r.fit_after <= 1e-10 && r.fit_before > 1e-2);
@@ -129,7 +138,11 @@ fn dta_with_5_percent_noise_reaches_the_noise_floor() {
     assert!(median(ze.clone()) <= 0.015, "{}", median(ze));
     assert!(r.modes.iter().all(|m| m.pole.re < 0.0));
     let sse = state_space_error(&frf, &r);
-    assert!((sse - r.fit_after).abs() <= 1e-9, "{sse} vs {}", r.fit_after);
+    assert!(
+        (sse - r.fit_after).abs() <= 1e-9,
+        "{sse} vs {}",
+        r.fit_after
+    );
 }
 
 fn exact_truth_poles() -> Vec<Complex64> {
@@ -171,7 +184,11 @@ fn truth_model_refined_from_the_thesis_era_poles() {
     let r = refine(&frf, &start, &truth_options(), &mut |_, _| {}).unwrap();
     assert_eq!(r.modes.len(), 4);
     for e in exact_truth_poles() {
-        let d = r.modes.iter().map(|m| (m.pole - e).norm()).fold(f64::INFINITY, f64::min);
+        let d = r
+            .modes
+            .iter()
+            .map(|m| (m.pole - e).norm())
+            .fold(f64::INFINITY, f64::min);
         assert!(d <= 1e-9 * e.norm(), "{e}: {d:e}");
     }
     assert!(r.fit_after <= 1e-9, "{}", r.fit_after);
@@ -209,6 +226,8 @@ fn truth_model_with_15_percent_noise_improves_on_era() {
             refined_err += nearest(&mut r.modes.iter().map(|m| m.frequency_hz));
         }
     }
-    eprintln!("refined {refined_err} Hz, ERA {era_err} Hz");
-    assert!(refined_err < era_err, "refined {refined_err} Hz, ERA {era_err} Hz");
+    assert!(
+        refined_err < era_err,
+        "refined {refined_err} Hz, ERA {era_err} Hz"
+    );
 }

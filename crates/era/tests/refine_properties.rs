@@ -44,10 +44,10 @@ impl System {
             }
             let jw = Complex64::new(0.0, w);
             let pair = i * self.p + j;
-            let mut g = Complex64::new(self.upper[pair], 0.0)
-                + self.lower[pair] * jw.powi(k - 2);
+            let mut g = Complex64::new(self.upper[pair], 0.0) + self.lower[pair] * jw.powi(k - 2);
             for (s, r) in self.poles.iter().zip(&self.residues) {
-                g += s.powi(k) * r[pair] / (jw - s) + s.conj().powi(k) * r[pair].conj() / (jw - s.conj());
+                g += s.powi(k) * r[pair] / (jw - s)
+                    + s.conj().powi(k) * r[pair].conj() / (jw - s.conj());
             }
             g
         })
@@ -56,7 +56,11 @@ impl System {
 }
 
 fn quantity_of(index: usize) -> Quantity {
-    [Quantity::Displacement, Quantity::Velocity, Quantity::Acceleration][index]
+    [
+        Quantity::Displacement,
+        Quantity::Velocity,
+        Quantity::Acceleration,
+    ][index]
 }
 
 proptest! {
@@ -144,7 +148,12 @@ fn naive_and_fast_paths_agree() {
     assert!((fast.cost_before - naive.cost_before).abs() <= 1e-10 * fast.cost_before);
     assert!((fast.cost_after - naive.cost_after).abs() <= 1e-7 * fast.cost_after);
     for (a, b) in fast.modes.iter().zip(&naive.modes) {
-        assert!((a.pole - b.pole).norm() <= 1e-6 * a.pole.norm(), "{} vs {}", a.pole, b.pole);
+        assert!(
+            (a.pole - b.pole).norm() <= 1e-6 * a.pole.norm(),
+            "{} vs {}",
+            a.pole,
+            b.pole
+        );
         // Kaufman's normal matrix and the full one differ by a term of the noise's order.
         assert!((a.frequency_std_hz / b.frequency_std_hz - 1.0).abs() < 0.1);
         assert!((a.damping_ratio_std / b.damping_ratio_std - 1.0).abs() < 0.1);
@@ -201,22 +210,40 @@ fn relative(a: &[Complex64], b: &[Complex64]) -> f64 {
 #[test]
 fn state_space_model_reproduces_the_response_in_every_quantity() {
     let freq: Vec<f64> = (1..200).map(|k| k as f64 * 0.05).collect();
-    for data_quantity in [Quantity::Displacement, Quantity::Velocity, Quantity::Acceleration] {
+    for data_quantity in [
+        Quantity::Displacement,
+        Quantity::Velocity,
+        Quantity::Acceleration,
+    ] {
         let (s, frf) = small(data_quantity, 0.05, 9);
-        for residuals in [Residuals::None, Residuals::Lower, Residuals::Upper, Residuals::Both] {
+        for residuals in [
+            Residuals::None,
+            Residuals::Lower,
+            Residuals::Upper,
+            Residuals::Both,
+        ] {
             let mut options = RefineOptions::default();
             options.residuals = residuals;
             let r = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
-            for out in [Quantity::Displacement, Quantity::Velocity, Quantity::Acceleration] {
+            for out in [
+                Quantity::Displacement,
+                Quantity::Velocity,
+                Quantity::Acceleration,
+            ] {
                 let has_upper = r.upper.is_some();
                 match r.to_state_space(out) {
                     Ok(ss) => {
                         let g = frequency_response(&ss, &freq).unwrap();
                         let want = r.response(&freq, out);
                         let e = relative(&g, &want);
-                        assert!(e <= 1e-10, "{data_quantity} data, {residuals:?}, {out} out: {e:e}");
+                        assert!(
+                            e <= 1e-10,
+                            "{data_quantity} data, {residuals:?}, {out} out: {e:e}"
+                        );
                     }
-                    Err(EraError::InvalidParameter { name: "quantity", .. }) => {
+                    Err(EraError::InvalidParameter {
+                        name: "quantity", ..
+                    }) => {
                         assert!(has_upper && kappa(out) > kappa(data_quantity));
                     }
                     Err(e) => panic!("{e}"),
@@ -245,7 +272,11 @@ fn z_domain_model_is_the_zero_order_hold_of_its_state_space() {
     for (p, m) in s.poles().iter().zip(&r.modes) {
         assert!((m.pole - p).norm() <= 1e-9 * p.norm(), "{} vs {p}", m.pole);
     }
-    let ss = r.to_state_space(Quantity::Displacement).unwrap().c2d(ts).unwrap();
+    let ss = r
+        .to_state_space(Quantity::Displacement)
+        .unwrap()
+        .c2d(ts)
+        .unwrap();
     let g = frequency_response(&ss, &freq[1..]).unwrap();
     assert!(relative(&g, &r.response(&freq[1..], Quantity::Displacement)) <= 1e-10);
     assert!(matches!(
@@ -280,7 +311,14 @@ fn monte_carlo_spread_matches_the_predicted_standard_deviations() {
             .iter()
             .map(|v| v + rng.complex_normal() * sigma)
             .collect();
-        let frf = FrfData::new(clean.frequency_hz().to_vec(), 2, 2, values, clean.quantity()).unwrap();
+        let frf = FrfData::new(
+            clean.frequency_hz().to_vec(),
+            2,
+            2,
+            values,
+            clean.quantity(),
+        )
+        .unwrap();
         let r = refine(&frf, &s.poles(), &options, &mut |_, _| {}).unwrap();
         assert_eq!(r.modes.len(), modes);
         // σ² per real observation is half the complex variance.
@@ -295,15 +333,27 @@ fn monte_carlo_spread_matches_the_predicted_standard_deviations() {
     for m in 0..modes {
         let rf = std_of(&freqs[m]) / predicted_f[m];
         let rz = std_of(&zetas[m]) / predicted_z[m];
-        assert!((rf - 1.0).abs() <= 0.3, "mode {m}: frequency spread / predicted = {rf}");
-        assert!((rz - 1.0).abs() <= 0.3, "mode {m}: damping spread / predicted = {rz}");
+        assert!(
+            (rf - 1.0).abs() <= 0.3,
+            "mode {m}: frequency spread / predicted = {rf}"
+        );
+        assert!(
+            (rz - 1.0).abs() <= 0.3,
+            "mode {m}: damping spread / predicted = {rz}"
+        );
     }
 }
 
 #[test]
 fn coherence_of_one_is_the_uniform_fit() {
     let (s, frf) = small(Quantity::Acceleration, 0.05, 4);
-    let uniform = refine(&frf, &start_of(&s), &RefineOptions::default(), &mut |_, _| {}).unwrap();
+    let uniform = refine(
+        &frf,
+        &start_of(&s),
+        &RefineOptions::default(),
+        &mut |_, _| {},
+    )
+    .unwrap();
     let mut options = RefineOptions::default();
     options.weighting = Weighting::Coherence(vec![1.0; frf.values().len()]);
     let weighted = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
@@ -315,7 +365,9 @@ fn coherence_of_one_is_the_uniform_fit() {
     w[..frf.lines()].iter_mut().for_each(|x| *x = 0.01);
     options.weighting = Weighting::Coherence(w);
     let other = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
-    assert!((other.modes[0].pole - uniform.modes[0].pole).norm() > 1e-9 * uniform.modes[0].pole.norm());
+    assert!(
+        (other.modes[0].pole - uniform.modes[0].pole).norm() > 1e-9 * uniform.modes[0].pole.norm()
+    );
 }
 
 fn expect_invalid(r: era::Result<Refinement>, name: &str) {
@@ -330,7 +382,8 @@ fn expect_invalid(r: era::Result<Refinement>, name: &str) {
 fn bad_input_is_an_error_that_names_it() {
     let (s, frf) = small(Quantity::Acceleration, 0.0, 0);
     let start = start_of(&s);
-    let run = |start: &[Complex64], options: &RefineOptions| refine(&frf, start, options, &mut |_, _| {});
+    let run =
+        |start: &[Complex64], options: &RefineOptions| refine(&frf, start, options, &mut |_, _| {});
     let o = RefineOptions::default();
     expect_invalid(run(&[], &o), "start poles");
     expect_invalid(run(&[Complex64::new(f64::NAN, 1.0)], &o), "start poles");
@@ -355,17 +408,23 @@ fn bad_input_is_an_error_that_names_it() {
     expect_invalid(run(&start, &z), "real-modes");
     let mut w = o.clone();
     w.weighting = Weighting::Coherence(vec![1.0; 3]);
-    assert!(matches!(run(&start, &w), Err(EraError::ShapeMismatch { .. })));
+    assert!(matches!(
+        run(&start, &w),
+        Err(EraError::ShapeMismatch { .. })
+    ));
     w.weighting = Weighting::Coherence(vec![1.5; frf.values().len()]);
     expect_invalid(run(&start, &w), "coherence");
     w.weighting = Weighting::InverseVariance(vec![0.0; frf.values().len()]);
     expect_invalid(run(&start, &w), "variance");
     w.weighting = Weighting::Coherence(vec![0.0; frf.values().len()]);
     expect_invalid(run(&start, &w), "weighting");
-    let rect = ModalStructure::random(&ModalSpec { collocated: false, ..ModalSpec::new(2, 1, 2) })
-        .unwrap()
-        .frf(100, 0.1, Quantity::Velocity)
-        .unwrap();
+    let rect = ModalStructure::random(&ModalSpec {
+        collocated: false,
+        ..ModalSpec::new(2, 1, 2)
+    })
+    .unwrap()
+    .frf(100, 0.1, Quantity::Velocity)
+    .unwrap();
     let mut rc = o.clone();
     rc.reciprocal = true;
     expect_invalid(refine(&rect, &start, &rc, &mut |_, _| {}), "reciprocal");

@@ -27,10 +27,7 @@ pub(crate) struct Evaluation {
 /// An evaluation, or the column of the basis that is a combination of the others.
 pub(crate) enum Outcome {
     Ready(Evaluation),
-    Deficient {
-        column: usize,
-        mode: Option<usize>,
-    },
+    Deficient { column: usize, mode: Option<usize> },
 }
 
 pub(crate) type Evaluator = fn(&Problem, &[f64]) -> Result<Outcome>;
@@ -90,7 +87,10 @@ fn start_poles(
         }
         let mut s = if s0.im < 0.0 { s0.conj() } else { s0 };
         if s.im <= 1e-8 * s.norm() || s.norm() == 0.0 {
-            dropped.push((k, format!("a real pole ({:.6e} rad/s) is not a vibration mode", s.re)));
+            dropped.push((
+                k,
+                format!("a real pole ({:.6e} rad/s) is not a vibration mode", s.re),
+            ));
             continue;
         }
         if options.enforce_stability && s.re >= 0.0 {
@@ -150,6 +150,7 @@ pub(crate) fn run(
             }
             continue;
         };
+        let step = limit_step(step, &state.theta, problem.parameters.log_damping);
         let mut trial = state.theta.clone();
         for (t, d) in trial.iter_mut().zip(&step) {
             *t += d;
@@ -179,9 +180,7 @@ pub(crate) fn run(
                     break;
                 }
             }
-            Some(Outcome::Deficient {
-                mode: Some(m), ..
-            }) => {
+            Some(Outcome::Deficient { mode: Some(m), .. }) => {
                 // The step drives two poles onto each other: drop the one it names.
                 let s = problem.parameters.pole(&trial, m);
                 state.drop_mode(
@@ -224,6 +223,36 @@ struct Summary {
     converged: bool,
     cost_before: f64,
     fit_before: f64,
+}
+
+/// Largest step of a mode's frequency, in units of its `σ` (half the half-power
+/// bandwidth): the cost is far from quadratic beyond a resonance's width.
+const MAX_FREQUENCY_STEP: f64 = 2.0;
+/// Largest step of `ln σ` (a factor `e^0.7 ≈ 2` in damping).
+const MAX_LOG_DAMPING_STEP: f64 = 0.7;
+
+/// Shortens each mode's part of the step to the region where its linearisation holds,
+/// so that one badly predicted mode does not force `λ` up for all.
+fn limit_step(mut step: Vec<f64>, theta: &[f64], log_damping: bool) -> Vec<f64> {
+    for r in 0..theta.len() / 2 {
+        let sigma = if log_damping {
+            theta[2 * r].exp()
+        } else {
+            theta[2 * r].abs()
+        };
+        let damping_step = if log_damping {
+            step[2 * r].abs() / MAX_LOG_DAMPING_STEP
+        } else {
+            step[2 * r].abs() / (0.5 * sigma)
+        };
+        let frequency_step = step[2 * r + 1].abs() / (MAX_FREQUENCY_STEP * sigma);
+        let worst = damping_step.max(frequency_step);
+        if worst > 1.0 {
+            step[2 * r] /= worst;
+            step[2 * r + 1] /= worst;
+        }
+    }
+    step
 }
 
 /// `ω_d < 0` is the conjugate pole: keep the representative with `Im s > 0`.
@@ -295,11 +324,9 @@ fn settle(
                     dropped,
                 );
             }
-            Outcome::Deficient { column, mode: None } => {
-                return Err(EraError::Numerical(format!(
-                    "the residual term in basis column {column} is a combination of the modes' columns"
-                )))
-            }
+            Outcome::Deficient { column, mode: None } => return Err(EraError::Numerical(format!(
+                "the residual term in basis column {column} is a combination of the modes' columns"
+            ))),
         }
     }
 }
@@ -332,7 +359,11 @@ fn settle_ready(
             break;
         }
         if let Some(o) = (0..m).find(|&o| (poles[o] - s).norm() <= COALESCED * s.norm()) {
-            let weaker = if contributions[o] < contributions[m] { o } else { m };
+            let weaker = if contributions[o] < contributions[m] {
+                o
+            } else {
+                m
+            };
             victim = Some((
                 weaker,
                 format!(
@@ -408,7 +439,10 @@ fn finish(
             let residue = (0..q * p)
                 .map(|pair| {
                     if pm == 2 {
-                        Complex64::new(e.coefficients[(2 * r, pair)], e.coefficients[(2 * r + 1, pair)])
+                        Complex64::new(
+                            e.coefficients[(2 * r, pair)],
+                            e.coefficients[(2 * r + 1, pair)],
+                        )
                     } else {
                         Complex64::new(0.0, e.coefficients[(r, pair)])
                     }
@@ -474,7 +508,9 @@ fn covariance(jtj: &Mat<f64>, noise_variance: f64) -> Option<Mat<f64>> {
         return None;
     }
     let inv = jtj.partial_piv_lu().inverse();
-    let cov = Mat::from_fn(inv.nrows(), inv.ncols(), |i, j| noise_variance * inv[(i, j)]);
+    let cov = Mat::from_fn(inv.nrows(), inv.ncols(), |i, j| {
+        noise_variance * inv[(i, j)]
+    });
     (0..cov.nrows())
         .all(|i| (0..cov.ncols()).all(|j| cov[(i, j)].is_finite()))
         .then_some(cov)

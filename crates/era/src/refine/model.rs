@@ -341,11 +341,17 @@ impl Problem {
                     "the residues of a sampled (z-domain) model are not imaginary: real modes need the continuous model",
                 ));
             }
-            if let Some(&f) = freq[band.0..band.1].iter().find(|&&f| f * ts > 0.5 * (1.0 + 1e-9)) {
+            if let Some(&f) = freq[band.0..band.1]
+                .iter()
+                .find(|&&f| f * ts > 0.5 * (1.0 + 1e-9))
+            {
                 return Err(invalid(
                     "band",
                     format!("{}..{}", band.0, band.1),
-                    format!("{f} Hz is above the Nyquist frequency {} Hz of the sample time {ts} s", 0.5 / ts),
+                    format!(
+                        "{f} Hz is above the Nyquist frequency {} Hz of the sample time {ts} s",
+                        0.5 / ts
+                    ),
                 ));
             }
         }
@@ -432,8 +438,10 @@ impl Problem {
                         let mean = unit.iter().map(|&pair| data[pair][k]).sum::<Complex64>() / n;
                         rhs[(k, u)] = n.sqrt() * mean.re;
                         rhs[(nl + k, u)] = n.sqrt() * mean.im;
-                        block.cost_offset +=
-                            unit.iter().map(|&pair| (data[pair][k] - mean).norm_sqr()).sum::<f64>();
+                        block.cost_offset += unit
+                            .iter()
+                            .map(|&pair| (data[pair][k] - mean).norm_sqr())
+                            .sum::<f64>();
                     }
                     continue;
                 }

@@ -11,7 +11,10 @@ use faer::linalg::solvers::SolveLstsq;
 use faer::Mat;
 
 /// `r(θ)` and the coefficients (`columns × pairs`), or the deficient column.
-fn residual(problem: &Problem, theta: &[f64]) -> Result<std::result::Result<(Vec<f64>, Mat<f64>), Outcome>> {
+fn residual(
+    problem: &Problem,
+    theta: &[f64],
+) -> Result<std::result::Result<(Vec<f64>, Mat<f64>), Outcome>> {
     let poles = problem.parameters.poles(theta);
     let layout = &problem.layout;
     let n_col = layout.columns(poles.len());
