@@ -324,9 +324,11 @@ fn settle(
                     dropped,
                 );
             }
-            Outcome::Deficient { column, mode: None } => return Err(EraError::Numerical(format!(
+            Outcome::Deficient { column, mode: None } => {
+                return Err(EraError::Numerical(format!(
                 "the residual term in basis column {column} is a combination of the modes' columns"
-            ))),
+            )))
+            }
         }
     }
 }
@@ -347,7 +349,7 @@ fn settle_ready(
             victim = Some((m, "its pole became real".into()));
             break;
         }
-        if !(contributions[m] >= MIN_CONTRIBUTION) {
+        if contributions[m].is_nan() || contributions[m] < MIN_CONTRIBUTION {
             victim = Some((
                 m,
                 format!(

@@ -372,7 +372,7 @@ impl Refinement {
             let sv: Vec<f64> = (0..q.min(p)).map(|k| svd.S()[k].re).collect();
             let largest = sv.iter().copied().fold(0.0, f64::max);
             for (k, &sk) in sv.iter().enumerate() {
-                if !(sk > RESIDUE_RANK_TOLERANCE * largest) {
+                if sk.is_nan() || sk <= RESIDUE_RANK_TOLERANCE * largest {
                     continue;
                 }
                 let root = sk.sqrt();

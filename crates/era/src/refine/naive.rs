@@ -10,11 +10,11 @@ use crate::error::Result;
 use faer::linalg::solvers::SolveLstsq;
 use faer::Mat;
 
+/// The residual vector and the coefficients, or the outcome that stops the fit.
+type Projected = std::result::Result<(Vec<f64>, Mat<f64>), Outcome>;
+
 /// `r(θ)` and the coefficients (`columns × pairs`), or the deficient column.
-fn residual(
-    problem: &Problem,
-    theta: &[f64],
-) -> Result<std::result::Result<(Vec<f64>, Mat<f64>), Outcome>> {
+fn residual(problem: &Problem, theta: &[f64]) -> Result<Projected> {
     let poles = problem.parameters.poles(theta);
     let layout = &problem.layout;
     let n_col = layout.columns(poles.len());
@@ -27,7 +27,8 @@ fn residual(
             let qr = phi_b.qr();
             let rr = qr.thin_R();
             for c in 0..n_col {
-                if !(rr[(c, c)].abs() > DEFICIENT_COLUMN * phi_b.col(c).norm_l2()) {
+                let diagonal = rr[(c, c)].abs();
+                if diagonal.is_nan() || diagonal <= DEFICIENT_COLUMN * phi_b.col(c).norm_l2() {
                     let pm = layout.per_mode;
                     return Ok(Err(Outcome::Deficient {
                         column: c,

@@ -45,7 +45,8 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64]) -> Result<Outcome> {
         let r = qr.thin_R().to_owned();
         for c in 0..n_col {
             let norm = phi_b.col(c).norm_l2();
-            if !(r[(c, c)].abs() > DEFICIENT_COLUMN * norm) {
+            let diagonal = r[(c, c)].abs();
+            if diagonal.is_nan() || diagonal <= DEFICIENT_COLUMN * norm {
                 return Ok(Outcome::Deficient {
                     column: c,
                     mode: (c < poles.len() * pm).then_some(c / pm),
