@@ -46,6 +46,7 @@ pub mod markov;
 pub mod modal;
 pub mod preprocess;
 pub mod realize;
+pub mod refine;
 pub mod response;
 pub mod sim;
 pub mod stability;

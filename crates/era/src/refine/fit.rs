@@ -1,0 +1,519 @@
+//! The Levenberg–Marquardt driver shared by the fast and the naive evaluation: start
+//! poles, steps, the dropping of modes that collapse or coalesce, and the result with its
+//! uncertainties.
+
+use super::model::{basis, Problem, ResidualKind};
+use super::uncertainty::mode_std;
+use super::{RefineOptions, RefinedMode, Refinement};
+use crate::error::{EraError, Result};
+use crate::frf::FrfData;
+use faer::linalg::solvers::DenseSolveCore;
+use faer::Mat;
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+/// What an evaluation of the projected functional gives.
+pub(crate) struct Evaluation {
+    /// `‖r‖²`, weighted.
+    pub cost: f64,
+    /// `JᵀJ` over the pole parameters.
+    pub jtj: Mat<f64>,
+    /// `Jᵀr`.
+    pub jtr: Vec<f64>,
+    /// Linear coefficients, `columns × pairs`.
+    pub coefficients: Mat<f64>,
+}
+
+/// An evaluation, or the column of the basis that is a combination of the others.
+pub(crate) enum Outcome {
+    Ready(Evaluation),
+    Deficient { column: usize, mode: Option<usize> },
+}
+
+pub(crate) type Evaluator = fn(&Problem, &[f64]) -> Result<Outcome>;
+
+/// A mode whose share of the band's FRF norm falls below this has collapsed.
+pub const MIN_CONTRIBUTION: f64 = 1e-10;
+/// Two poles closer than this, relative to their modulus, have coalesced.
+pub const COALESCED: f64 = 1e-9;
+/// Cost below this fraction of the (weighted) data's squared norm is an exact fit.
+const EXACT_FIT: f64 = 1e-28;
+
+/// The active modes: their start indices and parameters.
+struct State {
+    ids: Vec<usize>,
+    theta: Vec<f64>,
+}
+
+impl State {
+    fn drop_mode(&mut self, m: usize, reason: String, dropped: &mut Vec<(usize, String)>) {
+        dropped.push((self.ids[m], reason));
+        self.ids.remove(m);
+        self.theta.drain(2 * m..2 * m + 2);
+    }
+}
+
+fn invalid(name: &'static str, value: String, reason: impl Into<String>) -> EraError {
+    EraError::InvalidParameter {
+        name,
+        value,
+        reason: reason.into(),
+    }
+}
+
+/// Start poles into the upper half plane (and the left one when stability is enforced);
+/// real poles and duplicates are dropped.
+fn start_poles(
+    start: &[Complex64],
+    options: &RefineOptions,
+    dropped: &mut Vec<(usize, String)>,
+) -> Result<(Vec<usize>, Vec<Complex64>)> {
+    if start.is_empty() {
+        return Err(invalid(
+            "start poles",
+            "none".into(),
+            "refinement needs at least one start pole",
+        ));
+    }
+    let mut ids = Vec::new();
+    let mut poles: Vec<Complex64> = Vec::new();
+    for (k, &s0) in start.iter().enumerate() {
+        if !(s0.re.is_finite() && s0.im.is_finite()) {
+            return Err(invalid(
+                "start poles",
+                format!("{s0}"),
+                format!("start pole {k} is not finite"),
+            ));
+        }
+        let mut s = if s0.im < 0.0 { s0.conj() } else { s0 };
+        if s.im <= 1e-8 * s.norm() || s.norm() == 0.0 {
+            dropped.push((
+                k,
+                format!("a real pole ({:.6e} rad/s) is not a vibration mode", s.re),
+            ));
+            continue;
+        }
+        if options.enforce_stability && s.re >= 0.0 {
+            // Reflect an unstable start pole; one on the axis gets ζ = 1e-4.
+            s.re = if s.re > 0.0 { -s.re } else { -1e-4 * s.im };
+        }
+        if let Some(other) = poles
+            .iter()
+            .position(|p| (p - s).norm() <= COALESCED * s.norm())
+        {
+            dropped.push((k, format!("a duplicate of start pole {}", ids[other])));
+            continue;
+        }
+        ids.push(k);
+        poles.push(s);
+    }
+    Ok((ids, poles))
+}
+
+/// Runs the fit with `evaluate` (fast or naive).
+pub(crate) fn run(
+    frf: &FrfData,
+    start: &[Complex64],
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+    evaluate: Evaluator,
+) -> Result<Refinement> {
+    let problem = Problem::new(frf, options)?;
+    let mut dropped = Vec::new();
+    let (ids, poles) = start_poles(start, options, &mut dropped)?;
+    problem.check_size(poles.len())?;
+    let mut state = State {
+        theta: problem.parameters.theta(&poles),
+        ids,
+    };
+    let weighted_norm2: f64 = problem
+        .blocks
+        .iter()
+        .map(|b| b.rhs.squared_norm_l2() + b.cost_offset)
+        .sum();
+    let mut current = settle(&problem, &mut state, evaluate, &mut dropped)?;
+    let cost_before = current.cost;
+    let fit_before = fit_of(&problem, &state.theta, &current.coefficients);
+    progress(0, current.cost);
+    let mut lambda = 1e-3;
+    let mut iterations = 0;
+    let mut converged = false;
+    while iterations < options.max_iterations {
+        if current.cost <= EXACT_FIT * weighted_norm2 {
+            converged = true;
+            break;
+        }
+        let Some(step) = marquardt_step(&current.jtj, &current.jtr, lambda) else {
+            lambda *= 4.0;
+            if lambda > 1e16 {
+                break;
+            }
+            continue;
+        };
+        let step = limit_step(step, &state.theta, problem.parameters.log_damping);
+        let mut trial = state.theta.clone();
+        for (t, d) in trial.iter_mut().zip(&step) {
+            *t += d;
+        }
+        normalise(&mut trial);
+        let outcome = if trial.iter().all(|t| t.is_finite()) {
+            Some(evaluate(&problem, &trial)?)
+        } else {
+            None
+        };
+        match outcome {
+            Some(Outcome::Ready(next)) if next.cost < current.cost => {
+                let relative = (current.cost - next.cost) / current.cost;
+                state.theta = trial;
+                current = next;
+                iterations += 1;
+                lambda = (lambda / 5.0).max(1e-15);
+                let before_checks = state.ids.len();
+                current = settle_ready(&problem, &mut state, current, evaluate, &mut dropped)?;
+                progress(iterations, current.cost);
+                if state.ids.len() != before_checks {
+                    lambda = 1e-3;
+                    continue;
+                }
+                if relative <= options.tolerance {
+                    converged = true;
+                    break;
+                }
+            }
+            Some(Outcome::Deficient { mode: Some(m), .. }) => {
+                // The step drives two poles onto each other: drop the one it names.
+                let s = problem.parameters.pole(&trial, m);
+                state.drop_mode(
+                    m,
+                    format!(
+                        "its pole coalesced with another at {:.6} Hz",
+                        s.norm() / (2.0 * PI)
+                    ),
+                    &mut dropped,
+                );
+                current = settle(&problem, &mut state, evaluate, &mut dropped)?;
+                lambda = 1e-3;
+            }
+            _ => {
+                lambda *= 4.0;
+                if lambda > 1e16 {
+                    // No step lowers the cost any more: a minimum to working precision.
+                    converged = true;
+                    break;
+                }
+            }
+        }
+    }
+    finish(
+        &problem,
+        state,
+        current,
+        dropped,
+        Summary {
+            iterations,
+            converged,
+            cost_before,
+            fit_before,
+        },
+    )
+}
+
+struct Summary {
+    iterations: usize,
+    converged: bool,
+    cost_before: f64,
+    fit_before: f64,
+}
+
+/// Largest step of a mode's frequency, in units of its `σ` (half the half-power
+/// bandwidth): the cost is far from quadratic beyond a resonance's width.
+const MAX_FREQUENCY_STEP: f64 = 2.0;
+/// Largest step of `ln σ` (a factor `e^0.7 ≈ 2` in damping).
+const MAX_LOG_DAMPING_STEP: f64 = 0.7;
+
+/// Shortens each mode's part of the step to the region where its linearisation holds,
+/// so that one badly predicted mode does not force `λ` up for all.
+fn limit_step(mut step: Vec<f64>, theta: &[f64], log_damping: bool) -> Vec<f64> {
+    for r in 0..theta.len() / 2 {
+        let sigma = if log_damping {
+            theta[2 * r].exp()
+        } else {
+            theta[2 * r].abs()
+        };
+        let damping_step = if log_damping {
+            step[2 * r].abs() / MAX_LOG_DAMPING_STEP
+        } else {
+            step[2 * r].abs() / (0.5 * sigma)
+        };
+        let frequency_step = step[2 * r + 1].abs() / (MAX_FREQUENCY_STEP * sigma);
+        let worst = damping_step.max(frequency_step);
+        if worst > 1.0 {
+            step[2 * r] /= worst;
+            step[2 * r + 1] /= worst;
+        }
+    }
+    step
+}
+
+/// `ω_d < 0` is the conjugate pole: keep the representative with `Im s > 0`.
+fn normalise(theta: &mut [f64]) {
+    for r in 0..theta.len() / 2 {
+        theta[2 * r + 1] = theta[2 * r + 1].abs();
+    }
+}
+
+/// `(JᵀJ + λ diag JᵀJ) δ = −Jᵀr` (Marquardt's scaling, with a floor on the diagonal).
+fn marquardt_step(jtj: &Mat<f64>, jtr: &[f64], lambda: f64) -> Option<Vec<f64>> {
+    let n = jtr.len();
+    let largest = (0..n).map(|k| jtj[(k, k)]).fold(0.0, f64::max);
+    if !(largest > 0.0 && largest.is_finite()) {
+        return None;
+    }
+    let mut m = jtj.clone();
+    for k in 0..n {
+        m[(k, k)] += lambda * jtj[(k, k)].max(1e-14 * largest);
+    }
+    let rhs = Mat::from_fn(n, 1, |k, _| -jtr[k]);
+    let step = match m.llt(faer::Side::Lower) {
+        Ok(llt) => {
+            use faer::linalg::solvers::Solve;
+            llt.solve(&rhs)
+        }
+        Err(_) => {
+            use faer::linalg::solvers::Solve;
+            m.partial_piv_lu().solve(&rhs)
+        }
+    };
+    let v: Vec<f64> = (0..n).map(|k| step[(k, 0)]).collect();
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
+/// Evaluates, dropping the modes that make the basis deficient, then checks for
+/// collapse.
+fn settle(
+    problem: &Problem,
+    state: &mut State,
+    evaluate: Evaluator,
+    dropped: &mut Vec<(usize, String)>,
+) -> Result<Evaluation> {
+    loop {
+        if state.ids.is_empty() {
+            return Err(invalid(
+                "start poles",
+                format!("{} dropped", dropped.len()),
+                format!(
+                    "every start pole was dropped: {}",
+                    dropped
+                        .iter()
+                        .map(|(k, why)| format!("pole {k}: {why}"))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                ),
+            ));
+        }
+        match evaluate(problem, &state.theta)? {
+            Outcome::Ready(e) => return settle_ready(problem, state, e, evaluate, dropped),
+            Outcome::Deficient { mode: Some(m), .. } => {
+                let s = problem.parameters.pole(&state.theta, m);
+                state.drop_mode(
+                    m,
+                    format!(
+                        "its pole coalesced with another at {:.6} Hz",
+                        s.norm() / (2.0 * PI)
+                    ),
+                    dropped,
+                );
+            }
+            Outcome::Deficient { column, mode: None } => {
+                return Err(EraError::Numerical(format!(
+                "the residual term in basis column {column} is a combination of the modes' columns"
+            )))
+            }
+        }
+    }
+}
+
+/// Drops collapsed, coalesced or real modes of a ready evaluation, re-evaluating after.
+fn settle_ready(
+    problem: &Problem,
+    state: &mut State,
+    e: Evaluation,
+    evaluate: Evaluator,
+    dropped: &mut Vec<(usize, String)>,
+) -> Result<Evaluation> {
+    let poles = problem.parameters.poles(&state.theta);
+    let contributions = contributions(problem, &poles, &e.coefficients);
+    let mut victim: Option<(usize, String)> = None;
+    for (m, s) in poles.iter().enumerate() {
+        if s.im <= 1e-8 * s.norm() {
+            victim = Some((m, "its pole became real".into()));
+            break;
+        }
+        if contributions[m].is_nan() || contributions[m] < MIN_CONTRIBUTION {
+            victim = Some((
+                m,
+                format!(
+                    "its contribution collapsed to {:.2e} of the data at {:.6} Hz",
+                    contributions[m],
+                    s.norm() / (2.0 * PI)
+                ),
+            ));
+            break;
+        }
+        if let Some(o) = (0..m).find(|&o| (poles[o] - s).norm() <= COALESCED * s.norm()) {
+            let weaker = if contributions[o] < contributions[m] {
+                o
+            } else {
+                m
+            };
+            victim = Some((
+                weaker,
+                format!(
+                    "its pole coalesced with another at {:.6} Hz",
+                    s.norm() / (2.0 * PI)
+                ),
+            ));
+            break;
+        }
+    }
+    match victim {
+        None => Ok(e),
+        Some((m, why)) => {
+            state.drop_mode(m, why, dropped);
+            settle(problem, state, evaluate, dropped)
+        }
+    }
+}
+
+/// Per mode, `‖Σ_pairs mode FRF‖ / ‖data‖` over the band (unweighted).
+fn contributions(problem: &Problem, poles: &[Complex64], coefficients: &Mat<f64>) -> Vec<f64> {
+    let phi = basis(&problem.layout, &problem.omega, poles);
+    let pm = problem.layout.per_mode;
+    let norm = problem.data_norm2.sqrt();
+    (0..poles.len())
+        .map(|r| {
+            let cols = phi.subcols(r * pm, pm);
+            let coef = coefficients.subrows(r * pm, pm);
+            (cols * coef).norm_l2() / norm
+        })
+        .collect()
+}
+
+/// `‖G − Ĝ‖/‖G‖` over the band, unweighted.
+fn fit_of(problem: &Problem, theta: &[f64], coefficients: &Mat<f64>) -> f64 {
+    let poles = problem.parameters.poles(theta);
+    let model = basis(&problem.layout, &problem.omega, &poles) * coefficients;
+    let nl = problem.omega.len();
+    let mut err = 0.0;
+    for (pair, data) in problem.data.iter().enumerate() {
+        for (k, g) in data.iter().enumerate() {
+            err += (g - Complex64::new(model[(k, pair)], model[(nl + k, pair)])).norm_sqr();
+        }
+    }
+    (err / problem.data_norm2).sqrt()
+}
+
+fn finish(
+    problem: &Problem,
+    state: State,
+    e: Evaluation,
+    dropped: Vec<(usize, String)>,
+    summary: Summary,
+) -> Result<Refinement> {
+    let (q, p) = (problem.outputs, problem.inputs);
+    let layout = &problem.layout;
+    let pm = layout.per_mode;
+    let poles = problem.parameters.poles(&state.theta);
+    let n_modes = poles.len();
+    let units: usize = problem.blocks.iter().map(|b| b.units.len()).sum();
+    let unknowns = state.theta.len() + layout.columns(n_modes) * units;
+    let noise_variance = if problem.observations > unknowns {
+        e.cost / (problem.observations - unknowns) as f64
+    } else {
+        f64::NAN
+    };
+    let covariance = covariance(&e.jtj, noise_variance);
+    let contributions = contributions(problem, &poles, &e.coefficients);
+    let mut modes: Vec<RefinedMode> = poles
+        .iter()
+        .enumerate()
+        .map(|(r, &s)| {
+            let residue = (0..q * p)
+                .map(|pair| {
+                    if pm == 2 {
+                        Complex64::new(
+                            e.coefficients[(2 * r, pair)],
+                            e.coefficients[(2 * r + 1, pair)],
+                        )
+                    } else {
+                        Complex64::new(0.0, e.coefficients[(r, pair)])
+                    }
+                })
+                .collect();
+            let block = covariance.as_ref().map(|c| {
+                [
+                    [c[(2 * r, 2 * r)], c[(2 * r, 2 * r + 1)]],
+                    [c[(2 * r + 1, 2 * r)], c[(2 * r + 1, 2 * r + 1)]],
+                ]
+            });
+            let (frequency_std_hz, damping_ratio_std) = match block {
+                Some(b) => mode_std(s, problem.parameters, b),
+                None => (f64::NAN, f64::NAN),
+            };
+            RefinedMode {
+                pole: s,
+                frequency_hz: s.norm() / (2.0 * PI),
+                damping_ratio: -s.re / s.norm(),
+                residue,
+                frequency_std_hz,
+                damping_ratio_std,
+                contribution: contributions[r],
+            }
+        })
+        .collect();
+    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    let mut lower = None;
+    let mut upper = None;
+    for (m, &(kind, _)) in layout.residuals.iter().enumerate() {
+        let row = n_modes * pm + m;
+        let mat = Mat::from_fn(q, p, |i, j| e.coefficients[(row, i * p + j)]);
+        match kind {
+            ResidualKind::Lower => lower = Some(mat),
+            ResidualKind::Upper => upper = Some(mat),
+        }
+    }
+    let mut dropped = dropped;
+    dropped.sort_by_key(|d| d.0);
+    Ok(Refinement {
+        fit_after: fit_of(problem, &state.theta, &e.coefficients),
+        modes,
+        lower,
+        upper,
+        dropped,
+        iterations: summary.iterations,
+        converged: summary.converged,
+        cost_before: summary.cost_before,
+        cost_after: e.cost,
+        fit_before: summary.fit_before,
+        noise_variance,
+        quantity: problem.quantity,
+        outputs: q,
+        inputs: p,
+        band: problem.band,
+        sample_time_s: problem.layout.sample_time_s,
+    })
+}
+
+/// `σ² (JᵀJ)⁻¹`, or `None` when it is not finite.
+fn covariance(jtj: &Mat<f64>, noise_variance: f64) -> Option<Mat<f64>> {
+    if !noise_variance.is_finite() {
+        return None;
+    }
+    let inv = jtj.partial_piv_lu().inverse();
+    let cov = Mat::from_fn(inv.nrows(), inv.ncols(), |i, j| {
+        noise_variance * inv[(i, j)]
+    });
+    (0..cov.nrows())
+        .all(|i| (0..cov.ncols()).all(|j| cov[(i, j)].is_finite()))
+        .then_some(cov)
+}

@@ -1,0 +1,475 @@
+//! Maximum-likelihood refinement of poles, residues and residual terms against the
+//! measured FRFs, starting from ERA's poles (the thesis's closing recommendation, §VI:
+//! ERA "fits the poles rather well, but is much more inaccurate in fitting the zeros").
+//!
+//! # The model
+//!
+//! The FRFs are modelled in continuous time as a sum of modes, each a pole pair
+//! `s_r = −σ_r + jω_r` (`σ_r > 0`, `ω_r > 0`) with a complex residue matrix `R_r` (q × p)
+//! of **displacement** per unit force:
+//!
+//! ```text
+//! G(jω) = Σ_r [ s_r^κ R_r/(jω − s_r) + s̄_r^κ R̄_r/(jω − s̄_r) ]  +  L (jω)^(κ−2)  +  U
+//! ```
+//!
+//! where `κ` = 0, 1, 2 for displacement, velocity or acceleration data. The modal sum is
+//! the strictly proper part of `(jω)^κ` times the receptance `Σ R_r/(jω − s_r) + c.c.`:
+//! since `(jω)^κ/(jω − s) = s^κ/(jω − s) + (a polynomial in jω)`, the two differ by a
+//! polynomial, which is zero for a mechanical structure except for the constant
+//! (`Σ 2Re(R_r s_r)`, the `D = CB` of acceleration output), and that constant is what `U`
+//! carries. Keeping the modal sum strictly proper is what makes the fitted model a
+//! proper state-space model for every quantity.
+//!
+//! The residual terms, real q × p matrices ([`Residuals`]):
+//! - **lower**, `L/(jω)²` in displacement, so `L (jω)^(κ−2)` in the data's quantity: the
+//!   mass line of modes below the band (rigid-body-like);
+//! - **upper**, `U`, a constant in the *data's* quantity: the residual flexibility of
+//!   modes above the band for displacement data, and the direct term `D` of velocity and
+//!   acceleration data. (The textbook upper residual of acceleration data, `−ω²F`, is not
+//!   proper and cannot be part of `(A, B, C, D)`.)
+//!
+//! For acceleration data both terms are constants: with [`Residuals::Both`] the constant
+//! is fitted once and reported as `upper`.
+//!
+//! # The fit: variable projection
+//!
+//! For fixed poles the model is linear in the residues and residual matrices, with one
+//! real basis `Φ(θ)` (`2L` rows: real parts over imaginary parts) shared by every
+//! output/input pair: `Re R_r` multiplies `g(s) + g(s̄)` and `Im R_r` multiplies
+//! `j(g(s) − g(s̄))`, `g(s) = s^κ/(jω − s)`. The cost
+//!
+//! ```text
+//! F(θ) = Σ_pairs ‖W(y − Φ(θ) c)‖²,   c = (WΦ)⁺ W y
+//! ```
+//!
+//! depends on the pole parameters `θ = (x_r, ω_r)` alone (Golub & Pereyra 1973, 2003),
+//! with `x_r = ln σ_r` when stability is enforced (so `σ_r > 0` always) or `x_r = σ_r`.
+//! Levenberg–Marquardt (Marquardt 1963, with his diagonal scaling) minimises it with
+//! Kaufman's (1975) simplified Jacobian `J = −P⊥ (∂Φ/∂θ) c`; [`varpro`] says how one QR
+//! per block and a few Gram matrices give `JᵀJ` and `Jᵀr` without forming `J`.
+//! [`refine_naive`] is the reference: the same driver with a central-difference Jacobian
+//! of the projected residual and a dense solve per pair.
+//!
+//! Options: reciprocity (`R_r = R_rᵀ`, and `L`, `U` symmetric: the pairs `(i, j)` and
+//! `(j, i)` share their coefficients, a linear constraint that keeps the problem
+//! separable; the rank-one form `ψψᵀ` is bilinear and is *not* imposed), real normal
+//! modes (`R_r = jX_r` with `X_r` real: proportionally damped modes, whose receptance
+//! residue is `φφᵀ/(2jω_d)`), and weighting by coherence (`w = γ²`) or by inverse
+//! variance (`w = 1/var`) per pair and line.
+//!
+//! A mode is dropped, and the reason recorded in [`Refinement::dropped`], when its
+//! share of the band's FRF norm falls below [`MIN_CONTRIBUTION`], when its pole
+//! coalesces with another (closer than [`COALESCED`] relative, or its basis columns
+//! become a combination of the others'), or when its pole becomes real.
+//!
+//! Each mode's part of a step is shortened to within `2σ_r` in frequency and a factor
+//! `e^0.7` in damping: beyond a resonance's width the cost is far from quadratic, and
+//! without the limit one badly predicted mode forces `λ` up for all.
+//!
+//! # Sampled data: the z-domain model
+//!
+//! FRFs computed from a zero-order-hold discrete model (the truth model's,
+//! docs/design.md §2) are not those of any continuous pole–residue model: the hold
+//! delays and folds them, and a continuous fit is biased (by up to about 100 Hz in a
+//! truth-model frequency with 15 % noise, where ERA's error is about 10 Hz). With [`RefineOptions::sample_time_s`] the model
+//! is the hold's image instead,
+//!
+//! ```text
+//! G(z) = Σ_r [ R_r/(z − e^(s_r Ts)) + R̄_r/(z − e^(s̄_r Ts)) ]  +  U  +  L·H_(κ−2)(z),   z = e^(jωTs)
+//! ```
+//!
+//! with the same pole parameters (so `σ_r > 0` is still the stability constraint),
+//! residues `R_r` of the data's quantity in `z`, and `H_0 = 1`, `H_(−1) = Ts/(z − 1)`,
+//! `H_(−2) = Ts²(z + 1)/(2(z − 1)²)`, the hold's images of `1`, `1/s` and `1/s²`.
+//!
+//! # The model as a state-space model
+//!
+//! [`Refinement::to_state_space`] realises the fit in real modal block form. A mode with
+//! residue `R' = s^κ' R` of the output quantity `κ'` is split by its SVD into rank-one
+//! terms `u vᵀ` (singular values below `1e-12` of the largest are left out); each is two
+//! states with
+//!
+//! ```text
+//! A = [ Re s  Im s ; −Im s  Re s ],  B = √2 [ Re vᵀ ; −Im vᵀ ],  C = √2 [ Re u  Im u ]
+//! ```
+//!
+//! so that `C (jωI − A)⁻¹ B = u vᵀ/(jω − s) + ū v̄ᵀ/(jω − s̄)`. A noise-free fit of a
+//! structure gives rank-one residues and two states per mode; a noisy one up to
+//! `2 min(q, p)`. The residual terms: a term `K (jω)^0` goes into `D`; a term
+//! `K/(jω)^m` (`m` = 1, 2) is `m·p` states at `s = 0`, an integrator chain per input
+//! (`ẋ₁ = x₂, …, ẋ_m = u_j`, output `K x₁`). So for displacement data the lower residual
+//! is a double integrator and the upper one `D`; for acceleration data both are in `D`.
+//!
+//! A z-domain fit is realised the same way in `z` (blocks of `e^(sTs)`, `B_d`), and
+//! returned as the continuous model whose `c2d(Ts)` it is: per block
+//! `B_c = A_c (A_d − I)⁻¹ B_d`, which for the 2 × 2 block of a complex number is the
+//! multiplication of `v` by `μ = s/(e^(sTs) − 1)`; the integrator chains are their own
+//! continuous originals.
+//!
+//! # Uncertainty
+//!
+//! See [`uncertainty`]: `σ² (JᵀJ)⁻¹` at the optimum, propagated to frequency and damping.
+//!
+//! # Why hand-written
+//!
+//! No Rust crate does separable least squares; the structure that makes it fast here
+//! (one basis for all q·p pairs, Jacobian columns touching only their mode's columns) is
+//! specific to the pole–residue model. Every QR, product and solve is `faer`'s.
+//!
+//! References: G. H. Golub, V. Pereyra, "The differentiation of pseudo-inverses and
+//! nonlinear least squares problems whose variables separate", SIAM J. Numer. Anal. 10,
+//! 1973, and "Separable nonlinear least squares: the variable projection method and its
+//! applications", Inverse Problems 19, 2003; L. Kaufman, "A variable projection method
+//! for solving separable nonlinear least squares problems", BIT 15, 1975;
+//! D. W. Marquardt, SIAM J. Appl. Math. 11, 1963; the LSFD estimator of modal analysis
+//! (Peeters et al., "The PolyMAX frequency-domain method", Shock Vib. 11, 2004).
+
+mod fit;
+mod model;
+mod naive;
+pub mod uncertainty;
+pub mod varpro;
+
+pub use fit::{COALESCED, MIN_CONTRIBUTION};
+
+use crate::error::{EraError, Result};
+use crate::frf::{FrfData, Quantity};
+use crate::statespace::{StateSpace, TimeDomain};
+use faer::Mat;
+use model::{order, partial_fraction, power, residual_factor};
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+/// Which residual terms the model has (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Residuals {
+    /// Modes only.
+    None,
+    /// `L/(jω)²` in displacement: modes below the band.
+    Lower,
+    /// `U`, constant in the data's quantity.
+    Upper,
+    /// Both (for acceleration data, one constant).
+    #[default]
+    Both,
+}
+
+/// How the pairs and lines are weighted in the cost.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Weighting {
+    /// Every line and pair alike.
+    #[default]
+    Uniform,
+    /// Ordinary (or multiple) coherence `γ²` in [0, 1], `[output][input][line]` like
+    /// [`FrfData::values`]: the squared error of a line is weighted by `γ²`.
+    Coherence(Vec<f64>),
+    /// Variance of each FRF value, `[output][input][line]`: weight `1/var`.
+    InverseVariance(Vec<f64>),
+}
+
+/// Options of [`refine`].
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct RefineOptions {
+    /// Residual terms (default [`Residuals::Both`]).
+    pub residuals: Residuals,
+    /// Symmetric residues and residual matrices (square sets; default false).
+    pub reciprocal: bool,
+    /// Purely imaginary receptance residues (real normal modes; default false).
+    pub real_modes: bool,
+    /// Keep `Re s < 0` by the parameter `ln σ` (default true).
+    pub enforce_stability: bool,
+    /// Levenberg–Marquardt iterations at most (default 100).
+    pub max_iterations: usize,
+    /// Converged when an accepted step lowers the cost by less than this fraction
+    /// (default 1e-6: with noise, smaller decreases only move the parameters that the
+    /// data does not determine).
+    pub tolerance: f64,
+    /// Lines fitted, `first..end` (0-based, end exclusive); default every line above 0 Hz.
+    pub band: Option<(usize, usize)>,
+    /// Weighting (default uniform).
+    pub weighting: Weighting,
+    /// `Some(Ts)`: fit the zero-order-hold image of the model, `z = e^(jωTs)` (module
+    /// doc), for FRFs of a sampled system such as the truth model's; default `None`
+    /// (continuous).
+    pub sample_time_s: Option<f64>,
+}
+
+impl Default for RefineOptions {
+    fn default() -> Self {
+        RefineOptions {
+            residuals: Residuals::Both,
+            reciprocal: false,
+            real_modes: false,
+            enforce_stability: true,
+            max_iterations: 100,
+            tolerance: 1e-6,
+            band: None,
+            weighting: Weighting::Uniform,
+            sample_time_s: None,
+        }
+    }
+}
+
+/// One refined mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefinedMode {
+    /// Continuous pole, `Im s > 0`.
+    pub pole: Complex64,
+    /// `|s|/2π`, Hz.
+    pub frequency_hz: f64,
+    /// `−Re s/|s|` (a fraction).
+    pub damping_ratio: f64,
+    /// Receptance residue `R_r`, q × p row-major (`[output][input]`); in a z-domain fit
+    /// the residue of the data's quantity in `z`.
+    pub residue: Vec<Complex64>,
+    /// Standard deviation of the frequency, Hz (NaN when the fit has no spare degrees
+    /// of freedom or a singular normal matrix).
+    pub frequency_std_hz: f64,
+    /// Standard deviation of the damping ratio.
+    pub damping_ratio_std: f64,
+    /// The mode's share of the band's FRF norm, `‖G_r‖/‖G‖`.
+    pub contribution: f64,
+}
+
+/// The result of [`refine`]: the fitted model and how the fit went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refinement {
+    /// Modes, by ascending frequency.
+    pub modes: Vec<RefinedMode>,
+    /// Lower residual `L` (q × p), when fitted.
+    pub lower: Option<Mat<f64>>,
+    /// Upper residual `U` (q × p), when fitted.
+    pub upper: Option<Mat<f64>>,
+    /// Start poles dropped (0-based index into the start poles) and why.
+    pub dropped: Vec<(usize, String)>,
+    /// Accepted Levenberg–Marquardt steps.
+    pub iterations: usize,
+    /// Whether the cost stopped decreasing (rather than the iterations running out).
+    pub converged: bool,
+    /// Weighted cost `Σ‖W(y − ŷ)‖²` at the start poles.
+    pub cost_before: f64,
+    /// Weighted cost at the end.
+    pub cost_after: f64,
+    /// `‖G − Ĝ‖/‖G‖` over the band at the start poles.
+    pub fit_before: f64,
+    /// `‖G − Ĝ‖/‖G‖` over the band at the end.
+    pub fit_after: f64,
+    /// `σ²` per real observation, `cost/(observations − unknowns)`.
+    pub noise_variance: f64,
+    /// The data's quantity.
+    pub quantity: Quantity,
+    /// Outputs `q`.
+    pub outputs: usize,
+    /// Inputs `p`.
+    pub inputs: usize,
+    /// Lines fitted, `first..end`.
+    pub band: (usize, usize),
+    /// The sample time of a z-domain fit ([`RefineOptions::sample_time_s`]).
+    pub sample_time_s: Option<f64>,
+}
+
+/// Refines `start_poles` (continuous, one per mode; conjugates, real poles and
+/// duplicates are sorted out) against `frf` by variable projection with an analytic
+/// Jacobian (module doc). `progress(iteration, cost)` is called after every accepted
+/// step (and with 0 at the start).
+///
+/// # Errors
+/// [`EraError::InvalidParameter`] for no or non-finite start poles, a bad band,
+/// reciprocity of a non-square set, bad weights, too few lines for the unknowns, or
+/// when every start pole is dropped; [`EraError::ShapeMismatch`] for weights of the
+/// wrong length; [`EraError::AllZero`]; [`EraError::Limit`].
+pub fn refine(
+    frf: &FrfData,
+    start_poles: &[Complex64],
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Refinement> {
+    fit::run(frf, start_poles, options, progress, varpro::evaluate)
+}
+
+/// [`refine`] with a central-difference Jacobian and a dense solve per pair: the
+/// reference of the fast path. Slow: for small sets and tests.
+///
+/// # Errors
+/// As [`refine`].
+pub fn refine_naive(
+    frf: &FrfData,
+    start_poles: &[Complex64],
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Refinement> {
+    fit::run(frf, start_poles, options, progress, naive::evaluate)
+}
+
+/// Singular values of a mode's residue below this fraction of its largest are left out
+/// of the state-space model.
+pub const RESIDUE_RANK_TOLERANCE: f64 = 1e-12;
+
+impl Refinement {
+    /// The model's FRF of `quantity` at `frequency_hz`, `[output][input][line]`:
+    /// `Σ_r [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + U (jω)^(κ'−κ)` with `κ'` the order
+    /// of `quantity` and `κ` the data's (module doc). A negative power at 0 Hz is
+    /// infinite. A z-domain fit gives `Σ_r [R/(z − e^(sTs)) + c.c.]` plus the residual
+    /// terms' zero-order-hold images, of the data's quantity only.
+    ///
+    /// # Panics
+    /// For a z-domain fit and a `quantity` other than the data's.
+    #[track_caller]
+    pub fn response(&self, frequency_hz: &[f64], quantity: Quantity) -> Vec<Complex64> {
+        let (q, p, nl) = (self.outputs, self.inputs, frequency_hz.len());
+        let k_out = order(quantity);
+        let k_data = order(self.quantity);
+        let ts = self.sample_time_s;
+        assert!(
+            ts.is_none() || quantity == self.quantity,
+            "a z-domain refinement has only the data's quantity"
+        );
+        let mut out = vec![Complex64::new(0.0, 0.0); q * p * nl];
+        for (k, f) in frequency_hz.iter().enumerate() {
+            let w = 2.0 * PI * f;
+            let jw = Complex64::new(0.0, w);
+            for mode in &self.modes {
+                let s = mode.pole;
+                let (a, b) = match ts {
+                    Some(_) => (
+                        partial_fraction(s, w, k_out, ts).0,
+                        partial_fraction(s.conj(), w, k_out, ts).0,
+                    ),
+                    None => (
+                        power(s, k_out) / (jw - s),
+                        power(s.conj(), k_out) / (jw - s.conj()),
+                    ),
+                };
+                for pair in 0..q * p {
+                    let r = mode.residue[pair];
+                    out[pair * nl + k] += r * a + r.conj() * b;
+                }
+            }
+            for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
+                if let Some(m) = term {
+                    let factor = residual_factor(w, e, ts);
+                    for i in 0..q {
+                        for j in 0..p {
+                            out[(i * p + j) * nl + k] += factor * m[(i, j)];
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The fit as a continuous state-space model whose output is `quantity`, in real
+    /// modal block form, with the residual terms as `D` and integrator states (module
+    /// doc). Its frequency response is [`Refinement::response`] to round-off (and to the
+    /// residue rank truncation, [`RESIDUE_RANK_TOLERANCE`]).
+    ///
+    /// # Errors
+    /// [`EraError::InvalidParameter`] when `quantity` is a derivative of the data's and
+    /// an upper residual is present (`U (jω)^(κ'−κ)` is not proper);
+    /// [`EraError::Numerical`] when an SVD fails.
+    pub fn to_state_space(&self, quantity: Quantity) -> Result<StateSpace> {
+        let (q, p) = (self.outputs, self.inputs);
+        let k_out = order(quantity);
+        let k_data = order(self.quantity);
+        if self.sample_time_s.is_some() && quantity != self.quantity {
+            return Err(EraError::InvalidParameter {
+                name: "quantity",
+                value: quantity.name().into(),
+                reason: format!(
+                    "a z-domain refinement models only the data's quantity, {}",
+                    self.quantity
+                ),
+            });
+        }
+        // Rank-one terms (pole, u, v) of every mode.
+        let mut terms: Vec<(Complex64, Vec<Complex64>, Vec<Complex64>)> = Vec::new();
+        for mode in &self.modes {
+            let s = mode.pole;
+            // The z-domain residue is of the data's quantity already.
+            let scale = match self.sample_time_s {
+                Some(_) => Complex64::new(1.0, 0.0),
+                None => power(s, k_out),
+            };
+            let r = Mat::from_fn(q, p, |i, j| scale * mode.residue[i * p + j]);
+            let svd = r
+                .thin_svd()
+                .map_err(|e| EraError::Numerical(format!("SVD of a residue: {e:?}")))?;
+            let sv: Vec<f64> = (0..q.min(p)).map(|k| svd.S()[k].re).collect();
+            let largest = sv.iter().copied().fold(0.0, f64::max);
+            for (k, &sk) in sv.iter().enumerate() {
+                if sk.is_nan() || sk <= RESIDUE_RANK_TOLERANCE * largest {
+                    continue;
+                }
+                let root = sk.sqrt();
+                let u = (0..q).map(|i| svd.U()[(i, k)] * root).collect();
+                // z-domain: B_c = A_c (A_d − I)⁻¹ B_d, which for the 2 × 2 block of a
+                // complex number is multiplication by μ = s/(e^(sTs) − 1).
+                let mu = match self.sample_time_s {
+                    Some(ts) => s / ((s * ts).exp() - 1.0),
+                    None => Complex64::new(1.0, 0.0),
+                };
+                let v = (0..p).map(|j| svd.V()[(j, k)].conj() * root * mu).collect();
+                terms.push((s, u, v));
+            }
+        }
+        let mut chains: Vec<(usize, &Mat<f64>)> = Vec::new();
+        let mut d = Mat::<f64>::zeros(q, p);
+        for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
+            let Some(m) = term else { continue };
+            match e {
+                0 => d += m,
+                e if e < 0 => chains.push(((-e) as usize, m)),
+                _ => {
+                    return Err(EraError::InvalidParameter {
+                        name: "quantity",
+                        value: quantity.name().into(),
+                        reason: format!(
+                            "the upper residual of {} data times (jω)^{e} is not proper: ask for {} or an integral of it",
+                            self.quantity, self.quantity
+                        ),
+                    })
+                }
+            }
+        }
+        let n = 2 * terms.len() + chains.iter().map(|(m, _)| m * p).sum::<usize>();
+        crate::limits::STATES.check("refined model states", n as u64)?;
+        let mut a = Mat::<f64>::zeros(n, n);
+        let mut b = Mat::<f64>::zeros(n, p);
+        let mut c = Mat::<f64>::zeros(q, n);
+        let root2 = 2f64.sqrt();
+        for (t, (s, u, v)) in terms.iter().enumerate() {
+            let x = 2 * t;
+            a[(x, x)] = s.re;
+            a[(x, x + 1)] = s.im;
+            a[(x + 1, x)] = -s.im;
+            a[(x + 1, x + 1)] = s.re;
+            for j in 0..p {
+                b[(x, j)] = root2 * v[j].re;
+                b[(x + 1, j)] = -root2 * v[j].im;
+            }
+            for i in 0..q {
+                c[(i, x)] = root2 * u[i].re;
+                c[(i, x + 1)] = root2 * u[i].im;
+            }
+        }
+        let mut x = 2 * terms.len();
+        for (m, k) in chains {
+            for j in 0..p {
+                for t in 0..m {
+                    if t + 1 < m {
+                        a[(x + t, x + t + 1)] = 1.0;
+                    } else {
+                        b[(x + t, j)] = 1.0;
+                    }
+                }
+                for i in 0..q {
+                    c[(i, x)] = k[(i, j)];
+                }
+                x += m;
+            }
+        }
+        Ok(StateSpace::new(a, b, c, d, TimeDomain::Continuous))
+    }
+}

@@ -1,0 +1,547 @@
+//! The pole–residue model and its linear basis: which real columns the residues and
+//! residual terms multiply, their derivatives with respect to the poles, and the data of
+//! the fit arranged in blocks that share one basis.
+
+use super::{RefineOptions, Residuals, Weighting};
+use crate::error::{EraError, Result};
+use crate::frf::{FrfData, Quantity};
+use faer::Mat;
+use num_complex::Complex64;
+use std::f64::consts::PI;
+
+/// `κ`: the data is `(jω)^κ` times displacement.
+pub(crate) fn order(quantity: Quantity) -> i32 {
+    match quantity {
+        Quantity::Displacement => 0,
+        Quantity::Velocity => 1,
+        Quantity::Acceleration => 2,
+    }
+}
+
+/// `z^n` for a small integer `n ≥ 0` by repeated products (exact for `n ≤ 2`).
+pub(crate) fn power(z: Complex64, n: i32) -> Complex64 {
+    (0..n).fold(Complex64::new(1.0, 0.0), |acc, _| acc * z)
+}
+
+/// `(jω)^e` for `e ∈ {−2, −1, 0}` (the residual terms), also at other small `e`.
+pub(crate) fn jw_power(omega: f64, e: i32) -> Complex64 {
+    Complex64::new(0.0, omega).powi(e)
+}
+
+/// The residual term `(jω)^e`, or in the z-domain its zero-order-hold image: `1`,
+/// `Ts/(z − 1)` for `1/s`, `Ts²(z + 1)/(2(z − 1)²)` for `1/s²`.
+pub(crate) fn residual_factor(omega: f64, e: i32, sample_time_s: Option<f64>) -> Complex64 {
+    match sample_time_s {
+        None => jw_power(omega, e),
+        Some(ts) => {
+            let z = Complex64::from_polar(1.0, omega * ts);
+            match e {
+                -1 => ts / (z - 1.0),
+                -2 => ts * ts * (z + 1.0) / (2.0 * (z - 1.0) * (z - 1.0)),
+                _ => Complex64::new(1.0, 0.0),
+            }
+        }
+    }
+}
+
+/// Which residual term a basis column carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ResidualKind {
+    Lower,
+    Upper,
+}
+
+/// The columns of the linear problem: per mode `per_mode` real columns (2: `Re R`,
+/// `Im R`; 1 with real modes: `Im R`), then one column per residual term.
+#[derive(Debug, Clone)]
+pub(crate) struct Layout {
+    pub kappa: i32,
+    /// `Some(Ts)`: the zero-order-hold (z-domain) model, `z = e^(jωTs)`.
+    pub sample_time_s: Option<f64>,
+    pub per_mode: usize,
+    /// `(kind, exponent e of (jω)^e in the data's quantity)`.
+    pub residuals: Vec<(ResidualKind, i32)>,
+}
+
+impl Layout {
+    pub fn new(quantity: Quantity, options: &RefineOptions) -> Self {
+        let kappa = order(quantity);
+        let lower = (ResidualKind::Lower, kappa - 2);
+        let upper = (ResidualKind::Upper, 0);
+        let residuals = match options.residuals {
+            Residuals::None => vec![],
+            Residuals::Lower => vec![lower],
+            Residuals::Upper => vec![upper],
+            // For acceleration data both terms are a constant: fitted once, as `upper`.
+            Residuals::Both if kappa == 2 => vec![upper],
+            Residuals::Both => vec![lower, upper],
+        };
+        Layout {
+            kappa,
+            sample_time_s: options.sample_time_s,
+            per_mode: if options.real_modes { 1 } else { 2 },
+            residuals,
+        }
+    }
+    pub fn columns(&self, modes: usize) -> usize {
+        modes * self.per_mode + self.residuals.len()
+    }
+}
+
+/// `g(s) = s^κ/(jω − s)` and `g'(s) = κ s^(κ−1)/(jω − s) + s^κ/(jω − s)²`; in the
+/// z-domain `g = 1/(z − e^(sTs))`, `g' = Ts e^(sTs)/(z − e^(sTs))²`.
+pub(crate) fn partial_fraction(
+    s: Complex64,
+    omega: f64,
+    kappa: i32,
+    sample_time_s: Option<f64>,
+) -> (Complex64, Complex64) {
+    if let Some(ts) = sample_time_s {
+        let z = Complex64::from_polar(1.0, omega * ts);
+        let lambda = (s * ts).exp();
+        let inv = 1.0 / (z - lambda);
+        return (inv, ts * lambda * inv * inv);
+    }
+    let inv = 1.0 / (Complex64::new(0.0, omega) - s);
+    let sk = power(s, kappa);
+    let g = sk * inv;
+    let dg = if kappa == 0 {
+        g * inv
+    } else {
+        f64::from(kappa) * power(s, kappa - 1) * inv + g * inv
+    };
+    (g, dg)
+}
+
+/// The mode's columns at one line: `Re R` multiplies `g(s) + g(s̄)`, `Im R` multiplies
+/// `j(g(s) − g(s̄))`, so that `R g(s) + R̄ g(s̄) = Re R·(…) + Im R·(…)`.
+fn mode_columns(s: Complex64, omega: f64, layout: &Layout) -> [Complex64; 2] {
+    let j = Complex64::new(0.0, 1.0);
+    let (g1, _) = partial_fraction(s, omega, layout.kappa, layout.sample_time_s);
+    let (g2, _) = partial_fraction(s.conj(), omega, layout.kappa, layout.sample_time_s);
+    [g1 + g2, j * (g1 - g2)]
+}
+
+/// Derivatives of the two mode columns for `ds/dθ = delta` (and `ds̄/dθ = conj(delta)`).
+fn mode_column_derivatives(
+    s: Complex64,
+    omega: f64,
+    layout: &Layout,
+    delta: Complex64,
+) -> [Complex64; 2] {
+    let j = Complex64::new(0.0, 1.0);
+    let (_, d1) = partial_fraction(s, omega, layout.kappa, layout.sample_time_s);
+    let (_, d2) = partial_fraction(s.conj(), omega, layout.kappa, layout.sample_time_s);
+    let (a, b) = (d1 * delta, d2 * delta.conj());
+    [a + b, j * (a - b)]
+}
+
+/// The nonlinear parameters of one mode: `s = −σ + jω_d` with `x = ln σ` (stability
+/// enforced) or `x = σ`, and `ω_d`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PoleParameters {
+    pub log_damping: bool,
+}
+
+impl PoleParameters {
+    pub fn pole(&self, theta: &[f64], r: usize) -> Complex64 {
+        let x = theta[2 * r];
+        let sigma = if self.log_damping { x.exp() } else { x };
+        Complex64::new(-sigma, theta[2 * r + 1])
+    }
+    pub fn poles(&self, theta: &[f64]) -> Vec<Complex64> {
+        (0..theta.len() / 2).map(|r| self.pole(theta, r)).collect()
+    }
+    /// `θ` of poles (which must have `Re s < 0` when the damping is logarithmic).
+    pub fn theta(&self, poles: &[Complex64]) -> Vec<f64> {
+        poles
+            .iter()
+            .flat_map(|s| {
+                let sigma = -s.re;
+                [if self.log_damping { sigma.ln() } else { sigma }, s.im]
+            })
+            .collect()
+    }
+    /// `ds/dθ` for the damping parameter and the frequency parameter of pole `s`.
+    pub fn deltas(&self, s: Complex64) -> [Complex64; 2] {
+        let d_sigma = if self.log_damping { s.re } else { -1.0 };
+        [Complex64::new(d_sigma, 0.0), Complex64::new(0.0, 1.0)]
+    }
+}
+
+/// Real basis, `2L × columns`: rows `0..L` the real parts, `L..2L` the imaginary parts.
+pub(crate) fn basis(layout: &Layout, omega: &[f64], poles: &[Complex64]) -> Mat<f64> {
+    let lines = omega.len();
+    let cols = layout.columns(poles.len());
+    let mut out = Mat::<f64>::zeros(2 * lines, cols);
+    let pm = layout.per_mode;
+    for (r, &s) in poles.iter().enumerate() {
+        for (k, &w) in omega.iter().enumerate() {
+            let c = mode_columns(s, w, layout);
+            for local in 0..pm {
+                let v = c[local + 2 - pm];
+                out[(k, r * pm + local)] = v.re;
+                out[(lines + k, r * pm + local)] = v.im;
+            }
+        }
+    }
+    for (m, &(_, e)) in layout.residuals.iter().enumerate() {
+        let col = poles.len() * pm + m;
+        for (k, &w) in omega.iter().enumerate() {
+            let v = residual_factor(w, e, layout.sample_time_s);
+            out[(k, col)] = v.re;
+            out[(lines + k, col)] = v.im;
+        }
+    }
+    out
+}
+
+/// Derivative columns, `2L × (2N·per_mode)`: column `(2r + t)·per_mode + c` is the
+/// derivative of mode `r`'s column `c` with respect to its parameter `t` (0: damping,
+/// 1: frequency).
+pub(crate) fn basis_derivatives(
+    layout: &Layout,
+    parameters: PoleParameters,
+    omega: &[f64],
+    poles: &[Complex64],
+) -> Mat<f64> {
+    let lines = omega.len();
+    let pm = layout.per_mode;
+    let mut out = Mat::<f64>::zeros(2 * lines, 2 * poles.len() * pm);
+    for (r, &s) in poles.iter().enumerate() {
+        for (t, delta) in parameters.deltas(s).into_iter().enumerate() {
+            for (k, &w) in omega.iter().enumerate() {
+                let c = mode_column_derivatives(s, w, layout, delta);
+                for local in 0..pm {
+                    let v = c[local + 2 - pm];
+                    let col = (2 * r + t) * pm + local;
+                    out[(k, col)] = v.re;
+                    out[(lines + k, col)] = v.im;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Pairs that share one coefficient vector (one pair, or `(i, j)` and `(j, i)` when
+/// reciprocal), fitted against one stacked basis.
+#[derive(Debug, Clone)]
+pub(crate) struct Block {
+    /// Square-root weights of each stacked segment per band line (`None`: 1).
+    pub segment_weights: Vec<Option<Vec<f64>>>,
+    /// For each unit, the pair indices (`i·p + j`) sharing its coefficients: one per
+    /// segment, or all fitted through their mean when `averaged`.
+    pub units: Vec<Vec<usize>>,
+    /// Uniform weights: the pairs of a unit are fitted through `√n·ȳ` (the same
+    /// minimiser, Jacobian and gradient as fitting each pair, one basis for all), the
+    /// coefficients come out scaled by `√n`, and the cost misses `Σ‖y − ȳ‖²`, which
+    /// is `cost_offset`.
+    pub averaged: bool,
+    /// The part of the cost that no parameter changes.
+    pub cost_offset: f64,
+    /// Weighted data, `segments·2L × units`.
+    pub rhs: Mat<f64>,
+}
+
+impl Block {
+    /// `√n` for an averaged unit of `n` pairs, 1 otherwise: its coefficients are
+    /// divided by this.
+    pub fn unit_scale(&self, u: usize) -> f64 {
+        if self.averaged {
+            (self.units[u].len() as f64).sqrt()
+        } else {
+            1.0
+        }
+    }
+
+    /// The basis (or its derivative columns) stacked and weighted per segment.
+    pub fn stack(&self, unweighted: &Mat<f64>) -> Mat<f64> {
+        let rows = unweighted.nrows();
+        let lines = rows / 2;
+        let segments = self.segment_weights.len();
+        Mat::from_fn(segments * rows, unweighted.ncols(), |i, c| {
+            let (seg, row) = (i / rows, i % rows);
+            let w = self.segment_weights[seg]
+                .as_ref()
+                .map_or(1.0, |w| w[row % lines]);
+            w * unweighted[(row, c)]
+        })
+    }
+}
+
+/// Everything fixed during the fit: the band, the layout, the data in blocks.
+#[derive(Debug, Clone)]
+pub(crate) struct Problem {
+    pub layout: Layout,
+    pub parameters: PoleParameters,
+    pub outputs: usize,
+    pub inputs: usize,
+    pub quantity: Quantity,
+    pub band: (usize, usize),
+    /// `ω_k = 2π f_k` over the band, rad/s.
+    pub omega: Vec<f64>,
+    pub blocks: Vec<Block>,
+    /// Data over the band, `[pair][line]`.
+    pub data: Vec<Vec<Complex64>>,
+    /// `Σ |G|²` over the band, unweighted.
+    pub data_norm2: f64,
+    /// Real observations `2·L·q·p` (each pair counted once).
+    pub observations: usize,
+}
+
+fn invalid(name: &'static str, value: String, reason: impl Into<String>) -> EraError {
+    EraError::InvalidParameter {
+        name,
+        value,
+        reason: reason.into(),
+    }
+}
+
+impl Problem {
+    /// Validates the options against the data and arranges the blocks.
+    pub fn new(frf: &FrfData, options: &RefineOptions) -> Result<Self> {
+        let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+        let freq = frf.frequency_hz();
+        let band = match options.band {
+            Some((a, b)) => {
+                if !(a < b && b <= lines) {
+                    return Err(invalid(
+                        "band",
+                        format!("{a}..{b}"),
+                        format!("need first < end <= {lines} (the lines of the data)"),
+                    ));
+                }
+                if freq[a] <= 0.0 {
+                    return Err(invalid(
+                        "band",
+                        format!("{a}..{b}"),
+                        "the band must leave out the 0 Hz line",
+                    ));
+                }
+                (a, b)
+            }
+            None => {
+                let first = freq.iter().position(|&f| f > 0.0).unwrap_or(lines);
+                (first, lines)
+            }
+        };
+        if let Some(ts) = options.sample_time_s {
+            if !(ts.is_finite() && ts > 0.0) {
+                return Err(invalid(
+                    "sample time",
+                    ts.to_string(),
+                    "must be positive and finite",
+                ));
+            }
+            if options.real_modes {
+                return Err(invalid(
+                    "real-modes",
+                    "true".into(),
+                    "the residues of a sampled (z-domain) model are not imaginary: real modes need the continuous model",
+                ));
+            }
+            if let Some(&f) = freq[band.0..band.1]
+                .iter()
+                .find(|&&f| f * ts > 0.5 * (1.0 + 1e-9))
+            {
+                return Err(invalid(
+                    "band",
+                    format!("{}..{}", band.0, band.1),
+                    format!(
+                        "{f} Hz is above the Nyquist frequency {} Hz of the sample time {ts} s",
+                        0.5 / ts
+                    ),
+                ));
+            }
+        }
+        if options.reciprocal && q != p {
+            return Err(invalid(
+                "reciprocal",
+                format!("{q}x{p}"),
+                "reciprocity needs a square (collocated) set",
+            ));
+        }
+        if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
+            return Err(invalid(
+                "tolerance",
+                options.tolerance.to_string(),
+                "must be a finite number >= 0",
+            ));
+        }
+        crate::limits::ITERATIONS.check("max-iterations", options.max_iterations as u64)?;
+        let omega: Vec<f64> = freq[band.0..band.1].iter().map(|f| 2.0 * PI * f).collect();
+        let nl = omega.len();
+        let pair_count = q * p;
+        let data: Vec<Vec<Complex64>> = (0..pair_count)
+            .map(|pair| frf.pair(pair / p, pair % p)[band.0..band.1].to_vec())
+            .collect();
+        let data_norm2: f64 = data.iter().flatten().map(|v| v.norm_sqr()).sum();
+        if data_norm2 == 0.0 {
+            return Err(EraError::AllZero);
+        }
+        let weights = square_root_weights(&options.weighting, q * p * lines, lines, band)?;
+        let layout = Layout::new(frf.quantity(), options);
+        // Units: pairs sharing a coefficient vector.
+        let units: Vec<Vec<usize>> = if options.reciprocal {
+            let mut u = Vec::new();
+            for i in 0..q {
+                u.push(vec![i * p + i]);
+                for j in i + 1..p {
+                    u.push(vec![i * p + j, j * p + i]);
+                }
+            }
+            u
+        } else {
+            (0..pair_count).map(|pair| vec![pair]).collect()
+        };
+        let mut blocks = Vec::new();
+        match &weights {
+            None => {
+                // Uniform: every unit shares one basis.
+                blocks.push(Block {
+                    segment_weights: vec![None],
+                    units: units.clone(),
+                    averaged: true,
+                    cost_offset: 0.0,
+                    rhs: Mat::zeros(0, 0),
+                });
+            }
+            Some(w) => {
+                for unit in &units {
+                    blocks.push(Block {
+                        segment_weights: unit.iter().map(|&pair| Some(w[pair].clone())).collect(),
+                        units: vec![unit.clone()],
+                        averaged: false,
+                        cost_offset: 0.0,
+                        rhs: Mat::zeros(0, 0),
+                    });
+                }
+                for (pair, wp) in w.iter().enumerate() {
+                    if wp.iter().all(|&x| x == 0.0) {
+                        return Err(invalid(
+                            "weighting",
+                            format!("output {}, input {}", pair / p + 1, pair % p + 1),
+                            "every weight of this pair in the band is zero",
+                        ));
+                    }
+                }
+            }
+        }
+        for block in &mut blocks {
+            let segments = block.segment_weights.len();
+            let mut rhs = Mat::<f64>::zeros(segments * 2 * nl, block.units.len());
+            for (u, unit) in block.units.iter().enumerate() {
+                if block.averaged {
+                    let n = unit.len() as f64;
+                    for k in 0..nl {
+                        let mean = unit.iter().map(|&pair| data[pair][k]).sum::<Complex64>() / n;
+                        rhs[(k, u)] = n.sqrt() * mean.re;
+                        rhs[(nl + k, u)] = n.sqrt() * mean.im;
+                        block.cost_offset += unit
+                            .iter()
+                            .map(|&pair| (data[pair][k] - mean).norm_sqr())
+                            .sum::<f64>();
+                    }
+                    continue;
+                }
+                for (seg, &pair) in unit.iter().enumerate() {
+                    for k in 0..nl {
+                        let w = block.segment_weights[seg].as_ref().map_or(1.0, |w| w[k]);
+                        rhs[(seg * 2 * nl + k, u)] = w * data[pair][k].re;
+                        rhs[(seg * 2 * nl + nl + k, u)] = w * data[pair][k].im;
+                    }
+                }
+            }
+            block.rhs = rhs;
+        }
+        Ok(Problem {
+            layout,
+            parameters: PoleParameters {
+                log_damping: options.enforce_stability,
+            },
+            outputs: q,
+            inputs: p,
+            quantity: frf.quantity(),
+            band,
+            omega,
+            blocks,
+            data,
+            data_norm2,
+            observations: 2 * nl * pair_count,
+        })
+    }
+
+    /// Checks that there are more real observations per unit than linear unknowns.
+    pub fn check_size(&self, modes: usize) -> Result<()> {
+        let cols = self.layout.columns(modes);
+        let rows = 2 * self.omega.len();
+        if rows <= cols {
+            return Err(invalid(
+                "band",
+                format!("{}..{}", self.band.0, self.band.1),
+                format!(
+                    "{} lines give {rows} real values per FRF, not more than the {cols} unknowns of {modes} modes and the residual terms: widen the band or start from fewer poles",
+                    self.omega.len()
+                ),
+            ));
+        }
+        crate::limits::STATES.check_product("refined modes (2 states each)", &[modes as u64, 2])?;
+        crate::limits::VALUES.check_product(
+            "refinement basis (2 x lines x columns)",
+            &[rows as u64, (3 * cols) as u64],
+        )?;
+        Ok(())
+    }
+}
+
+/// Square roots of the per-line weights over the band, per pair, or `None` (uniform).
+fn square_root_weights(
+    weighting: &Weighting,
+    expected: usize,
+    lines: usize,
+    band: (usize, usize),
+) -> Result<Option<Vec<Vec<f64>>>> {
+    let (values, coherence) = match weighting {
+        Weighting::Uniform => return Ok(None),
+        Weighting::Coherence(v) => (v, true),
+        Weighting::InverseVariance(v) => (v, false),
+    };
+    if values.len() != expected {
+        return Err(EraError::ShapeMismatch {
+            what: "weights ([output][input][line], like the FRF values)".into(),
+            expected,
+            got: values.len(),
+        });
+    }
+    let pairs = expected / lines;
+    let mut out = Vec::with_capacity(pairs);
+    for pair in 0..pairs {
+        let mut w = Vec::with_capacity(band.1 - band.0);
+        for k in band.0..band.1 {
+            let v = values[pair * lines + k];
+            let ok = if coherence {
+                (0.0..=1.0).contains(&v)
+            } else {
+                v.is_finite() && v > 0.0
+            };
+            if !ok {
+                return Err(invalid(
+                    if coherence { "coherence" } else { "variance" },
+                    v.to_string(),
+                    format!(
+                        "at line {k} of pair {pair}: {}",
+                        if coherence {
+                            "a coherence must be in [0, 1]"
+                        } else {
+                            "a variance must be positive and finite"
+                        }
+                    ),
+                ));
+            }
+            w.push(if coherence { v.sqrt() } else { 1.0 / v.sqrt() });
+        }
+        out.push(w);
+    }
+    Ok(Some(out))
+}

@@ -1,0 +1,233 @@
+//! `era::refine` on the DTA-like synthetic set and the thesis truth model.
+
+use era::identify::{identify, EraOptions};
+use era::refine::{refine, RefineOptions, Refinement, Residuals};
+use era::response::frequency_response;
+use era::sim::{
+    add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure, TRUTH_SAMPLE_RATE_HZ,
+};
+use era::{Complex64, FrfData, Quantity};
+use std::f64::consts::PI;
+
+fn pole(f_hz: f64, zeta: f64) -> Complex64 {
+    let w = 2.0 * PI * f_hz;
+    Complex64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt())
+}
+
+/// The DTA-like set of `era simulate modal` (defaults: 8×8, 40 modes, 801 lines at
+/// 0.025 Hz, acceleration, collocated), with `noise` added as the CLI does.
+fn dta(noise: f64) -> (ModalStructure, FrfData) {
+    let spec = ModalSpec::default();
+    let s = ModalStructure::random(&spec).unwrap();
+    let mut frf = s.frf(801, 0.025, Quantity::Acceleration).unwrap();
+    if noise > 0.0 {
+        frf = add_noise(&frf, noise, spec.seed).unwrap();
+    }
+    (s, frf)
+}
+
+/// True poles with the frequency off by ±0.3 % and the damping by ±20 % (alternating),
+/// mode `missing` left out, and two computational poles: one near the missing mode, one
+/// in a gap.
+fn perturbed_start(s: &ModalStructure, missing: usize) -> Vec<Complex64> {
+    let mut start = Vec::new();
+    for (r, (f, z)) in s.frequencies_hz.iter().zip(&s.damping_ratios).enumerate() {
+        if r == missing {
+            continue;
+        }
+        let sign = if r % 2 == 0 { 1.0 } else { -1.0 };
+        start.push(pole(f * (1.0 + 0.003 * sign), z * (1.0 - 0.2 * sign)));
+    }
+    start.push(pole(s.frequencies_hz[missing] * 1.01, 0.03));
+    start.push(pole(17.0, 0.05));
+    start
+}
+
+/// Relative errors of the found frequencies and damping ratios against the nearest true
+/// mode, and how many true modes have a found mode within 1e-3 relative.
+fn errors(s: &ModalStructure, r: &Refinement) -> (Vec<f64>, Vec<f64>, usize) {
+    let mut fe = Vec::new();
+    let mut ze = Vec::new();
+    let mut found = 0;
+    for (f, z) in s.frequencies_hz.iter().zip(&s.damping_ratios) {
+        let best = r
+            .modes
+            .iter()
+            .min_by(|a, b| {
+                (a.frequency_hz - f)
+                    .abs()
+                    .total_cmp(&(b.frequency_hz - f).abs())
+            })
+            .unwrap();
+        let e = (best.frequency_hz - f).abs() / f;
+        if e < 1e-3 {
+            found += 1;
+        }
+        fe.push(e);
+        ze.push((best.damping_ratio - z).abs() / z);
+    }
+    (fe, ze, found)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// `‖G − Ĝ‖/‖G‖` over lines `band` of the model's own (A, B, C, D) response: the
+/// continuous model, or its zero-order-hold image for a z-domain fit.
+fn state_space_error(frf: &FrfData, r: &Refinement) -> f64 {
+    let mut ss = r.to_state_space(frf.quantity()).unwrap();
+    if let Some(ts) = r.sample_time_s {
+        ss = ss.c2d(ts).unwrap();
+    }
+    let f = &frf.frequency_hz()[r.band.0..r.band.1];
+    let g = frequency_response(&ss, f).unwrap();
+    let nl = frf.lines();
+    let nb = f.len();
+    let (mut num, mut den) = (0.0, 0.0);
+    for pair in 0..frf.outputs() * frf.inputs() {
+        for k in 0..nb {
+            let data = frf.values()[pair * nl + r.band.0 + k];
+            num += (data - g[pair * nb + k]).norm_sqr();
+            den += data.norm_sqr();
+        }
+    }
+    (num / den).sqrt()
+}
+
+#[test]
+fn dta_noise_free_is_recovered_to_round_off() {
+    // 39 of the 40 poles perturbed, one left out with a computational pole near it, and
+    // one computational pole in a gap above the modes.
+    let (s, frf) = dta(0.0);
+    let start = perturbed_start(&s, 17);
+    let mut options = RefineOptions::default();
+    options.residuals = Residuals::Upper;
+    let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    let (fe, ze, found) = errors(&s, &r);
+    assert_eq!(found, 40);
+    assert_eq!(r.modes.len(), 40, "dropped {:?}", r.dropped);
+    // The computational pole in the gap has nothing to fit and is said to be dropped.
+    assert_eq!(r.dropped.len(), 1);
+    assert_eq!(r.dropped[0].0, 40);
+    assert!(
+        r.dropped[0].1.contains("contribution"),
+        "{}",
+        r.dropped[0].1
+    );
+    assert!(median(fe.clone()) <= 1e-9, "{:e}", median(fe));
+    assert!(median(ze.clone()) <= 1e-7, "{:e}", median(ze));
+    assert!(r.fit_after <= 1e-10 && r.fit_before > 1e-2);
+    let sse = state_space_error(&frf, &r);
+    assert!(sse <= 1e-8, "{sse:e}");
+    assert!(r.converged);
+}
+
+#[test]
+fn dta_with_5_percent_noise_reaches_the_noise_floor() {
+    let (s, frf) = dta(0.05);
+    let start = perturbed_start(&s, 17);
+    let mut options = RefineOptions::default();
+    options.residuals = Residuals::Upper;
+    let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    let (_, ze, found) = errors(&s, &r);
+    assert!(found >= 37, "found {found}");
+    // The noise floor: the noise RMS is 5 % of each pair's RMS.
+    assert!(r.fit_after <= 1.1 * 0.05, "{}", r.fit_after);
+    assert!(median(ze.clone()) <= 0.015, "{}", median(ze));
+    assert!(r.modes.iter().all(|m| m.pole.re < 0.0));
+    let sse = state_space_error(&frf, &r);
+    assert!(
+        (sse - r.fit_after).abs() <= 1e-9,
+        "{sse} vs {}",
+        r.fit_after
+    );
+}
+
+fn exact_truth_poles() -> Vec<Complex64> {
+    truth_model()
+        .poles()
+        .unwrap()
+        .into_iter()
+        .filter(|s| s.im > 0.0)
+        .collect()
+}
+
+/// `add_noise` gives each pair noise of 15 % of its RMS: weights of the inverse of each
+/// pair's mean square make the least-squares fit the maximum-likelihood one.
+fn pair_variance_weights(frf: &FrfData) -> era::refine::Weighting {
+    let nl = frf.lines();
+    let mut w = Vec::with_capacity(frf.values().len());
+    for v in frf.values().chunks(nl) {
+        let mean_square = v.iter().map(|x| x.norm_sqr()).sum::<f64>() / nl as f64;
+        w.extend(std::iter::repeat_n(mean_square, nl));
+    }
+    era::refine::Weighting::InverseVariance(w)
+}
+
+fn truth_options() -> RefineOptions {
+    let mut options = RefineOptions::default();
+    options.residuals = Residuals::Upper;
+    options.reciprocal = true;
+    options.sample_time_s = Some(1.0 / TRUTH_SAMPLE_RATE_HZ);
+    options
+}
+
+#[test]
+fn truth_model_refined_from_the_thesis_era_poles() {
+    // The truth-model FRFs are those of the zero-order-hold model: the z-domain fit
+    // contains them exactly.
+    let frf = truth_model_frf(None).unwrap();
+    let era = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
+    let start: Vec<Complex64> = era.modal.modes.iter().map(|m| m.continuous_pole).collect();
+    let r = refine(&frf, &start, &truth_options(), &mut |_, _| {}).unwrap();
+    assert_eq!(r.modes.len(), 4);
+    for e in exact_truth_poles() {
+        let d = r
+            .modes
+            .iter()
+            .map(|m| (m.pole - e).norm())
+            .fold(f64::INFINITY, f64::min);
+        assert!(d <= 1e-9 * e.norm(), "{e}: {d:e}");
+    }
+    assert!(r.fit_after <= 1e-9, "{}", r.fit_after);
+    // Its continuous model, discretised again, is the data.
+    assert!(state_space_error(&frf, &r) <= 1e-8);
+    // Displacement residues of a collocated chain are symmetric.
+    for m in &r.modes {
+        for i in 0..3 {
+            for j in 0..3 {
+                assert_eq!(m.residue[i * 3 + j], m.residue[j * 3 + i]);
+            }
+        }
+    }
+}
+
+#[test]
+fn truth_model_with_15_percent_noise_improves_on_era() {
+    let exact = exact_truth_poles();
+    let (mut era_err, mut refined_err) = (0.0, 0.0);
+    for seed in [11u64, 12, 13] {
+        let frf = truth_model_frf(Some((0.15, seed))).unwrap();
+        let era = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
+        let start: Vec<Complex64> = era.modal.modes.iter().map(|m| m.continuous_pole).collect();
+        let mut options = truth_options();
+        options.weighting = pair_variance_weights(&frf);
+        let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+        assert_eq!(r.modes.len(), 4);
+        assert!(r.fit_after <= r.fit_before);
+        for e in &exact {
+            let f = e.norm() / (2.0 * PI);
+            let nearest = |fs: &mut dyn Iterator<Item = f64>| {
+                fs.map(|x| (x - f).abs()).fold(f64::INFINITY, f64::min)
+            };
+            era_err += nearest(&mut era.modal.modes.iter().map(|m| m.frequency_hz));
+            refined_err += nearest(&mut r.modes.iter().map(|m| m.frequency_hz));
+        }
+    }
+    assert!(
+        refined_err < era_err,
+        "refined {refined_err} Hz, ERA {era_err} Hz"
+    );
+}
