@@ -8,6 +8,7 @@ use crate::report::{
 use crate::usage;
 use anyhow::Context;
 use era::identify::{identify_observed, EraOptions, ModelDomain};
+use era::params::Naming;
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
 use era_io::atomic::OutputSet;
@@ -19,28 +20,34 @@ use std::time::Instant;
 /// The most `--orders` one run identifies.
 const MAX_ORDERS: usize = 64;
 
-/// Options from flags, with the checks clap cannot do.
+/// Options from flags, with the checks clap cannot do (those of the library call are
+/// [`EraOptions::check`], shared with the Python package; `--orders` is the CLI's own).
 pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
-    if a.states == 0 {
-        return usage("--states 0: the model needs at least one state");
-    }
-    if a.hankel_factor == 0 {
-        return usage("--hankel-factor 0: must be at least 1");
-    }
+    let opts = EraOptions {
+        states: a.states,
+        hankel_factor: a.hankel_factor,
+        integrations: a.integrations,
+        lowpass: a.lowpass_hz.map(|hz| (a.lowpass_order, hz)),
+        zero_lines: a.zero_lines,
+        pad_to: a.pad_to,
+        domain: match a.time_domain {
+            TimeDomainArg::Discrete => ModelDomain::Discrete,
+            TimeDomainArg::Continuous => ModelDomain::Continuous,
+        },
+        direct_term: match a.direct_term {
+            DirectTermArg::Zero => DirectTerm::Zero,
+            DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
+        },
+        svd: match a.svd {
+            SvdArg::Dense => SvdPath::Dense,
+            SvdArg::MatrixFree => SvdPath::MatrixFree,
+            SvdArg::Auto => SvdPath::Auto,
+        },
+    };
     // Sizes are checked against their limits here, under the flag's name, before anything
     // is read or allocated (the core checks them again for library users).
-    use era::limits::{LINES, SAMPLES, STATES};
-    STATES.check("--states", a.states as u64)?;
-    SAMPLES.check_product(
-        "--states x --hankel-factor (Markov samples)",
-        &[a.states as u64, a.hankel_factor as u64],
-    )?;
-    if a.pad_to != 0 {
-        LINES.check(
-            "--pad-to (lines, pad-to + 1)",
-            (a.pad_to as u64).saturating_add(1),
-        )?;
-    }
+    opts.check(Naming::Flag)?;
+    use era::limits::{SAMPLES, STATES};
     if a.orders.len() > MAX_ORDERS {
         return usage(format!(
             "--orders: {} orders given, at most {MAX_ORDERS} (each is a whole identification)",
@@ -57,40 +64,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
             &[order as u64, a.hankel_factor as u64],
         )?;
     }
-    if !(1..=20).contains(&a.lowpass_order) {
-        return usage(format!(
-            "--lowpass-order {}: the Butterworth order must be 1 to 20",
-            a.lowpass_order
-        ));
-    }
-    let lowpass = match a.lowpass_hz {
-        Some(hz) if !(hz.is_finite() && hz > 0.0) => {
-            return usage(format!("--lowpass-hz {hz}: must be a positive frequency"))
-        }
-        Some(hz) => Some((a.lowpass_order, hz)),
-        None => None,
-    };
-    Ok(EraOptions {
-        states: a.states,
-        hankel_factor: a.hankel_factor,
-        integrations: a.integrations,
-        lowpass,
-        zero_lines: a.zero_lines,
-        pad_to: a.pad_to,
-        domain: match a.time_domain {
-            TimeDomainArg::Discrete => ModelDomain::Discrete,
-            TimeDomainArg::Continuous => ModelDomain::Continuous,
-        },
-        direct_term: match a.direct_term {
-            DirectTermArg::Zero => DirectTerm::Zero,
-            DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
-        },
-        svd: match a.svd {
-            SvdArg::Dense => SvdPath::Dense,
-            SvdArg::MatrixFree => SvdPath::MatrixFree,
-            SvdArg::Auto => SvdPath::Auto,
-        },
-    })
+    Ok(opts)
 }
 
 /// An FRF file as `identify`, `plot` and `convert` see it.

@@ -80,6 +80,64 @@ impl EraOptions {
     }
 }
 
+impl EraOptions {
+    /// Checks what a front end asked for before anything is read or allocated: at least
+    /// one state, a Hankel factor of at least 1, the states, Markov samples
+    /// (`states × hankel_factor`) and padded lines within [`crate::limits`], and a
+    /// Butterworth low-pass of order 1 to 20 at a positive cut-off. Messages name each
+    /// parameter as `naming` does (the CLI's `--states`, Python's `states`).
+    ///
+    /// The stages check their own parameters again for library users; this is the
+    /// check a front end makes first, so that a bad flag is refused with its own name.
+    ///
+    /// # Errors
+    /// [`EraError::Invalid`] or [`EraError::Limit`].
+    pub fn check(&self, naming: crate::params::Naming) -> Result<()> {
+        use crate::limits::{LINES, SAMPLES, STATES};
+        use crate::params::invalid;
+        let name = |key: &str| naming.name(key);
+        if self.states == 0 {
+            return invalid(format!(
+                "{} 0: the model needs at least one state",
+                name("states")
+            ));
+        }
+        if self.hankel_factor == 0 {
+            return invalid(format!("{} 0: must be at least 1", name("hankel_factor")));
+        }
+        STATES.check(name("states"), self.states as u64)?;
+        SAMPLES.check_product(
+            format!(
+                "{} x {} (Markov samples)",
+                name("states"),
+                name("hankel_factor")
+            ),
+            &[self.states as u64, self.hankel_factor as u64],
+        )?;
+        if self.pad_to != 0 {
+            LINES.check(
+                format!("{} (lines, pad-to + 1)", name("pad_to")),
+                (self.pad_to as u64).saturating_add(1),
+            )?;
+        }
+        if let Some((order, hz)) = self.lowpass {
+            if !(1..=20).contains(&order) {
+                return invalid(format!(
+                    "{} {order}: the Butterworth order must be 1 to 20",
+                    name("lowpass_order")
+                ));
+            }
+            if !(hz.is_finite() && hz > 0.0) {
+                return invalid(format!(
+                    "{} {hz}: must be a positive frequency",
+                    name("lowpass_hz")
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A stage of the pipeline, reported to an observer as it starts
 /// ([`identify_observed`]); front ends turn these into progress displays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
