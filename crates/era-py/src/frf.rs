@@ -232,7 +232,8 @@ pub fn read_frf(
 
 /// Writes FRFs in the format the extension names: `.csv`, `.uff`/`.unv` (UFF 58,
 /// ASCII; binary 58b with `binary=True`) or `.mat`. The file appears whole or not at
-/// all (written to a temporary file and renamed).
+/// all (written to a temporary file and renamed). CSV and UFF files carry the quantity;
+/// a MAT file (`FRF` + `FreqV`) does not, so `read_frf` is told it again.
 #[pyfunction]
 #[pyo3(signature = (path, frf, binary=false))]
 pub fn write_frf(
@@ -435,3 +436,34 @@ pub fn simulate_modal(
     Ok(PyFrfData::wrap(frf))
 }
 
+
+/// Reads time histories from a CSV, MAT v5 or HDF5 file (as `era frf` does).
+///
+/// `variables` picks MAT variables (side by side), `datasets` HDF5 datasets. Returns
+/// `(data, sample_rate_hz, names)`: `data` float64 (channels, samples), the sample rate
+/// the file gives (None when it gives none), and the channel names (None when absent).
+#[pyfunction]
+#[pyo3(signature = (path, variables=Vec::new(), datasets=Vec::new()))]
+#[allow(clippy::type_complexity)]
+pub fn read_time<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    variables: Vec<String>,
+    datasets: Vec<String>,
+) -> PyResult<(
+    Bound<'py, numpy::PyArray2<f64>>,
+    Option<f64>,
+    Option<Vec<String>>,
+)> {
+    let selection = era_io::time::TimeSelection {
+        variables,
+        datasets,
+    };
+    let history = guarded(py, || {
+        era_io::time::read_time_file(&path, &selection).map_err(io_error)
+    })?;
+    let (channels, samples) = (history.channels(), history.samples());
+    let flat: Vec<f64> = history.columns.into_iter().flatten().collect();
+    let data = vector(py, flat).reshape([channels, samples])?;
+    Ok((data, history.sample_rate.map(|(r, _)| r), history.names))
+}

@@ -185,6 +185,7 @@ fn _era(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frf::read_frf, m)?)?;
     m.add_function(wrap_pyfunction!(frf::write_frf, m)?)?;
     m.add_function(wrap_pyfunction!(frf::estimate_frf, m)?)?;
+    m.add_function(wrap_pyfunction!(frf::read_time, m)?)?;
     m.add_function(wrap_pyfunction!(frf::simulate_truth_model, m)?)?;
     m.add_function(wrap_pyfunction!(frf::simulate_modal, m)?)?;
     m.add_function(wrap_pyfunction!(model::identify, m)?)?;
