@@ -20,7 +20,7 @@ import era
 try:
     import control
 except ImportError:
-    raise SystemExit("this example needs python-control: pip install control")
+    raise SystemExit("this example needs python-control: pip install control") from None
 
 
 def markov_of(frf: era.FrfData, integrations: int, zero_lines: int, pad_to: int) -> np.ndarray:
@@ -63,6 +63,7 @@ def side_by_side(name, frf, states, hankel_factor=5, integrations=0, zero_lines=
     return gap
 
 
-side_by_side("truth model", era.simulate_truth_model(noise=0.15), 8, hankel_factor=4, pad_to=1024)
-side_by_side("thesis size (DTA-like)", era.simulate_modal(collocated=True, noise=0.05), 80,
-             hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024)
+if __name__ == "__main__":
+    side_by_side("truth model", era.simulate_truth_model(noise=0.15), 8, hankel_factor=4, pad_to=1024)
+    side_by_side("thesis size (DTA-like)", era.simulate_modal(collocated=True, noise=0.05), 80,
+                 hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024)
