@@ -214,7 +214,9 @@ pub fn read_frf(
     quantity: Option<&str>,
     outputs: Option<Int>,
 ) -> PyResult<PyFrfData> {
-    let tag = quantity.map(|q| crate::frf::quantity("quantity", q)).transpose()?;
+    let tag = quantity
+        .map(|q| crate::frf::quantity("quantity", q))
+        .transpose()?;
     let outputs = outputs.map(|o| o.size("outputs")).transpose()?;
     let opts = ReadOptions {
         default_quantity: Quantity::Acceleration,
@@ -325,7 +327,11 @@ pub fn estimate_frf<'py>(
         "h1" => Estimator::H1,
         "h2" => Estimator::H2,
         "hv" => Estimator::Hv,
-        _ => return value_error(format!("estimator '{estimator}': expected 'h1', 'h2' or 'hv'")),
+        _ => {
+            return value_error(format!(
+                "estimator '{estimator}': expected 'h1', 'h2' or 'hv'"
+            ))
+        }
     };
     let detrend = match detrend.to_ascii_lowercase().as_str() {
         "none" => Detrend::None,
@@ -435,7 +441,6 @@ pub fn simulate_modal(
     })?;
     Ok(PyFrfData::wrap(frf))
 }
-
 
 /// Reads time histories from a CSV, MAT v5 or HDF5 file (as `era frf` does).
 ///

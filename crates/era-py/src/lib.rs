@@ -72,7 +72,10 @@ pub(crate) fn value_error<T>(message: impl Into<String>) -> PyResult<T> {
 /// Runs `work` with the GIL released, turning a panic into a `RuntimeError` (a panic is
 /// a bug of ours, never an answer to bad input; it must not reach Python as pyo3's
 /// `PanicException`, which is not an `Exception`).
-pub(crate) fn guarded<T: Send>(py: Python<'_>, work: impl FnOnce() -> PyResult<T> + Send) -> PyResult<T> {
+pub(crate) fn guarded<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
     py.allow_threads(|| {
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|payload| {
             let what = payload

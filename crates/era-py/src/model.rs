@@ -75,7 +75,7 @@ fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArr
             v.push(m[(i, j)]);
         }
     }
-    Ok(vector(py, v).reshape([r, c])?)
+    vector(py, v).reshape([r, c])
 }
 
 #[pymethods]
@@ -127,22 +127,54 @@ impl PyIdentification {
     /// Natural frequencies of the modes, Hz, ascending.
     #[getter]
     fn frequency_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector(py, self.found.modal.modes.iter().map(|m| m.frequency_hz).collect())
+        vector(
+            py,
+            self.found
+                .modal
+                .modes
+                .iter()
+                .map(|m| m.frequency_hz)
+                .collect(),
+        )
     }
     /// Damping ratios of the modes (fractions), in the order of `frequency_hz`.
     #[getter]
     fn damping_ratio<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector(py, self.found.modal.modes.iter().map(|m| m.damping_ratio).collect())
+        vector(
+            py,
+            self.found
+                .modal
+                .modes
+                .iter()
+                .map(|m| m.damping_ratio)
+                .collect(),
+        )
     }
     /// Eigenvalues of A of the modes (positive imaginary part), complex.
     #[getter]
     fn eigenvalues<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<Complex64>> {
-        vector(py, self.found.modal.modes.iter().map(|m| m.eigenvalue).collect())
+        vector(
+            py,
+            self.found
+                .modal
+                .modes
+                .iter()
+                .map(|m| m.eigenvalue)
+                .collect(),
+        )
     }
     /// Real eigenvalues of A (not modes).
     #[getter]
     fn real_poles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector(py, self.found.modal.real_poles.iter().map(|r| r.eigenvalue).collect())
+        vector(
+            py,
+            self.found
+                .modal
+                .real_poles
+                .iter()
+                .map(|r| r.eigenvalue)
+                .collect(),
+        )
     }
     /// The modes, by frequency.
     #[getter]
@@ -237,7 +269,7 @@ impl PyIdentification {
         let values = guarded(py, || {
             Ok(era::response::HessenbergForm::new(model).response(&f))
         })?;
-        Ok(vector(py, values).reshape([q, p, l])?)
+        vector(py, values).reshape([q, p, l])
     }
     /// model.json's text (as `era identify --out` writes it, without timings).
     fn to_json(&self) -> PyResult<String> {
@@ -261,7 +293,10 @@ impl PyIdentification {
             TimeDomain::Discrete { sample_time_s } => sample_time_s,
             TimeDomain::Continuous => 0.0,
         };
-        control.call_method1("ss", (self.a(py)?, self.b(py)?, self.c(py)?, self.d(py)?, dt))
+        control.call_method1(
+            "ss",
+            (self.a(py)?, self.b(py)?, self.c(py)?, self.d(py)?, dt),
+        )
     }
     fn __repr__(&self) -> String {
         format!(
