@@ -4,18 +4,18 @@
 //! arrays in, numpy arrays and plain Python objects out, every call going through the same
 //! library functions and parameter checks as the `era` command line.
 //!
-//! - [`frf`]: `FrfData` (validated like a file the CLI reads), `read_frf`, `write_frf`,
+//! - `frf`: `FrfData` (validated like a file the CLI reads), `read_frf`, `write_frf`,
 //!   `estimate_frf` (Welch H1/H2/Hv from time histories), the simulators.
-//! - [`model`]: `identify` and its `Identification` (the matrices, singular values, modes,
+//! - `model`: `identify` and its `Identification` (the matrices, singular values, modes,
 //!   fit, the model's FRF, `model.json`'s text, a python-control `StateSpace`).
-//! - [`friction`]: `friction_estimate`, the free-decay Coulomb estimate of Eq. 3.12.
+//! - `friction`: `friction_estimate`, the free-decay Coulomb estimate of Eq. 3.12.
 //!
 //! ## Errors
 //! A refused value or file is a Python exception carrying the CLI's message: input errors
 //! of the core ([`era::EraError::is_input_error`]) and malformed files are `ValueError`;
 //! a missing file `FileNotFoundError`, an unreadable one `PermissionError` or `OSError`;
 //! a numerical failure `RuntimeError`. A panic never crosses into Python as pyo3's
-//! `PanicException`: [`guarded`] turns one into a `RuntimeError` naming it an internal
+//! `PanicException`: `guarded` turns one into a `RuntimeError` naming it an internal
 //! error.
 //!
 //! ## Threads and copies
@@ -35,9 +35,9 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 
-pub mod frf;
-pub mod friction;
-pub mod model;
+mod frf;
+mod friction;
+mod model;
 
 /// An error of the core as a Python exception: `ValueError` for the caller's data or
 /// parameters, `RuntimeError` for a numerical failure.
@@ -94,7 +94,7 @@ pub(crate) fn guarded<T: Send>(
 /// (`count`), so that a negative value is a `ValueError` naming the parameter. A value
 /// of the wrong type (a float, a string, a bool) is a `TypeError`, as in numpy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Int(pub i128);
+pub(crate) struct Int(pub i128);
 
 impl<'py> FromPyObject<'py> for Int {
     fn extract_bound(obj: &Bound<'py, PyAny>) -> PyResult<Self> {
