@@ -11,7 +11,8 @@ use era::friction::estimate::{estimate_displacement, estimate_velocity, summariz
 use era::friction::simulate::{free_decay_record, DecaySpec, Method};
 use era::friction::tune::{stability_margin, tune, TuneSpec};
 use era::friction::Oscillator;
-use era_io::decay_csv::{read_decay_csv, write_decay_csv};
+use era::params::Naming;
+use era_io::decay_csv::{estimate_json, read_decay_csv, write_decay_csv};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -30,32 +31,13 @@ fn estimate_file(path: &Path, stiffness: f64) -> anyhow::Result<(DecayEstimate, 
 }
 
 fn record_json(path: &Path, e: &DecayEstimate, signal: &str) -> serde_json::Value {
-    json!({
-        "file": path,
-        "signal": signal,
-        "natural_frequency_hz": e.natural_frequency_hz,
-        "natural_frequency_hz_from_peaks": e.natural_frequency_hz_from_peaks,
-        "cycles": e.cycles,
-        "velocity_drop_per_cycle": e.velocity_drop_per_cycle,
-        "coulomb_force": e.coulomb_force,
-        "viscous_damping_ratio": e.viscous_damping_ratio,
-        "better_model": e.better_model.name(),
-        "coulomb_residual": e.coulomb_residual,
-        "viscous_residual": e.viscous_residual,
-        "half_cycles_fitted": e.half_cycles.len(),
-        "fit_start_s": e.half_cycles.first().map(|h| h.start_s),
-        "fit_end_s": e.half_cycles.last().map(|h| h.end_s),
-        "noise_rms": e.noise_rms,
-    })
+    let mut record = estimate_json(e, signal);
+    record.insert("file".into(), json!(path));
+    serde_json::Value::Object(record)
 }
 
 fn check_stiffness(k: f64) -> anyhow::Result<()> {
-    if !(k.is_finite() && k > 0.0) {
-        return usage(format!(
-            "--stiffness {k}: must be a positive stiffness (thesis: 1.0 lbf/in)"
-        ));
-    }
-    Ok(())
+    Ok(era::friction::check_stiffness(Naming::Flag, k)?)
 }
 
 fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {

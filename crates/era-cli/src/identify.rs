@@ -5,12 +5,12 @@ use crate::report::{
     identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
 };
-use crate::usage;
 use anyhow::Context;
 use era::identify::{
     identify_auto, identify_observed, identify_with_scan, EraOptions, ModelDomain, ScanOptions,
 };
 use era::modal::stabilization::OrderRange;
+use era::params::Naming;
 use era::realize::{DirectTerm, SvdPath};
 use era::Quantity;
 use era_io::atomic::OutputSet;
@@ -19,55 +19,19 @@ use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::path::Path;
 use std::time::Instant;
 
-/// Options from flags, with the checks clap cannot do.
+/// Options from flags, with the checks clap cannot do (those of the library call are
+/// [`EraOptions::check`], shared with the Python package; `--orders` is the CLI's own).
 pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     let states = match a.states {
-        StatesArg::Fixed(0) => return usage("--states 0: the model needs at least one state"),
         StatesArg::Fixed(n) => n,
         // The scan sets its own orders; this is only echoed.
         StatesArg::Auto => 0,
     };
-    if a.hankel_factor == 0 {
-        return usage("--hankel-factor 0: must be at least 1");
-    }
-    // Sizes are checked against their limits here, under the flag's name, before anything
-    // is read or allocated (the core checks them again for library users).
-    use era::limits::{LINES, SAMPLES, STATES};
-    STATES.check("--states", states as u64)?;
-    SAMPLES.check_product(
-        "--states x --hankel-factor (Markov samples)",
-        &[states as u64, a.hankel_factor as u64],
-    )?;
-    if a.pad_to != 0 {
-        LINES.check(
-            "--pad-to (lines, pad-to + 1)",
-            (a.pad_to as u64).saturating_add(1),
-        )?;
-    }
-    if let Some(range) = scan_orders(a)? {
-        SAMPLES.check_product(
-            format!("--orders {} x --hankel-factor (Markov samples)", range.max),
-            &[range.max as u64, a.hankel_factor as u64],
-        )?;
-    }
-    if !(1..=20).contains(&a.lowpass_order) {
-        return usage(format!(
-            "--lowpass-order {}: the Butterworth order must be 1 to 20",
-            a.lowpass_order
-        ));
-    }
-    let lowpass = match a.lowpass_hz {
-        Some(hz) if !(hz.is_finite() && hz > 0.0) => {
-            return usage(format!("--lowpass-hz {hz}: must be a positive frequency"))
-        }
-        Some(hz) => Some((a.lowpass_order, hz)),
-        None => None,
-    };
-    Ok(EraOptions {
+    let opts = EraOptions {
         states,
         hankel_factor: a.hankel_factor,
         integrations: a.integrations,
-        lowpass,
+        lowpass: a.lowpass_hz.map(|hz| (a.lowpass_order, hz)),
         zero_lines: a.zero_lines,
         pad_to: a.pad_to,
         domain: match a.time_domain {
@@ -83,7 +47,23 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
             SvdArg::MatrixFree => SvdPath::MatrixFree,
             SvdArg::Auto => SvdPath::Auto,
         },
-    })
+    };
+    // Sizes are checked against their limits here, under the flag's name, before anything
+    // is read or allocated (the core checks them again for library users). With
+    // --states auto every other parameter is checked as for one state.
+    let checked = EraOptions {
+        states: states.max(usize::from(a.states == StatesArg::Auto)),
+        ..opts.clone()
+    };
+    checked.check(Naming::Flag)?;
+    use era::limits::SAMPLES;
+    if let Some(range) = scan_orders(a)? {
+        SAMPLES.check_product(
+            format!("--orders {} x --hankel-factor (Markov samples)", range.max),
+            &[range.max as u64, a.hankel_factor as u64],
+        )?;
+    }
+    Ok(opts)
 }
 
 /// `--orders` parsed, naming the flag in errors.

@@ -49,34 +49,7 @@ pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     }
 }
 
-/// Every parameter by its JSON name (docs/design.md §1 table).
-pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
-    use serde_json::json;
-    let mut m = BTreeMap::new();
-    m.insert("states".into(), json!(o.states));
-    m.insert("hankel_factor".into(), json!(o.hankel_factor));
-    m.insert("integrations".into(), json!(o.integrations));
-    m.insert("lowpass_order".into(), json!(o.lowpass.map(|l| l.0)));
-    m.insert("lowpass_hz".into(), json!(o.lowpass.map(|l| l.1)));
-    m.insert("zero_lines".into(), json!(o.zero_lines));
-    m.insert("pad_to".into(), json!(o.pad_to));
-    m.insert(
-        "time_domain".into(),
-        json!(match o.domain {
-            ModelDomain::Discrete => "discrete",
-            ModelDomain::Continuous => "continuous",
-        }),
-    );
-    m.insert("svd".into(), json!(o.svd.name()));
-    m.insert(
-        "direct_term".into(),
-        json!(match o.direct_term {
-            DirectTerm::Zero => "zero",
-            DirectTerm::FirstMarkov => "markov0",
-        }),
-    );
-    m
-}
+pub use era_io::model_json::parameters;
 
 /// The modal table: frequency, damping, the indicators and whether to trust each mode
 /// (docs/design.md §10). Suspect modes are marked `?` with the reason below the table;

@@ -3,7 +3,8 @@
 use crate::args::{ModalArgs, SimulateArgs, SimulateCommon, SimulateModel};
 use crate::report::{finish_output, Human};
 use crate::usage;
-use era::sim::{add_noise, truth_model_frf, ModalSpec, ModalStructure};
+use era::params::Naming;
+use era::sim::{add_noise, truth_model_frf, ModalRequest, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
 use era_io::csv::{write_frf_csv, FrfFile};
 use era_io::format::{FrfFormat, FrfWriter};
@@ -24,21 +25,7 @@ pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
 }
 
 pub fn check_noise(noise: f64) -> anyhow::Result<()> {
-    let max = era::sim::MAX_NOISE_FRACTION;
-    if !(noise.is_finite() && (0.0..=max).contains(&noise)) {
-        return usage(format!(
-            "--noise {noise}: must be a fraction from 0 to {max} (0.15 for 15 %)"
-        ));
-    }
-    Ok(())
-}
-
-/// A positive, finite number for `flag`.
-fn check_positive(flag: &str, value: f64, what: &str) -> anyhow::Result<()> {
-    if !(value.is_finite() && value > 0.0) {
-        return usage(format!("{flag} {value}: must be a positive {what}"));
-    }
-    Ok(())
+    Ok(era::sim::check_noise(Naming::Flag, noise)?)
 }
 
 fn finish(
@@ -124,54 +111,24 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
 fn modal(a: &ModalArgs) -> anyhow::Result<()> {
     check_noise(a.sim.noise)?;
     let (damping_min, damping_max) = parse_range(&a.damping)?;
-    // Sizes against their limits, under the flag's name, before anything is allocated.
-    use era::limits::{CHANNELS, LINES, STATES, VALUES};
-    CHANNELS.check("--outputs", a.outputs as u64)?;
-    CHANNELS.check("--inputs", a.inputs as u64)?;
-    STATES.check_product("--modes (2 states each)", &[a.modes as u64, 2])?;
-    LINES.check("--lines", a.lines as u64)?;
-    VALUES.check_product(
-        "--outputs x --inputs x --lines",
-        &[a.outputs as u64, a.inputs as u64, a.lines as u64],
-    )?;
-    VALUES.check_product(
-        "--outputs x --inputs x --lines x --modes (modal FRF terms)",
-        &[
-            a.outputs as u64,
-            a.inputs as u64,
-            a.lines as u64,
-            a.modes as u64,
-        ],
-    )?;
-    check_positive("--df", a.df, "line spacing in Hz")?;
-    check_positive("--fmin", a.fmin, "frequency in Hz")?;
-    check_positive("--fmax", a.fmax, "frequency in Hz")?;
-    if a.collocated && a.outputs != a.inputs {
-        return usage(format!(
-            "--collocated needs as many outputs as inputs, got {} x {}",
-            a.outputs, a.inputs
-        ));
-    }
-    if a.fmax >= a.df * (a.lines.saturating_sub(1)) as f64 {
-        return usage(format!(
-            "--fmax {} Hz is not below the last line, {} Hz (--lines {} at --df {})",
-            a.fmax,
-            a.df * (a.lines.saturating_sub(1)) as f64,
-            a.lines,
-            a.df
-        ));
-    }
-    let spec = ModalSpec {
-        outputs: a.outputs,
-        inputs: a.inputs,
-        modes: a.modes,
-        fmin_hz: a.fmin,
-        fmax_hz: a.fmax,
-        damping_min,
-        damping_max,
-        collocated: a.collocated,
-        seed: a.sim.seed,
+    let request = ModalRequest {
+        spec: ModalSpec {
+            outputs: a.outputs,
+            inputs: a.inputs,
+            modes: a.modes,
+            fmin_hz: a.fmin,
+            fmax_hz: a.fmax,
+            damping_min,
+            damping_max,
+            collocated: a.collocated,
+            seed: a.sim.seed,
+        },
+        lines: a.lines,
+        df_hz: a.df,
     };
+    // Sizes against their limits, under the flag's name, before anything is allocated.
+    request.check(Naming::Flag)?;
+    let spec = request.spec;
     let clock = Instant::now();
     let structure = ModalStructure::random(&spec)?;
     let quantity: Quantity = a.quantity.into();

@@ -14,6 +14,7 @@
 use crate::atomic::write_atomic;
 use crate::text::metadata_line;
 use crate::IoError;
+use era::friction::estimate::DecayEstimate;
 use era::friction::simulate::DecayRecord;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -30,6 +31,41 @@ pub struct DecayFile {
     pub displacement: Option<Vec<f64>>,
     /// `# key: value` lines, keys lower-case.
     pub metadata: BTreeMap<String, String>,
+}
+
+/// One record's friction estimate as `era friction estimate --json` prints it (its
+/// `records` entries, less `file`), and as Python's `era.friction.estimate` returns it.
+pub fn estimate_json(
+    e: &DecayEstimate,
+    signal: &str,
+) -> serde_json::Map<String, serde_json::Value> {
+    use serde_json::json;
+    let fields = [
+        ("signal", json!(signal)),
+        ("natural_frequency_hz", json!(e.natural_frequency_hz)),
+        (
+            "natural_frequency_hz_from_peaks",
+            json!(e.natural_frequency_hz_from_peaks),
+        ),
+        ("cycles", json!(e.cycles)),
+        ("velocity_drop_per_cycle", json!(e.velocity_drop_per_cycle)),
+        ("coulomb_force", json!(e.coulomb_force)),
+        ("viscous_damping_ratio", json!(e.viscous_damping_ratio)),
+        ("better_model", json!(e.better_model.name())),
+        ("coulomb_residual", json!(e.coulomb_residual)),
+        ("viscous_residual", json!(e.viscous_residual)),
+        ("half_cycles_fitted", json!(e.half_cycles.len())),
+        (
+            "fit_start_s",
+            json!(e.half_cycles.first().map(|h| h.start_s)),
+        ),
+        ("fit_end_s", json!(e.half_cycles.last().map(|h| h.end_s))),
+        ("noise_rms", json!(e.noise_rms)),
+    ];
+    fields
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
 }
 
 /// Reads a free-decay CSV.

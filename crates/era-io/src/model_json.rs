@@ -10,7 +10,7 @@
 
 use crate::atomic::write_atomic;
 use crate::IoError;
-use era::identify::{Identification, StageTimings};
+use era::identify::{EraOptions, Identification, StageTimings};
 use era::modal::{ModalParameters, Mode};
 use era::response::FitReport;
 use era::{StateSpace, TimeDomain};
@@ -203,6 +203,36 @@ pub fn modal_json(modal: &ModalParameters) -> (Vec<ModeJson>, Vec<RealPoleJson>)
             })
             .collect(),
     )
+}
+
+/// Every parameter by its JSON name (docs/design.md §1 table): the `parameters`
+/// of `model.json`, written alike by the CLI and the Python package.
+pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
+    use serde_json::json;
+    let mut m = BTreeMap::new();
+    m.insert("states".into(), json!(o.states));
+    m.insert("hankel_factor".into(), json!(o.hankel_factor));
+    m.insert("integrations".into(), json!(o.integrations));
+    m.insert("lowpass_order".into(), json!(o.lowpass.map(|l| l.0)));
+    m.insert("lowpass_hz".into(), json!(o.lowpass.map(|l| l.1)));
+    m.insert("zero_lines".into(), json!(o.zero_lines));
+    m.insert("pad_to".into(), json!(o.pad_to));
+    m.insert(
+        "time_domain".into(),
+        json!(match o.domain {
+            era::ModelDomain::Discrete => "discrete",
+            era::ModelDomain::Continuous => "continuous",
+        }),
+    );
+    m.insert("svd".into(), json!(o.svd.name()));
+    m.insert(
+        "direct_term".into(),
+        json!(match o.direct_term {
+            era::realize::DirectTerm::Zero => "zero",
+            era::realize::DirectTerm::FirstMarkov => "markov0",
+        }),
+    );
+    m
 }
 
 /// Stage timings by name (`read` and `write` are added by the caller).

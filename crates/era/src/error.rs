@@ -158,6 +158,10 @@ pub enum EraError {
     /// ([`crate::limits`]).
     #[error(transparent)]
     Limit(#[from] crate::limits::LimitError),
+    /// A parameter a front end passed is refused; the message names it as that front
+    /// end does (a flag, a keyword) with its value ([`crate::params`]).
+    #[error("{0}")]
+    Invalid(String),
     /// A dense decomposition failed to converge.
     #[error("numerical failure: {0}")]
     Numerical(String),

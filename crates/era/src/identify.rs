@@ -87,6 +87,64 @@ impl EraOptions {
     }
 }
 
+impl EraOptions {
+    /// Checks what a front end asked for before anything is read or allocated: at least
+    /// one state, a Hankel factor of at least 1, the states, Markov samples
+    /// (`states × hankel_factor`) and padded lines within [`crate::limits`], and a
+    /// Butterworth low-pass of order 1 to 20 at a positive cut-off. Messages name each
+    /// parameter as `naming` does (the CLI's `--states`, Python's `states`).
+    ///
+    /// The stages check their own parameters again for library users; this is the
+    /// check a front end makes first, so that a bad flag is refused with its own name.
+    ///
+    /// # Errors
+    /// [`EraError::Invalid`] or [`EraError::Limit`].
+    pub fn check(&self, naming: crate::params::Naming) -> Result<()> {
+        use crate::limits::{LINES, SAMPLES, STATES};
+        use crate::params::invalid;
+        let name = |key: &str| naming.name(key);
+        if self.states == 0 {
+            return invalid(format!(
+                "{} 0: the model needs at least one state",
+                name("states")
+            ));
+        }
+        if self.hankel_factor == 0 {
+            return invalid(format!("{} 0: must be at least 1", name("hankel_factor")));
+        }
+        STATES.check(name("states"), self.states as u64)?;
+        SAMPLES.check_product(
+            format!(
+                "{} x {} (Markov samples)",
+                name("states"),
+                name("hankel_factor")
+            ),
+            &[self.states as u64, self.hankel_factor as u64],
+        )?;
+        if self.pad_to != 0 {
+            LINES.check(
+                format!("{} (lines, pad-to + 1)", name("pad_to")),
+                (self.pad_to as u64).saturating_add(1),
+            )?;
+        }
+        if let Some((order, hz)) = self.lowpass {
+            if !(1..=20).contains(&order) {
+                return invalid(format!(
+                    "{} {order}: the Butterworth order must be 1 to 20",
+                    name("lowpass_order")
+                ));
+            }
+            if !(hz.is_finite() && hz > 0.0) {
+                return invalid(format!(
+                    "{} {hz}: must be a positive frequency",
+                    name("lowpass_hz")
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A stage of the pipeline, reported to an observer as it starts
 /// ([`identify_observed`]); front ends turn these into progress displays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -760,8 +818,27 @@ fn scan_front(
         other => other,
     })?;
     timings.hankel_svd = factorization.seconds();
+    // Exact low-order data: the default range starts above the Hankel's rank; scan up to
+    // the rank instead (an explicit --orders is taken as given).
+    let rank = factorization.rank() / 2 * 2;
+    let range = if scan_options.orders.is_none() && rank < range.min && rank >= 2 {
+        OrderRange::new(2, rank, 2)?
+    } else {
+        range
+    };
     let s = scan(&factorization, &range, &scan_options.diagram, progress)?;
     Ok((f, factorization, range, s, clock.elapsed().as_secs_f64()))
+}
+
+/// The selection criteria for a scan of `range`: as given, except that a scan cut short
+/// by the Hankel's rank (exact low-order data, whose top order is the exact model) takes
+/// a mode seen at a single order.
+fn criteria_for(scan_options: &ScanOptions, range: &OrderRange) -> SelectionCriteria {
+    let mut c = scan_options.selection;
+    if scan_options.orders.is_none() && range.min == 2 && range.step == 2 && range.max < 40 {
+        c.min_poles = 1;
+    }
+    c
 }
 
 /// [`identify`] at the fixed order of `options`, plus a scan across `scan_options`'
@@ -789,7 +866,7 @@ pub fn identify_with_scan(
         progress,
         &mut timings,
     )?;
-    let selection = select(&s, found.band_hz, &scan_options.selection);
+    let selection = select(&s, found.band_hz, &criteria_for(scan_options, &range));
     for (m, q) in found.modal.modes.iter().zip(found.quality.iter_mut()) {
         let cluster = selection.clusters.iter().filter(|c| c.physical).find(|c| {
             let rep = &s.poles[c.representative];
@@ -846,7 +923,7 @@ pub fn identify_auto(
         .zero_lines
         .max(usize::from(options.integrations > 0));
     let band_hz = fitted_band(&processed, first_line);
-    let selection = select(&s, band_hz, &scan_options.selection);
+    let selection = select(&s, band_hz, &criteria_for(scan_options, &range));
     let chosen: Vec<&crate::modal::stabilization::ScanPole> = selection
         .physical()
         .map(|c| &s.poles[c.representative])

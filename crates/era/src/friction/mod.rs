@@ -126,6 +126,22 @@ impl FrictionError {
     }
 }
 
+/// Checks the spring stiffness a front end was given: `{stiffness} {k}: must be a
+/// positive stiffness (thesis: 1.0 lbf/in)`, named as `naming` does (the CLI's
+/// `--stiffness`, Python's `stiffness`).
+///
+/// # Errors
+/// [`crate::EraError::Invalid`] for zero, negative or non-finite values.
+pub fn check_stiffness(naming: crate::params::Naming, stiffness: f64) -> crate::Result<()> {
+    if !(stiffness.is_finite() && stiffness > 0.0) {
+        return crate::params::invalid(format!(
+            "{} {stiffness}: must be a positive stiffness (thesis: 1.0 lbf/in)",
+            naming.name("stiffness")
+        ));
+    }
+    Ok(())
+}
+
 /// A parameter value for a message: plain for ordinary magnitudes, in exponent form
 /// beyond (`1e308`, not 309 digits).
 pub fn show(x: f64) -> String {

@@ -690,7 +690,10 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
                 .collect();
             upper_mpc.sort_by(f64::total_cmp);
             let median_mpc = upper_mpc.get(upper_mpc.len() / 2).copied().unwrap_or(0.0);
-            let rejection = if upper_count < needed || open.members.len() < criteria.min_poles {
+            // A short scan (exact low-order data) cannot ask for more poles than it has
+            // counted orders.
+            let min_poles = criteria.min_poles.min(counted.max(1));
+            let rejection = if upper_count < needed || open.members.len() < min_poles {
                 Some(Rejection::Unstable(upper_count, counted))
             } else if median_mpc < criteria.mpc_minimum {
                 Some(Rejection::LowMpc(median_mpc))

@@ -59,6 +59,105 @@ impl Minstd {
 /// already buries it; beyond, the noisy values head for overflow.
 pub const MAX_NOISE_FRACTION: f64 = 1000.0;
 
+/// Checks a noise fraction a front end was given: `{noise} {value}: must be a fraction
+/// from 0 to 1000 (0.15 for 15 %)`, naming it as `naming` does.
+///
+/// # Errors
+/// [`EraError::Invalid`] for a negative or non-finite fraction, or one above
+/// [`MAX_NOISE_FRACTION`].
+pub fn check_noise(naming: crate::params::Naming, noise: f64) -> Result<()> {
+    let max = MAX_NOISE_FRACTION;
+    if !(noise.is_finite() && (0.0..=max).contains(&noise)) {
+        return crate::params::invalid(format!(
+            "{} {noise}: must be a fraction from 0 to {max} (0.15 for 15 %)",
+            naming.name("noise")
+        ));
+    }
+    Ok(())
+}
+
+/// What `era simulate modal` (and Python's `simulate_modal`) is asked for: a
+/// [`ModalSpec`] and the lines to evaluate it on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalRequest {
+    /// The structure.
+    pub spec: ModalSpec,
+    /// Lines from 0 Hz.
+    pub lines: usize,
+    /// Line spacing, Hz.
+    pub df_hz: f64,
+}
+
+impl ModalRequest {
+    /// Checks sizes against [`crate::limits`] before anything is allocated, and the
+    /// frequencies: positive spacing and band, `fmax` below the last line, a
+    /// collocated set square. Messages name each parameter as `naming` does.
+    ///
+    /// # Errors
+    /// [`EraError::Invalid`] or [`EraError::Limit`].
+    pub fn check(&self, naming: crate::params::Naming) -> Result<()> {
+        use crate::limits::{CHANNELS, LINES, STATES, VALUES};
+        use crate::params::check_positive;
+        let name = |key: &str| naming.name(key);
+        let s = &self.spec;
+        CHANNELS.check(name("outputs"), s.outputs as u64)?;
+        CHANNELS.check(name("inputs"), s.inputs as u64)?;
+        STATES.check_product(
+            format!("{} (2 states each)", name("modes")),
+            &[s.modes as u64, 2],
+        )?;
+        LINES.check(name("lines"), self.lines as u64)?;
+        VALUES.check_product(
+            format!(
+                "{} x {} x {}",
+                name("outputs"),
+                name("inputs"),
+                name("lines")
+            ),
+            &[s.outputs as u64, s.inputs as u64, self.lines as u64],
+        )?;
+        VALUES.check_product(
+            format!(
+                "{} x {} x {} x {} (modal FRF terms)",
+                name("outputs"),
+                name("inputs"),
+                name("lines"),
+                name("modes")
+            ),
+            &[
+                s.outputs as u64,
+                s.inputs as u64,
+                self.lines as u64,
+                s.modes as u64,
+            ],
+        )?;
+        check_positive(naming, "df", self.df_hz, "line spacing in Hz")?;
+        check_positive(naming, "fmin", s.fmin_hz, "frequency in Hz")?;
+        check_positive(naming, "fmax", s.fmax_hz, "frequency in Hz")?;
+        if s.collocated && s.outputs != s.inputs {
+            return crate::params::invalid(format!(
+                "{} needs as many outputs as inputs, got {} x {}",
+                name("collocated"),
+                s.outputs,
+                s.inputs
+            ));
+        }
+        let last = self.df_hz * (self.lines.saturating_sub(1)) as f64;
+        if s.fmax_hz >= last {
+            return crate::params::invalid(format!(
+                "{} {} Hz is not below the last line, {last} Hz ({} {} at {} {})",
+                name("fmax"),
+                s.fmax_hz,
+                name("lines"),
+                self.lines,
+                name("df"),
+                self.df_hz
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Adds complex Gaussian noise to every FRF: the noise on each pair has an RMS of exactly
 /// `fraction` times that pair's RMS magnitude (docs/design.md §2; thesis "15 % noise").
 ///

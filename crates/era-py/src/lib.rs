@@ -1,0 +1,197 @@
+//! # era from Python
+//!
+//! The native module `era._era` behind the Python package `era` (`python/era`): numpy
+//! arrays in, numpy arrays and plain Python objects out, every call going through the same
+//! library functions and parameter checks as the `era` command line.
+//!
+//! - `frf`: `FrfData` (validated like a file the CLI reads), `read_frf`, `write_frf`,
+//!   `estimate_frf` (Welch H1/H2/Hv from time histories), the simulators.
+//! - `model`: `identify` and its `Identification` (the matrices, singular values, modes,
+//!   fit, the model's FRF, `model.json`'s text, a python-control `StateSpace`).
+//! - `friction`: `friction_estimate`, the free-decay Coulomb estimate of Eq. 3.12.
+//!
+//! ## Errors
+//! A refused value or file is a Python exception carrying the CLI's message: input errors
+//! of the core ([`era::EraError::is_input_error`]) and malformed files are `ValueError`;
+//! a missing file `FileNotFoundError`, an unreadable one `PermissionError` or `OSError`;
+//! a numerical failure `RuntimeError`. A panic never crosses into Python as pyo3's
+//! `PanicException`: `guarded` turns one into a `RuntimeError` naming it an internal
+//! error.
+//!
+//! ## Threads and copies
+//! Every call that computes or reads a file releases the GIL (`Python::allow_threads`),
+//! so Python threads identify in parallel. Inputs are read in place when numpy's layout
+//! allows (a C-contiguous float64 time-history block is borrowed, not copied); FRF values
+//! are copied once into the validated [`era::FrfData`] the core owns; results move their
+//! Rust buffers into numpy arrays without a copy.
+//!
+//! Why hand-written glue rather than a generated binding: the API is fixed by issue 17
+//! (names, axis order `[output, input, frequency]`, exceptions), and the checks are the
+//! CLI's ([`era::params`]), which no generator knows about.
+
+use numpy::{Element, PyArray, PyArray1};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
+};
+use pyo3::prelude::*;
+
+mod frf;
+mod friction;
+mod model;
+
+/// An error of the core as a Python exception: `ValueError` for the caller's data or
+/// parameters, `RuntimeError` for a numerical failure.
+pub(crate) fn era_error(e: era::EraError) -> PyErr {
+    if e.is_input_error() {
+        PyValueError::new_err(e.to_string())
+    } else {
+        PyRuntimeError::new_err(e.to_string())
+    }
+}
+
+/// A file error as a Python exception: `FileNotFoundError`, `PermissionError` or
+/// `OSError` for the operating system's refusals, `ValueError` for malformed content or
+/// a size above a limit. The message is the CLI's (it names the file, line, column).
+pub(crate) fn io_error(e: era_io::IoError) -> PyErr {
+    let message = e.to_string();
+    match &e {
+        era_io::IoError::Io { error, .. } => match error.kind() {
+            std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+            std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+            _ => PyOSError::new_err(message),
+        },
+        _ => PyValueError::new_err(message),
+    }
+}
+
+/// `ValueError(message)`.
+pub(crate) fn value_error<T>(message: impl Into<String>) -> PyResult<T> {
+    Err(PyValueError::new_err(message.into()))
+}
+
+/// Runs `work` with the GIL released, turning a panic into a `RuntimeError` (a panic is
+/// a bug of ours, never an answer to bad input; it must not reach Python as pyo3's
+/// `PanicException`, which is not an `Exception`).
+pub(crate) fn guarded<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
+    py.allow_threads(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|payload| {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(PyRuntimeError::new_err(format!(
+                "era: internal error (please report it): {what}"
+            )))
+        })
+    })
+}
+
+/// A whole number given for a count or a seed, checked by the function that takes it
+/// (`count`), so that a negative value is a `ValueError` naming the parameter. A value
+/// of the wrong type (a float, a string, a bool) is a `TypeError`, as in numpy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Int(pub i128);
+
+impl<'py> FromPyObject<'py> for Int {
+    fn extract_bound(obj: &Bound<'py, PyAny>) -> PyResult<Self> {
+        if obj.is_instance_of::<pyo3::types::PyBool>() {
+            return Err(pyo3::exceptions::PyTypeError::new_err(
+                "expected an integer, got a bool",
+            ));
+        }
+        match obj.extract::<i128>() {
+            Ok(v) => Ok(Int(v)),
+            Err(e) if e.is_instance_of::<pyo3::exceptions::PyOverflowError>(obj.py()) => {
+                // Beyond i128: as large as anything can be, for the limit checks.
+                let negative = obj.lt(0).unwrap_or(false);
+                Ok(Int(if negative { i128::MIN } else { i128::MAX }))
+            }
+            Err(e) => Err(e),
+        }
+    }
+}
+
+impl Int {
+    /// The value as a count for `name`: `ValueError` when negative; values beyond `u64`
+    /// saturate (the limit checks then refuse them with "more than 1.8e19").
+    pub fn count(self, name: &str) -> PyResult<u64> {
+        if self.0 < 0 {
+            let shown = if self.0 == i128::MIN {
+                "below -1.7e38".to_string()
+            } else {
+                self.0.to_string()
+            };
+            return value_error(format!("{name} {shown}: must be 0 or more"));
+        }
+        Ok(u64::try_from(self.0).unwrap_or(u64::MAX))
+    }
+
+    /// [`Int::count`] as a `usize` (saturating on 32-bit targets).
+    pub fn size(self, name: &str) -> PyResult<usize> {
+        Ok(usize::try_from(self.count(name)?).unwrap_or(usize::MAX))
+    }
+}
+
+/// `obj` as a C-contiguous numpy array of `dtype` with `ndim` dimensions: an array that
+/// already is one is returned as it is (no copy); anything else goes through
+/// `numpy.ascontiguousarray`. `what` names the argument in a `ValueError`.
+pub(crate) fn contiguous<'py, T: Element, D: numpy::ndarray::Dimension>(
+    obj: &Bound<'py, PyAny>,
+    dtype: &str,
+    ndim: usize,
+    what: &str,
+    shape_words: &str,
+) -> PyResult<Bound<'py, PyArray<T, D>>> {
+    let py = obj.py();
+    let np = py.import("numpy")?;
+    let kwargs = pyo3::types::PyDict::new(py);
+    kwargs.set_item("dtype", dtype)?;
+    let array = np
+        .call_method("ascontiguousarray", (obj,), Some(&kwargs))
+        .map_err(|e| PyValueError::new_err(format!("{what}: cannot be read as {dtype}: {e}")))?;
+    let found = array.getattr("ndim")?.extract::<usize>()?;
+    if found != ndim {
+        let shape = array.getattr("shape")?.str()?.to_string();
+        return value_error(format!(
+            "{what}: expected {ndim} dimensions {shape_words}, got shape {shape}"
+        ));
+    }
+    array
+        .downcast_into::<PyArray<T, D>>()
+        .map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
+}
+
+/// A 1-D float64 array of `values` (moved, not copied).
+pub(crate) fn vector<'py, T: Element>(py: Python<'py>, values: Vec<T>) -> Bound<'py, PyArray1<T>> {
+    PyArray1::from_vec(py, values)
+}
+
+/// Marks a numpy array read-only (arrays that mirror immutable Rust data).
+pub(crate) fn read_only<T: Element, D: numpy::ndarray::Dimension>(
+    array: &Bound<'_, PyArray<T, D>>,
+) -> PyResult<()> {
+    array.getattr("flags")?.setattr("writeable", false)?;
+    Ok(())
+}
+
+/// The native module, imported by `python/era/__init__.py`.
+#[pymodule]
+fn _era(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<frf::PyFrfData>()?;
+    m.add_class::<model::PyIdentification>()?;
+    m.add_class::<model::PyMode>()?;
+    m.add_function(wrap_pyfunction!(frf::read_frf, m)?)?;
+    m.add_function(wrap_pyfunction!(frf::write_frf, m)?)?;
+    m.add_function(wrap_pyfunction!(frf::estimate_frf, m)?)?;
+    m.add_function(wrap_pyfunction!(frf::read_time, m)?)?;
+    m.add_function(wrap_pyfunction!(frf::simulate_truth_model, m)?)?;
+    m.add_function(wrap_pyfunction!(frf::simulate_modal, m)?)?;
+    m.add_function(wrap_pyfunction!(model::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(friction::friction_estimate, m)?)?;
+    Ok(())
+}

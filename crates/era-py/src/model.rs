@@ -1,0 +1,444 @@
+//! `identify` and what it returns.
+//!
+//! `identify(frf, states, ...)` runs docs/design.md §1 (the thesis's `frffilt`): integrate
+//! `ni` times, pad to `ndpts + 1` lines, zero `nz` leading lines, inverse-FFT to the
+//! Markov blocks `Y_k = C A^(k−1) B`, build the Hankel `H0[r][c] = Y_(1+r+c)` of
+//! `M = ns·lh` samples, `H0 = U S Vᵀ`, and realize
+//! `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)`; the modes come from
+//! `s = ln(z)/Ts`: frequency `|s|/2π`, damping `−Re s/|s|`, shapes `Cφ`, participations
+//! `ψB`. The parameters are the CLI's `era identify` flags under their Python names,
+//! checked by [`era::EraOptions::check`] with the CLI's messages.
+
+use crate::frf::PyFrfData;
+use crate::{contiguous, era_error, guarded, value_error, vector, Int};
+use era::identify::{
+    identify as run_identify, identify_auto, EraOptions, Identification, ModelDomain, ScanOptions,
+};
+use era::params::Naming;
+use era::realize::{DirectTerm, SvdPath};
+use era::{Complex64, TimeDomain};
+use era_io::model_json::{parameters, FitJson, ModelJson};
+use numpy::ndarray::Ix1;
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
+use pyo3::exceptions::PyImportError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+/// One mode: a complex pole pair of the model, by its positive-frequency member.
+///
+/// `frequency_hz` (`|s|/2π`), `damping_ratio` (`−Re s/|s|`), `eigenvalue` (of `A`:
+/// discrete `z` or continuous `s`), `continuous_pole` (`s`, rad/s), `shape` (`Cφ`,
+/// largest entry 1, complex (q,)), `participation` (`ψB`, complex (p,)). `physical` and
+/// `indicators` are `None` unless the identification computed them (automatic order
+/// selection and refinement do).
+#[pyclass(module = "era", name = "Mode", frozen, get_all)]
+pub struct PyMode {
+    /// Hz.
+    frequency_hz: f64,
+    /// Fraction of critical.
+    damping_ratio: f64,
+    /// Eigenvalue of `A`.
+    eigenvalue: Complex64,
+    /// `s`, rad/s.
+    continuous_pole: Complex64,
+    /// `Cφ`.
+    shape: Py<PyArray1<Complex64>>,
+    /// `ψB`.
+    participation: Py<PyArray1<Complex64>>,
+    /// Whether the mode is judged physical, when that was computed.
+    physical: Option<bool>,
+    /// Mode indicators by name, when computed.
+    indicators: Option<Py<PyDict>>,
+}
+
+#[pymethods]
+impl PyMode {
+    fn __repr__(&self) -> String {
+        format!(
+            "Mode(frequency_hz={}, damping_ratio={})",
+            self.frequency_hz, self.damping_ratio
+        )
+    }
+}
+
+/// What `identify` found: the model `(A, B, C, D)`, its Hankel singular values, modes
+/// and fit.
+#[pyclass(module = "era", name = "Identification", frozen)]
+pub struct PyIdentification {
+    found: Identification,
+    options: EraOptions,
+}
+
+fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (r, c) = (m.nrows(), m.ncols());
+    let mut v = Vec::with_capacity(r * c);
+    for i in 0..r {
+        for j in 0..c {
+            v.push(m[(i, j)]);
+        }
+    }
+    vector(py, v).reshape([r, c])
+}
+
+#[pymethods]
+impl PyIdentification {
+    /// State matrix A (n, n).
+    #[getter]
+    fn a<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        matrix(py, &self.found.model.a)
+    }
+    /// Input matrix B (n, p).
+    #[getter]
+    fn b<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        matrix(py, &self.found.model.b)
+    }
+    /// Output matrix C (q, n).
+    #[getter]
+    fn c<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        matrix(py, &self.found.model.c)
+    }
+    /// Direct term D (q, p).
+    #[getter]
+    fn d<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        matrix(py, &self.found.model.d)
+    }
+    /// Sample time of the impulse responses (the discrete model's), s:
+    /// `Ts = 1/(2Δf(N−1))` after padding.
+    #[getter]
+    fn sample_time_s(&self) -> f64 {
+        self.found.sample_time_s
+    }
+    /// "discrete" or "continuous".
+    #[getter]
+    fn time_domain(&self) -> &'static str {
+        match self.found.model.domain {
+            TimeDomain::Discrete { .. } => "discrete",
+            TimeDomain::Continuous => "continuous",
+        }
+    }
+    /// Model order n.
+    #[getter]
+    fn states(&self) -> usize {
+        self.found.model.states()
+    }
+    /// All singular values of H0, largest first.
+    #[getter]
+    fn singular_values<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector(py, self.found.realization.singular_values.clone())
+    }
+    /// Natural frequencies of the modes, Hz, ascending.
+    #[getter]
+    fn frequency_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector(
+            py,
+            self.found
+                .modal
+                .modes
+                .iter()
+                .map(|m| m.frequency_hz)
+                .collect(),
+        )
+    }
+    /// Damping ratios of the modes (fractions), in the order of `frequency_hz`.
+    #[getter]
+    fn damping_ratio<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector(
+            py,
+            self.found
+                .modal
+                .modes
+                .iter()
+                .map(|m| m.damping_ratio)
+                .collect(),
+        )
+    }
+    /// Eigenvalues of A of the modes (positive imaginary part), complex.
+    #[getter]
+    fn eigenvalues<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<Complex64>> {
+        vector(
+            py,
+            self.found
+                .modal
+                .modes
+                .iter()
+                .map(|m| m.eigenvalue)
+                .collect(),
+        )
+    }
+    /// Real eigenvalues of A (not modes).
+    #[getter]
+    fn real_poles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector(
+            py,
+            self.found
+                .modal
+                .real_poles
+                .iter()
+                .map(|r| r.eigenvalue)
+                .collect(),
+        )
+    }
+    /// The modes, by frequency.
+    #[getter]
+    fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let modes = self
+            .found
+            .modal
+            .modes
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let quality = self.found.quality.get(k);
+                let indicators = match quality {
+                    Some(q) => {
+                        let d = PyDict::new(py);
+                        d.set_item("mpc", q.indicators.mpc)?;
+                        d.set_item("emac", q.indicators.emac)?;
+                        d.set_item("cmi", q.indicators.cmi)?;
+                        d.set_item("contribution", q.indicators.contribution)?;
+                        d.set_item("reason", q.reason.clone())?;
+                        Some(d.unbind())
+                    }
+                    None => None,
+                };
+                Py::new(
+                    py,
+                    PyMode {
+                        frequency_hz: m.frequency_hz,
+                        damping_ratio: m.damping_ratio,
+                        eigenvalue: m.eigenvalue,
+                        continuous_pole: m.continuous_pole,
+                        shape: vector(py, m.shape.clone()).unbind(),
+                        participation: vector(py, m.participation.clone()).unbind(),
+                        physical: quality.map(|q| q.physical),
+                        indicators,
+                    },
+                )
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, modes)
+    }
+    /// Size of H0, (rows, columns).
+    #[getter]
+    fn hankel_size(&self) -> (usize, usize) {
+        self.found.realization.hankel_size
+    }
+    /// Warnings of the run.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.found
+            .realization
+            .warnings
+            .iter()
+            .map(ToString::to_string)
+            .collect()
+    }
+    /// Every parameter of the run by its model.json name.
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&parameters(&self.options))
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+    /// The fit against the processed measurement: fit.json's fields (`pairs` with
+    /// 1-based `output`, `input`, `relative_error` = ‖G_meas − G_model‖₂/‖G_meas‖₂,
+    /// `rms_log_magnitude_db`; the collocated and non-collocated means), plus
+    /// `relative_error` and `rms_log_magnitude_db` as (q, p) arrays.
+    #[getter]
+    fn fit<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&FitJson::from_report(&self.found.fit))
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        let dict = py.import("json")?.call_method1("loads", (text,))?;
+        let (q, p) = (self.found.model.outputs(), self.found.model.inputs());
+        let mut rel = vec![f64::NAN; q * p];
+        let mut db = vec![f64::NAN; q * p];
+        for pair in &self.found.fit.pairs {
+            rel[pair.output * p + pair.input] = pair.relative_error;
+            db[pair.output * p + pair.input] = pair.rms_log_magnitude_db;
+        }
+        dict.set_item("relative_error", vector(py, rel).reshape([q, p])?)?;
+        dict.set_item("rms_log_magnitude_db", vector(py, db).reshape([q, p])?)?;
+        Ok(dict)
+    }
+    /// The measurement after the same integrations (what the fit compares with).
+    #[getter]
+    fn processed(&self) -> PyFrfData {
+        PyFrfData::wrap(self.found.processed.clone())
+    }
+    /// The model's FRF at `frequency_hz` (any finite frequencies, Hz), complex (q, p, L)
+    /// in the quantity of the processed data.
+    fn response<'py>(
+        &self,
+        py: Python<'py>,
+        frequency_hz: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray3<Complex64>>> {
+        let f = contiguous::<f64, Ix1>(frequency_hz, "float64", 1, "frequency_hz", "(lines,)")?;
+        let f = f.readonly().as_slice()?.to_vec();
+        if let Some(k) = f.iter().position(|x| !x.is_finite()) {
+            return value_error(format!(
+                "frequency_hz: non-finite value {} at index {k}",
+                f[k]
+            ));
+        }
+        let model = &self.found.model;
+        let (q, p, l) = (model.outputs(), model.inputs(), f.len());
+        let values = guarded(py, || {
+            Ok(era::response::HessenbergForm::new(model).response(&f))
+        })?;
+        vector(py, values).reshape([q, p, l])
+    }
+    /// model.json's text (as `era identify --out` writes it, without timings).
+    fn to_json(&self) -> PyResult<String> {
+        let model = ModelJson::from_identification(&self.found, parameters(&self.options), None);
+        let mut text = serde_json::to_string_pretty(&model)
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        text.push('\n');
+        Ok(text)
+    }
+    /// A python-control `StateSpace` of the model (`dt` = the sample time for a
+    /// discrete model, 0 for a continuous one).
+    ///
+    /// Raises ImportError when python-control is not installed.
+    fn to_control<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let control = py.import("control").map_err(|e| {
+            PyImportError::new_err(format!(
+                "Identification.to_control() needs python-control: pip install control ({e})"
+            ))
+        })?;
+        let dt = match self.found.model.domain {
+            TimeDomain::Discrete { sample_time_s } => sample_time_s,
+            TimeDomain::Continuous => 0.0,
+        };
+        control.call_method1(
+            "ss",
+            (self.a(py)?, self.b(py)?, self.c(py)?, self.d(py)?, dt),
+        )
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Identification({} states, {} outputs x {} inputs, {} modes, {})",
+            self.found.model.states(),
+            self.found.model.outputs(),
+            self.found.model.inputs(),
+            self.found.modal.modes.len(),
+            self.time_domain()
+        )
+    }
+}
+
+/// The number of states from `states`: an int, or `None` for "auto" (automatic order,
+/// docs/design.md §10).
+fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+    if let Ok(text) = states.extract::<String>() {
+        return if text.trim().eq_ignore_ascii_case("auto") {
+            Ok(None)
+        } else {
+            value_error(format!(
+                "states '{text}': expected a number of states (an int) or 'auto'"
+            ))
+        };
+    }
+    states.extract::<Int>()?.size("states").map(Some)
+}
+
+/// Identifies a state-space model from FRFs (docs/design.md §1; the thesis's
+/// `frffilt`). Thesis names: `states` = ns, `hankel_factor` = lh, `integrations` = ni,
+/// `zero_lines` = nz, `pad_to` = ndpts, `lowpass` = (ford, Hzbreak),
+/// `time_domain` = cord.
+#[pyfunction]
+#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false))]
+#[allow(clippy::too_many_arguments)]
+pub fn identify(
+    py: Python<'_>,
+    frf: &Bound<'_, PyFrfData>,
+    states: &Bound<'_, PyAny>,
+    hankel_factor: Int,
+    integrations: Int,
+    zero_lines: Int,
+    pad_to: Int,
+    lowpass: Option<&Bound<'_, PyAny>>,
+    time_domain: &str,
+    direct_term: &str,
+    svd: &str,
+    refine: bool,
+) -> PyResult<PyIdentification> {
+    let chosen = states_of(states)?;
+    let states = chosen.unwrap_or(0);
+    if refine {
+        return value_error(
+            "refine=True: refinement of the modes is not available in this version yet",
+        );
+    }
+    let lowpass = match lowpass {
+        None => None,
+        Some(obj) if obj.is_none() => None,
+        Some(obj) => match obj.extract::<(Int, f64)>() {
+            Ok((order, hz)) => Some((order.size("lowpass order")?, hz)),
+            Err(_) => match obj.extract::<f64>() {
+                Ok(hz) => Some((4, hz)),
+                Err(_) => {
+                    return value_error(format!(
+                        "lowpass {}: expected a cut-off in Hz or (order, cut-off Hz)",
+                        obj.repr()?
+                    ))
+                }
+            },
+        },
+    };
+    let options = EraOptions {
+        states,
+        hankel_factor: hankel_factor.size("hankel_factor")?,
+        integrations: integrations.size("integrations")?,
+        lowpass,
+        zero_lines: zero_lines.size("zero_lines")?,
+        pad_to: pad_to.size("pad_to")?,
+        domain: match time_domain {
+            "discrete" => ModelDomain::Discrete,
+            "continuous" => ModelDomain::Continuous,
+            other => {
+                return value_error(format!(
+                    "time_domain '{other}': expected 'discrete' or 'continuous'"
+                ))
+            }
+        },
+        direct_term: match direct_term {
+            "zero" => DirectTerm::Zero,
+            "markov0" => DirectTerm::FirstMarkov,
+            other => {
+                return value_error(format!(
+                    "direct_term '{other}': expected 'zero' or 'markov0'"
+                ))
+            }
+        },
+        svd: match svd {
+            "auto" => SvdPath::Auto,
+            "dense" => SvdPath::Dense,
+            "matrix-free" | "matrix_free" => SvdPath::MatrixFree,
+            other => {
+                return value_error(format!(
+                    "svd '{other}': expected 'auto', 'dense' or 'matrix-free'"
+                ))
+            }
+        },
+    };
+    let checked = EraOptions {
+        states: states.max(usize::from(chosen.is_none())),
+        ..options.clone()
+    };
+    checked.check(Naming::Keyword).map_err(era_error)?;
+    let data = frf.get().inner.clone();
+    let found = guarded(py, || {
+        match chosen {
+            Some(_) => run_identify(&data, &options),
+            None => identify_auto(
+                &data,
+                &options,
+                &ScanOptions::default(),
+                &mut |_| {},
+                &mut |_, _| {},
+            ),
+        }
+        .map_err(era_error)
+    })?;
+    Ok(PyIdentification { found, options })
+}

@@ -1,0 +1,51 @@
+"""era: the Eigensystem Realization Algorithm for lightly damped structures, from Python.
+
+Measured frequency response functions (FRFs) in, a state-space model ``(A, B, C, D)``,
+its Hankel singular values, modes and fit out: the same Rust core, checks and messages
+as the ``era`` command line, with numpy arrays in and out. The axis order is
+``[output, input, frequency]`` everywhere.
+
+>>> import era
+>>> frf = era.simulate_truth_model()            # the thesis's 4-mass truth model
+>>> found = era.identify(frf, states=8, hankel_factor=4, pad_to=1024)
+>>> [round(f, 2) for f in found.frequency_hz]   # Table 5.2
+[1748.64, 5031.8, 7709.75, 9458.39]
+
+Thesis names (Woods 1994, Appendix J) beside ours: ``states`` = ns, ``hankel_factor``
+= lh, ``integrations`` = ni, ``zero_lines`` = nz, ``pad_to`` = ndpts, ``lowpass`` =
+(ford, Hzbreak), ``time_domain`` = cord.
+
+Errors: bad values and malformed files raise ``ValueError`` with the CLI's message, a
+missing file ``FileNotFoundError``, an unreadable one ``OSError``; a value of the wrong
+type ``TypeError``. Heavy calls release the GIL, so threads identify in parallel.
+"""
+
+from ._era import (
+    FrfData,
+    Identification,
+    Mode,
+    __version__,
+    estimate_frf,
+    identify,
+    read_frf,
+    read_time,
+    simulate_modal,
+    simulate_truth_model,
+    write_frf,
+)
+from . import friction
+
+__all__ = [
+    "FrfData",
+    "Identification",
+    "Mode",
+    "__version__",
+    "estimate_frf",
+    "friction",
+    "identify",
+    "read_frf",
+    "read_time",
+    "simulate_modal",
+    "simulate_truth_model",
+    "write_frf",
+]

@@ -1,0 +1,33 @@
+"""Eight threads identifying at once give what one thread gives, bit for bit."""
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+import era
+
+
+def test_eight_threads_equal_one():
+    # The thesis size: the DTA-like 8 x 8 set, 801 lines, and its settings (ns 80,
+    # lh 5, ni 1, nz 3, ndpts 1024).
+    frf = era.simulate_modal(collocated=True, noise=0.05)
+    settings = dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024)
+    alone = era.identify(frf, **settings)
+    with ThreadPoolExecutor(max_workers=8) as pool:
+        results = list(pool.map(lambda _: era.identify(frf, **settings), range(8)))
+    for found in results:
+        assert np.array_equal(found.eigenvalues, alone.eigenvalues)
+        assert np.array_equal(found.singular_values, alone.singular_values)
+        assert np.array_equal(found.a, alone.a)
+        assert found.to_json() == alone.to_json()
+
+
+def test_threads_on_different_data():
+    frfs = [era.simulate_truth_model(noise=0.15, seed=s) for s in range(1, 9)]
+    one = [era.identify(f, 8, hankel_factor=4, pad_to=1024).eigenvalues for f in frfs]
+    with ThreadPoolExecutor(max_workers=8) as pool:
+        many = list(pool.map(lambda f: era.identify(f, 8, hankel_factor=4, pad_to=1024).eigenvalues, frfs))
+    for a, b in zip(one, many):
+        assert np.array_equal(a, b)
+    # Different noise, different models: the comparison above could fail.
+    assert not np.array_equal(one[0], one[1])
