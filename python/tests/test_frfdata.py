@@ -99,9 +99,9 @@ def test_identification_results_are_plain_numpy():
     assert mode.frequency_hz == found.frequency_hz[0]
     assert mode.shape.shape == (q,) and mode.participation.shape == (p,)
     assert np.max(np.abs(mode.shape)) == pytest.approx(1.0)
-    # The truth model's four modes are real normal modes, judged physical.
+    # The truth model's four modes are judged physical, with near-real shapes.
     assert mode.physical is True
-    assert mode.indicators["mpc"] == pytest.approx(1.0, abs=1e-6)
+    assert mode.indicators["mpc"] > 0.999
     assert mode.indicators["emac"] > 0.9 and mode.indicators["reason"] is None
     # states="auto" scans the orders and keeps the same four modes.
     auto = era.identify(era.simulate_truth_model(), "auto", hankel_factor=4, pad_to=1024)
