@@ -265,13 +265,33 @@ pub struct Stabilization {
     pub model_note: Option<String>,
 }
 
-/// What order to identify at.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum OrderChoice {
-    /// The order of [`EraOptions::states`], the thesis's way.
-    Fixed,
-    /// Choose the physical modes from a scan ([`identify_auto`]).
-    Auto,
+impl Stabilization {
+    /// The record of a scan, its selection and the factorization it came from; the CMIF
+    /// is taken of `processed` without its zeroed lines.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        range: OrderRange,
+        scan: Scan,
+        selection: Selection,
+        factorization: &Factorization,
+        processed: &FrfData,
+        zero_lines: usize,
+        seconds: f64,
+        model_note: Option<String>,
+    ) -> Self {
+        Stabilization {
+            range,
+            scan,
+            selection,
+            singular_values: factorization.singular_values().to_vec(),
+            hankel_size: factorization.hankel_size(),
+            cmif: cmif(&zero_leading_lines(processed, zero_lines)),
+            seconds,
+            factor_seconds: factorization.seconds(),
+            svd_iterations: factorization.svd_iterations(),
+            model_note,
+        }
+    }
 }
 
 /// The largest FRF magnitude identified as given: `2^300` (about 2e90). Above it the
@@ -321,37 +341,30 @@ impl MagnitudeScale {
     }
 
     fn undo(self, r: &mut Realization) {
+        self.undo_model(&mut r.model);
         let inv = Self::factor(-self.exponent);
         let inv_sqrt = Self::factor(-self.exponent / 2);
-        let m = &mut r.model;
-        for (mat, k) in [(&mut m.b, inv_sqrt), (&mut m.c, inv_sqrt), (&mut m.d, inv)] {
-            for j in 0..mat.ncols() {
-                for i in 0..mat.nrows() {
-                    mat[(i, j)] *= k;
-                }
-            }
-        }
         for sv in &mut r.singular_values {
             *sv *= inv;
         }
-        for mat in [&mut r.tails.observability, &mut r.tails.controllability] {
-            for j in 0..mat.ncols() {
-                for i in 0..mat.nrows() {
-                    mat[(i, j)] *= inv_sqrt;
-                }
-            }
-        }
+        scale(&mut r.tails.observability, inv_sqrt);
+        scale(&mut r.tails.controllability, inv_sqrt);
     }
 
     fn undo_model(self, m: &mut StateSpace) {
         let inv = Self::factor(-self.exponent);
         let inv_sqrt = Self::factor(-self.exponent / 2);
-        for (mat, k) in [(&mut m.b, inv_sqrt), (&mut m.c, inv_sqrt), (&mut m.d, inv)] {
-            for j in 0..mat.ncols() {
-                for i in 0..mat.nrows() {
-                    mat[(i, j)] *= k;
-                }
-            }
+        scale(&mut m.b, inv_sqrt);
+        scale(&mut m.c, inv_sqrt);
+        scale(&mut m.d, inv);
+    }
+}
+
+/// Multiplies every entry of `mat` by `k`.
+fn scale(mat: &mut faer::Mat<f64>, k: f64) {
+    for j in 0..mat.ncols() {
+        for i in 0..mat.nrows() {
+            mat[(i, j)] *= k;
         }
     }
 }
@@ -858,7 +871,7 @@ pub fn identify_with_scan(
 ) -> Result<Identification> {
     let mut found = run(frf, options, Path::Fast, observer)?;
     let mut timings = StageTimings::default();
-    let (f, factorization, range, s, seconds) = scan_front(
+    let (_, factorization, range, s, seconds) = scan_front(
         frf,
         options,
         scan_options,
@@ -883,19 +896,16 @@ pub fn identify_with_scan(
             None => {}
         }
     }
-    let _ = f;
-    found.stabilization = Some(Stabilization {
+    found.stabilization = Some(Stabilization::new(
         range,
-        scan: s,
+        s,
         selection,
-        singular_values: factorization.singular_values().to_vec(),
-        hankel_size: factorization.hankel_size(),
-        cmif: cmif(&zero_leading_lines(&found.processed, options.zero_lines)),
+        &factorization,
+        &found.processed,
+        options.zero_lines,
         seconds,
-        factor_seconds: factorization.seconds(),
-        svd_iterations: factorization.svd_iterations(),
-        model_note: None,
-    });
+        None,
+    ));
     Ok(found)
 }
 
@@ -986,18 +996,16 @@ pub fn identify_auto(
             q.reason = None;
         }
     }
-    found.stabilization = Some(Stabilization {
+    found.stabilization = Some(Stabilization::new(
         range,
-        scan: s,
+        s,
         selection,
-        singular_values: factorization.singular_values().to_vec(),
-        hankel_size: factorization.hankel_size(),
-        cmif: cmif(&zero_leading_lines(&found.processed, options.zero_lines)),
+        &factorization,
+        &found.processed,
+        options.zero_lines,
         seconds,
-        factor_seconds: factorization.seconds(),
-        svd_iterations: factorization.svd_iterations(),
-        model_note: Some(note),
-    });
+        Some(note),
+    ));
     Ok(found)
 }
 

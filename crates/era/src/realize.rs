@@ -57,6 +57,15 @@ impl SvdPath {
             SvdPath::Auto => "auto",
         }
     }
+
+    /// Whether this path goes matrix-free for an `H0` whose short side is `short_side`.
+    pub fn matrix_free(self, short_side: usize) -> bool {
+        match self {
+            SvdPath::Dense => false,
+            SvdPath::MatrixFree => true,
+            SvdPath::Auto => short_side >= AUTO_MATRIX_FREE_MIN_DIM,
+        }
+    }
 }
 
 /// [`SvdPath::Auto`] goes matrix-free when the short side of `H0` is at least this.
@@ -227,15 +236,8 @@ fn plan(
     }
     let rows = shapes.h0.block_rows * markov.outputs();
     let cols = shapes.h0.block_cols * markov.inputs();
+    check_room(rows, cols, options.states)?;
     let available = rows.min(cols);
-    if available < options.states {
-        return Err(EraError::HankelTooSmall {
-            rows,
-            cols,
-            available,
-            states: options.states,
-        });
-    }
     let mut warnings = Vec::new();
     if available < 2 * options.states {
         warnings.push(RealizeWarning::FewSingularValues {
@@ -250,6 +252,20 @@ fn plan(
         });
     }
     Ok((shapes, warnings))
+}
+
+/// [`EraError::HankelTooSmall`] unless an `H0` of `rows × cols` has room for `states`
+/// (at least one).
+fn check_room(rows: usize, cols: usize, states: usize) -> Result<()> {
+    if states == 0 || rows.min(cols) < states {
+        return Err(EraError::HankelTooSmall {
+            rows,
+            cols,
+            available: rows.min(cols),
+            states,
+        });
+    }
+    Ok(())
 }
 
 /// Numerical rank of a singular-value list: values above `max(rows, cols)·ε·σ₁`.
@@ -322,14 +338,7 @@ pub fn realize_general(
         shape.block_rows * markov.outputs(),
         shape.block_cols * markov.inputs(),
     );
-    if options.states == 0 || rows.min(cols) < options.states {
-        return Err(EraError::HankelTooSmall {
-            rows,
-            cols,
-            available: rows.min(cols),
-            states: options.states,
-        });
-    }
+    check_room(rows, cols, options.states)?;
     let h1 = HankelShape {
         first_sample: shape.first_sample + 1,
         ..shape
@@ -348,11 +357,7 @@ fn realize_shapes(
 ) -> Result<Realization> {
     let short_side =
         (h0_shape.block_rows * markov.outputs()).min(h0_shape.block_cols * markov.inputs());
-    let matrix_free = match options.svd {
-        SvdPath::Dense => false,
-        SvdPath::MatrixFree => true,
-        SvdPath::Auto => short_side >= AUTO_MATRIX_FREE_MIN_DIM,
-    };
+    let matrix_free = options.svd.matrix_free(short_side);
     if matrix_free {
         return realize_matrix_free(markov, sample_time_s, options, h0_shape, h1_shape, warnings);
     }
@@ -471,12 +476,33 @@ fn balanced_matrices(
     markov: &MarkovSequence,
     options: &RealizeOptions,
 ) -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>) {
-    let (n, q, p) = (singular_values.len(), markov.outputs(), markov.inputs());
+    let (a, b, c) = balanced_abc(
+        singular_values,
+        un,
+        vn,
+        ut_h1_v.as_ref(),
+        markov.outputs(),
+        markov.inputs(),
+    );
+    (a, b, c, direct_term(markov, options.direct_term))
+}
+
+/// `A`, `B`, `C` of §1.9 (see [`balanced_matrices`]); `ut_h1_v` may be larger than
+/// `n × n` (a factorization's), only its leading block is read.
+fn balanced_abc(
+    singular_values: &[f64],
+    un: faer::MatRef<'_, f64>,
+    vn: faer::MatRef<'_, f64>,
+    ut_h1_v: faer::MatRef<'_, f64>,
+    q: usize,
+    p: usize,
+) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
+    let n = singular_values.len();
     let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
     let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
     let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
     let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
-    (a, b, c, direct_term(markov, options.direct_term))
+    (a, b, c)
 }
 
 /// The matrix-free path of [`realize`]: `H0` and `H1` are never formed.
@@ -604,14 +630,7 @@ impl Factorization {
             shapes.h0.block_rows * markov.outputs(),
             shapes.h0.block_cols * markov.inputs(),
         );
-        if options.max_states == 0 || rows.min(cols) < options.max_states {
-            return Err(EraError::HankelTooSmall {
-                rows,
-                cols,
-                available: rows.min(cols),
-                states: options.max_states,
-            });
-        }
+        check_room(rows, cols, options.max_states)?;
         let realize_options = RealizeOptions {
             states: options.max_states,
             ..plan_options
@@ -641,14 +660,7 @@ impl Factorization {
             shape.block_rows * markov.outputs(),
             shape.block_cols * markov.inputs(),
         );
-        if max_states == 0 || rows.min(cols) < max_states {
-            return Err(EraError::HankelTooSmall {
-                rows,
-                cols,
-                available: rows.min(cols),
-                states: max_states,
-            });
-        }
+        check_room(rows, cols, max_states)?;
         let h1 = HankelShape {
             first_sample: shape.first_sample + 1,
             ..shape
@@ -675,11 +687,7 @@ impl Factorization {
             h0_shape.block_rows * markov.outputs(),
             h0_shape.block_cols * markov.inputs(),
         );
-        let matrix_free = match options.svd {
-            SvdPath::Dense => false,
-            SvdPath::MatrixFree => true,
-            SvdPath::Auto => rows.min(cols) >= AUTO_MATRIX_FREE_MIN_DIM,
-        };
+        let matrix_free = options.svd.matrix_free(rows.min(cols));
         let (u, s, v, ut_h1_v, path, iterations) = if matrix_free {
             let op0 = HankelOperator::new(markov, h0_shape)?;
             // Only the realized triplets must converge; the extra singular values are the
@@ -810,11 +818,8 @@ impl Factorization {
         let n = states;
         let (q, p) = (self.y0.nrows(), self.y0.ncols());
         let sv = &self.singular_values[..n];
-        let root: Vec<f64> = sv.iter().map(|s| s.sqrt()).collect();
         let (un, vn) = (self.u.subcols(0, n), self.v.subcols(0, n));
-        let a = Mat::from_fn(n, n, |r, c| self.ut_h1_v[(r, c)] / (root[r] * root[c]));
-        let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
-        let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
+        let (a, b, c) = balanced_abc(sv, un, vn, self.ut_h1_v.as_ref(), q, p);
         let d = match direct {
             DirectTerm::Zero => Mat::zeros(q, p),
             DirectTerm::FirstMarkov => self.y0.clone(),
