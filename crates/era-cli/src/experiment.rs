@@ -2,6 +2,7 @@
 //! (`era::sim::experiment`), written as an FRF file with its coherence beside it.
 
 use crate::args::CommonArgs;
+use crate::figures::write_figure;
 use crate::identify::{output_name, write_output};
 use crate::report::{finish_output, Human};
 use crate::usage;
@@ -16,6 +17,7 @@ use era_io::atomic::OutputSet;
 use era_io::csv::FrfFile;
 use era_io::format::FrfFormat;
 use era_io::uff::UffWriteOptions;
+use era_plot::{Figure, Panel, Series, SeriesKind, YScale};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -359,6 +361,102 @@ fn time_csv(e: &Experiment, run: usize, rate_hz: f64) -> String {
     out
 }
 
+/// Seconds of each run drawn in its time-history figure.
+const FIGURE_SPAN_S: f64 = 20.0;
+
+/// The first [`FIGURE_SPAN_S`] of one run, for the first excited actuator: the drive and
+/// compensation voltages, the LVT velocity against the compensator's dead zone, and the
+/// stroke. It shows where the mass sticks and where the compensator acts at all.
+fn time_figure(e: &Experiment, run: usize, rate_hz: f64, dead_zone: f64) -> Figure {
+    let rec = &e.records[run];
+    let j = rec.excited.first().copied().unwrap_or(0);
+    let n = ((FIGURE_SPAN_S * rate_hz) as usize).min(rec.voltage[j].len());
+    let t: Vec<f64> = (0..n).map(|k| k as f64 / rate_hz).collect();
+    let series = |label: &str, y: &[f64], kind| Series {
+        label: label.into(),
+        x: t.clone(),
+        y: y[..n].to_vec(),
+        kind,
+    };
+    let range = |ys: &[&[f64]]| {
+        let m = ys
+            .iter()
+            .flat_map(|y| y[..n].iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let m = if m > 0.0 { 1.1 * m } else { 1.0 };
+        (-m, m)
+    };
+    let panel = |y_label: &str, series: Vec<Series>, y_range, guide| Panel {
+        title: String::new(),
+        x_label: "time (s)".into(),
+        y_label: y_label.into(),
+        y_scale: YScale::Linear,
+        x_range: (0.0, FIGURE_SPAN_S),
+        y_range,
+        series,
+        marker_x: None,
+        guide_y: guide,
+        legend: true,
+    };
+    let (v, c, z, s) = (
+        &rec.voltage[j],
+        &rec.compensation_v[j],
+        &rec.relative_velocity[j],
+        &rec.stroke[j],
+    );
+    let stuck = z[..n].iter().filter(|x| **x == 0.0).count();
+    Figure {
+        title: format!(
+            "run {}: actuator {}, first {FIGURE_SPAN_S:.0} s (stuck {:.0} % of samples)",
+            run + 1,
+            j + 1,
+            100.0 * stuck as f64 / n.max(1) as f64
+        ),
+        panels: vec![
+            panel(
+                "voltage (V)",
+                vec![
+                    series("excitation", v, SeriesKind::Measured),
+                    series("compensation", c, SeriesKind::Model),
+                ],
+                range(&[v, c]),
+                None,
+            ),
+            panel(
+                "LVT velocity (in/s)",
+                vec![series("relative velocity", z, SeriesKind::Measured)],
+                range(&[z]),
+                Some((dead_zone, format!("compensator dead zone {dead_zone} in/s"))),
+            ),
+            panel(
+                "stroke (in)",
+                vec![series("proof-mass stroke", s, SeriesKind::Measured)],
+                range(&[s]),
+                None,
+            ),
+        ],
+        columns: 1,
+        size: (1100, 900),
+    }
+}
+
+/// Over all runs, for each run's excited actuator(s): the share of analyzer samples at
+/// which the mass is stuck, and the share at which its speed is above the compensator's
+/// dead zone (where compensation acts).
+fn motion_shares(e: &Experiment, dead_zone: f64) -> (f64, f64) {
+    let (mut stuck, mut above, mut total) = (0usize, 0usize, 0usize);
+    for rec in &e.records {
+        for &j in &rec.excited {
+            let z = &rec.relative_velocity[j];
+            stuck += z.iter().filter(|x| **x == 0.0).count();
+            above += z.iter().filter(|x| x.abs() > dead_zone).count();
+            total += z.len();
+        }
+    }
+    let total = total.max(1) as f64;
+    (stuck as f64 / total, above as f64 / total)
+}
+
 pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     frf_format("--out", &a.out)?;
@@ -429,6 +527,14 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         })?;
         s.commit()?;
     }
+    let dead_zone = spec
+        .compensation
+        .as_ref()
+        .map_or(Compensation::thesis().dead_zone, |c| c.dead_zone);
+    let shares = a
+        .time_histories
+        .as_ref()
+        .map(|_| motion_shares(&found, dead_zone));
     if let Some(mut s) = th_set.take() {
         for r in 0..found.records.len() {
             let text = time_csv(&found, r, spec.analyzer_rate_hz);
@@ -436,6 +542,8 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
                 era_io::atomic::write_atomic(staged, text.as_bytes())?;
                 Ok(())
             })?;
+            let figure = time_figure(&found, r, spec.analyzer_rate_hz, dead_zone);
+            write_figure(&mut s, Path::new(""), &format!("run{}", r + 1), &figure)?;
         }
         s.commit()?;
     }
@@ -466,6 +574,14 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
             .collect::<Vec<_>>()
             .join(" ")
     ));
+    if let Some((stuck, above)) = shares {
+        human.print(&format!(
+            "  excited actuators: stuck {:.1} % of the time, faster than the {dead_zone} in/s dead zone {:.1} % (time histories and figures in {})\n",
+            100.0 * stuck,
+            100.0 * above,
+            a.time_histories.as_ref().map_or(String::new(), |d| d.display().to_string())
+        ));
+    }
     let summary = json!({
         "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
         "time_histories": a.time_histories,
@@ -475,6 +591,8 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         "excitation_rms_v": spec.excitation_rms_v,
         "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
         "max_stroke_in": found.max_stroke,
+        "excited_stuck_fraction": shares.map(|s| s.0),
+        "excited_above_dead_zone_fraction": shares.map(|s| s.1),
     });
     finish_output(
         &human,

@@ -47,8 +47,8 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
     let mut estimates = Vec::new();
     let mut records = Vec::new();
     let mut table = format!(
-        "era friction estimate (k = {}; Eq. 3.12: F_C = dy k / (8 pi f_n cycles))\n{:<28} {:>9} {:>7} {:>12} {:>11} {:>9} {:>9}\n",
-        a.stiffness, "record", "f_n (Hz)", "cycles", "drop/cycle", "F_C", "zeta", "model"
+        "era friction estimate (k = {}; Eq. 3.12: F_C = dy k / (8 pi f_n cycles); combined: friction and viscous damping fitted together)\n{:<28} {:>9} {:>7} {:>12} {:>11} {:>9} {:>9} {:>11} {:>9}\n",
+        a.stiffness, "record", "f_n (Hz)", "cycles", "drop/cycle", "F_C", "zeta", "model", "F_C comb.", "zeta comb."
     );
     for path in &a.files {
         let (e, signal) = estimate_file(path, a.stiffness)?;
@@ -58,14 +58,16 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
         );
         let _ = writeln!(
             table,
-            "{:<28} {:>9.4} {:>7.1} {:>12.5} {:>11.5} {:>9.5} {:>9}",
+            "{:<28} {:>9.4} {:>7.1} {:>12.5} {:>11.5} {:>9.5} {:>9} {:>11.5} {:>10.5}",
             name,
             e.natural_frequency_hz,
             e.cycles,
             e.velocity_drop_per_cycle,
             e.coulomb_force,
             e.viscous_damping_ratio,
-            e.better_model.name()
+            e.better_model.name(),
+            e.combined.coulomb_force,
+            e.combined.viscous_damping_ratio
         );
         records.push(record_json(path, &e, signal));
         estimates.push(e);
@@ -79,12 +81,19 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
         estimates.len(),
         s.natural_frequency_hz_mean
     );
+    let _ = writeln!(
+        table,
+        "combined law: F_C mean {:.5}, zeta mean {:.5} (Eq. 3.12 reads any viscous damping as friction; the combined fit does not)",
+        s.combined_coulomb_force_mean, s.combined_viscous_damping_ratio_mean
+    );
     human.print(&table);
     let out = json!({
         "records": records,
         "coulomb_force_mean": s.coulomb_force_mean,
         "coulomb_force_std": s.coulomb_force_std,
         "natural_frequency_hz_mean": s.natural_frequency_hz_mean,
+        "combined_coulomb_force_mean": s.combined_coulomb_force_mean,
+        "combined_viscous_damping_ratio_mean": s.combined_viscous_damping_ratio_mean,
         "stiffness": a.stiffness,
     });
     finish_output(

@@ -54,6 +54,12 @@ pub fn estimate_json(
         ("better_model", json!(e.better_model.name())),
         ("coulomb_residual", json!(e.coulomb_residual)),
         ("viscous_residual", json!(e.viscous_residual)),
+        ("combined_coulomb_force", json!(e.combined.coulomb_force)),
+        (
+            "combined_viscous_damping_ratio",
+            json!(e.combined.viscous_damping_ratio),
+        ),
+        ("combined_residual", json!(e.combined.residual)),
         ("half_cycles_fitted", json!(e.half_cycles.len())),
         (
             "fit_start_s",

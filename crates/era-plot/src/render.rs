@@ -110,9 +110,21 @@ where
                 }
             };
             mesh.x_label_formatter(&x_format);
-            let y_format = |v: &f64| match panel.y_scale {
+            // Linear ticks with as many decimals as the span needs (a ±0.3 V axis
+            // is not labelled 0, 0, 0).
+            let y_span = y1 - y0;
+            let decimals = if y_span >= 20.0 {
+                0
+            } else {
+                (1.0 - y_span.log10().floor()).clamp(1.0, 6.0) as usize
+            };
+            let y_format = move |v: &f64| match panel.y_scale {
                 YScale::Log => format!("{v:.0e}"),
-                YScale::Linear => format!("{v:.0}"),
+                // A tick at 0 that roundoff put at -1e-17 is "0", not "-0.0".
+                YScale::Linear if v.abs() < 0.5 * 10f64.powi(-(decimals as i32)) => {
+                    format!("{:.decimals$}", 0.0)
+                }
+                YScale::Linear => format!("{v:.decimals$}"),
             };
             mesh.y_label_formatter(&y_format);
             mesh.draw().map_err(err)?;

@@ -23,6 +23,19 @@
 //!    `A = A₀ e^(−σt)` (viscous; weighted log-linear start, Gauss–Newton refinement);
 //!    the RMS residuals say which explains the record better.
 //! 9. **Friction**: Eq. 3.12 with the fitted drop per cycle `−b/f_n`.
+//! 10. **Both at once**: Eq. 3.12 reads the whole decay as friction, so any viscous
+//!     damping in the actuator (back-EMF, air) inflates it. The combined law separates
+//!     them. Within one half-cycle of `m ẍ + c ẋ + k x = −F_C sgn ẋ` the motion is a
+//!     damped oscillation about the shifted rest point `±δ`, `δ = F_C/k`, so the
+//!     displacement extremes obey `X₊ − δ = d (X − δ) − 2δ` with the half-cycle ratio
+//!     `d = e^(−σπ/ω_d)`, `σ = ζω`. The lobe amplitudes `A = K (X − δ)`,
+//!     `K = (ω²/ω_d)·e^(−σπ/2ω_d)` (the envelope at the lobe centre), therefore follow
+//!     `A₊ = d A − 2Kδ`, whose continuous form is
+//!     `A(t) = A₀ e^(−σt) − r (1 − e^(−σt))/σ`. It is linear in `(A₀, r)` for a given
+//!     `σ`, so `σ ≥ 0` is found by a one-dimensional search on the least-squares residual
+//!     (a log-spaced grid, then golden-section refinement) with `r ≥ 0`, and
+//!     `F_C = k (r/σ)(1 − d) / (2K)`. At `σ = 0` it is the straight line and Eq. 3.12
+//!     exactly; at `r = 0` it is the exponential.
 
 use super::{coulomb_force_from_decay, FrictionError, Result};
 use crate::filter::LowPass;
@@ -79,12 +92,26 @@ pub struct DecayEstimate {
     pub viscous_residual: f64,
     /// The model with the smaller residual.
     pub better_model: DampingModel,
+    /// The combined Coulomb + viscous law (module docs, step 10).
+    pub combined: CombinedFit,
     /// The half-cycles fitted.
     pub half_cycles: Vec<HalfCycle>,
     /// Estimated sensor noise RMS.
     pub noise_rms: f64,
     /// Velocity offset removed.
     pub offset: f64,
+}
+
+/// Friction and viscous damping fitted together to the lobe amplitudes (module docs,
+/// step 10).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CombinedFit {
+    /// Coulomb force with the viscous share taken out.
+    pub coulomb_force: f64,
+    /// Viscous damping ratio with the friction share taken out.
+    pub viscous_damping_ratio: f64,
+    /// RMS residual of the combined law.
+    pub residual: f64,
 }
 
 /// Minimum usable half-cycles for the fits.
@@ -195,6 +222,102 @@ fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
         / n)
         .sqrt();
     (a, b, rms)
+}
+
+/// `(1 − e^(−σt))/σ`, continuous at σ = 0 (where it is `t`).
+fn friction_basis(sigma: f64, t: f64) -> f64 {
+    if sigma * t < 1e-12 {
+        t
+    } else {
+        -(-sigma * t).exp_m1() / sigma
+    }
+}
+
+/// For a given σ: least squares `y = A₀ e^(−σt) − r (1 − e^(−σt))/σ` with `r ≥ 0`;
+/// returns (A₀, r, RMS residual).
+fn combined_at(sigma: f64, t: &[f64], y: &[f64]) -> (f64, f64, f64) {
+    let rms = |a0: f64, r: f64| {
+        (t.iter()
+            .zip(y)
+            .map(|(ti, yi)| {
+                (yi - a0 * (-sigma * ti).exp() + r * friction_basis(sigma, *ti)).powi(2)
+            })
+            .sum::<f64>()
+            / t.len() as f64)
+            .sqrt()
+    };
+    let (mut s11, mut s12, mut s22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (ti, yi) in t.iter().zip(y) {
+        let (e, g) = ((-sigma * ti).exp(), -friction_basis(sigma, *ti));
+        s11 += e * e;
+        s12 += e * g;
+        s22 += g * g;
+        b1 += e * yi;
+        b2 += g * yi;
+    }
+    let det = s11 * s22 - s12 * s12;
+    if det > 1e-12 * s11 * s22 {
+        let (a0, r) = ((s22 * b1 - s12 * b2) / det, (s11 * b2 - s12 * b1) / det);
+        if r >= 0.0 {
+            return (a0, r, rms(a0, r));
+        }
+    }
+    // Friction would be negative (or the two laws are indistinguishable): the
+    // exponential alone.
+    let a0 = b1 / s11;
+    (a0, 0.0, rms(a0, 0.0))
+}
+
+/// The combined Coulomb + viscous law (module docs, step 10) for amplitudes `y` at lobe
+/// centres `t` (from the first), damped angular frequency `omega_d`.
+fn combined_fit(t: &[f64], y: &[f64], omega_d: f64, stiffness: f64) -> CombinedFit {
+    let cost = |sigma: f64| combined_at(sigma, t, y).2;
+    // σ up to the decay of one cycle in e^-2π (ζ ≈ 0.7): beyond it there is no
+    // oscillation to fit. A log grid, σ = 0 included, then golden section around the
+    // best point.
+    let top = omega_d;
+    let floor = 1e-6 * omega_d;
+    let grid: Vec<f64> = std::iter::once(0.0)
+        .chain((0..=120).map(|i| floor * (top / floor).powf(i as f64 / 120.0)))
+        .collect();
+    let best = (0..grid.len())
+        .min_by(|a, b| cost(grid[*a]).total_cmp(&cost(grid[*b])))
+        .unwrap_or(0);
+    let (mut lo, mut hi) = (
+        grid[best.saturating_sub(1)],
+        grid[(best + 1).min(grid.len() - 1)],
+    );
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut x1, mut x2) = (hi - phi * (hi - lo), lo + phi * (hi - lo));
+    let (mut f1, mut f2) = (cost(x1), cost(x2));
+    for _ in 0..80 {
+        if f1 <= f2 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - phi * (hi - lo);
+            f1 = cost(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + phi * (hi - lo);
+            f2 = cost(x2);
+        }
+    }
+    let mut sigma = if f1 <= f2 { x1 } else { x2 };
+    if cost(grid[best]) < cost(sigma) {
+        sigma = grid[best];
+    }
+    let (_, r, residual) = combined_at(sigma, t, y);
+    let half = std::f64::consts::PI / omega_d;
+    let omega2 = omega_d * omega_d + sigma * sigma;
+    let gain = omega2 / omega_d * (-0.5 * sigma * half).exp();
+    // (r/σ)(1 − d), continuous at σ = 0 where it is r·half.
+    let drop = r * friction_basis(sigma, half);
+    CombinedFit {
+        coulomb_force: stiffness * drop / (2.0 * gain),
+        viscous_damping_ratio: sigma / omega2.sqrt(),
+        residual,
+    }
 }
 
 /// Least squares `y = A₀ exp(−σ x)` for positive `y`; returns (A₀, σ, RMS residual).
@@ -392,6 +515,7 @@ pub fn estimate_velocity(
         natural_frequency_hz,
         cycles,
     );
+    let combined = combined_fit(&rel, &amplitudes, omega_d, stiffness);
     let better_model = if coulomb_residual <= viscous_residual {
         DampingModel::Coulomb
     } else {
@@ -407,6 +531,7 @@ pub fn estimate_velocity(
         coulomb_residual,
         viscous_residual,
         better_model,
+        combined,
         half_cycles,
         noise_rms: noise,
         offset,
@@ -454,6 +579,10 @@ pub struct DecaySummary {
     pub coulomb_force_std: f64,
     /// Mean natural frequency, Hz.
     pub natural_frequency_hz_mean: f64,
+    /// Mean Coulomb force of the combined law (viscous share taken out).
+    pub combined_coulomb_force_mean: f64,
+    /// Mean viscous damping ratio of the combined law.
+    pub combined_viscous_damping_ratio_mean: f64,
 }
 
 /// Summary of several estimates.
@@ -480,6 +609,16 @@ pub fn summarize(estimates: &[DecayEstimate]) -> DecaySummary {
         natural_frequency_hz_mean: estimates
             .iter()
             .map(|e| e.natural_frequency_hz)
+            .sum::<f64>()
+            / n,
+        combined_coulomb_force_mean: estimates
+            .iter()
+            .map(|e| e.combined.coulomb_force)
+            .sum::<f64>()
+            / n,
+        combined_viscous_damping_ratio_mean: estimates
+            .iter()
+            .map(|e| e.combined.viscous_damping_ratio)
             .sum::<f64>()
             / n,
     }
