@@ -262,3 +262,50 @@ fn bad_input_exits_2_naming_the_flag() {
         .assert_input_error()
         .says("not on the same pairs");
 }
+
+/// `--time-histories`: one CSV `era frf` reads and one figure per run, and the share of
+/// time the excited masses stick (0 without friction, positive with it).
+#[test]
+fn time_histories_come_with_figures_and_the_stick_share() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let shares = |scale: &str, folder: &str| {
+        std::fs::create_dir(d.join(folder)).unwrap();
+        let mut args: Vec<&str> = SMALL.to_vec();
+        args.extend([
+            "--averages",
+            "1",
+            "--friction-scale",
+            scale,
+            "--out",
+            "x.csv",
+            "--time-histories",
+            folder,
+            "--json",
+        ]);
+        let out = era().current_dir(d).args(&args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        for run in 1..=3 {
+            let png = std::fs::read(d.join(folder).join(format!("run{run}.png"))).unwrap();
+            assert!(png.starts_with(b"\x89PNG") && png.len() > 10_000);
+            let svg =
+                std::fs::read_to_string(d.join(folder).join(format!("run{run}.svg"))).unwrap();
+            assert!(svg.contains("LVT velocity") && svg.contains("dead zone"));
+            assert!(d.join(folder).join(format!("run{run}.csv")).exists());
+        }
+        (
+            v["excited_stuck_fraction"].as_f64().unwrap(),
+            v["excited_above_dead_zone_fraction"].as_f64().unwrap(),
+        )
+    };
+    let (stuck, above) = shares("0", "linear");
+    assert_eq!(stuck, 0.0);
+    assert!(above > 0.0 && above < 1.0, "{above}");
+    let (stuck, _) = shares("1", "friction");
+    assert!(stuck > 0.01, "{stuck}");
+}

@@ -194,6 +194,26 @@ fn single_output_verbs(inputs: &Path) -> Vec<Vec<String>> {
             "--out",
             "OUT.csv",
         ]),
+        // A two-mode structure, one actuator, one frame: the coherence goes beside it.
+        v(&[
+            "simulate",
+            "experiment",
+            "-q",
+            "--modes",
+            "2",
+            "--dofs",
+            "2",
+            "--fmin",
+            "2",
+            "--fmax",
+            "5",
+            "--actuators",
+            "1",
+            "--averages",
+            "1",
+            "--out",
+            "OUT.csv",
+        ]),
         v(&[
             "friction",
             "simulate",
@@ -301,12 +321,14 @@ fn frf_leaves_the_old_output_when_the_coherence_cannot_be_written() {
     );
 }
 
-/// The folder verbs (identify --out, demo --out, plot --out) refuse a hostile entry at
+/// The folder verbs (identify --out, demo --out, plot --out, compare --out,
+/// simulate experiment --time-histories) refuse a hostile entry at
 /// any of their output names, including the `pairs` folder, before writing anything.
 #[test]
 fn folder_verbs_refuse_hostile_entries_and_change_nothing() {
     let inputs = tempfile::tempdir().unwrap();
     let frf = small_frf(inputs.path(), "in.csv");
+    let experiment_out = inputs.path().join("experiment.csv");
     let decoy = decoys();
     let outside = tempfile::tempdir().unwrap();
     let verbs: Vec<(Vec<&str>, &[&str])> = vec![
@@ -324,6 +346,33 @@ fn folder_verbs_refuse_hostile_entries_and_change_nothing() {
         (
             vec!["plot", s(&frf), "-q", "--out"],
             &["grid.svg", "pairs/pair_2_1.png"],
+        ),
+        (
+            vec!["compare", s(&frf), s(&frf), "-q", "--out"],
+            &["compare.html", "pair_2_1.png"],
+        ),
+        (
+            vec![
+                "simulate",
+                "experiment",
+                "-q",
+                "--modes",
+                "2",
+                "--dofs",
+                "2",
+                "--fmin",
+                "2",
+                "--fmax",
+                "5",
+                "--actuators",
+                "1",
+                "--averages",
+                "1",
+                "--out",
+                s(&experiment_out),
+                "--time-histories",
+            ],
+            &["run1.csv", "run1.png", "run1.svg"],
         ),
         (
             vec!["demo", "-q", "--out"],
@@ -357,7 +406,11 @@ fn folder_verbs_refuse_hostile_entries_and_change_nothing() {
                 assert_eq!(snapshot(dir.path()), before, "{a:?} with {name} as {what}");
             }
         }
-        // `pairs` as a symbolic link to a folder elsewhere: nothing lands there.
+        // `pairs` as a symbolic link to a folder elsewhere: nothing lands there (compare
+        // and the time histories write no sub-folder).
+        if args[0] == "compare" || args[0] == "simulate" {
+            continue;
+        }
         let dir = tempfile::tempdir().unwrap();
         let pairs = if args[0] == "demo" {
             std::fs::create_dir(dir.path().join("noisy")).unwrap();
