@@ -58,6 +58,7 @@ compare() {
   # The two fit errors, "a b", from the JSON's fit_percent block.
   tr -d ' \n' <"$out/compare_$1_$2.json" |
     sed -n 's/.*"fit_percent":{"a":\([^,]*\),"b":\([^,]*\),.*/\1 \2/p'
+  echo # the JSON has no final newline, and `read` needs one
 }
 rows=()
 for seed in $seeds; do

@@ -30,8 +30,13 @@
 //!    [`SelectionCriteria::recurrence`] of the orders of the upper half of the range
 //!    (where every physical mode has appeared), and never fewer than
 //!    [`SelectionCriteria::min_poles`], and when the median MPC and CMI of those poles are
-//!    at least [`SelectionCriteria::mpc_minimum`] and [`SelectionCriteria::cmi_minimum`]. Its representative is its pole at the highest
-//!    order it reached (the most accurate, being least biased by truncation).
+//!    at least [`SelectionCriteria::mpc_minimum`] and [`SelectionCriteria::cmi_minimum`].
+//!    Before counting, fragments of one track are joined: clusters of the same shape
+//!    within the frequency tolerance that share no order (noise made the pole leave its
+//!    track for an order or two). The representative is, on exact data, the pole at the
+//!    highest order (the least biased by truncation); on noisy data the counted member
+//!    nearest the median frequency and damping, so that a noise pole at the top order
+//!    does not stand for the mode.
 //! 4. *Duplicates*. Noise can split one mode into two clusters; two physical clusters
 //!    within the frequency tolerance whose shapes agree (MAC) are one mode, and only the
 //!    larger is kept. A pole can also drift by more than the tolerance between two orders
@@ -524,7 +529,8 @@ pub fn hard_rejection(
 pub struct Cluster {
     /// Indices into [`Scan::poles`], one per order, ascending order.
     pub members: Vec<usize>,
-    /// Index of the representative pole (the member at the highest order).
+    /// Index of the representative pole (the member at the highest counted order that
+    /// agrees with the track's median frequency and damping).
     pub representative: usize,
     /// Orders of the upper half of the range in which the cluster has a pole.
     pub upper_count: usize,
@@ -582,6 +588,107 @@ impl Selection {
     }
 }
 
+/// Step 2b of [`select`]: joins clusters (member lists in ascending order) of the same
+/// shape, within the frequency tolerance of each other's median, that share no order.
+/// Larger clusters absorb smaller ones; repeated until nothing joins.
+fn join_fragments(
+    scan: &Scan,
+    mut clusters: Vec<Vec<usize>>,
+    criteria: &SelectionCriteria,
+) -> Vec<Vec<usize>> {
+    let median_f = |m: &[usize]| {
+        let mut f: Vec<f64> = m.iter().map(|&i| scan.poles[i].frequency_hz).collect();
+        f.sort_by(f64::total_cmp);
+        f[f.len() / 2]
+    };
+    loop {
+        clusters.sort_by_key(|m| std::cmp::Reverse(m.len()));
+        let medians: Vec<f64> = clusters.iter().map(|m| median_f(m)).collect();
+        let mut joined = false;
+        let mut gone = vec![false; clusters.len()];
+        for a in 0..clusters.len() {
+            if gone[a] {
+                continue;
+            }
+            for b in a + 1..clusters.len() {
+                if gone[b] {
+                    continue;
+                }
+                let df = (medians[a] - medians[b]).abs() / medians[a];
+                if df > criteria.frequency_tolerance {
+                    continue;
+                }
+                let orders_a: Vec<usize> =
+                    clusters[a].iter().map(|&i| scan.poles[i].order).collect();
+                if clusters[b]
+                    .iter()
+                    .any(|&i| orders_a.contains(&scan.poles[i].order))
+                {
+                    continue;
+                }
+                // The shapes where the two tracks are nearest in order.
+                let (last_a, last_b) = (
+                    &scan.poles[*clusters[a].last().expect("non-empty")],
+                    &scan.poles[*clusters[b].last().expect("non-empty")],
+                );
+                if mac(&last_a.shape, &last_b.shape) < criteria.mac_minimum {
+                    continue;
+                }
+                let taken = std::mem::take(&mut clusters[b]);
+                clusters[a].extend(taken);
+                clusters[a].sort_by_key(|&i| scan.poles[i].order);
+                gone[b] = true;
+                joined = true;
+            }
+        }
+        clusters.retain(|m| !m.is_empty());
+        if !joined {
+            return clusters;
+        }
+    }
+}
+
+/// The pole that stands for a cluster. Of its members in the counted (upper) orders:
+/// the one at the highest order that agrees with their median frequency to 1e-6 and
+/// damping to 1e-4 (relative) when there is one, which on exact data is the highest
+/// order, the least biased by truncation; otherwise, on noisy data, the member nearest
+/// those medians. At the top order alone a noise pole that displaced the mode's pole for
+/// one order could stand for the mode; the median is what most of the track agrees on.
+/// Without three counted members, the member at the highest order.
+fn representative(scan: &Scan, members: &[usize], lowest_counted: usize) -> usize {
+    let top = *members.last().expect("clusters are never empty");
+    let upper: Vec<usize> = members
+        .iter()
+        .copied()
+        .filter(|&i| scan.poles[i].order >= lowest_counted)
+        .collect();
+    if upper.len() < 3 {
+        return top;
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let f = median(upper.iter().map(|&i| scan.poles[i].frequency_hz).collect());
+    let z = median(upper.iter().map(|&i| scan.poles[i].damping_ratio).collect());
+    let df = |i: usize| (scan.poles[i].frequency_hz - f).abs() / f;
+    let dz = |i: usize| (scan.poles[i].damping_ratio - z).abs() / z;
+    let settled = upper
+        .iter()
+        .rev()
+        .copied()
+        .find(|&i| df(i) <= 1e-6 && dz(i) <= 1e-4);
+    settled.unwrap_or_else(|| {
+        // Frequency decides; damping, known to a few per cent at best, breaks ties.
+        let distance = |i: usize| df(i) + 0.01 * dz(i);
+        upper
+            .iter()
+            .copied()
+            .min_by(|a, b| distance(*a).total_cmp(&distance(*b)))
+            .unwrap_or(top)
+    })
+}
+
 /// Clusters the poles of `scan` and judges each cluster (module doc, steps 1–3).
 /// `band_hz` is the fitted band.
 pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) -> Selection {
@@ -596,12 +703,15 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
         }
     }
     // Step 2: clusters, visiting orders from low to high.
-    struct Open {
+    struct Track {
         members: Vec<usize>,
         frequency_hz: f64,
         shape: Vec<Complex64>,
     }
-    let mut clusters: Vec<Open> = Vec::new();
+    struct Open {
+        members: Vec<usize>,
+    }
+    let mut clusters: Vec<Track> = Vec::new();
     for &order in &scan.orders {
         let here: Vec<usize> = (0..scan.poles.len())
             .filter(|&i| candidate[i] && scan.poles[i].order == order)
@@ -639,7 +749,7 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
         for &i in &here {
             if !pole_taken[i] {
                 let p = &scan.poles[i];
-                clusters.push(Open {
+                clusters.push(Track {
                     members: vec![i],
                     frequency_hz: p.frequency_hz,
                     shape: p.shape.clone(),
@@ -647,6 +757,15 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             }
         }
     }
+    // Step 2b: fragments. Noise makes a mode's pole leave its cluster for an order or
+    // two and start a new one; clusters of the same shape within the frequency
+    // tolerance that never share an order are one track, joined before recurrence is
+    // counted. (Two close modes present at the same orders share orders and stay apart.)
+    let clusters = join_fragments(
+        scan,
+        clusters.into_iter().map(|o| o.members).collect(),
+        criteria,
+    );
     // Step 3: recurrence over the upper half of the orders.
     let counted_orders: Vec<usize> = scan.orders[scan.orders.len() / 2..].to_vec();
     let lowest_counted = counted_orders.first().copied().unwrap_or(0);
@@ -654,7 +773,8 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
     let needed = ((criteria.recurrence * counted as f64).ceil() as usize).max(1);
     let mut out: Vec<Cluster> = clusters
         .into_iter()
-        .map(|open| {
+        .map(|members| {
+            let open = Open { members };
             let upper_count = open
                 .members
                 .iter()
@@ -673,7 +793,7 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             f.sort_by(f64::total_cmp);
             z.sort_by(f64::total_cmp);
             let median_frequency_hz = f[f.len() / 2];
-            let representative = *open.members.last().expect("clusters are never empty");
+            let representative = representative(scan, &open.members, lowest_counted);
             let mut upper_cmi: Vec<f64> = open
                 .members
                 .iter()
@@ -796,5 +916,88 @@ mod tests {
         for bad in ["50,0", "50,x", "50,,60"] {
             assert!(OrderRange::parse(bad).is_err(), "{bad}");
         }
+    }
+
+    fn pole(order: usize, frequency_hz: f64, damping_ratio: f64, shape: [f64; 2]) -> ScanPole {
+        ScanPole {
+            order,
+            frequency_hz,
+            damping_ratio,
+            continuous_pole: Complex64::new(0.0, 0.0),
+            eigenvalue: Complex64::new(0.0, 0.0),
+            shape: shape.iter().map(|v| Complex64::new(*v, 0.0)).collect(),
+            participation: vec![],
+            mpc: 1.0,
+            emac: 1.0,
+            status: PoleStatus::New,
+        }
+    }
+
+    /// Clusters that are one track (same shape, near frequency, no shared order) are
+    /// joined; a close mode present at the same orders, a far one and one of another
+    /// shape are not.
+    #[test]
+    fn fragments_of_one_track_are_joined_and_close_modes_are_not() {
+        let mut poles = Vec::new();
+        let mut lists: Vec<Vec<usize>> = vec![vec![]; 5];
+        for order in (10..=40).step_by(2) {
+            let mut add = |list: usize, p: ScanPole| {
+                lists[list].push(poles.len());
+                poles.push(p);
+            };
+            if order <= 24 {
+                add(0, pole(order, 5.000, 0.01, [1.0, 0.5]));
+            } else {
+                add(1, pole(order, 5.003, 0.01, [1.0, 0.52]));
+            }
+            add(2, pole(order, 5.004, 0.01, [1.0, -2.0]));
+            if order > 30 {
+                add(3, pole(order, 5.2, 0.01, [1.0, 0.5]));
+            }
+            if order == 26 {
+                add(4, pole(order, 5.001, 0.01, [-0.5, 1.0]));
+            }
+        }
+        let scan = Scan {
+            orders: (10..=40).step_by(2).collect(),
+            poles,
+            skipped: vec![],
+        };
+        let joined = join_fragments(&scan, lists.clone(), &SelectionCriteria::default());
+        assert_eq!(joined.len(), 4, "{joined:?}");
+        let mut track = lists[0].clone();
+        track.extend(&lists[1]);
+        assert!(joined.contains(&track), "{joined:?}");
+        for other in &lists[2..] {
+            assert!(joined.contains(other), "{joined:?}");
+        }
+    }
+
+    /// Exact data: the highest order stands for the track. Noisy data with a noise pole
+    /// at the top order: a member near the median does.
+    #[test]
+    fn the_representative_is_the_top_order_when_settled_and_the_median_when_not() {
+        let exact: Vec<ScanPole> = (0..8)
+            .map(|k| pole(10 + 2 * k, 5.0 * (1.0 + 1e-9 * k as f64), 0.01, [1.0, 0.5]))
+            .collect();
+        let members: Vec<usize> = (0..8).collect();
+        let scan = Scan {
+            orders: (10..=24).step_by(2).collect(),
+            poles: exact,
+            skipped: vec![],
+        };
+        assert_eq!(representative(&scan, &members, 16), 7);
+        let noisy: Vec<ScanPole> = [5.001, 4.999, 5.0005, 4.9995, 5.0, 5.0002, 5.0001, 5.02]
+            .iter()
+            .enumerate()
+            .map(|(k, f)| pole(10 + 2 * k, *f, 0.01 + 0.001 * k as f64, [1.0, 0.5]))
+            .collect();
+        let scan = Scan {
+            poles: noisy,
+            ..scan
+        };
+        let r = representative(&scan, &members, 16);
+        assert_ne!(r, 7);
+        assert!((scan.poles[r].frequency_hz - 5.0).abs() < 3e-4, "{r}");
     }
 }
