@@ -111,7 +111,7 @@ fn main() -> era::Result<()> {
                     cmis.sort_by(f64::total_cmp);
                     let orders: Vec<usize> =
                         c.members.iter().map(|&i| st.scan.poles[i].order).collect();
-                    println!("  {} f {:.4} z {:.4} members {} upper {} rep cmi {:.2} median cmi {:.2} mpc {:.2} truth-dist {:.1e} orders {}..{}", if t < 0.005 {"  "} else {"!!"}, rep.frequency_hz, rep.damping_ratio, c.members.len(), c.upper_count, rep.cmi(), cmis[cmis.len()/2], rep.mpc, t, orders[0], orders[orders.len()-1]);
+                    println!("  {} f {:.4} z {:.4} members {} upper {} rep cmi {:.2} median cmi {:.2} mpc {:.2} median mpc {:.2} truth-dist {:.1e} orders {}..{}", if t < 0.005 {"  "} else {"!!"}, rep.frequency_hz, rep.damping_ratio, c.members.len(), c.upper_count, rep.cmi(), cmis[cmis.len()/2], rep.mpc, c.median_mpc, t, orders[0], orders[orders.len()-1]);
                     if std::env::var("MACS").is_ok() {
                         for d in st.selection.clusters.iter().filter(|d| {
                             d.physical
