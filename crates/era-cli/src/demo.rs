@@ -164,7 +164,6 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
                 &title,
                 &parameter_echo(&options),
                 found,
-                0,
                 options.states,
                 &bar,
             )?;

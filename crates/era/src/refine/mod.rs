@@ -230,6 +230,8 @@ pub struct RefinedMode {
     pub damping_ratio_std: f64,
     /// The mode's share of the band's FRF norm, `‖G_r‖/‖G‖`.
     pub contribution: f64,
+    /// The start pole it came from (0-based index into the start poles).
+    pub start: usize,
 }
 
 /// The result of [`refine`]: the fitted model and how the fit went.
@@ -307,6 +309,20 @@ pub fn refine_naive(
 pub const RESIDUE_RANK_TOLERANCE: f64 = 1e-12;
 
 impl Refinement {
+    /// The residue of `mode` in the model's own variable: `s^κ R` of the data's
+    /// quantity over `(jω − s)` for a continuous fit, the z-domain residue `R` over
+    /// `(z − e^(sTs))` for a sampled one. Its rank-one part is the mode's shape times
+    /// its participation.
+    pub fn model_residue(&self, mode: &RefinedMode) -> Vec<Complex64> {
+        match self.sample_time_s {
+            Some(_) => mode.residue.clone(),
+            None => {
+                let scale = power(mode.pole, order(self.quantity));
+                mode.residue.iter().map(|r| scale * r).collect()
+            }
+        }
+    }
+
     /// The model's FRF of `quantity` at `frequency_hz`, `[output][input][line]`:
     /// `Σ_r [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + U (jω)^(κ'−κ)` with `κ'` the order
     /// of `quantity` and `κ` the data's (module doc). A negative power at 0 Hz is
