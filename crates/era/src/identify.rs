@@ -1338,7 +1338,15 @@ pub fn refine_identification(
             }
         })
         .collect();
-    let response = HessenbergForm::new(&model).response(found.measured.frequency_hz());
+    let mut response = HessenbergForm::new(&model).response(found.measured.frequency_hz());
+    // Below the band the lower residual's integrators are infinite at 0 Hz: those lines
+    // were not fitted (like the zeroed measured lines) and are written as 0.
+    let nl = found.measured.lines();
+    for (i, v) in response.iter_mut().enumerate() {
+        if i % nl < first && !(v.re.is_finite() && v.im.is_finite()) {
+            *v = Complex64::new(0.0, 0.0);
+        }
+    }
     found.fit = fit_metrics(&found.measured, &response, first);
     found.model_response = response;
     found.first_line = first;
