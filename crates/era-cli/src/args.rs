@@ -79,6 +79,19 @@ pub struct RefineFitArgs {
     /// Levenberg–Marquardt iterations of the refinement at most (default 100).
     #[arg(long, value_name = "N")]
     pub max_iterations: Option<usize>,
+    /// Weights of the refinement's cost (default pair-noise).
+    #[arg(long, value_enum, value_name = "uniform|pair-noise")]
+    pub weighting: Option<WeightingArg>,
+}
+
+/// How the refinement weights the pairs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WeightingArg {
+    /// Every pair and line alike.
+    Uniform,
+    /// Each pair by the inverse of its noise variance, estimated from a first uniform
+    /// fit's residual (maximum likelihood when the pairs' noise levels differ).
+    PairNoise,
 }
 
 #[derive(Debug, Args)]

@@ -204,7 +204,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let opts = options(a)?;
     if !a.refine && crate::refine::any_given(&a.refine_fit) {
         return crate::usage(
-            "--residuals, --reciprocal and --max-iterations set the refinement: add --refine",
+            "--residuals, --reciprocal, --weighting and --max-iterations set the refinement: add --refine",
         );
     }
     let refine_options = crate::refine::options(&a.refine_fit)?;
@@ -352,6 +352,13 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             serde_json::json!(format!("{:?}", refine_options.residuals).to_lowercase()),
         );
         params.insert("reciprocal".into(), serde_json::json!(refine_options.reciprocal));
+        params.insert(
+            "weighting".into(),
+            serde_json::json!(match refine_options.weighting {
+                era::refine::Weighting::Uniform => "uniform",
+                _ => "pair-noise",
+            }),
+        );
         params.insert(
             "max_iterations".into(),
             serde_json::json!(refine_options.max_iterations),

@@ -20,6 +20,10 @@ pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
         o.residuals = r.into();
     }
     o.reciprocal = fit.reciprocal;
+    o.weighting = match fit.weighting {
+        Some(crate::args::WeightingArg::Uniform) => era::refine::Weighting::Uniform,
+        Some(crate::args::WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
+    };
     if let Some(n) = fit.max_iterations {
         if n == 0 {
             return crate::usage(
@@ -34,7 +38,10 @@ pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
 
 /// Whether any refinement flag was given (they need `--refine` on `era identify`).
 pub fn any_given(fit: &RefineFitArgs) -> bool {
-    fit.residuals.is_some() || fit.reciprocal || fit.max_iterations.is_some()
+    fit.residuals.is_some()
+        || fit.reciprocal
+        || fit.max_iterations.is_some()
+        || fit.weighting.is_some()
 }
 
 /// `--reciprocal` needs a square set: said before the identification runs.

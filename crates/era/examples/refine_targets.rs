@@ -123,9 +123,13 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             )?;
             let era_fit = relative(&found.measured, &found.model_response, found.first_line);
             let clock = Instant::now();
+            let mut ropts = RefineOptions::default();
+            if std::env::var("PAIRNOISE").is_ok() {
+                ropts.weighting = era::refine::Weighting::PairNoise;
+            }
             let found = refine_identification(
                 found,
-                &RefineOptions::default(),
+                &ropts,
                 &mut |_| {},
                 &mut |_, _| {},
             )?;
@@ -167,6 +171,36 @@ fn report_dta(
             (physical[j].1 - structure.damping_ratios[i]).abs() / structure.damping_ratios[i]
         })
         .collect();
+    if std::env::var("DEBUG").is_ok() {
+        let r = found.refinement.as_ref().unwrap();
+        let matched: Vec<usize> = m.iter().map(|&(_, j)| j).collect();
+        let mut j = 0;
+        for (rm, q) in r.refinement.modes.iter().zip(&found.quality) {
+            if !q.physical {
+                println!("    not physical {:.4} ({:?})", rm.frequency_hz, q.reason);
+                continue;
+            }
+            let start = r.start_frequency_hz[rm.start];
+            let truth = structure
+                .frequencies_hz
+                .iter()
+                .copied()
+                .min_by(|a, b| (a - rm.frequency_hz).abs().total_cmp(&(b - rm.frequency_hz).abs()))
+                .unwrap();
+            println!(
+                "  {} start {:.4} -> {:.4} (truth {:.4}) zeta {:.4} ± {:.1e} share {:.2e} f-std {:.1e}",
+                if matched.contains(&j) { "  " } else { "!!" },
+                start,
+                rm.frequency_hz,
+                truth,
+                rm.damping_ratio,
+                rm.damping_ratio_std,
+                rm.contribution,
+                rm.frequency_std_hz
+            );
+            j += 1;
+        }
+    }
     let first = found.first_line;
     let fit = relative(&found.measured, &found.model_response, first);
     // The noise over the same lines and quantity as the fit.
@@ -226,6 +260,9 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
         }
         if std::env::var("RECIP").is_ok() {
             ropts.reciprocal = true;
+        }
+        if std::env::var("PAIRNOISE").is_ok() {
+            ropts.weighting = era::refine::Weighting::PairNoise;
         }
         if std::env::var("REWEIGHT").is_ok() {
             // Per-pair noise variance from a first uniform fit's residual.

@@ -1105,6 +1105,11 @@ pub fn identify_auto(
     Ok(found)
 }
 
+/// A refined mode whose share of the band's FRF norm exceeds this is not physical: it is
+/// larger than the data, so it cancels other modes (the fit has gone degenerate there,
+/// typically where modes the start missed are absorbed by others).
+pub const MAX_REFINED_SHARE: f64 = 1.0;
+
 /// A discrete model of the chosen poles in real block-diagonal form: per pole
 /// `λ = α + iβ` with shape `c = Cφ` and participation `b = ψB`, the block
 /// `A = [[α, −β], [β, α]]`, `B = [Re b; Im b]`, `C = [2 Re c, −2 Im c]`, whose response
@@ -1212,7 +1217,8 @@ pub fn assess_model(
 ///   lower residual's integrator states are the model's real poles at `s = 0`.
 /// - **Judgement**: a mode is physical when it passes the hard criteria of
 ///   docs/design.md §10 with its refined frequency and damping, its share is at least
-///   the minimum, and (when a scan ran) its start mode was physical.
+///   the minimum and at most [`MAX_REFINED_SHARE`], and (when a scan ran) its start
+///   mode was physical.
 ///
 /// # Errors
 /// [`EraError::InvalidParameter`] when there is no mode to start from, and every error
@@ -1314,6 +1320,12 @@ pub fn refine_identification(
                     crate::modal::stabilization::Rejection::NoContribution(rm.contribution)
                         .to_string(),
                 );
+            }
+            if reason.is_none() && rm.contribution > MAX_REFINED_SHARE {
+                reason = Some(format!(
+                    "its share of the data is {:.2}: it cancels other modes (a degenerate fit there)",
+                    rm.contribution
+                ));
             }
             if reason.is_none() && scanned {
                 if let Some(b) = before.as_ref().filter(|b| !b.physical) {

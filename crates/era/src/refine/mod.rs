@@ -57,6 +57,21 @@
 //! residue is `φφᵀ/(2jω_d)`), and weighting by coherence (`w = γ²`) or by inverse
 //! variance (`w = 1/var`) per pair and line.
 //!
+//! ## Noise per pair
+//!
+//! Sensors and drive points differ, and noise given as a fraction of each FRF's level
+//! (the thesis's 15 %) makes the variance differ from pair to pair by orders of
+//! magnitude. The maximum-likelihood cost of independent complex Gaussian noise of
+//! variance `σ²_ij` per pair is `Σ_ij ‖y_ij − ŷ_ij‖²/σ²_ij`; uniform weights waste the
+//! quiet pairs. [`Weighting::PairNoise`] estimates `σ²_ij` from the residual of a uniform
+//! fit (`‖y_ij − ŷ_ij‖²/L`, floored at 1e-12 of the mean) and refits with `1/σ²_ij`
+//! from the first fit's poles (one step of iteratively reweighted least squares). An
+//! exact fit (`fit_after` below 1e-9) has no noise to weight by and is returned as it
+//! is. The costs reported are of the second pass's weights; `fit_before` is the
+//! unweighted fit at the start poles, as always. On the truth model with 15 % noise this
+//! lowers the median frequency error of every mode against the uniform fit (docs in the
+//! README, "Refinement").
+//!
 //! A mode is dropped, and the reason recorded in [`Refinement::dropped`], when its
 //! share of the band's FRF norm falls below [`MIN_CONTRIBUTION`], when its pole
 //! coalesces with another (closer than [`COALESCED`] relative, or its basis columns
@@ -165,6 +180,10 @@ pub enum Weighting {
     Coherence(Vec<f64>),
     /// Variance of each FRF value, `[output][input][line]`: weight `1/var`.
     InverseVariance(Vec<f64>),
+    /// Each pair weighted by `1/σ²_pair`, its noise variance estimated from the residual
+    /// of a first, uniform fit (module doc, "Noise per pair"); then the fit is repeated
+    /// from the first fit's poles with those weights.
+    PairNoise,
 }
 
 /// Options of [`refine`].
@@ -287,7 +306,71 @@ pub fn refine(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    fit::run(frf, start_poles, options, progress, varpro::evaluate)
+    run(frf, start_poles, options, progress, varpro::evaluate)
+}
+
+/// The fit, or for [`Weighting::PairNoise`] a uniform fit and a reweighted one.
+fn run(
+    frf: &FrfData,
+    start_poles: &[Complex64],
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+    evaluate: fit::Evaluator,
+) -> Result<Refinement> {
+    if options.weighting != Weighting::PairNoise {
+        return fit::run(frf, start_poles, options, progress, evaluate);
+    }
+    let uniform = RefineOptions {
+        weighting: Weighting::Uniform,
+        ..options.clone()
+    };
+    let first = fit::run(frf, start_poles, &uniform, progress, evaluate)?;
+    if !(first.fit_after >= 1e-9) {
+        return Ok(first);
+    }
+    let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+    let (a, b) = first.band;
+    let model = first.response(&frf.frequency_hz()[a..b], frf.quantity());
+    let per_pair: Vec<f64> = (0..q * p)
+        .map(|pair| {
+            let data = &frf.values()[pair * lines + a..pair * lines + b];
+            let fit = &model[pair * (b - a)..(pair + 1) * (b - a)];
+            data.iter()
+                .zip(fit)
+                .map(|(y, m)| (y - m).norm_sqr())
+                .sum::<f64>()
+                / (b - a) as f64
+        })
+        .collect();
+    let mean = per_pair.iter().sum::<f64>() / per_pair.len() as f64;
+    let floor = 1e-12 * mean;
+    let mut variance = vec![1.0; q * p * lines];
+    for (pair, &v) in per_pair.iter().enumerate() {
+        variance[pair * lines..(pair + 1) * lines].fill(v.max(floor));
+    }
+    let weighted = RefineOptions {
+        weighting: Weighting::InverseVariance(variance),
+        band: Some(first.band),
+        ..options.clone()
+    };
+    let poles: Vec<Complex64> = first.modes.iter().map(|m| m.pole).collect();
+    let mut second = fit::run(frf, &poles, &weighted, progress, evaluate)?;
+    // Indices into the first fit's modes → indices into the caller's start poles.
+    for m in &mut second.modes {
+        m.start = first.modes[m.start].start;
+    }
+    let mut dropped = first.dropped.clone();
+    dropped.extend(
+        second
+            .dropped
+            .iter()
+            .map(|(k, why)| (first.modes[*k].start, why.clone())),
+    );
+    dropped.sort_by_key(|d| d.0);
+    second.dropped = dropped;
+    second.iterations += first.iterations;
+    second.fit_before = first.fit_before;
+    Ok(second)
 }
 
 /// [`refine`] with a central-difference Jacobian and a dense solve per pair: the
@@ -301,7 +384,7 @@ pub fn refine_naive(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    fit::run(frf, start_poles, options, progress, naive::evaluate)
+    run(frf, start_poles, options, progress, naive::evaluate)
 }
 
 /// Singular values of a mode's residue below this fraction of its largest are left out
