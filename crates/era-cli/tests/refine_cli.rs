@@ -366,3 +366,23 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
     let v: serde_json::Value = serde_json::from_str(&o.stdout).unwrap();
     assert!(v["refinement"]["fit_after"].as_f64().unwrap() < 1e-6, "{}", v["refinement"]);
 }
+
+#[test]
+fn demo_gains_a_refined_column_beside_the_thesis_columns() {
+    let out = era().args(["demo", "--json"]).output().unwrap();
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let refined = v["refined"].as_array().unwrap();
+    assert_eq!(refined.len(), 4);
+    let truth = [1748.64, 5031.80, 7709.75, 9458.39];
+    for (m, t) in refined.iter().zip(truth) {
+        let f = m["frequency_hz"].as_f64().unwrap();
+        let sd = m["frequency_std_hz"].as_f64().unwrap();
+        // Within five predicted standard deviations of the truth.
+        assert!((f - t).abs() < 5.0 * sd, "{f} ± {sd} vs {t}");
+    }
+    assert_eq!(v["refinement"]["model"], "z");
+    assert!(v["errors"]["refined"]["max_frequency_error_hz"].as_f64().is_some());
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(text.contains("ERA + refined") && text.contains("noisy - truth"), "{text}");
+}
