@@ -351,7 +351,10 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             "residuals".into(),
             serde_json::json!(format!("{:?}", refine_options.residuals).to_lowercase()),
         );
-        params.insert("reciprocal".into(), serde_json::json!(refine_options.reciprocal));
+        params.insert(
+            "reciprocal".into(),
+            serde_json::json!(refine_options.reciprocal),
+        );
         params.insert(
             "weighting".into(),
             serde_json::json!(match refine_options.weighting {
@@ -363,7 +366,10 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             "max_iterations".into(),
             serde_json::json!(refine_options.max_iterations),
         );
-        params.insert("model_states".into(), serde_json::json!(found.model.states()));
+        params.insert(
+            "model_states".into(),
+            serde_json::json!(found.model.states()),
+        );
     }
     let mut model = ModelJson::from_identification(&found, params, None);
     let fit = FitJson::from_report(&found.fit);

@@ -26,9 +26,7 @@ pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
     };
     if let Some(n) = fit.max_iterations {
         if n == 0 {
-            return crate::usage(
-                "--max-iterations 0: the refinement needs at least one iteration",
-            );
+            return crate::usage("--max-iterations 0: the refinement needs at least one iteration");
         }
         era::limits::ITERATIONS.check("--max-iterations", n as u64)?;
         o.max_iterations = n;
@@ -144,7 +142,8 @@ fn count(model: &ModelJson, key: &str) -> usize {
 pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let ropts = options(&a.fit)?;
-    let model = ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;
+    let model =
+        ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
@@ -212,7 +211,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         svd_path,
         sample_time_s,
     )
-        .with_context(|| format!("evaluating {} on {}", a.model.display(), a.file.display()))?;
+    .with_context(|| format!("evaluating {} on {}", a.model.display(), a.file.display()))?;
     // The modes judged physical in the file start the refinement of an automatic model;
     // every mode starts that of a fixed-order one (as `era identify --refine`).
     let auto = model.parameters.get("states").and_then(|v| v.as_str()) == Some("auto");
@@ -246,7 +245,10 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
             .map_or("-".into(), |v| format!("{v:.3e}"))
     ));
     human.print(&summary(&found));
-    let states = model.states.min(found.realization.singular_values.len()).max(1);
+    let states = model
+        .states
+        .min(found.realization.singular_values.len())
+        .max(1);
     human.print(&identification_summary(&found, states));
     let mut params = model.parameters.clone();
     params.insert("refined_from".into(), serde_json::json!(a.model));

@@ -65,9 +65,17 @@ pub fn mode_table(found: &Identification) -> String {
         "{:>5} {:>14}{} {:>10}{} {:>6} {:>6} {:>6} {:>9} {:>7}  trust",
         "mode",
         "f (Hz)",
-        if refined { format!(" {:>11}", "± (Hz)") } else { String::new() },
+        if refined {
+            format!(" {:>11}", "± (Hz)")
+        } else {
+            String::new()
+        },
         "zeta (%)",
-        if refined { format!(" {:>11}", "± (%)") } else { String::new() },
+        if refined {
+            format!(" {:>11}", "± (%)")
+        } else {
+            String::new()
+        },
         "MPC",
         "EMAC",
         "CMI",

@@ -197,7 +197,11 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
         ])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let human = String::from_utf8_lossy(&out.stderr);
     assert!(human.contains("refinement (z-domain model"), "{human}");
     assert!(human.contains("± (Hz)"), "the mode table shows ±: {human}");
@@ -275,7 +279,10 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
         run_capped(&a, None, None)
     };
     for (extra, needle) in [
-        (&["--refine", "--max-iterations", "0"][..], "--max-iterations"),
+        (
+            &["--refine", "--max-iterations", "0"][..],
+            "--max-iterations",
+        ),
         (
             &["--refine", "--max-iterations", "99999999999999"][..],
             "--max-iterations",
@@ -302,8 +309,21 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
         dir.path(),
         "rect.csv",
         &[
-            "--outputs", "3", "--inputs", "2", "--modes", "3", "--fmin", "1", "--fmax", "6",
-            "--lines", "201", "--df", "0.05", "--quiet",
+            "--outputs",
+            "3",
+            "--inputs",
+            "2",
+            "--modes",
+            "3",
+            "--fmin",
+            "1",
+            "--fmax",
+            "6",
+            "--lines",
+            "201",
+            "--df",
+            "0.05",
+            "--quiet",
         ],
     );
     let o = run_capped(
@@ -335,8 +355,22 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
         dir.path(),
         "other.csv",
         &[
-            "--outputs", "2", "--inputs", "2", "--modes", "3", "--fmin", "1", "--fmax", "6",
-            "--lines", "201", "--df", "0.04", "--collocated", "--quiet",
+            "--outputs",
+            "2",
+            "--inputs",
+            "2",
+            "--modes",
+            "3",
+            "--fmin",
+            "1",
+            "--fmax",
+            "6",
+            "--lines",
+            "201",
+            "--df",
+            "0.04",
+            "--collocated",
+            "--quiet",
         ],
     );
     let o = run_capped(&["refine", s(&model), s(&other), "-q"], None, None);
@@ -364,7 +398,11 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
     let o = run_capped(&["refine", s(&model), f, "-q", "--json"], None, None);
     assert_eq!(o.code, Some(0), "{}", o.stderr);
     let v: serde_json::Value = serde_json::from_str(&o.stdout).unwrap();
-    assert!(v["refinement"]["fit_after"].as_f64().unwrap() < 1e-6, "{}", v["refinement"]);
+    assert!(
+        v["refinement"]["fit_after"].as_f64().unwrap() < 1e-6,
+        "{}",
+        v["refinement"]
+    );
 }
 
 #[test]
@@ -382,7 +420,12 @@ fn demo_gains_a_refined_column_beside_the_thesis_columns() {
         assert!((f - t).abs() < 5.0 * sd, "{f} ± {sd} vs {t}");
     }
     assert_eq!(v["refinement"]["model"], "z");
-    assert!(v["errors"]["refined"]["max_frequency_error_hz"].as_f64().is_some());
+    assert!(v["errors"]["refined"]["max_frequency_error_hz"]
+        .as_f64()
+        .is_some());
     let text = String::from_utf8_lossy(&out.stderr);
-    assert!(text.contains("ERA + refined") && text.contains("noisy - truth"), "{text}");
+    assert!(
+        text.contains("ERA + refined") && text.contains("noisy - truth"),
+        "{text}"
+    );
 }

@@ -127,14 +127,11 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             if std::env::var("PAIRNOISE").is_ok() {
                 ropts.weighting = era::refine::Weighting::PairNoise;
             }
-            let found = refine_identification(
-                found,
-                &ropts,
-                &mut |_| {},
-                &mut |_, _| {},
-            )?;
+            let found = refine_identification(found, &ropts, &mut |_| {}, &mut |_, _| {})?;
             let seconds = clock.elapsed().as_secs_f64();
-            report_dta(seed, noise, &structure, &clean, &frf, &found, era_fit, seconds)?;
+            report_dta(
+                seed, noise, &structure, &clean, &frf, &found, era_fit, seconds,
+            )?;
         }
     }
     Ok(())
@@ -185,7 +182,11 @@ fn report_dta(
                 .frequencies_hz
                 .iter()
                 .copied()
-                .min_by(|a, b| (a - rm.frequency_hz).abs().total_cmp(&(b - rm.frequency_hz).abs()))
+                .min_by(|a, b| {
+                    (a - rm.frequency_hz)
+                        .abs()
+                        .total_cmp(&(b - rm.frequency_hz).abs())
+                })
                 .unwrap();
             println!(
                 "  {} start {:.4} -> {:.4} (truth {:.4}) zeta {:.4} ± {:.1e} share {:.2e} f-std {:.1e}",
@@ -267,13 +268,19 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
         if std::env::var("REWEIGHT").is_ok() {
             // Per-pair noise variance from a first uniform fit's residual.
             let first = refine_identification(found.clone(), &ropts, &mut |_| {}, &mut |_, _| {})?;
-            let (q, p, lines) = (first.measured.outputs(), first.measured.inputs(), first.measured.lines());
+            let (q, p, lines) = (
+                first.measured.outputs(),
+                first.measured.inputs(),
+                first.measured.lines(),
+            );
             let mut var = vec![0.0; q * p * lines];
             for pair in 0..q * p {
                 let mut e = 0.0;
                 let mut n = 0;
                 for k in first.first_line..lines {
-                    e += (first.measured.values()[pair * lines + k] - first.model_response[pair * lines + k]).norm_sqr();
+                    e += (first.measured.values()[pair * lines + k]
+                        - first.model_response[pair * lines + k])
+                        .norm_sqr();
                     n += 1;
                 }
                 for k in 0..lines {
@@ -282,8 +289,7 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
             }
             ropts.weighting = era::refine::Weighting::InverseVariance(var);
         }
-        match refine_identification(found, &ropts, &mut |_| {}, &mut |_, _| {})
-        {
+        match refine_identification(found, &ropts, &mut |_| {}, &mut |_, _| {}) {
             Ok(refined) => {
                 for (k, &f) in truth.iter().enumerate() {
                     ref_err[k].push(nearest(&refined, f));

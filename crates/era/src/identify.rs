@@ -1397,7 +1397,9 @@ fn rank_one(
         .unwrap_or(0);
     let top = u[k];
     let shape = u.iter().map(|x| x / top).collect();
-    let participation = (0..p).map(|j| top * sigma * svd.V()[(j, 0)].conj()).collect();
+    let participation = (0..p)
+        .map(|j| top * sigma * svd.V()[(j, 0)].conj())
+        .collect();
     Ok((shape, participation))
 }
 
