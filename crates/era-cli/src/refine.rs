@@ -71,10 +71,10 @@ pub fn refine_found(
     let refined = refine_identification(found, options, &mut on_stage, &mut on_step)
         .map_err(|e| match e {
             era::EraError::InvalidParameter {
-                name,
+                name: "max-iterations",
                 value,
                 reason,
-            } if name == "max-iterations" => anyhow::Error::from(crate::UsageError(format!(
+            } => anyhow::Error::from(crate::UsageError(format!(
                 "--max-iterations {value}: {reason}"
             ))),
             other => anyhow::Error::from(other),

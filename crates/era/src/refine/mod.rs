@@ -325,7 +325,8 @@ fn run(
         ..options.clone()
     };
     let first = fit::run(frf, start_poles, &uniform, progress, evaluate)?;
-    if !(first.fit_after >= 1e-9) {
+    // NaN (no fit measure) is returned as it is, like an exact fit.
+    if first.fit_after.is_nan() || first.fit_after < 1e-9 {
         return Ok(first);
     }
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
