@@ -65,6 +65,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     refine_options.weighting = era::refine::Weighting::PairNoise;
     let refined = era::identify::refine_identification(
         noisy.clone(),
+        &noisy_frf,
         &refine_options,
         &mut |_| {},
         &mut |_, _| {},

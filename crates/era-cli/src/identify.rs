@@ -321,7 +321,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
                 .noncollocated_mean_relative_error
                 .map_or("-".into(), |v| format!("{v:.3e}"))
         ));
-        found = crate::refine::refine_found(found, &refine_options, &a.common)
+        found = crate::refine::refine_found(found, frf, &refine_options, &a.common)
             .with_context(|| format!("refining the model of {}", a.file.display()))?;
         human.print(&crate::refine::summary(&found));
     }

@@ -57,6 +57,7 @@ pub fn check_shape(options: &RefineOptions, frf: &era::FrfData) -> anyhow::Resul
 /// Runs the refinement of `found` with a spinner that counts the iterations.
 pub fn refine_found(
     found: Identification,
+    frf: &era::FrfData,
     options: &RefineOptions,
     common: &crate::args::CommonArgs,
 ) -> anyhow::Result<Identification> {
@@ -68,7 +69,7 @@ pub fn refine_found(
             "refinement: iteration {iteration}, cost {cost:.3e}"
         ));
     };
-    let refined = refine_identification(found, options, &mut on_stage, &mut on_step)
+    let refined = refine_identification(found, frf, options, &mut on_stage, &mut on_step)
         .map_err(|e| match e {
             era::EraError::InvalidParameter {
                 name: "max-iterations",
@@ -233,7 +234,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         found.quality.retain(|q| q.physical);
     }
     let before = found.fit.clone();
-    let found = refine_found(found, &ropts, &a.common)
+    let found = refine_found(found, frf, &ropts, &a.common)
         .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
     human.print(&format!(
         "  the model as given: fit collocated {}, non-collocated {}\n",

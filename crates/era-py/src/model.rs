@@ -506,6 +506,7 @@ pub fn identify(
             if refine {
                 era::identify::refine_identification(
                     found,
+                    &data,
                     &refine_options,
                     &mut |_| {},
                     &mut |_, _| {},

@@ -127,7 +127,7 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             if std::env::var("PAIRNOISE").is_ok() {
                 ropts.weighting = era::refine::Weighting::PairNoise;
             }
-            let found = refine_identification(found, &ropts, &mut |_| {}, &mut |_, _| {})?;
+            let found = refine_identification(found, &frf, &ropts, &mut |_| {}, &mut |_, _| {})?;
             let seconds = clock.elapsed().as_secs_f64();
             report_dta(
                 seed, noise, &structure, &clean, &frf, &found, era_fit, seconds,
@@ -267,7 +267,8 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
         }
         if std::env::var("REWEIGHT").is_ok() {
             // Per-pair noise variance from a first uniform fit's residual.
-            let first = refine_identification(found.clone(), &ropts, &mut |_| {}, &mut |_, _| {})?;
+            let first =
+                refine_identification(found.clone(), &frf, &ropts, &mut |_| {}, &mut |_, _| {})?;
             let (q, p, lines) = (
                 first.measured.outputs(),
                 first.measured.inputs(),
@@ -289,7 +290,7 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
             }
             ropts.weighting = era::refine::Weighting::InverseVariance(var);
         }
-        match refine_identification(found, &ropts, &mut |_| {}, &mut |_, _| {}) {
+        match refine_identification(found, &frf, &ropts, &mut |_| {}, &mut |_, _| {}) {
             Ok(refined) => {
                 for (k, &f) in truth.iter().enumerate() {
                     ref_err[k].push(nearest(&refined, f));

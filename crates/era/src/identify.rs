@@ -1206,6 +1206,13 @@ pub fn assess_model(
 /// - **Domain**: a continuous model is refined as a continuous pole–residue model; a
 ///   discrete one as the zero-order-hold image at its sample time (the `z`-domain fit of
 ///   [`crate::refine`]), so that either way the model returned *is* the fitted one.
+/// - **Data**: a continuous model is fitted to `frf` *as measured* (the data `found`
+///   was identified from), and realised in the quantity of the processed data: the
+///   integrations of docs/design.md §1.1 help ERA's Markov parameters decay, but they
+///   colour the noise (its variance grows as `1/ω²` per integration), so a fit of the
+///   integrated data would weight the noisy low lines most. The `z`-domain model has
+///   only the quantity it was fitted in, so a discrete model is fitted to the processed
+///   data.
 /// - **Band**: the identification's fitted lines (from `found.first_line`, never the
 ///   0 Hz line), unless `options.band` says otherwise.
 /// - **The model** is [`crate::refine::Refinement::to_state_space`] of the data's
@@ -1225,6 +1232,7 @@ pub fn assess_model(
 /// of [`crate::refine::refine`] and [`crate::refine::Refinement::to_state_space`].
 pub fn refine_identification(
     mut found: Identification,
+    frf: &FrfData,
     options: &crate::refine::RefineOptions,
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, f64),
@@ -1263,27 +1271,41 @@ pub fn refine_identification(
         let positive = freq.iter().position(|&f| f > 0.0).unwrap_or(lines);
         ropts.band = Some((found.first_line.max(positive), lines));
     }
-    let refinement = crate::refine::refine(&found.processed, &start_poles, &ropts, progress)?;
+    let fitted = match discrete_ts {
+        Some(_) => &found.processed,
+        None => frf,
+    };
+    if (fitted.outputs(), fitted.inputs(), fitted.lines())
+        != (
+            found.processed.outputs(),
+            found.processed.inputs(),
+            found.processed.lines(),
+        )
+    {
+        return Err(EraError::InvalidParameter {
+            name: "frf",
+            value: format!("{}x{}x{}", frf.outputs(), frf.inputs(), frf.lines()),
+            reason: "not the data the identification was made from".into(),
+        });
+    }
+    let refinement = crate::refine::refine(fitted, &start_poles, &ropts, progress)?;
     let quantity = found.processed.quantity();
     let continuous = refinement.to_state_space(quantity)?;
     let model = match discrete_ts {
         Some(ts) => continuous.c2d(ts)?,
         None => continuous,
     };
-    let kappa: usize = match quantity {
-        crate::Quantity::Displacement => 0,
-        crate::Quantity::Velocity => 1,
-        crate::Quantity::Acceleration => 2,
-    };
-    let residual_states = if refinement.lower.is_some() {
-        (2 - kappa) * refinement.inputs
-    } else {
-        0
-    };
+    // Integrator states of the residual terms `K (jω)^e`, `e < 0`.
+    let residual_states: usize = refinement
+        .residual_terms(quantity)
+        .iter()
+        .filter(|(e, _)| *e < 0)
+        .map(|(e, _)| e.unsigned_abs() as usize * refinement.inputs)
+        .sum();
     let (q, p) = (refinement.outputs, refinement.inputs);
     let mut modes = Vec::with_capacity(refinement.modes.len());
     for rm in &refinement.modes {
-        let residue = refinement.model_residue(rm);
+        let residue = refinement.model_residue(rm, quantity);
         let (shape, participation) = rank_one(&residue, q, p)?;
         modes.push(crate::modal::Mode {
             frequency_hz: rm.frequency_hz,

@@ -393,23 +393,25 @@ pub fn refine_naive(
 pub const RESIDUE_RANK_TOLERANCE: f64 = 1e-12;
 
 impl Refinement {
-    /// The residue of `mode` in the model's own variable: `s^κ R` of the data's
-    /// quantity over `(jω − s)` for a continuous fit, the z-domain residue `R` over
-    /// `(z − e^(sTs))` for a sampled one. Its rank-one part is the mode's shape times
-    /// its participation.
-    pub fn model_residue(&self, mode: &RefinedMode) -> Vec<Complex64> {
+    /// The residue of `mode` in the model's own variable: `s^κ' R` of `quantity` (order
+    /// `κ'`) over `(jω − s)` for a continuous fit, the z-domain residue `R` of the data's
+    /// quantity over `(z − e^(sTs))` for a sampled one (`quantity` is then the data's,
+    /// as in [`Refinement::to_state_space`]). Its rank-one part is the mode's shape
+    /// times its participation.
+    pub fn model_residue(&self, mode: &RefinedMode, quantity: Quantity) -> Vec<Complex64> {
         match self.sample_time_s {
             Some(_) => mode.residue.clone(),
             None => {
-                let scale = power(mode.pole, order(self.quantity));
+                let scale = power(mode.pole, order(quantity));
                 mode.residue.iter().map(|r| scale * r).collect()
             }
         }
     }
 
     /// The model's FRF of `quantity` at `frequency_hz`, `[output][input][line]`:
-    /// `Σ_r [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + U (jω)^(κ'−κ)` with `κ'` the order
-    /// of `quantity` and `κ` the data's (module doc). A negative power at 0 Hz is
+    /// `Σ_r [s^κ' R/(jω − s) + c.c.]` plus [`Refinement::residual_terms`] (in the data's
+    /// quantity `L (jω)^(κ−2) + U`), with `κ'` the order of `quantity` and `κ` the
+    /// data's (module doc). A negative power at 0 Hz is
     /// infinite. A z-domain fit gives `Σ_r [R/(z − e^(sTs)) + c.c.]` plus the residual
     /// terms' zero-order-hold images, of the data's quantity only.
     ///
@@ -419,13 +421,13 @@ impl Refinement {
     pub fn response(&self, frequency_hz: &[f64], quantity: Quantity) -> Vec<Complex64> {
         let (q, p, nl) = (self.outputs, self.inputs, frequency_hz.len());
         let k_out = order(quantity);
-        let k_data = order(self.quantity);
         let ts = self.sample_time_s;
         assert!(
             ts.is_none() || quantity == self.quantity,
             "a z-domain refinement has only the data's quantity"
         );
         let mut out = vec![Complex64::new(0.0, 0.0); q * p * nl];
+        let terms = self.residual_terms(quantity);
         for (k, f) in frequency_hz.iter().enumerate() {
             let w = 2.0 * PI * f;
             let jw = Complex64::new(0.0, w);
@@ -446,18 +448,79 @@ impl Refinement {
                     out[pair * nl + k] += r * a + r.conj() * b;
                 }
             }
-            for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
-                if let Some(m) = term {
-                    let factor = residual_factor(w, e, ts);
-                    for i in 0..q {
-                        for j in 0..p {
-                            out[(i * p + j) * nl + k] += factor * m[(i, j)];
-                        }
+            for (e, m) in &terms {
+                let factor = residual_factor(w, *e, ts);
+                for i in 0..q {
+                    for j in 0..p {
+                        out[(i * p + j) * nl + k] += factor * m[(i, j)];
                     }
                 }
             }
         }
         out
+    }
+
+    /// The terms of the model of `quantity` besides the modal sum
+    /// `Σ_r [s^κ' R/(jω − s) + c.c.]`, as `(e, K)` for `K (jω)^e`, one per power.
+    ///
+    /// The fitted receptance is `(jω)^(−κ)` times the data's model, and
+    /// `(jω)^κ/(jω − s) = s^κ/(jω − s) + p_κ(jω, s)` with `p_0 = 0`, `p_1 = 1`,
+    /// `p_2 = jω + s`: the modal sum of the data's quantity leaves out the polynomial
+    /// `P_κ = Σ_r [R p_κ + c.c.]`, which `U` absorbs (for acceleration data
+    /// `U = Σ 2Re(s R) +` the residual). In another quantity `κ'` the model is therefore
+    /// `Σ [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + (jω)^(κ'−κ) (U − P_κ) + P_κ'`:
+    /// for acceleration data in velocity `(U − Σ 2Re(sR))/(jω)`, the mass line the modes
+    /// do not carry. For an integral (`κ' < κ`) every power is at most 0. For a
+    /// derivative only `U (jω)^(κ'−κ)` is kept (the modes' polynomial is then not
+    /// proper in general).
+    pub fn residual_terms(&self, quantity: Quantity) -> Vec<(i32, Mat<f64>)> {
+        let (q, p) = (self.outputs, self.inputs);
+        let k_out = order(quantity);
+        let k_data = order(self.quantity);
+        let mut terms: Vec<(i32, Mat<f64>)> = Vec::new();
+        let mut add =
+            |e: i32, m: &Mat<f64>, sign: f64| match terms.iter_mut().find(|(f, _)| *f == e) {
+                Some((_, acc)) => {
+                    for i in 0..q {
+                        for j in 0..p {
+                            acc[(i, j)] += sign * m[(i, j)];
+                        }
+                    }
+                }
+                None => terms.push((e, Mat::from_fn(q, p, |i, j| sign * m[(i, j)]))),
+            };
+        if let Some(l) = &self.lower {
+            add(k_out - 2, l, 1.0);
+        }
+        if let Some(u) = &self.upper {
+            add(k_out - k_data, u, 1.0);
+        }
+        if k_out < k_data && self.sample_time_s.is_none() {
+            // P_κ(jω) = Σ_j c_j (jω)^j: `c_0`, `c_1` of the data's order, and of κ'.
+            let polynomial = |k: i32| -> Vec<(i32, Mat<f64>)> {
+                let sum = |f: &dyn Fn(&RefinedMode, Complex64) -> Complex64| {
+                    Mat::from_fn(q, p, |i, j| {
+                        self.modes
+                            .iter()
+                            .map(|m| 2.0 * f(m, m.residue[i * p + j]).re)
+                            .sum::<f64>()
+                    })
+                };
+                match k {
+                    1 => vec![(0, sum(&|_, r| r))],
+                    2 => vec![(1, sum(&|_, r| r)), (0, sum(&|m, r| m.pole * r))],
+                    _ => vec![],
+                }
+            };
+            for (j, c) in polynomial(k_data) {
+                add(j + k_out - k_data, &c, -1.0);
+            }
+            for (j, c) in polynomial(k_out) {
+                add(j, &c, 1.0);
+            }
+        }
+        terms.sort_by_key(|t| t.0);
+        terms
     }
 
     /// The fit as a continuous state-space model whose output is `quantity`, in real
@@ -472,7 +535,6 @@ impl Refinement {
     pub fn to_state_space(&self, quantity: Quantity) -> Result<StateSpace> {
         let (q, p) = (self.outputs, self.inputs);
         let k_out = order(quantity);
-        let k_data = order(self.quantity);
         if self.sample_time_s.is_some() && quantity != self.quantity {
             return Err(EraError::InvalidParameter {
                 name: "quantity",
@@ -516,9 +578,9 @@ impl Refinement {
         }
         let mut chains: Vec<(usize, &Mat<f64>)> = Vec::new();
         let mut d = Mat::<f64>::zeros(q, p);
-        for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
-            let Some(m) = term else { continue };
-            match e {
+        let residual_terms = self.residual_terms(quantity);
+        for (e, m) in &residual_terms {
+            match *e {
                 0 => d += m,
                 e if e < 0 => chains.push(((-e) as usize, m)),
                 _ => {
@@ -529,7 +591,9 @@ impl Refinement {
                             "the upper residual of {} data times (jω)^{e} is not proper: ask for {} or an integral of it",
                             self.quantity, self.quantity
                         ),
-                    })
+                        // (only the upper residual has a positive power: see
+                        // `residual_terms`)
+                    });
                 }
             }
         }
