@@ -10,7 +10,12 @@
 //! `cargo run --release -p era --example refine_targets -- table52 [SEEDS]`: the truth
 //! model with 15 % noise, thesis settings (Table 5.2), ERA and ERA + refinement (the
 //! z-domain fit at the model's sample time): the median |Δf| per mode over the seeds
-//! (default 1..=100).
+//! (default 1..=100), and the median of the fit's own predicted standard deviation.
+//!
+//! Environment: `PAIRNOISE=1` weights each pair by its estimated noise (the CLI's
+//! default, `--weighting pair-noise`); `NORES=1` fits without residual terms and
+//! `RECIP=1` with reciprocity (Table 5.2 only); `DEBUG=1` lists every refined mode of a
+//! DTA-like set with its start, truth and standard deviations.
 
 use era::identify::{
     identify, identify_auto, refine_identification, EraOptions, Identification, ModelDomain,
@@ -264,31 +269,6 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
         }
         if std::env::var("PAIRNOISE").is_ok() {
             ropts.weighting = era::refine::Weighting::PairNoise;
-        }
-        if std::env::var("REWEIGHT").is_ok() {
-            // Per-pair noise variance from a first uniform fit's residual.
-            let first =
-                refine_identification(found.clone(), &frf, &ropts, &mut |_| {}, &mut |_, _| {})?;
-            let (q, p, lines) = (
-                first.measured.outputs(),
-                first.measured.inputs(),
-                first.measured.lines(),
-            );
-            let mut var = vec![0.0; q * p * lines];
-            for pair in 0..q * p {
-                let mut e = 0.0;
-                let mut n = 0;
-                for k in first.first_line..lines {
-                    e += (first.measured.values()[pair * lines + k]
-                        - first.model_response[pair * lines + k])
-                        .norm_sqr();
-                    n += 1;
-                }
-                for k in 0..lines {
-                    var[pair * lines + k] = e / n as f64;
-                }
-            }
-            ropts.weighting = era::refine::Weighting::InverseVariance(var);
         }
         match refine_identification(found, &frf, &ropts, &mut |_| {}, &mut |_, _| {}) {
             Ok(refined) => {
