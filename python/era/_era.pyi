@@ -63,6 +63,10 @@ class Mode:
     def physical(self) -> Optional[bool]: ...
     @property
     def indicators(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def frequency_std_hz(self) -> Optional[float]: ...
+    @property
+    def damping_ratio_std(self) -> Optional[float]: ...
 
 class Identification:
     """The model (A, B, C, D), its Hankel singular values, modes and fit."""
@@ -153,6 +157,10 @@ def identify(
     direct_term: Literal["zero", "markov0"] = "zero",
     svd: Literal["auto", "dense", "matrix-free"] = "auto",
     refine: bool = False,
+    residuals: Literal["none", "lower", "upper", "both"] = "both",
+    reciprocal: bool = False,
+    weighting: Literal["pair-noise", "uniform"] = "pair-noise",
+    max_iterations: int = 100,
 ) -> Identification: ...
 def friction_estimate(
     time_s: npt.ArrayLike, velocity: npt.ArrayLike, stiffness: float

@@ -79,7 +79,9 @@ def test_frfdata_values_are_validated_like_a_file():
     (dict(states=8, time_domain="z"), "time_domain 'z': expected 'discrete' or 'continuous'"),
     (dict(states=8, direct_term="one"), "direct_term 'one': expected 'zero' or 'markov0'"),
     (dict(states=8, svd="lanczos"), "svd 'lanczos': expected 'auto', 'dense' or 'matrix-free'"),
-    (dict(states=8, refine=True), "refine=True: refinement of the modes is not available"),
+    (dict(states=8, refine=True, residuals="sideways"), "residuals 'sideways': expected"),
+    (dict(states=8, refine=True, weighting="loud"), "weighting 'loud': expected"),
+    (dict(states=8, refine=True, max_iterations=0), "max_iterations 0: the refinement needs at least one iteration"),
     (dict(states=8, hankel_factor=400), "the Hankel matrix needs"),
     (dict(states=8, integrations=3), "integrat"),
 ])

@@ -38,6 +38,82 @@ pub enum Command {
     /// Compare two FRF sets of one structure: overlays, differences by band, and the
     /// modes and fits of their models (given or identified).
     Compare(Box<crate::compare::CompareArgs>),
+    /// Refine a model identified earlier (model.json) against its FRF file: poles,
+    /// residues and residual terms by maximum likelihood, with uncertainties.
+    Refine(RefineArgs),
+}
+
+/// The residual terms of a refined model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ResidualsArg {
+    /// Modes only.
+    None,
+    /// L/(jω)² in displacement: modes below the band.
+    Lower,
+    /// A constant in the data's quantity: modes above the band, or D.
+    Upper,
+    /// Both.
+    Both,
+}
+
+impl From<ResidualsArg> for era::refine::Residuals {
+    fn from(r: ResidualsArg) -> Self {
+        match r {
+            ResidualsArg::None => era::refine::Residuals::None,
+            ResidualsArg::Lower => era::refine::Residuals::Lower,
+            ResidualsArg::Upper => era::refine::Residuals::Upper,
+            ResidualsArg::Both => era::refine::Residuals::Both,
+        }
+    }
+}
+
+/// How a refinement fits (docs: README "Refinement").
+#[derive(Debug, Args, Clone)]
+pub struct RefineFitArgs {
+    /// Residual terms of the refined model (default both).
+    #[arg(long, value_enum, value_name = "none|lower|upper|both")]
+    pub residuals: Option<ResidualsArg>,
+    /// Reciprocity: symmetric residues and residuals (square, collocated sets).
+    #[arg(long)]
+    pub reciprocal: bool,
+    /// Levenberg–Marquardt iterations of the refinement at most (default 100).
+    #[arg(long, value_name = "N")]
+    pub max_iterations: Option<usize>,
+    /// Weights of the refinement's cost (default pair-noise).
+    #[arg(long, value_enum, value_name = "uniform|pair-noise")]
+    pub weighting: Option<WeightingArg>,
+}
+
+/// How the refinement weights the pairs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WeightingArg {
+    /// Every pair and line alike.
+    Uniform,
+    /// Each pair by the inverse of its noise variance, estimated from a first uniform
+    /// fit's residual (maximum likelihood when the pairs' noise levels differ).
+    PairNoise,
+}
+
+#[derive(Debug, Args)]
+pub struct RefineArgs {
+    /// model.json of an earlier `era identify`.
+    pub model: PathBuf,
+    /// The FRF file it was identified from (same shape and lines).
+    pub file: PathBuf,
+    /// Quantity of the FRFs; overrides the file's (as era identify --quantity).
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Outputs of a MAT file's FRF matrix, when the file does not say.
+    #[arg(long, value_name = "N")]
+    pub outputs: Option<usize>,
+    #[command(flatten)]
+    pub fit: RefineFitArgs,
+    /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
+    /// figures of the refined model (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
 }
 
 #[derive(Debug, Args)]
@@ -340,6 +416,14 @@ pub struct IdentifyArgs {
     /// With --from-time: also write the estimated FRFs (.csv, .uff or .mat).
     #[arg(long, value_name = "FILE", requires = "from_time")]
     pub save_frf: Option<PathBuf>,
+    /// Refine the identified model against the FRFs: poles, residues and residual
+    /// terms by maximum likelihood, starting from the physical modes (--states auto) or
+    /// every mode (--states N); model.json and every output then show the refined
+    /// model, with standard deviations.
+    #[arg(long)]
+    pub refine: bool,
+    #[command(flatten)]
+    pub refine_fit: RefineFitArgs,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
     /// figures (created if missing).
     #[arg(long, value_name = "DIR")]

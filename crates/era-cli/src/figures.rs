@@ -2,7 +2,6 @@
 
 use crate::identify::write_output;
 use era::identify::Identification;
-use era::preprocess::zero_leading_lines;
 use era::FrfData;
 use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::IoError;
@@ -110,19 +109,13 @@ pub fn write_all(
     title: &str,
     parameters: &str,
     found: &Identification,
-    zero_lines: usize,
     states: usize,
     progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<()> {
-    let measured = zero_leading_lines(&found.processed, zero_lines);
-    // The fit already evaluated the model on these lines.
-    let model = FrfData::new(
-        measured.frequency_hz().to_vec(),
-        measured.outputs(),
-        measured.inputs(),
-        found.model_response.clone(),
-        measured.quantity(),
-    )?;
+    // What the fit compared, kept in the identification: the measurement and the
+    // model's FRF on its lines.
+    let measured = &found.measured;
+    let model = found.model_frf()?;
     // With a scan, the factored H0's values: on the matrix-free path they run past the
     // largest order, so the gap after the physical modes shows.
     let singular_values = match &found.stabilization {
@@ -163,7 +156,7 @@ pub fn write_all(
         }
         None => None,
     };
-    let (grid_svg, overlays) = write_frf_figures(set, folder, &measured, Some(&model), progress)?;
+    let (grid_svg, overlays) = write_frf_figures(set, folder, measured, Some(&model), progress)?;
     let html = report_html(&ReportInput {
         title,
         parameters,

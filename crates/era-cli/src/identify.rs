@@ -202,6 +202,12 @@ pub fn output_name<'a>(flag: &str, path: &'a Path) -> anyhow::Result<&'a std::ff
 pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let opts = options(a)?;
+    if !a.refine && crate::refine::any_given(&a.refine_fit) {
+        return crate::usage(
+            "--residuals, --reciprocal, --weighting and --max-iterations set the refinement: add --refine",
+        );
+    }
+    let refine_options = crate::refine::options(&a.refine_fit)?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
@@ -256,6 +262,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let read_s = clock.elapsed().as_secs_f64() - estimate_s.unwrap_or(0.0);
     let frf = &input.file.frf;
+    if a.refine {
+        crate::refine::check_shape(&refine_options, frf)?;
+    }
     human.print(&format!("  {}{}\n", shape_line(frf), input.note));
     human.print(&describe_input(&input));
     let auto = a.states == StatesArg::Auto;
@@ -293,11 +302,28 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     })
     .with_context(|| format!("identifying {}", a.file.display()));
     spinner.finish_and_clear();
-    let found = found?;
+    let mut found = found?;
     let states = found.model.states();
     let mut opts = opts;
     if auto {
         opts.states = states;
+    }
+    if a.refine {
+        let era_fit = &found.fit;
+        human.print(&format!(
+            "\nERA model: {} states, {} modes; fit collocated {}, non-collocated {}\n",
+            states,
+            found.modal.modes.len(),
+            era_fit
+                .collocated_mean_relative_error
+                .map_or("-".into(), |v| format!("{v:.3e}")),
+            era_fit
+                .noncollocated_mean_relative_error
+                .map_or("-".into(), |v| format!("{v:.3e}"))
+        ));
+        found = crate::refine::refine_found(found, frf, &refine_options, &a.common)
+            .with_context(|| format!("refining the model of {}", a.file.display()))?;
+        human.print(&crate::refine::summary(&found));
     }
     human.print(&identification_summary(&found, states));
     human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
@@ -318,59 +344,49 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if let Some(st) = &found.stabilization {
         params.insert("orders".into(), serde_json::json!(st.range.to_string()));
     }
+    if a.refine {
+        timings.insert("refine".into(), found.timings.refine);
+        params.insert("refine".into(), serde_json::json!(true));
+        params.insert(
+            "residuals".into(),
+            serde_json::json!(format!("{:?}", refine_options.residuals).to_lowercase()),
+        );
+        params.insert(
+            "reciprocal".into(),
+            serde_json::json!(refine_options.reciprocal),
+        );
+        params.insert(
+            "weighting".into(),
+            serde_json::json!(match refine_options.weighting {
+                era::refine::Weighting::Uniform => "uniform",
+                _ => "pair-noise",
+            }),
+        );
+        params.insert(
+            "max_iterations".into(),
+            serde_json::json!(refine_options.max_iterations),
+        );
+        params.insert(
+            "model_states".into(),
+            serde_json::json!(found.model.states()),
+        );
+    }
     let mut model = ModelJson::from_identification(&found, params, None);
     let fit = FitJson::from_report(&found.fit);
     if let Some(set) = outputs.as_mut() {
         let clock = Instant::now();
-        write_output(set, "model.json", |p| Ok(model.write(p)?))?;
-        write_output(set, "fit.json", |p| Ok(fit.write(p)?))?;
-        write_output(set, "model.mat", |p| {
-            Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
-        })?;
-        // The model's synthesised FRFs on the measurement's lines, after the same
-        // integrations, for tools that overlay them on the measurement.
-        let processed = &found.processed;
-        let synthesised = era::FrfData::new(
-            processed.frequency_hz().to_vec(),
-            processed.outputs(),
-            processed.inputs(),
-            found.model_response.clone(),
-            processed.quantity(),
-        )?;
-        write_output(set, "model_frf.uff", |p| {
-            Ok(era_io::uff::write_uff58(
-                p,
-                &synthesised,
-                input.file.channels.as_ref(),
-                (None, None),
-                era_io::uff::UffWriteOptions {
-                    binary: true,
-                    single: false,
-                },
-            )?)
-        })?;
-        write_output(set, "modes.uff", |p| {
-            Ok(era_io::uff::write_uff55(
-                p,
-                &found.modal,
-                input.file.channels.as_ref(),
-                // The shapes are of the integrated quantity, as the model is.
-                found.processed.quantity(),
-            )?)
-        })?;
         let title = format!("era identify {}", a.file.display());
-        let bar = crate::progress::bar(&a.common, (frf.outputs() * frf.inputs()) as u64, "figures");
-        crate::figures::write_all(
+        write_identification(
             set,
-            Path::new(""),
+            &found,
+            &model,
+            &fit,
+            input.file.channels.as_ref(),
             &title,
             &echo,
-            &found,
-            opts.zero_lines,
             states,
-            &bar,
+            &a.common,
         )?;
-        bar.finish_and_clear();
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
     }
     if a.common.timings {
@@ -392,6 +408,56 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if a.common.json {
         print_json(&model)?;
     }
+    Ok(())
+}
+
+/// Every output of one identification into `set`: model.json, fit.json, model.mat,
+/// model_frf.uff (the model's FRFs on the measurement's lines, after the same
+/// integrations), modes.uff, the figures and report.html. All of them show
+/// `found.model`, refined or not, and use the compared data kept in `found`.
+#[allow(clippy::too_many_arguments)]
+pub fn write_identification(
+    set: &mut OutputSet,
+    found: &era::Identification,
+    model: &ModelJson,
+    fit: &FitJson,
+    channels: Option<&era_io::uff::ChannelTable>,
+    title: &str,
+    echo: &str,
+    states: usize,
+    common: &crate::args::CommonArgs,
+) -> anyhow::Result<()> {
+    write_output(set, "model.json", |p| Ok(model.write(p)?))?;
+    write_output(set, "fit.json", |p| Ok(fit.write(p)?))?;
+    write_output(set, "model.mat", |p| {
+        Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
+    })?;
+    let synthesised = found.model_frf()?;
+    write_output(set, "model_frf.uff", |p| {
+        Ok(era_io::uff::write_uff58(
+            p,
+            &synthesised,
+            channels,
+            (None, None),
+            era_io::uff::UffWriteOptions {
+                binary: true,
+                single: false,
+            },
+        )?)
+    })?;
+    write_output(set, "modes.uff", |p| {
+        Ok(era_io::uff::write_uff55(
+            p,
+            &found.modal,
+            channels,
+            // The shapes are of the integrated quantity, as the model is.
+            found.processed.quantity(),
+        )?)
+    })?;
+    let q = found.measured.outputs() * found.measured.inputs();
+    let bar = crate::progress::bar(common, q as u64, "figures");
+    crate::figures::write_all(set, Path::new(""), title, echo, found, states, &bar)?;
+    bar.finish_and_clear();
     Ok(())
 }
 

@@ -15,6 +15,7 @@ mod friction;
 mod identify;
 mod plot;
 mod progress;
+mod refine;
 mod report;
 mod simulate;
 
@@ -79,6 +80,7 @@ fn main() -> ExitCode {
         args::Command::Info(a) => files::run_info(a),
         args::Command::Convert(a) => files::run_convert(a),
         args::Command::Compare(a) => compare::run(a),
+        args::Command::Refine(a) => refine::run(a),
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

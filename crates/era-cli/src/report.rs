@@ -57,10 +57,30 @@ pub use era_io::model_json::parameters;
 pub fn mode_table(found: &Identification) -> String {
     let mut s = String::new();
     let num = |v: Option<f64>, w: usize| v.map_or(format!("{:>w$}", "-"), |x| format!("{x:>w$.2}"));
+    // A refined model's modes carry standard deviations: shown as `± σ` columns.
+    let refined = found.refinement.is_some();
+    let pm = |v: Option<f64>| v.map_or(format!("{:>11}", "-"), |x| format!("± {x:>9.2e}"));
     let _ = writeln!(
         s,
-        "{:>5} {:>14} {:>10} {:>6} {:>6} {:>6} {:>9} {:>7}  trust",
-        "mode", "f (Hz)", "zeta (%)", "MPC", "EMAC", "CMI", "share", "orders"
+        "{:>5} {:>14}{} {:>10}{} {:>6} {:>6} {:>6} {:>9} {:>7}  trust",
+        "mode",
+        "f (Hz)",
+        if refined {
+            format!(" {:>11}", "± (Hz)")
+        } else {
+            String::new()
+        },
+        "zeta (%)",
+        if refined {
+            format!(" {:>11}", "± (%)")
+        } else {
+            String::new()
+        },
+        "MPC",
+        "EMAC",
+        "CMI",
+        "share",
+        "orders"
     );
     let mut reasons = Vec::new();
     for (k, m) in found.modal.modes.iter().enumerate() {
@@ -79,9 +99,20 @@ pub fn mode_table(found: &Identification) -> String {
             None => "",
         };
         let i = q.map(|q| q.indicators);
+        let (f_std, z_std) = if refined {
+            (
+                format!(" {}", pm(q.and_then(|q| q.frequency_std_hz))),
+                format!(
+                    " {}",
+                    pm(q.and_then(|q| q.damping_ratio_std).map(|z| 100.0 * z))
+                ),
+            )
+        } else {
+            (String::new(), String::new())
+        };
         let _ = writeln!(
             s,
-            "{:>5} {:>14.4} {:>10.4} {} {} {} {:>9} {:>7}  {mark}",
+            "{:>5} {:>14.4}{f_std} {:>10.4}{z_std} {} {} {} {:>9} {:>7}  {mark}",
             k + 1,
             m.frequency_hz,
             100.0 * m.damping_ratio,

@@ -7,6 +7,12 @@
 //! `eigenvalue_re`, `eigenvalue_im`, plus `shape_re/_im` = `Cφ` and
 //! `participation_re/_im` = `ψB`), `real_poles`, `parameters` (every flag), `hankel`
 //! (size and path), `warnings`, and `timings_s` when timings were asked for.
+//!
+//! A refined model (`era identify --refine`, `era refine`) adds `refinement`
+//! (`iterations`, `converged`, `cost_before`, `cost_after`, `fit_before`, `fit_after`,
+//! the residual terms, the dropped modes) and, per mode, `frequency_std_hz` and
+//! `damping_ratio_std`. `frf_lines` records the lines of the FRF the model was fitted
+//! to, so that `era refine` can check a file against it.
 
 use crate::atomic::write_atomic;
 use crate::IoError;
@@ -54,6 +60,12 @@ pub struct ModeJson {
     /// Orders of the scan in which the mode's cluster has a pole.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stable_orders: Option<usize>,
+    /// Standard deviation of the frequency, Hz (refined models).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub frequency_std_hz: Option<f64>,
+    /// Standard deviation of the damping ratio (refined models).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub damping_ratio_std: Option<f64>,
 }
 
 /// A mode's quality indicators as stored.
@@ -85,6 +97,8 @@ impl ModeJson {
             reason: None,
             indicators: None,
             stable_orders: None,
+            frequency_std_hz: None,
+            damping_ratio_std: None,
         }
     }
 
@@ -101,6 +115,8 @@ impl ModeJson {
                 contribution: i.contribution,
             }),
             stable_orders: q.stable_orders,
+            frequency_std_hz: q.frequency_std_hz,
+            damping_ratio_std: q.damping_ratio_std,
             ..Self::from_mode(m)
         }
     }
@@ -174,6 +190,114 @@ pub struct ModelJson {
     /// `--states auto`), when run.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stabilization: Option<serde_json::Value>,
+    /// How the refinement went (`--refine`, `era refine`), when one ran.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub refinement: Option<RefinementJson>,
+    /// The lines of the FRF the model was identified from (absent in older files).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub frf_lines: Option<FrfLinesJson>,
+}
+
+/// The lines of an FRF: enough to tell whether another file has the same ones.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrfLinesJson {
+    /// Number of lines.
+    pub lines: usize,
+    /// First line, Hz.
+    pub first_hz: f64,
+    /// Last line, Hz.
+    pub last_hz: f64,
+    /// The quantity of the data the model describes (after the integrations).
+    pub quantity: String,
+}
+
+impl FrfLinesJson {
+    /// Of an FRF set.
+    pub fn of(frf: &era::FrfData) -> Self {
+        let f = frf.frequency_hz();
+        FrfLinesJson {
+            lines: f.len(),
+            first_hz: f.first().copied().unwrap_or(f64::NAN),
+            last_hz: f.last().copied().unwrap_or(f64::NAN),
+            quantity: frf.quantity().name().into(),
+        }
+    }
+
+    /// `None` when `frf` has these lines (first and last within 1e-9 relative), or what
+    /// differs.
+    pub fn differs_from(&self, frf: &era::FrfData) -> Option<String> {
+        let other = Self::of(frf);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-300);
+        if self.lines != other.lines {
+            return Some(format!(
+                "the model was fitted to {} lines, the file has {}",
+                self.lines, other.lines
+            ));
+        }
+        if !close(self.first_hz, other.first_hz) || !close(self.last_hz, other.last_hz) {
+            return Some(format!(
+                "the model was fitted to lines {} .. {} Hz, the file has {} .. {} Hz",
+                self.first_hz, self.last_hz, other.first_hz, other.last_hz
+            ));
+        }
+        None
+    }
+}
+
+/// `refinement` of `model.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefinementJson {
+    /// Accepted Levenberg–Marquardt steps.
+    pub iterations: usize,
+    /// Whether the cost stopped decreasing before the iterations ran out.
+    pub converged: bool,
+    /// Weighted cost at the start poles.
+    pub cost_before: f64,
+    /// Weighted cost at the end.
+    pub cost_after: f64,
+    /// `‖G − Ĝ‖/‖G‖` over the band at the start poles (best residues for them).
+    pub fit_before: f64,
+    /// `‖G − Ĝ‖/‖G‖` over the band at the end.
+    pub fit_after: f64,
+    /// Noise variance per real observation, from the residual.
+    pub noise_variance: Option<f64>,
+    /// `"z"` (zero-order-hold image at the sample time) or `"s"` (continuous).
+    pub model: String,
+    /// Lines fitted, 0-based `[first, end)`.
+    pub band: [usize; 2],
+    /// Start poles (ERA's modes).
+    pub start_modes: usize,
+    /// The lower residual as a q × p matrix (row-major), when fitted.
+    pub lower_residual: Option<Vec<Vec<f64>>>,
+    /// The upper residual, when fitted.
+    pub upper_residual: Option<Vec<Vec<f64>>>,
+    /// Integrator states of the lower residual in the model.
+    pub residual_states: usize,
+    /// Start modes dropped: `"the mode at f Hz was dropped: why"`.
+    pub dropped: Vec<String>,
+}
+
+impl RefinementJson {
+    /// From the pipeline's record.
+    pub fn of(r: &era::identify::Refined) -> Self {
+        let f = &r.refinement;
+        RefinementJson {
+            iterations: f.iterations,
+            converged: f.converged,
+            cost_before: f.cost_before,
+            cost_after: f.cost_after,
+            fit_before: f.fit_before,
+            fit_after: f.fit_after,
+            noise_variance: f.noise_variance.is_finite().then_some(f.noise_variance),
+            model: if f.sample_time_s.is_some() { "z" } else { "s" }.into(),
+            band: [f.band.0, f.band.1],
+            start_modes: r.start_frequency_hz.len(),
+            lower_residual: f.lower.as_ref().map(rows),
+            upper_residual: f.upper.as_ref().map(rows),
+            residual_states: r.residual_states,
+            dropped: r.dropped_lines(),
+        }
+    }
 }
 
 /// Row-major nested vectors of a matrix.
@@ -300,6 +424,8 @@ impl ModelJson {
             timings_s,
             stability: None,
             stabilization: found.stabilization.as_ref().map(stabilization_json),
+            refinement: found.refinement.as_ref().map(RefinementJson::of),
+            frf_lines: Some(FrfLinesJson::of(&found.processed)),
         }
     }
 

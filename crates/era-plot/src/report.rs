@@ -34,6 +34,39 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 }
 
 /// The whole page.
+/// ` ± σ` after a refined value (one standard deviation), empty otherwise.
+fn plus_minus(std: Option<f64>) -> String {
+    std.map_or(String::new(), |s| format!(" ± {s:.2e}"))
+}
+
+/// The paragraph on the refinement of a refined model: how the fit went, which modes
+/// were dropped, and how to read `±`.
+fn refinement_html(f: &era::identify::Identification) -> String {
+    let Some(r) = &f.refinement else {
+        return String::new();
+    };
+    let fit = &r.refinement;
+    let mut h = format!(
+        "<p id=\"refinement\">Refined model: poles, residues and residual terms fitted to the FRFs by maximum likelihood ({} model), starting from {} modes of ERA; {} kept. {} iterations, {}. Over the band, ‖G − Ĝ‖/‖G‖ went from {:.3e} to {:.3e}. The model, its FRFs and the table are the refined ones; ± is one standard deviation from the Gauss–Newton covariance at the optimum, with the noise variance taken from the residual.</p>\n",
+        if fit.sample_time_s.is_some() { "z-domain, at the sample time" } else { "continuous" },
+        r.start_frequency_hz.len(),
+        fit.modes.len(),
+        fit.iterations,
+        if fit.converged { "converged" } else { "<span class=\"suspect\">not converged</span>" },
+        fit.fit_before,
+        fit.fit_after,
+    );
+    let dropped = r.dropped_lines();
+    if !dropped.is_empty() {
+        h.push_str("<ul id=\"refinement-dropped\">");
+        for d in dropped {
+            let _ = write!(h, "<li>{}</li>", escape(&d));
+        }
+        h.push_str("</ul>\n");
+    }
+    h
+}
+
 pub fn report_html(input: &ReportInput<'_>) -> String {
     let f = input.found;
     let mut h = String::with_capacity(1 << 20);
@@ -74,7 +107,7 @@ pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%
             svg
         );
     }
-    let _ = write!(h, "<h2 id=\"modes\">Modes</h2>\n<p>MPC: modal phase collinearity (1 for a real normal mode). EMAC: extended modal amplitude coherence, how consistently the mode appears over the record (1 = fully). CMI = MPC × EMAC. Share: the mode's part of the measured FRF. Orders: scanned orders in which the mode's cluster has a pole. A mode not judged physical is marked, with the reason.</p>\n<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th><th>MPC</th><th>EMAC</th><th>CMI</th><th>share</th><th>orders</th><th>physical</th></tr>\n");
+    let _ = write!(h, "<h2 id=\"modes\">Modes</h2>\n<p>MPC: modal phase collinearity (1 for a real normal mode). EMAC: extended modal amplitude coherence, how consistently the mode appears over the record (1 = fully). CMI = MPC × EMAC. Share: the mode's part of the measured FRF. Orders: scanned orders in which the mode's cluster has a pole. A mode not judged physical is marked, with the reason.</p>\n{}<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th><th>MPC</th><th>EMAC</th><th>CMI</th><th>share</th><th>orders</th><th>physical</th></tr>\n", refinement_html(f));
     for (k, m) in f.modal.modes.iter().enumerate() {
         let q = f.quality.get(k);
         let i = q.map(|q| q.indicators);
@@ -88,11 +121,13 @@ pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%
         };
         let _ = writeln!(
             h,
-            "<tr{}><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.6}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            "<tr{}><td>{}</td><td>{:.4}{}</td><td>{:.4}{}</td><td>{:.6}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
             if q.is_some_and(|q| !q.physical) { " class=\"bad\"" } else { "" },
             k + 1,
             m.frequency_hz,
+            plus_minus(q.and_then(|q| q.frequency_std_hz)),
             100.0 * m.damping_ratio,
+            plus_minus(q.and_then(|q| q.damping_ratio_std).map(|z| 100.0 * z)),
             m.eigenvalue.norm(),
             opt(i.map(|i| i.mpc), 3),
             opt(i.and_then(|i| i.emac), 3),

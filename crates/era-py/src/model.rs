@@ -49,6 +49,10 @@ pub struct PyMode {
     physical: Option<bool>,
     /// Mode indicators by name, when computed.
     indicators: Option<Py<PyDict>>,
+    /// Standard deviation of the frequency, Hz (refined models, `refine=True`).
+    frequency_std_hz: Option<f64>,
+    /// Standard deviation of the damping ratio (refined models).
+    damping_ratio_std: Option<f64>,
 }
 
 #[pymethods]
@@ -67,6 +71,8 @@ impl PyMode {
 pub struct PyIdentification {
     found: Identification,
     options: EraOptions,
+    /// The refinement's settings, when `refine=True`.
+    refine: Option<era::refine::RefineOptions>,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -212,6 +218,8 @@ impl PyIdentification {
                         participation: vector(py, m.participation.clone()).unbind(),
                         physical: quality.map(|q| q.physical),
                         indicators,
+                        frequency_std_hz: quality.and_then(|q| q.frequency_std_hz),
+                        damping_ratio_std: quality.and_then(|q| q.damping_ratio_std),
                     },
                 )
             })
@@ -289,7 +297,21 @@ impl PyIdentification {
     }
     /// model.json's text (as `era identify --out` writes it, without timings).
     fn to_json(&self) -> PyResult<String> {
-        let model = ModelJson::from_identification(&self.found, parameters(&self.options), None);
+        let mut params = parameters(&self.options);
+        if let Some(r) = &self.refine {
+            params.insert("refine".into(), serde_json::json!(true));
+            params.insert(
+                "residuals".into(),
+                serde_json::json!(format!("{:?}", r.residuals).to_lowercase()),
+            );
+            params.insert("reciprocal".into(), serde_json::json!(r.reciprocal));
+            params.insert("max_iterations".into(), serde_json::json!(r.max_iterations));
+            params.insert(
+                "model_states".into(),
+                serde_json::json!(self.found.model.states()),
+            );
+        }
+        let model = ModelJson::from_identification(&self.found, params, None);
         let mut text = serde_json::to_string_pretty(&model)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         text.push('\n');
@@ -345,8 +367,14 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// `frffilt`). Thesis names: `states` = ns, `hankel_factor` = lh, `integrations` = ni,
 /// `zero_lines` = nz, `pad_to` = ndpts, `lowpass` = (ford, Hzbreak),
 /// `time_domain` = cord.
+///
+/// `refine=True` refines the model against the FRFs (poles, residues and residual
+/// terms by maximum likelihood, `era identify --refine`): `residuals` ('none', 'lower',
+/// 'upper', 'both'), `reciprocal`, `weighting` ('pair-noise', 'uniform') and
+/// `max_iterations` set it; the modes then carry `frequency_std_hz` and
+/// `damping_ratio_std`.
 #[pyfunction]
-#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false))]
+#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100)))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -361,13 +389,49 @@ pub fn identify(
     direct_term: &str,
     svd: &str,
     refine: bool,
+    residuals: &str,
+    reciprocal: bool,
+    weighting: &str,
+    max_iterations: Int,
 ) -> PyResult<PyIdentification> {
     let chosen = states_of(states)?;
     let states = chosen.unwrap_or(0);
-    if refine {
-        return value_error(
-            "refine=True: refinement of the modes is not available in this version yet",
-        );
+    let mut refine_options = era::refine::RefineOptions::default();
+    refine_options.residuals = match residuals {
+        "none" => era::refine::Residuals::None,
+        "lower" => era::refine::Residuals::Lower,
+        "upper" => era::refine::Residuals::Upper,
+        "both" => era::refine::Residuals::Both,
+        other => {
+            return value_error(format!(
+                "residuals '{other}': expected 'none', 'lower', 'upper' or 'both'"
+            ))
+        }
+    };
+    refine_options.weighting = match weighting {
+        "pair-noise" | "pair_noise" => era::refine::Weighting::PairNoise,
+        "uniform" => era::refine::Weighting::Uniform,
+        other => {
+            return value_error(format!(
+                "weighting '{other}': expected 'pair-noise' or 'uniform'"
+            ))
+        }
+    };
+    refine_options.reciprocal = reciprocal;
+    let iterations = max_iterations.size("max_iterations")?;
+    if iterations == 0 {
+        return value_error("max_iterations 0: the refinement needs at least one iteration");
+    }
+    era::limits::ITERATIONS
+        .check("max_iterations", iterations as u64)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    refine_options.max_iterations = iterations;
+    if reciprocal && frf.get().inner.outputs() != frf.get().inner.inputs() {
+        return value_error(format!(
+            "reciprocal=True: the set has {} outputs x {} inputs; reciprocity needs a square (collocated) set",
+            frf.get().inner.outputs(),
+            frf.get().inner.inputs()
+        ));
     }
     let lowpass = match lowpass {
         None => None,
@@ -438,7 +502,24 @@ pub fn identify(
                 &mut |_, _| {},
             ),
         }
+        .and_then(|found| {
+            if refine {
+                era::identify::refine_identification(
+                    found,
+                    &data,
+                    &refine_options,
+                    &mut |_| {},
+                    &mut |_, _| {},
+                )
+            } else {
+                Ok(found)
+            }
+        })
         .map_err(era_error)
     })?;
-    Ok(PyIdentification { found, options })
+    Ok(PyIdentification {
+        found,
+        options,
+        refine: refine.then_some(refine_options),
+    })
 }

@@ -161,6 +161,8 @@ pub enum Stage {
     Modes,
     /// Model FRF and fit.
     Fit,
+    /// Refinement of the poles and residues against the FRFs ([`refine_identification`]).
+    Refine,
 }
 
 impl Stage {
@@ -173,6 +175,7 @@ impl Stage {
             Stage::Realize => "realization",
             Stage::Modes => "modes",
             Stage::Fit => "fit",
+            Stage::Refine => "refinement",
         }
     }
 }
@@ -192,6 +195,8 @@ pub struct StageTimings {
     pub modes: f64,
     /// Model FRF and fit metrics.
     pub fit: f64,
+    /// The refinement ([`refine_identification`]), 0 when none ran.
+    pub refine: f64,
 }
 
 /// Everything `identify` found.
@@ -206,13 +211,20 @@ pub struct Identification {
     pub modal: ModalParameters,
     /// Fit against the processed measurement.
     pub fit: FitReport,
-    /// The measurement after the same integrations, on its own lines: what the fit and
-    /// plots compare against.
+    /// The measurement after the same integrations, on its own lines (the zeroed
+    /// leading lines kept): the data a refinement fits.
     pub processed: FrfData,
+    /// `processed` with its leading lines zeroed: what the fit compared and what every
+    /// plot overlays (docs/design.md §1.10). Built here once, for every consumer.
+    pub measured: FrfData,
+    /// First line of `measured` in the fit (the zeroed lines, and the 0 Hz line of
+    /// integrated data, are left out).
+    pub first_line: usize,
     /// Sample time of the impulse responses, s.
     pub sample_time_s: f64,
-    /// The model's FRF on the lines of `processed`, `[output][input][line]` as in
-    /// [`FrfData::values`]: what the fit compared, kept for plots.
+    /// The model's FRF on the lines of `measured`, `[output][input][line]` as in
+    /// [`FrfData::values`], evaluated from `model`'s (A, B, C, D): what the fit compared,
+    /// kept for plots ([`Identification::model_frf`]).
     pub model_response: Vec<crate::Complex64>,
     /// Stage times.
     pub timings: StageTimings,
@@ -222,6 +234,55 @@ pub struct Identification {
     pub band_hz: (f64, f64),
     /// The scan across orders, when one was asked for (`--orders` or `--states auto`).
     pub stabilization: Option<Stabilization>,
+    /// The refinement that gave `model`, when one ran ([`refine_identification`]).
+    pub refinement: Option<Refined>,
+}
+
+impl Identification {
+    /// `model_response` as an [`FrfData`] on the lines of `measured`: the model's side of
+    /// every overlay.
+    ///
+    /// # Errors
+    /// None in practice: the shapes are the identification's own.
+    pub fn model_frf(&self) -> Result<FrfData> {
+        FrfData::new(
+            self.measured.frequency_hz().to_vec(),
+            self.measured.outputs(),
+            self.measured.inputs(),
+            self.model_response.clone(),
+            self.measured.quantity(),
+        )
+    }
+}
+
+/// A refinement in the pipeline: the fit, and what it started from.
+#[derive(Debug, Clone)]
+pub struct Refined {
+    /// The fit ([`crate::refine::refine`]).
+    pub refinement: crate::refine::Refinement,
+    /// Frequencies of the start poles (ERA's modes), Hz, in the refinement's start order:
+    /// [`crate::refine::Refinement::dropped`] and [`crate::refine::RefinedMode::start`]
+    /// index them.
+    pub start_frequency_hz: Vec<f64>,
+    /// Integrator states of the lower residual in the model (they are its real poles at
+    /// `s = 0`).
+    pub residual_states: usize,
+}
+
+impl Refined {
+    /// `"mode at 12.3456 Hz: why"` for every dropped start pole.
+    pub fn dropped_lines(&self) -> Vec<String> {
+        self.refinement
+            .dropped
+            .iter()
+            .map(|(k, why)| {
+                format!(
+                    "the mode at {:.4} Hz was dropped: {why}",
+                    self.start_frequency_hz.get(*k).copied().unwrap_or(f64::NAN)
+                )
+            })
+            .collect()
+    }
 }
 
 /// Whether a mode is to be trusted, and why not.
@@ -235,6 +296,10 @@ pub struct ModeQuality {
     pub indicators: ModeIndicators,
     /// Orders of the scan in which the mode's cluster has a pole, when a scan ran.
     pub stable_orders: Option<usize>,
+    /// Standard deviation of the frequency, Hz, when a refinement estimated it.
+    pub frequency_std_hz: Option<f64>,
+    /// Standard deviation of the damping ratio, when a refinement estimated it.
+    pub damping_ratio_std: Option<f64>,
 }
 
 /// A scan across orders, its diagram and (for `--states auto`) the automatic choice.
@@ -267,15 +332,14 @@ pub struct Stabilization {
 
 impl Stabilization {
     /// The record of a scan, its selection and the factorization it came from; the CMIF
-    /// is taken of `processed` without its zeroed lines.
+    /// is taken of the identification's `measured` data.
     #[allow(clippy::too_many_arguments)]
     fn new(
         range: OrderRange,
         scan: Scan,
         selection: Selection,
         factorization: &Factorization,
-        processed: &FrfData,
-        zero_lines: usize,
+        measured: &FrfData,
         seconds: f64,
         model_note: Option<String>,
     ) -> Self {
@@ -285,7 +349,7 @@ impl Stabilization {
             selection,
             singular_values: factorization.singular_values().to_vec(),
             hankel_size: factorization.hankel_size(),
-            cmif: cmif(&zero_leading_lines(processed, zero_lines)),
+            cmif: cmif(measured),
             seconds,
             factor_seconds: factorization.seconds(),
             svd_iterations: factorization.svd_iterations(),
@@ -535,7 +599,35 @@ fn back(
     let mut convert = 0.0;
     lap(&mut convert);
     timings.realize += convert;
+    assess(
+        frf,
+        options,
+        path,
+        observer,
+        timings,
+        realization,
+        model,
+        sample_time_s,
+    )
+}
 
+/// Modes, indicators and fit of `model` as it is (its own time domain).
+#[allow(clippy::too_many_arguments)]
+fn assess(
+    frf: &FrfData,
+    options: &EraOptions,
+    path: Path,
+    observer: &mut dyn FnMut(Stage),
+    mut timings: StageTimings,
+    realization: Realization,
+    model: StateSpace,
+    sample_time_s: f64,
+) -> Result<Identification> {
+    let mut clock = Instant::now();
+    let mut lap = |slot: &mut f64| {
+        *slot = clock.elapsed().as_secs_f64();
+        clock = Instant::now();
+    };
     observer(Stage::Modes);
     let form = ModalForm::new(&model)?;
     let modal = modal_parameters_of(&form, model.domain);
@@ -548,11 +640,8 @@ fn back(
         Path::Fast => HessenbergForm::new(&model).response(measured.frequency_hz()),
         Path::Naive => frequency_response_naive(&model, measured.frequency_hz()),
     };
-    let first_line = options
-        .zero_lines
-        .max(usize::from(options.integrations > 0));
+    let (first_line, band_hz) = fit_band(measured.frequency_hz(), options);
     let fit = fit_metrics(&measured, &response, first_line);
-    let band_hz = fitted_band(&measured, first_line);
     let quality = mode_quality(
         &modal,
         &form,
@@ -570,20 +659,30 @@ fn back(
         modal,
         fit,
         processed,
+        measured,
+        first_line,
         sample_time_s,
         model_response: response,
         timings,
         quality,
         band_hz,
         stabilization: None,
+        refinement: None,
     })
 }
 
-/// Frequencies of the first and last fitted lines.
-fn fitted_band(measured: &FrfData, first_line: usize) -> (f64, f64) {
-    let f = measured.frequency_hz();
-    let last = f.len().saturating_sub(1);
-    (f[first_line.min(last)], f[last])
+/// The first fitted line (past the zeroed lines, and past the 0 Hz line of integrated
+/// data) and the frequencies of the first and last fitted lines, from the data's lines
+/// alone.
+fn fit_band(frequency_hz: &[f64], options: &EraOptions) -> (usize, (f64, f64)) {
+    let first_line = options
+        .zero_lines
+        .max(usize::from(options.integrations > 0));
+    let last = frequency_hz.len().saturating_sub(1);
+    (
+        first_line,
+        (frequency_hz[first_line.min(last)], frequency_hz[last]),
+    )
 }
 
 /// Indicators and the hard criteria of every mode of an identification. EMAC comes from
@@ -655,6 +754,8 @@ fn mode_quality(
                 reason: reason.map(|r| r.to_string()),
                 indicators,
                 stable_orders: None,
+                frequency_std_hz: None,
+                damping_ratio_std: None,
             }
         })
         .collect()
@@ -901,8 +1002,7 @@ pub fn identify_with_scan(
         s,
         selection,
         &factorization,
-        &found.processed,
-        options.zero_lines,
+        &found.measured,
         seconds,
         None,
     ));
@@ -928,11 +1028,8 @@ pub fn identify_auto(
     let mut timings = StageTimings::default();
     let (f, factorization, range, s, seconds) =
         scan_front(frf, options, scan_options, observer, progress, &mut timings)?;
-    let processed = integrate(frf, options.integrations)?;
-    let first_line = options
-        .zero_lines
-        .max(usize::from(options.integrations > 0));
-    let band_hz = fitted_band(&processed, first_line);
+    // The band needs the lines only: the data is integrated once, in `assess`.
+    let (_, band_hz) = fit_band(frf.frequency_hz(), options);
     let selection = select(&s, band_hz, &criteria_for(scan_options, &range));
     let chosen: Vec<&crate::modal::stabilization::ScanPole> = selection
         .physical()
@@ -1001,13 +1098,17 @@ pub fn identify_auto(
         s,
         selection,
         &factorization,
-        &found.processed,
-        options.zero_lines,
+        &found.measured,
         seconds,
         Some(note),
     ));
     Ok(found)
 }
+
+/// A refined mode whose share of the band's FRF norm exceeds this is not physical: it is
+/// larger than the data, so it cancels other modes (the fit has gone degenerate there,
+/// typically where modes the start missed are absorbed by others).
+pub const MAX_REFINED_SHARE: f64 = 1.0;
 
 /// A discrete model of the chosen poles in real block-diagonal form: per pole
 /// `λ = α + iβ` with shape `c = Cφ` and participation `b = ψB`, the block
@@ -1046,6 +1147,282 @@ pub fn modal_model(
         d.clone(),
         crate::TimeDomain::Discrete { sample_time_s },
     )
+}
+
+/// The identification of a model given from elsewhere (a `model.json` written earlier):
+/// its modes, indicators (no EMAC: the Hankel tails are not known) and fit against
+/// `frf` processed as `options` say. `model` is taken in its own time domain;
+/// `singular_values`, `hankel_size` and `svd_path` are what is known of the
+/// realization, for the report.
+///
+/// # Errors
+/// As [`identify`]'s last stages, and `c2d` of a continuous model at `sample_time_s`.
+pub fn assess_model(
+    frf: &FrfData,
+    options: &EraOptions,
+    model: StateSpace,
+    singular_values: Vec<f64>,
+    hankel_size: (usize, usize),
+    svd_path: SvdPath,
+    sample_time_s: f64,
+) -> Result<Identification> {
+    let discrete = match model.domain {
+        crate::TimeDomain::Discrete { .. } => model.clone(),
+        crate::TimeDomain::Continuous => model.c2d(sample_time_s)?,
+    };
+    let realization = Realization {
+        model: discrete,
+        singular_values,
+        hankel_size,
+        warnings: Vec::new(),
+        hankel_svd_seconds: 0.0,
+        products_seconds: 0.0,
+        svd_path,
+        svd_iterations: None,
+        tails: crate::realize::HankelTails {
+            observability: faer::Mat::zeros(0, 0),
+            controllability: faer::Mat::zeros(0, 0),
+            outputs: model.outputs(),
+            inputs: model.inputs(),
+        },
+    };
+    assess(
+        frf,
+        options,
+        Path::Fast,
+        &mut |_| {},
+        StageTimings::default(),
+        realization,
+        model,
+        sample_time_s,
+    )
+}
+
+/// Replaces the model of `found` by its refinement against the processed FRFs
+/// ([`crate::refine`]): the model that is the fit.
+///
+/// - **Start poles**: with `--states auto` (a scan chose the modes) the modes judged
+///   physical; at a fixed order every mode.
+/// - **Domain**: a continuous model is refined as a continuous pole–residue model; a
+///   discrete one as the zero-order-hold image at its sample time (the `z`-domain fit of
+///   [`crate::refine`]), so that either way the model returned *is* the fitted one.
+/// - **Data**: a continuous model is fitted to `frf` *as measured* (the data `found`
+///   was identified from), and realised in the quantity of the processed data: the
+///   integrations of docs/design.md §1.1 help ERA's Markov parameters decay, but they
+///   colour the noise (its variance grows as `1/ω²` per integration), so a fit of the
+///   integrated data would weight the noisy low lines most. The `z`-domain model has
+///   only the quantity it was fitted in, so a discrete model is fitted to the processed
+///   data.
+/// - **Band**: the identification's fitted lines (from `found.first_line`, never the
+///   0 Hz line), unless `options.band` says otherwise.
+/// - **The model** is [`crate::refine::Refinement::to_state_space`] of the data's
+///   quantity, discretised by `c2d` at the sample time when `found.model` is discrete;
+///   its FRF, the fit and the plots are evaluated from its (A, B, C, D).
+/// - **Modes** come from the refinement: each pole, its shape and participation the
+///   rank-one part `u σ vᴴ` of its residue in the model's variable (shape `u` scaled to
+///   a largest entry of 1), with the standard deviations of frequency and damping. The
+///   lower residual's integrator states are the model's real poles at `s = 0`.
+/// - **Judgement**: a mode is physical when it passes the hard criteria of
+///   docs/design.md §10 with its refined frequency and damping, its share is at least
+///   the minimum and at most [`MAX_REFINED_SHARE`], and (when a scan ran) its start
+///   mode was physical.
+///
+/// # Errors
+/// [`EraError::InvalidParameter`] when there is no mode to start from, and every error
+/// of [`crate::refine::refine`] and [`crate::refine::Refinement::to_state_space`].
+pub fn refine_identification(
+    mut found: Identification,
+    frf: &FrfData,
+    options: &crate::refine::RefineOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Identification> {
+    use crate::Complex64;
+    observer(Stage::Refine);
+    let clock = Instant::now();
+    let scanned = found.stabilization.is_some();
+    let auto = found
+        .stabilization
+        .as_ref()
+        .is_some_and(|s| s.model_note.is_some());
+    let starts: Vec<usize> = (0..found.modal.modes.len())
+        .filter(|&k| !auto || found.quality.get(k).is_none_or(|q| q.physical))
+        .collect();
+    if starts.is_empty() {
+        return Err(EraError::InvalidParameter {
+            name: "refine",
+            value: "true".into(),
+            reason: "the model has no mode to start the refinement from".into(),
+        });
+    }
+    let start_poles: Vec<Complex64> = starts
+        .iter()
+        .map(|&k| found.modal.modes[k].continuous_pole)
+        .collect();
+    let mut ropts = options.clone();
+    let discrete_ts = match found.model.domain {
+        crate::TimeDomain::Discrete { sample_time_s } => Some(sample_time_s),
+        crate::TimeDomain::Continuous => None,
+    };
+    ropts.sample_time_s = discrete_ts;
+    let freq = found.processed.frequency_hz();
+    let lines = freq.len();
+    if ropts.band.is_none() {
+        let positive = freq.iter().position(|&f| f > 0.0).unwrap_or(lines);
+        ropts.band = Some((found.first_line.max(positive), lines));
+    }
+    let fitted = match discrete_ts {
+        Some(_) => &found.processed,
+        None => frf,
+    };
+    if (fitted.outputs(), fitted.inputs(), fitted.lines())
+        != (
+            found.processed.outputs(),
+            found.processed.inputs(),
+            found.processed.lines(),
+        )
+    {
+        return Err(EraError::InvalidParameter {
+            name: "frf",
+            value: format!("{}x{}x{}", frf.outputs(), frf.inputs(), frf.lines()),
+            reason: "not the data the identification was made from".into(),
+        });
+    }
+    let refinement = crate::refine::refine(fitted, &start_poles, &ropts, progress)?;
+    let quantity = found.processed.quantity();
+    let continuous = refinement.to_state_space(quantity)?;
+    let model = match discrete_ts {
+        Some(ts) => continuous.c2d(ts)?,
+        None => continuous,
+    };
+    // Integrator states of the residual terms `K (jω)^e`, `e < 0`.
+    let residual_states: usize = refinement
+        .residual_terms(quantity)
+        .iter()
+        .filter(|(e, _)| *e < 0)
+        .map(|(e, _)| e.unsigned_abs() as usize * refinement.inputs)
+        .sum();
+    let (q, p) = (refinement.outputs, refinement.inputs);
+    let mut modes = Vec::with_capacity(refinement.modes.len());
+    for rm in &refinement.modes {
+        let residue = refinement.model_residue(rm, quantity);
+        let (shape, participation) = rank_one(&residue, q, p)?;
+        modes.push(crate::modal::Mode {
+            frequency_hz: rm.frequency_hz,
+            damping_ratio: rm.damping_ratio,
+            eigenvalue: match discrete_ts {
+                Some(ts) => (rm.pole * ts).exp(),
+                None => rm.pole,
+            },
+            continuous_pole: rm.pole,
+            shape,
+            participation,
+        });
+    }
+    let real_poles = (0..residual_states)
+        .map(|_| crate::modal::RealPole {
+            eigenvalue: if discrete_ts.is_some() { 1.0 } else { 0.0 },
+            continuous_pole: Complex64::new(0.0, 0.0),
+            frequency_hz: 0.0,
+        })
+        .collect();
+    let (first, end) = refinement.band;
+    let band_hz = (freq[first], freq[end - 1]);
+    let criteria = SelectionCriteria::default();
+    let quality = refinement
+        .modes
+        .iter()
+        .zip(&modes)
+        .map(|(rm, m)| {
+            let before = found.quality.get(starts[rm.start]).cloned();
+            let mut reason = hard_rejection(m.frequency_hz, m.damping_ratio, None, band_hz, &criteria)
+                .map(|r| r.to_string());
+            if reason.is_none() && rm.contribution < criteria.contribution_minimum {
+                reason = Some(
+                    crate::modal::stabilization::Rejection::NoContribution(rm.contribution)
+                        .to_string(),
+                );
+            }
+            if reason.is_none() && rm.contribution > MAX_REFINED_SHARE {
+                reason = Some(format!(
+                    "its share of the data is {:.2}: it cancels other modes (a degenerate fit there)",
+                    rm.contribution
+                ));
+            }
+            if reason.is_none() && scanned {
+                if let Some(b) = before.as_ref().filter(|b| !b.physical) {
+                    reason = b.reason.clone().or(Some("not physical before refinement".into()));
+                }
+            }
+            let emac = before.as_ref().and_then(|b| b.indicators.emac);
+            let m_pc = mpc(&m.shape);
+            let finite = |v: f64| v.is_finite().then_some(v);
+            ModeQuality {
+                physical: reason.is_none(),
+                reason,
+                indicators: ModeIndicators {
+                    mpc: m_pc,
+                    emac,
+                    cmi: emac.map(|e| e * m_pc),
+                    contribution: Some(rm.contribution),
+                },
+                stable_orders: before.and_then(|b| b.stable_orders),
+                frequency_std_hz: finite(rm.frequency_std_hz),
+                damping_ratio_std: finite(rm.damping_ratio_std),
+            }
+        })
+        .collect();
+    let mut response = HessenbergForm::new(&model).response(found.measured.frequency_hz());
+    // Below the band the lower residual's integrators are infinite at 0 Hz: those lines
+    // were not fitted (like the zeroed measured lines) and are written as 0.
+    let nl = found.measured.lines();
+    for (i, v) in response.iter_mut().enumerate() {
+        if i % nl < first && !(v.re.is_finite() && v.im.is_finite()) {
+            *v = Complex64::new(0.0, 0.0);
+        }
+    }
+    found.fit = fit_metrics(&found.measured, &response, first);
+    found.model_response = response;
+    found.first_line = first;
+    found.band_hz = band_hz;
+    found.model = model;
+    found.modal = ModalParameters { modes, real_poles };
+    found.quality = quality;
+    found.timings.refine = clock.elapsed().as_secs_f64();
+    found.refinement = Some(Refined {
+        start_frequency_hz: start_poles
+            .iter()
+            .map(|s| s.norm() / (2.0 * std::f64::consts::PI))
+            .collect(),
+        refinement,
+        residual_states,
+    });
+    Ok(found)
+}
+
+/// The dominant rank-one part `u σ vᴴ` of a q × p residue as (shape, participation):
+/// shape `u/u_max` (largest entry 1), participation `u_max σ v̄`, so that
+/// `shape · participationᵀ` is that part.
+fn rank_one(
+    residue: &[crate::Complex64],
+    q: usize,
+    p: usize,
+) -> Result<(Vec<crate::Complex64>, Vec<crate::Complex64>)> {
+    let r = faer::Mat::from_fn(q, p, |i, j| residue[i * p + j]);
+    let svd = r
+        .thin_svd()
+        .map_err(|e| EraError::Numerical(format!("SVD of a residue: {e:?}")))?;
+    let sigma = svd.S()[0].re;
+    let u: Vec<crate::Complex64> = (0..q).map(|i| svd.U()[(i, 0)]).collect();
+    let k = (0..q)
+        .max_by(|&a, &b| u[a].norm().total_cmp(&u[b].norm()))
+        .unwrap_or(0);
+    let top = u[k];
+    let shape = u.iter().map(|x| x / top).collect();
+    let participation = (0..p)
+        .map(|j| top * sigma * svd.V()[(j, 0)].conj())
+        .collect();
+    Ok((shape, participation))
 }
 
 #[cfg(test)]

@@ -468,6 +468,7 @@ fn finish(
                 frequency_std_hz,
                 damping_ratio_std,
                 contribution: contributions[r],
+                start: state.ids[r],
             }
         })
         .collect();

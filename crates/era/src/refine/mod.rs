@@ -57,6 +57,21 @@
 //! residue is `φφᵀ/(2jω_d)`), and weighting by coherence (`w = γ²`) or by inverse
 //! variance (`w = 1/var`) per pair and line.
 //!
+//! ## Noise per pair
+//!
+//! Sensors and drive points differ, and noise given as a fraction of each FRF's level
+//! (the thesis's 15 %) makes the variance differ from pair to pair by orders of
+//! magnitude. The maximum-likelihood cost of independent complex Gaussian noise of
+//! variance `σ²_ij` per pair is `Σ_ij ‖y_ij − ŷ_ij‖²/σ²_ij`; uniform weights waste the
+//! quiet pairs. [`Weighting::PairNoise`] estimates `σ²_ij` from the residual of a uniform
+//! fit (`‖y_ij − ŷ_ij‖²/L`, floored at 1e-12 of the mean) and refits with `1/σ²_ij`
+//! from the first fit's poles (one step of iteratively reweighted least squares). An
+//! exact fit (`fit_after` below 1e-9) has no noise to weight by and is returned as it
+//! is. The costs reported are of the second pass's weights; `fit_before` is the
+//! unweighted fit at the start poles, as always. On the truth model with 15 % noise this
+//! lowers the median frequency error of every mode against the uniform fit (docs in the
+//! README, "Refinement").
+//!
 //! A mode is dropped, and the reason recorded in [`Refinement::dropped`], when its
 //! share of the band's FRF norm falls below [`MIN_CONTRIBUTION`], when its pole
 //! coalesces with another (closer than [`COALESCED`] relative, or its basis columns
@@ -165,6 +180,10 @@ pub enum Weighting {
     Coherence(Vec<f64>),
     /// Variance of each FRF value, `[output][input][line]`: weight `1/var`.
     InverseVariance(Vec<f64>),
+    /// Each pair weighted by `1/σ²_pair`, its noise variance estimated from the residual
+    /// of a first, uniform fit (module doc, "Noise per pair"); then the fit is repeated
+    /// from the first fit's poles with those weights.
+    PairNoise,
 }
 
 /// Options of [`refine`].
@@ -230,6 +249,8 @@ pub struct RefinedMode {
     pub damping_ratio_std: f64,
     /// The mode's share of the band's FRF norm, `‖G_r‖/‖G‖`.
     pub contribution: f64,
+    /// The start pole it came from (0-based index into the start poles).
+    pub start: usize,
 }
 
 /// The result of [`refine`]: the fitted model and how the fit went.
@@ -285,7 +306,72 @@ pub fn refine(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    fit::run(frf, start_poles, options, progress, varpro::evaluate)
+    run(frf, start_poles, options, progress, varpro::evaluate)
+}
+
+/// The fit, or for [`Weighting::PairNoise`] a uniform fit and a reweighted one.
+fn run(
+    frf: &FrfData,
+    start_poles: &[Complex64],
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+    evaluate: fit::Evaluator,
+) -> Result<Refinement> {
+    if options.weighting != Weighting::PairNoise {
+        return fit::run(frf, start_poles, options, progress, evaluate);
+    }
+    let uniform = RefineOptions {
+        weighting: Weighting::Uniform,
+        ..options.clone()
+    };
+    let first = fit::run(frf, start_poles, &uniform, progress, evaluate)?;
+    // NaN (no fit measure) is returned as it is, like an exact fit.
+    if first.fit_after.is_nan() || first.fit_after < 1e-9 {
+        return Ok(first);
+    }
+    let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+    let (a, b) = first.band;
+    let model = first.response(&frf.frequency_hz()[a..b], frf.quantity());
+    let per_pair: Vec<f64> = (0..q * p)
+        .map(|pair| {
+            let data = &frf.values()[pair * lines + a..pair * lines + b];
+            let fit = &model[pair * (b - a)..(pair + 1) * (b - a)];
+            data.iter()
+                .zip(fit)
+                .map(|(y, m)| (y - m).norm_sqr())
+                .sum::<f64>()
+                / (b - a) as f64
+        })
+        .collect();
+    let mean = per_pair.iter().sum::<f64>() / per_pair.len() as f64;
+    let floor = 1e-12 * mean;
+    let mut variance = vec![1.0; q * p * lines];
+    for (pair, &v) in per_pair.iter().enumerate() {
+        variance[pair * lines..(pair + 1) * lines].fill(v.max(floor));
+    }
+    let weighted = RefineOptions {
+        weighting: Weighting::InverseVariance(variance),
+        band: Some(first.band),
+        ..options.clone()
+    };
+    let poles: Vec<Complex64> = first.modes.iter().map(|m| m.pole).collect();
+    let mut second = fit::run(frf, &poles, &weighted, progress, evaluate)?;
+    // Indices into the first fit's modes → indices into the caller's start poles.
+    for m in &mut second.modes {
+        m.start = first.modes[m.start].start;
+    }
+    let mut dropped = first.dropped.clone();
+    dropped.extend(
+        second
+            .dropped
+            .iter()
+            .map(|(k, why)| (first.modes[*k].start, why.clone())),
+    );
+    dropped.sort_by_key(|d| d.0);
+    second.dropped = dropped;
+    second.iterations += first.iterations;
+    second.fit_before = first.fit_before;
+    Ok(second)
 }
 
 /// [`refine`] with a central-difference Jacobian and a dense solve per pair: the
@@ -299,7 +385,7 @@ pub fn refine_naive(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    fit::run(frf, start_poles, options, progress, naive::evaluate)
+    run(frf, start_poles, options, progress, naive::evaluate)
 }
 
 /// Singular values of a mode's residue below this fraction of its largest are left out
@@ -307,9 +393,25 @@ pub fn refine_naive(
 pub const RESIDUE_RANK_TOLERANCE: f64 = 1e-12;
 
 impl Refinement {
+    /// The residue of `mode` in the model's own variable: `s^κ' R` of `quantity` (order
+    /// `κ'`) over `(jω − s)` for a continuous fit, the z-domain residue `R` of the data's
+    /// quantity over `(z − e^(sTs))` for a sampled one (`quantity` is then the data's,
+    /// as in [`Refinement::to_state_space`]). Its rank-one part is the mode's shape
+    /// times its participation.
+    pub fn model_residue(&self, mode: &RefinedMode, quantity: Quantity) -> Vec<Complex64> {
+        match self.sample_time_s {
+            Some(_) => mode.residue.clone(),
+            None => {
+                let scale = power(mode.pole, order(quantity));
+                mode.residue.iter().map(|r| scale * r).collect()
+            }
+        }
+    }
+
     /// The model's FRF of `quantity` at `frequency_hz`, `[output][input][line]`:
-    /// `Σ_r [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + U (jω)^(κ'−κ)` with `κ'` the order
-    /// of `quantity` and `κ` the data's (module doc). A negative power at 0 Hz is
+    /// `Σ_r [s^κ' R/(jω − s) + c.c.]` plus [`Refinement::residual_terms`] (in the data's
+    /// quantity `L (jω)^(κ−2) + U`), with `κ'` the order of `quantity` and `κ` the
+    /// data's (module doc). A negative power at 0 Hz is
     /// infinite. A z-domain fit gives `Σ_r [R/(z − e^(sTs)) + c.c.]` plus the residual
     /// terms' zero-order-hold images, of the data's quantity only.
     ///
@@ -319,13 +421,13 @@ impl Refinement {
     pub fn response(&self, frequency_hz: &[f64], quantity: Quantity) -> Vec<Complex64> {
         let (q, p, nl) = (self.outputs, self.inputs, frequency_hz.len());
         let k_out = order(quantity);
-        let k_data = order(self.quantity);
         let ts = self.sample_time_s;
         assert!(
             ts.is_none() || quantity == self.quantity,
             "a z-domain refinement has only the data's quantity"
         );
         let mut out = vec![Complex64::new(0.0, 0.0); q * p * nl];
+        let terms = self.residual_terms(quantity);
         for (k, f) in frequency_hz.iter().enumerate() {
             let w = 2.0 * PI * f;
             let jw = Complex64::new(0.0, w);
@@ -346,18 +448,79 @@ impl Refinement {
                     out[pair * nl + k] += r * a + r.conj() * b;
                 }
             }
-            for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
-                if let Some(m) = term {
-                    let factor = residual_factor(w, e, ts);
-                    for i in 0..q {
-                        for j in 0..p {
-                            out[(i * p + j) * nl + k] += factor * m[(i, j)];
-                        }
+            for (e, m) in &terms {
+                let factor = residual_factor(w, *e, ts);
+                for i in 0..q {
+                    for j in 0..p {
+                        out[(i * p + j) * nl + k] += factor * m[(i, j)];
                     }
                 }
             }
         }
         out
+    }
+
+    /// The terms of the model of `quantity` besides the modal sum
+    /// `Σ_r [s^κ' R/(jω − s) + c.c.]`, as `(e, K)` for `K (jω)^e`, one per power.
+    ///
+    /// The fitted receptance is `(jω)^(−κ)` times the data's model, and
+    /// `(jω)^κ/(jω − s) = s^κ/(jω − s) + p_κ(jω, s)` with `p_0 = 0`, `p_1 = 1`,
+    /// `p_2 = jω + s`: the modal sum of the data's quantity leaves out the polynomial
+    /// `P_κ = Σ_r [R p_κ + c.c.]`, which `U` absorbs (for acceleration data
+    /// `U = Σ 2Re(s R) +` the residual). In another quantity `κ'` the model is therefore
+    /// `Σ [s^κ' R/(jω − s) + c.c.] + L (jω)^(κ'−2) + (jω)^(κ'−κ) (U − P_κ) + P_κ'`:
+    /// for acceleration data in velocity `(U − Σ 2Re(sR))/(jω)`, the mass line the modes
+    /// do not carry. For an integral (`κ' < κ`) every power is at most 0. For a
+    /// derivative only `U (jω)^(κ'−κ)` is kept (the modes' polynomial is then not
+    /// proper in general).
+    pub fn residual_terms(&self, quantity: Quantity) -> Vec<(i32, Mat<f64>)> {
+        let (q, p) = (self.outputs, self.inputs);
+        let k_out = order(quantity);
+        let k_data = order(self.quantity);
+        let mut terms: Vec<(i32, Mat<f64>)> = Vec::new();
+        let mut add =
+            |e: i32, m: &Mat<f64>, sign: f64| match terms.iter_mut().find(|(f, _)| *f == e) {
+                Some((_, acc)) => {
+                    for i in 0..q {
+                        for j in 0..p {
+                            acc[(i, j)] += sign * m[(i, j)];
+                        }
+                    }
+                }
+                None => terms.push((e, Mat::from_fn(q, p, |i, j| sign * m[(i, j)]))),
+            };
+        if let Some(l) = &self.lower {
+            add(k_out - 2, l, 1.0);
+        }
+        if let Some(u) = &self.upper {
+            add(k_out - k_data, u, 1.0);
+        }
+        if k_out < k_data && self.sample_time_s.is_none() {
+            // P_κ(jω) = Σ_j c_j (jω)^j: `c_0`, `c_1` of the data's order, and of κ'.
+            let polynomial = |k: i32| -> Vec<(i32, Mat<f64>)> {
+                let sum = |f: &dyn Fn(&RefinedMode, Complex64) -> Complex64| {
+                    Mat::from_fn(q, p, |i, j| {
+                        self.modes
+                            .iter()
+                            .map(|m| 2.0 * f(m, m.residue[i * p + j]).re)
+                            .sum::<f64>()
+                    })
+                };
+                match k {
+                    1 => vec![(0, sum(&|_, r| r))],
+                    2 => vec![(1, sum(&|_, r| r)), (0, sum(&|m, r| m.pole * r))],
+                    _ => vec![],
+                }
+            };
+            for (j, c) in polynomial(k_data) {
+                add(j + k_out - k_data, &c, -1.0);
+            }
+            for (j, c) in polynomial(k_out) {
+                add(j, &c, 1.0);
+            }
+        }
+        terms.sort_by_key(|t| t.0);
+        terms
     }
 
     /// The fit as a continuous state-space model whose output is `quantity`, in real
@@ -372,7 +535,6 @@ impl Refinement {
     pub fn to_state_space(&self, quantity: Quantity) -> Result<StateSpace> {
         let (q, p) = (self.outputs, self.inputs);
         let k_out = order(quantity);
-        let k_data = order(self.quantity);
         if self.sample_time_s.is_some() && quantity != self.quantity {
             return Err(EraError::InvalidParameter {
                 name: "quantity",
@@ -416,9 +578,9 @@ impl Refinement {
         }
         let mut chains: Vec<(usize, &Mat<f64>)> = Vec::new();
         let mut d = Mat::<f64>::zeros(q, p);
-        for (term, e) in [(&self.lower, k_out - 2), (&self.upper, k_out - k_data)] {
-            let Some(m) = term else { continue };
-            match e {
+        let residual_terms = self.residual_terms(quantity);
+        for (e, m) in &residual_terms {
+            match *e {
                 0 => d += m,
                 e if e < 0 => chains.push(((-e) as usize, m)),
                 _ => {
@@ -429,7 +591,9 @@ impl Refinement {
                             "the upper residual of {} data times (jω)^{e} is not proper: ask for {} or an integral of it",
                             self.quantity, self.quantity
                         ),
-                    })
+                        // (only the upper residual has a positive power: see
+                        // `residual_terms`)
+                    });
                 }
             }
         }

@@ -503,7 +503,8 @@ fn square_root_weights(
     band: (usize, usize),
 ) -> Result<Option<Vec<Vec<f64>>>> {
     let (values, coherence) = match weighting {
-        Weighting::Uniform => return Ok(None),
+        // PairNoise is resolved into InverseVariance before a problem is built.
+        Weighting::Uniform | Weighting::PairNoise => return Ok(None),
         Weighting::Coherence(v) => (v, true),
         Weighting::InverseVariance(v) => (v, false),
     };

@@ -1,0 +1,291 @@
+//! Refinement in the CLI: `era identify … --refine` and `era refine MODEL.json FRF_FILE`
+//! (the core is [`era::refine`], wired into the pipeline by
+//! [`era::identify::refine_identification`]).
+
+use crate::args::{RefineArgs, RefineFitArgs};
+use crate::identify::{prepare_out_dir, read_frf, shape_line, write_identification};
+use crate::report::{identification_summary, print_json, Human};
+use anyhow::Context;
+use era::identify::{assess_model, refine_identification, EraOptions, Identification};
+use era::realize::SvdPath;
+use era::refine::RefineOptions;
+use era_io::model_json::{FitJson, ModelJson};
+use std::fmt::Write as _;
+
+/// The refinement options of the flags, checked before anything is read: at least one
+/// iteration, and no more than [`era::limits::ITERATIONS`].
+pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
+    let mut o = RefineOptions::default();
+    if let Some(r) = fit.residuals {
+        o.residuals = r.into();
+    }
+    o.reciprocal = fit.reciprocal;
+    o.weighting = match fit.weighting {
+        Some(crate::args::WeightingArg::Uniform) => era::refine::Weighting::Uniform,
+        Some(crate::args::WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
+    };
+    if let Some(n) = fit.max_iterations {
+        if n == 0 {
+            return crate::usage("--max-iterations 0: the refinement needs at least one iteration");
+        }
+        era::limits::ITERATIONS.check("--max-iterations", n as u64)?;
+        o.max_iterations = n;
+    }
+    Ok(o)
+}
+
+/// Whether any refinement flag was given (they need `--refine` on `era identify`).
+pub fn any_given(fit: &RefineFitArgs) -> bool {
+    fit.residuals.is_some()
+        || fit.reciprocal
+        || fit.max_iterations.is_some()
+        || fit.weighting.is_some()
+}
+
+/// `--reciprocal` needs a square set: said before the identification runs.
+pub fn check_shape(options: &RefineOptions, frf: &era::FrfData) -> anyhow::Result<()> {
+    if options.reciprocal && frf.outputs() != frf.inputs() {
+        return crate::usage(format!(
+            "--reciprocal: the set has {} outputs x {} inputs; reciprocity needs a square (collocated) set",
+            frf.outputs(),
+            frf.inputs()
+        ));
+    }
+    Ok(())
+}
+
+/// Runs the refinement of `found` with a spinner that counts the iterations.
+pub fn refine_found(
+    found: Identification,
+    frf: &era::FrfData,
+    options: &RefineOptions,
+    common: &crate::args::CommonArgs,
+) -> anyhow::Result<Identification> {
+    let spinner = crate::progress::spinner(common);
+    spinner.set_message("refinement");
+    let mut on_stage = |_: era::Stage| {};
+    let mut on_step = |iteration: usize, cost: f64| {
+        spinner.set_message(format!(
+            "refinement: iteration {iteration}, cost {cost:.3e}"
+        ));
+    };
+    let refined = refine_identification(found, frf, options, &mut on_stage, &mut on_step)
+        .map_err(|e| match e {
+            era::EraError::InvalidParameter {
+                name: "max-iterations",
+                value,
+                reason,
+            } => anyhow::Error::from(crate::UsageError(format!(
+                "--max-iterations {value}: {reason}"
+            ))),
+            other => anyhow::Error::from(other),
+        })
+        .context("refining the model");
+    spinner.finish_and_clear();
+    refined
+}
+
+/// How the refinement went, in lines for the human summary.
+pub fn summary(found: &Identification) -> String {
+    let Some(r) = &found.refinement else {
+        return String::new();
+    };
+    let f = &r.refinement;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "\nrefinement ({} model of the {} data, residuals {}): {} start modes, {} kept; {} iterations, {}; fit over the band {:.3e} -> {:.3e} (cost {:.3e} -> {:.3e}), {:.2} s",
+        if f.sample_time_s.is_some() {
+            "z-domain"
+        } else {
+            "continuous"
+        },
+        f.quantity,
+        match (&f.lower, &f.upper) {
+            (Some(_), Some(_)) => "lower+upper",
+            (Some(_), None) => "lower",
+            (None, Some(_)) => "upper",
+            (None, None) => "none",
+        },
+        r.start_frequency_hz.len(),
+        f.modes.len(),
+        f.iterations,
+        if f.converged {
+            "converged"
+        } else {
+            "NOT converged (the iterations ran out: raise --max-iterations)"
+        },
+        f.fit_before,
+        f.fit_after,
+        f.cost_before,
+        f.cost_after,
+        found.timings.refine
+    );
+    for line in r.dropped_lines() {
+        let _ = writeln!(s, "  {line}");
+    }
+    let _ = writeln!(
+        s,
+        "  (± is one standard deviation from the Gauss-Newton covariance at the optimum, the noise taken from the residual)"
+    );
+    s
+}
+
+/// A JSON parameter of an older model.json as a count.
+fn count(model: &ModelJson, key: &str) -> usize {
+    model
+        .parameters
+        .get(key)
+        .and_then(|v| v.as_u64())
+        .unwrap_or(0) as usize
+}
+
+/// `era refine MODEL.json FRF_FILE`.
+pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
+    let human = Human::new(&a.common);
+    let ropts = options(&a.fit)?;
+    let model =
+        ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;
+    let mut outputs = match &a.out {
+        Some(dir) => Some(prepare_out_dir(dir)?),
+        None => None,
+    };
+    let input = read_frf(&a.file, a.quantity, a.outputs)?;
+    let frf = &input.file.frf;
+    if (model.outputs, model.inputs) != (frf.outputs(), frf.inputs()) {
+        return crate::usage(format!(
+            "{}: the model has {} outputs x {} inputs, {} has {} x {}",
+            a.model.display(),
+            model.outputs,
+            model.inputs,
+            a.file.display(),
+            frf.outputs(),
+            frf.inputs()
+        ));
+    }
+    if let Some(lines) = &model.frf_lines {
+        if let Some(why) = lines.differs_from(frf) {
+            return crate::usage(format!(
+                "{}: not the FRF lines of {}: {why}",
+                a.file.display(),
+                a.model.display()
+            ));
+        }
+    }
+    check_shape(&ropts, frf)?;
+    human.print(&format!(
+        "era refine {} {}\n  {}{}\n",
+        a.model.display(),
+        a.file.display(),
+        shape_line(frf),
+        input.note
+    ));
+    let options = EraOptions {
+        integrations: count(&model, "integrations"),
+        zero_lines: count(&model, "zero_lines"),
+        pad_to: count(&model, "pad_to"),
+        ..EraOptions::new(model.states.max(1), 1)
+    };
+    let state_space = model
+        .state_space()
+        .map_err(|e| crate::UsageError(format!("{}: {e}", a.model.display())))?;
+    // The sample time of the identification: the model's own when discrete, else that
+    // of the (padded) lines, as the pipeline computes it.
+    let padded_lines = if options.pad_to > 0 {
+        options.pad_to + 1
+    } else {
+        frf.lines()
+    };
+    let sample_time_s = model
+        .sample_time_s
+        .unwrap_or_else(|| era::preprocess::sample_time_s(frf.spacing_hz(), padded_lines));
+    let svd_path = if model.hankel.path == "matrix-free" {
+        SvdPath::MatrixFree
+    } else {
+        SvdPath::Dense
+    };
+    let mut found = assess_model(
+        frf,
+        &options,
+        state_space,
+        model.singular_values.clone(),
+        (model.hankel.rows, model.hankel.cols),
+        svd_path,
+        sample_time_s,
+    )
+    .with_context(|| format!("evaluating {} on {}", a.model.display(), a.file.display()))?;
+    // The modes judged physical in the file start the refinement of an automatic model;
+    // every mode starts that of a fixed-order one (as `era identify --refine`).
+    let auto = model.parameters.get("states").and_then(|v| v.as_str()) == Some("auto");
+    for (q, m) in found.quality.iter_mut().zip(&model.modes) {
+        if let Some(physical) = m.physical {
+            q.physical = physical;
+            q.reason.clone_from(&m.reason);
+        }
+    }
+    if auto {
+        // Only the modes marked physical start: `refine_identification` keeps those of a
+        // model chosen by a scan.
+        let keep: Vec<bool> = found.quality.iter().map(|q| q.physical).collect();
+        let mut k = 0;
+        found.modal.modes.retain(|_| {
+            k += 1;
+            keep[k - 1]
+        });
+        found.quality.retain(|q| q.physical);
+    }
+    let before = found.fit.clone();
+    let found = refine_found(found, frf, &ropts, &a.common)
+        .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
+    human.print(&format!(
+        "  the model as given: fit collocated {}, non-collocated {}\n",
+        before
+            .collocated_mean_relative_error
+            .map_or("-".into(), |v| format!("{v:.3e}")),
+        before
+            .noncollocated_mean_relative_error
+            .map_or("-".into(), |v| format!("{v:.3e}"))
+    ));
+    human.print(&summary(&found));
+    let states = model
+        .states
+        .min(found.realization.singular_values.len())
+        .max(1);
+    human.print(&identification_summary(&found, states));
+    let mut params = model.parameters.clone();
+    params.insert("refined_from".into(), serde_json::json!(a.model));
+    params.insert(
+        "model_states".into(),
+        serde_json::json!(found.model.states()),
+    );
+    let mut json = ModelJson::from_identification(&found, params, None);
+    if json.singular_values.is_empty() {
+        json.singular_values = model.singular_values.clone();
+    }
+    if let Some(set) = outputs.as_mut() {
+        let fit = FitJson::from_report(&found.fit);
+        let title = format!("era refine {} {}", a.model.display(), a.file.display());
+        write_identification(
+            set,
+            &found,
+            &json,
+            &fit,
+            input.file.channels.as_ref(),
+            &title,
+            &format!("refined from {}\n", a.model.display()),
+            states,
+            &a.common,
+        )?;
+    }
+    if let (Some(dir), Some(set)) = (&a.out, outputs) {
+        set.commit()?;
+        human.print(&format!(
+            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json, {0}/report.html and figures\n",
+            dir.display()
+        ));
+    }
+    if a.common.json {
+        print_json(&json)?;
+    }
+    Ok(())
+}
