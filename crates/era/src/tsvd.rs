@@ -24,8 +24,9 @@
 //! Hᵀ U_j  = Σ_(i≤j) V_i S_ij + V_(j+1) L_j        (V_(j+1) L_j likewise)
 //! ```
 //!
-//! orthogonalising each new block against *all* earlier ones twice (block Gram–Schmidt,
-//! "twice is enough": Giraud, Langou & Rozložník 2005), so `U = [U_0 … U_j]` and
+//! orthogonalising each new block against *all* earlier ones (block Gram–Schmidt, a
+//! second sweep when a column lost more than `1 − 1/√2` of its norm in the first: Kahan
+//! and Parlett's "twice is enough", Giraud, Langou & Rozložník 2005), so `U = [U_0 … U_j]` and
 //! `V = [V_0 … V_j]` stay orthonormal to rounding. Then `H V = U T` holds exactly, the
 //! small SVD `T = X Σ Yᵀ` gives the Ritz triplets `(u_i = U x_i, σ_i, v_i = V y_i)`, and
 //! the residual needs no further product:
@@ -184,7 +185,8 @@ fn extend_basis(basis: &[Mat<f64>], mut p: Mat<f64>) -> (Mat<f64>, Vec<Mat<f64>>
     let b = p.ncols();
     let mut coefficients: Vec<Mat<f64>> = basis.iter().map(|q| Mat::zeros(q.ncols(), b)).collect();
     let project = |x: &mut Mat<f64>, coefficients: &mut [Mat<f64>], scale: Option<&Mat<f64>>| {
-        for _ in 0..2 {
+        for sweep in 0..2 {
+            let before = column_norms(x.as_ref());
             for (q, c) in basis.iter().zip(coefficients.iter_mut()) {
                 let step = q.transpose() * &*x;
                 *x -= q * &step;
@@ -192,6 +194,16 @@ fn extend_basis(basis: &[Mat<f64>], mut p: Mat<f64>) -> (Mat<f64>, Vec<Mat<f64>>
                     None => *c += &step,
                     Some(r) => *c += &step * r,
                 }
+            }
+            // Kahan–Parlett: a column that kept ≥ 1/√2 of its norm is orthogonal to the
+            // basis to rounding after one sweep; otherwise sweep once more.
+            let after = column_norms(x.as_ref());
+            let kept = before
+                .iter()
+                .zip(&after)
+                .all(|(b, a)| *a >= std::f64::consts::FRAC_1_SQRT_2 * b);
+            if sweep == 0 && kept {
+                break;
             }
         }
     };
@@ -206,6 +218,10 @@ fn extend_basis(basis: &[Mat<f64>], mut p: Mat<f64>) -> (Mat<f64>, Vec<Mat<f64>>
         r = &r2 * &r;
     }
     (q, coefficients, r)
+}
+
+fn column_norms(x: MatRef<'_, f64>) -> Vec<f64> {
+    (0..x.ncols()).map(|j| x.col(j).norm_l2()).collect()
 }
 
 /// `Σ_i blocks_i · x[rows of block i]`.
