@@ -5,6 +5,12 @@
 #
 #   bench/peers.sh            # python-control where it finishes in about a minute
 #   bench/peers.sh --all      # also python-control at 8000^2 (minutes, GBs)
+#   bench/peers.sh --thesis   # only the thesis case (DTA-like FRFs), three runs each
+#
+# The thesis case comes first: the Markov data of the DTA-like 8x8 set at the thesis
+# settings (ns 80, lh 5, ni 1, nz 3, ndpts 1024; H0 1592^2), noise-free and with 5 %
+# noise on the FRFs, era's Hankel + SVD + realization against python-control's
+# eigensys_realization, both in the same run (medians of three, alternating).
 #
 # Creates a virtual environment with numpy and python-control from PyPI
 # (target/peers-venv, or $ERA_PEERS_VENV). Data: 8x8 lightly damped structures
@@ -34,6 +40,24 @@ run() {
   rss=$(awk -F: '/Maximum resident set size/ {printf "%.0f", $2/1024}' "$work/err")
   echo "$s $rss"
 }
+
+median3() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
+echo "thesis case: DTA-like 8x8 FRFs, ns 80, lh 5, ni 1, nz 3, ndpts 1024 (H0 1592 x 1592), $(uptime | sed 's/.*load/load/')"
+printf '%-22s %12s %8s %14s %9s\n' "data" "era (s)" "passes" "python (s)" "speed-up"
+for noise in 0 0.05; do
+  "$core" dta "$work/dta.bin" "$noise"
+  e=(); pyt=()
+  for _ in 1 2 3; do
+    "$core" realize "$work/dta.bin" 8 8 2048 80 199 matrix-free > "$work/era.json"
+    e+=("$(sed -n 's/.*"seconds": \([0-9.e+-]*\).*/\1/p' "$work/era.json")")
+    passes=$(sed -n 's/.*"iterations": \([0-9]*\).*/\1/p' "$work/era.json")
+    pyt+=("$("$venv/bin/python" "$here/bench/pc_era.py" "$work/dta.bin" 8 8 2048 80 199 | sed -n 's/.*"seconds": \([0-9.e+-]*\).*/\1/p')")
+  done
+  es=$(median3 "${e[@]}"); ps=$(median3 "${pyt[@]}")
+  printf '%-22s %12.4f %8s %14.3f %8.0fx\n' "noise $noise" "$es" "$passes" "$ps" "$(awk -v a="$ps" -v b="$es" 'BEGIN { print a / b }')"
+done
+[ "$all" = --thesis ] && exit 0
+echo
 
 printf '%-28s %-12s %10s %9s %12s %9s %9s\n' "case (q x p, m, states)" "H0" "era (s)" "era MB" "python (s)" "py MB" "speed-up"
 # q p modes m python?

@@ -11,7 +11,7 @@ use era::markov::markov_from_frf;
 use era::modal::modal_parameters;
 use era::preprocess::preprocess;
 use era::realize::{realize, RealizeOptions};
-use era::response::HessenbergForm;
+use era::response::{frequency_response, HessenbergForm};
 use era::sim::{ModalSpec, ModalStructure};
 use era::Quantity;
 use std::hint::black_box;
@@ -62,6 +62,9 @@ fn stages(c: &mut Criterion) {
     });
     g.bench_function("model_frf_801_lines", |b| {
         b.iter(|| HessenbergForm::new(black_box(&model)).response(frf.frequency_hz()))
+    });
+    g.bench_function("model_frf_801_lines_dispatch", |b| {
+        b.iter(|| frequency_response(black_box(&model), frf.frequency_hz()).unwrap())
     });
     g.bench_function("identify_end_to_end", |b| {
         b.iter(|| identify(black_box(&frf), &options).unwrap())

@@ -5,14 +5,21 @@
 //! era_core generate FILE OUTPUTS INPUTS MODES SAMPLES SEED
 //!     writes lightly damped Markov data (era::sim::lightly_damped_markov) as raw
 //!     little-endian f64 in [sample][output][input] order (numpy: reshape(K, q, p))
+//! era_core dta FILE NOISE
+//!     writes the Markov data of the DTA-like 8x8 set (40 modes, 801 lines at 0.025 Hz,
+//!     acceleration, seed 987654321) at the thesis settings (ni 1, nz 3, ndpts 1024), with
+//!     NOISE (0.05 for 5 %, seed 42) added to the FRFs first; same layout, 2048 samples
 //! era_core realize FILE OUTPUTS INPUTS SAMPLES STATES M dense|matrix-free|auto
 //!     H0 = m × m blocks from Y_1 (as python-control builds it); prints one JSON line
 //! ```
 
 use era::hankel::HankelShape;
-use era::markov::MarkovSequence;
+use era::markov::{markov_from_frf, MarkovSequence};
+use era::preprocess::preprocess;
 use era::realize::{realize_general, RealizeOptions, SvdPath};
 use era::sim::lightly_damped_markov;
+use era::sim::{add_noise, ModalSpec, ModalStructure};
+use era::Quantity;
 use std::io::Write;
 use std::time::Instant;
 
@@ -50,6 +57,30 @@ fn main() {
                     eprintln!("era_core: {file}: {e}");
                     std::process::exit(2)
                 });
+        }
+        Some("dta") => {
+            let (file, noise): (String, f64) = (arg(&args, 2, "FILE"), arg(&args, 3, "NOISE"));
+            let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
+            let clean = structure.frf(801, 0.025, Quantity::Acceleration).unwrap();
+            let frf = if noise > 0.0 {
+                add_noise(&clean, noise, 42).unwrap()
+            } else {
+                clean
+            };
+            let pre = preprocess(&frf, 1, 1024, 3).unwrap();
+            let m = markov_from_frf(&pre.frf).unwrap();
+            let mut bytes = Vec::with_capacity(m.samples() * 64 * 8);
+            for k in 0..m.samples() {
+                for i in 0..m.outputs() {
+                    for j in 0..m.inputs() {
+                        bytes.extend_from_slice(&m.get(k, i, j).to_le_bytes());
+                    }
+                }
+            }
+            std::fs::write(&file, &bytes).unwrap_or_else(|e| {
+                eprintln!("era_core: {file}: {e}");
+                std::process::exit(2)
+            });
         }
         Some("realize") => {
             let (file, q, p, samples, states, m): (String, usize, usize, usize, usize, usize) = (

@@ -16,6 +16,12 @@
 //! O((p + q) N log N + q p N) per vector and O(q p N) memory, where the dense Hankel
 //! needs `R q · C p`. `Hᵀ y` is the same with the roles of outputs and inputs swapped.
 //! Columns are processed in parallel with `rayon`.
+//!
+//! **Made once.** FFT plans come from one process-wide planner ([`real_fft_plans`]), so a
+//! length planned once (every identification at the same `ndpts` and `lh`) is never
+//! planned again; the spectra `A_ij` live as long as the operator; each worker thread
+//! owns its buffers (time signal, input spectra, accumulator, FFT scratch, the operand
+//! column) for a whole product, so a product allocates per thread, not per column.
 
 use crate::error::Result;
 use crate::hankel::HankelShape;
@@ -24,7 +30,7 @@ use faer::{Mat, MatRef};
 use num_complex::Complex64;
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// A linear operator known through its products (what a truncated SVD needs).
 pub trait LinearOperator: Sync {
@@ -70,6 +76,18 @@ pub fn fast_fft_len(min: usize) -> usize {
     }
 }
 
+/// Forward and inverse real FFT plans of length `len`, from a planner shared by the
+/// process: `realfft` caches plans per planner, so each length is planned once.
+pub fn real_fft_plans(len: usize) -> (Arc<dyn RealToComplex<f64>>, Arc<dyn ComplexToReal<f64>>) {
+    static PLANNER: OnceLock<Mutex<RealFftPlanner<f64>>> = OnceLock::new();
+    let mut planner = PLANNER
+        .get_or_init(|| Mutex::new(RealFftPlanner::new()))
+        .lock()
+        // A panic elsewhere while planning leaves a usable planner (plans are immutable).
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    (planner.plan_fft_forward(len), planner.plan_fft_inverse(len))
+}
+
 /// `H` of a [`HankelShape`] over a [`MarkovSequence`], applied by FFT correlations.
 pub struct HankelOperator {
     outputs: usize,
@@ -89,6 +107,8 @@ struct Scratch {
     inputs: Vec<Complex64>,
     acc: Vec<Complex64>,
     fft: Vec<Complex64>,
+    /// The operand column, when it is not contiguous in the operand.
+    column: Vec<f64>,
 }
 
 impl HankelOperator {
@@ -103,9 +123,7 @@ impl HankelOperator {
         let span = shape.block_rows + shape.block_cols - 1;
         let fft_len = fast_fft_len(span);
         let bins = fft_len / 2 + 1;
-        let mut planner = RealFftPlanner::<f64>::new();
-        let forward = planner.plan_fft_forward(fft_len);
-        let inverse = planner.plan_fft_inverse(fft_len);
+        let (forward, inverse) = real_fft_plans(fft_len);
         let mut spectra = vec![Complex64::new(0.0, 0.0); q * p * bins];
         let mut time = vec![0.0; fft_len];
         let mut scratch = forward.make_scratch_vec();
@@ -140,6 +158,7 @@ impl HankelOperator {
 
     fn scratch(&self, channels: usize) -> Scratch {
         Scratch {
+            column: Vec::new(),
             time: vec![0.0; self.fft_len],
             inputs: vec![Complex64::new(0.0, 0.0); channels * self.bins],
             acc: vec![Complex64::new(0.0, 0.0); self.bins],
@@ -208,12 +227,19 @@ impl HankelOperator {
         // Written in place, column by column (owned columns are contiguous).
         let mut out = Mat::<f64>::zeros(out_dim, b);
         let work = |s: &mut Scratch, (col, target): (usize, faer::col::ColMut<'_, f64>)| {
-            let column: Vec<f64> = (0..in_dim).map(|r| x[(r, col)]).collect();
             let slice = target
                 .try_as_col_major_mut()
                 .expect("owned columns are contiguous")
                 .as_slice_mut();
-            self.column(&column, slice, transpose, s);
+            if let Some(column) = x.col(col).try_as_col_major() {
+                self.column(column.as_slice(), slice, transpose, s);
+            } else {
+                let mut column = std::mem::take(&mut s.column);
+                column.clear();
+                column.extend((0..in_dim).map(|r| x[(r, col)]));
+                self.column(&column, slice, transpose, s);
+                s.column = column;
+            }
         };
         if b > 1 && out_dim * b > 4096 {
             out.par_col_iter_mut()
@@ -278,6 +304,9 @@ mod tests {
             let x = Mat::from_fn(c * p, 6, |i, j| ((i * 13 + j * 7) as f64).cos());
             let y = Mat::from_fn(r * q, 6, |i, j| ((i * 3 + j * 17) as f64).sin());
             let hx = op.apply(x.as_ref());
+            // A strided operand (a transposed view) takes the copying path: same product.
+            let xt = x.transpose().to_owned();
+            assert_eq!(op.apply(xt.transpose()), hx, "{q}x{p} strided");
             let hty = op.apply_transpose(y.as_ref());
             let ex = &dense * &x;
             let ety = dense.transpose() * &y;

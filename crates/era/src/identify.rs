@@ -15,7 +15,7 @@ use crate::realize::{
     realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
     SvdPath,
 };
-use crate::response::{fit_metrics, frequency_response_naive, FitReport, HessenbergForm};
+use crate::response::{fit_metrics, frequency_response_naive, frequency_response_with, FitReport};
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
@@ -637,7 +637,7 @@ fn assess(
     let processed = integrate(frf, options.integrations)?;
     let measured = zero_leading_lines(&processed, options.zero_lines);
     let response = match path {
-        Path::Fast => HessenbergForm::new(&model).response(measured.frequency_hz()),
+        Path::Fast => frequency_response_with(&model, Some(&form), measured.frequency_hz()),
         Path::Naive => frequency_response_naive(&model, measured.frequency_hz()),
     };
     let (first_line, band_hz) = fit_band(measured.frequency_hz(), options);
@@ -702,13 +702,21 @@ fn mode_quality(
         && realization.tails.observability.ncols() == model.states();
     // EMAC needs the discrete eigenvalues of the realization's basis.
     let emacs: Option<(ModalForm, Vec<(f64, f64)>)> = if same_basis {
-        ModalForm::new(&realization.model)
-            .ok()
-            .map(|f| {
-                let e = emac(&f, &realization.tails);
-                (f, e)
-            })
-            .filter(|_| model.states() == realization.model.states())
+        // A discrete model is the realization's own: its form is already at hand.
+        let own = model.domain == realization.model.domain
+            && model.a == realization.model.a
+            && model.b == realization.model.b
+            && model.c == realization.model.c;
+        (if own {
+            Some(form.clone())
+        } else {
+            ModalForm::new(&realization.model).ok()
+        })
+        .map(|f| {
+            let e = emac(&f, &realization.tails);
+            (f, e)
+        })
+        .filter(|_| model.states() == realization.model.states())
     } else {
         None
     };

@@ -5,13 +5,13 @@
 //! MATLAB's `h = real(ifft(mirror(G)))` of the thesis. Taking the real part there discards
 //! the imaginary parts of the DC and Nyquist lines (which a mirror cannot make
 //! Hermitian); here those are set to zero before a real inverse FFT (`realfft`), which
-//! is the same thing. Sample `h[k]` is the Markov block `Y_k`: `Y_0` is the direct term
-//! and `Y_k = C A^(k-1) B` for `k ≥ 1`.
+//! is the same thing. The plan comes from [`crate::hankel_op::real_fft_plans`], made once
+//! per length per process. Sample `h[k]` is the Markov block `Y_k`: `Y_0` is the direct
+//! term and `Y_k = C A^(k-1) B` for `k ≥ 1`.
 
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
 use num_complex::Complex64;
-use realfft::RealFftPlanner;
 
 /// A sequence of q×p Markov blocks `Y_0, Y_1, …, Y_(K-1)`.
 ///
@@ -132,8 +132,7 @@ pub fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
         return Err(EraError::TooFewLines { lines });
     }
     let n = 2 * (lines - 1);
-    let mut planner = RealFftPlanner::<f64>::new();
-    let c2r = planner.plan_fft_inverse(n);
+    let (_, c2r) = crate::hankel_op::real_fft_plans(n);
     let mut spectrum = c2r.make_input_vec();
     let mut scratch = c2r.make_scratch_vec();
     let scale = 1.0 / n as f64;

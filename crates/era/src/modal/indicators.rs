@@ -189,23 +189,25 @@ pub fn contributions(
             if reference <= 0.0 || !reference.is_finite() {
                 return 0.0;
             }
+            // With r_ij = c_i b_j, w = 1/(z − λ) and w' = 1/(z − λ̄) (0 for a real pole),
+            // Σ_ij |r_ij w + r̄_ij w'|² = S₁(|w|² + |w'|²) + 2 Re(S₂ w w̄'), where
+            // S₁ = Σ_ij |r_ij|² = Σ|c_i|² Σ|b_j|² and S₂ = Σ_ij r_ij² = Σc_i² Σb_j²:
+            // O(1) per line instead of O(q·p).
             let shape = &form.shapes[k];
             let part = &form.participations[k];
             let pair = lambda.im != 0.0;
+            let s1 = shape.iter().map(|c| c.norm_sqr()).sum::<f64>()
+                * part.iter().map(|b| b.norm_sqr()).sum::<f64>();
+            let s2 = shape.iter().map(|c| c * c).sum::<Complex64>()
+                * part.iter().map(|b| b * b).sum::<Complex64>();
             let mut sum = 0.0;
             for z in &points {
                 let w = 1.0 / (z - lambda);
-                let wc = if pair {
-                    1.0 / (z - lambda.conj())
+                if pair {
+                    let wc = 1.0 / (z - lambda.conj());
+                    sum += s1 * (w.norm_sqr() + wc.norm_sqr()) + 2.0 * (s2 * w * wc.conj()).re;
                 } else {
-                    Complex64::new(0.0, 0.0)
-                };
-                for c in shape {
-                    for b in part {
-                        let r = c * b;
-                        let g = r * w + r.conj() * wc;
-                        sum += g.norm_sqr();
-                    }
+                    sum += s1 * w.norm_sqr();
                 }
             }
             sum.sqrt() / reference
