@@ -15,7 +15,9 @@ use crate::realize::{
     realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
     SvdPath,
 };
-use crate::response::{fit_metrics, frequency_response_naive, frequency_response_with, FitReport};
+use crate::response::{
+    fit_metrics, frequency_response_naive, frequency_response_with, FitReport, HessenbergForm,
+};
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
