@@ -594,13 +594,9 @@ impl Selection {
 /// those medians. At the top order alone a noise pole that displaced the mode's pole for
 /// one order could stand for the mode; the median is what most of the track agrees on.
 /// Without three counted members, the member at the highest order.
-fn representative(scan: &Scan, members: &[usize], lowest_counted: usize) -> usize {
+/// `upper` are the members in the counted orders.
+fn representative(scan: &Scan, members: &[usize], upper: &[usize]) -> usize {
     let top = *members.last().expect("clusters are never empty");
-    let upper: Vec<usize> = members
-        .iter()
-        .copied()
-        .filter(|&i| scan.poles[i].order >= lowest_counted)
-        .collect();
     if upper.len() < 3 {
         return top;
     }
@@ -646,17 +642,9 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             None => candidate[i] = true,
         }
     }
-    // Step 2: clusters, visiting orders from low to high.
-    struct Track {
-        members: Vec<usize>,
-        frequency_hz: f64,
-        damping_ratio: f64,
-        shape: Vec<Complex64>,
-    }
-    struct Open {
-        members: Vec<usize>,
-    }
-    let mut clusters: Vec<Track> = Vec::new();
+    // Step 2: clusters (member indices, ascending order), visiting orders from low to
+    // high; a pole is compared with each cluster's latest member.
+    let mut clusters: Vec<Vec<usize>> = Vec::new();
     for &order in &scan.orders {
         let here: Vec<usize> = (0..scan.poles.len())
             .filter(|&i| candidate[i] && scan.poles[i].order == order)
@@ -664,20 +652,21 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
         let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
         for &i in &here {
             let p = &scan.poles[i];
-            for (c, open) in clusters.iter().enumerate() {
-                let df = (p.frequency_hz - open.frequency_hz).abs() / open.frequency_hz;
+            for (c, members) in clusters.iter().enumerate() {
+                let latest = &scan.poles[*members.last().expect("clusters are never empty")];
+                let df = (p.frequency_hz - latest.frequency_hz).abs() / latest.frequency_hz;
                 if df > criteria.frequency_tolerance {
                     continue;
                 }
-                let m = mac(&p.shape, &open.shape);
+                let m = mac(&p.shape, &latest.shape);
                 if m < criteria.mac_minimum {
                     continue;
                 }
                 // Damping tells apart two modes closer in frequency than the noise
                 // moves them (and whose shapes mix): without it the greedy assignment
                 // swaps their poles between the two tracks from order to order.
-                let dz = (p.damping_ratio - open.damping_ratio).abs()
-                    / p.damping_ratio.max(open.damping_ratio);
+                let dz = (p.damping_ratio - latest.damping_ratio).abs()
+                    / p.damping_ratio.max(latest.damping_ratio);
                 pairs.push((df + (1.0 - m) + DAMPING_WEIGHT * dz, i, c));
             }
         }
@@ -690,26 +679,14 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             }
             pole_taken[i] = true;
             cluster_taken[c] = true;
-            let p = &scan.poles[i];
-            let open = &mut clusters[c];
-            open.members.push(i);
-            open.frequency_hz = p.frequency_hz;
-            open.damping_ratio = p.damping_ratio;
-            open.shape = p.shape.clone();
+            clusters[c].push(i);
         }
         for &i in &here {
             if !pole_taken[i] {
-                let p = &scan.poles[i];
-                clusters.push(Track {
-                    members: vec![i],
-                    frequency_hz: p.frequency_hz,
-                    damping_ratio: p.damping_ratio,
-                    shape: p.shape.clone(),
-                });
+                clusters.push(vec![i]);
             }
         }
     }
-    let clusters: Vec<Vec<usize>> = clusters.into_iter().map(|o| o.members).collect();
     // Step 3: recurrence over the upper half of the orders.
     let counted_orders: Vec<usize> = scan.orders[scan.orders.len() / 2..].to_vec();
     let lowest_counted = counted_orders.first().copied().unwrap_or(0);
@@ -718,46 +695,35 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
     let mut out: Vec<Cluster> = clusters
         .into_iter()
         .map(|members| {
-            let open = Open { members };
-            let upper_count = open
-                .members
+            // The members in the counted (upper) orders.
+            let upper: Vec<usize> = members
                 .iter()
-                .filter(|&&i| scan.poles[i].order >= lowest_counted)
-                .count();
-            let mut f: Vec<f64> = open
-                .members
+                .copied()
+                .filter(|&i| scan.poles[i].order >= lowest_counted)
+                .collect();
+            let upper_count = upper.len();
+            let mut f: Vec<f64> = members
                 .iter()
                 .map(|&i| scan.poles[i].frequency_hz)
                 .collect();
-            let mut z: Vec<f64> = open
-                .members
+            let mut z: Vec<f64> = members
                 .iter()
                 .map(|&i| scan.poles[i].damping_ratio)
                 .collect();
             f.sort_by(f64::total_cmp);
             z.sort_by(f64::total_cmp);
             let median_frequency_hz = f[f.len() / 2];
-            let representative = representative(scan, &open.members, lowest_counted);
-            let mut upper_cmi: Vec<f64> = open
-                .members
-                .iter()
-                .filter(|&&i| scan.poles[i].order >= lowest_counted)
-                .map(|&i| scan.poles[i].cmi())
-                .collect();
+            let representative = representative(scan, &members, &upper);
+            let mut upper_cmi: Vec<f64> = upper.iter().map(|&i| scan.poles[i].cmi()).collect();
             upper_cmi.sort_by(f64::total_cmp);
             let median_cmi = upper_cmi.get(upper_cmi.len() / 2).copied().unwrap_or(0.0);
-            let mut upper_mpc: Vec<f64> = open
-                .members
-                .iter()
-                .filter(|&&i| scan.poles[i].order >= lowest_counted)
-                .map(|&i| scan.poles[i].mpc)
-                .collect();
+            let mut upper_mpc: Vec<f64> = upper.iter().map(|&i| scan.poles[i].mpc).collect();
             upper_mpc.sort_by(f64::total_cmp);
             let median_mpc = upper_mpc.get(upper_mpc.len() / 2).copied().unwrap_or(0.0);
             // A short scan (exact low-order data) cannot ask for more poles than it has
             // counted orders.
             let min_poles = criteria.min_poles.min(counted.max(1));
-            let rejection = if upper_count < needed || open.members.len() < min_poles {
+            let rejection = if upper_count < needed || members.len() < min_poles {
                 Some(Rejection::Unstable(upper_count, counted))
             } else if median_mpc < criteria.mpc_minimum {
                 Some(Rejection::LowMpc(median_mpc))
@@ -776,7 +742,7 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
                 median_frequency_hz,
                 median_damping_ratio: z[z.len() / 2],
                 frequency_spread: (f[f.len() - 1] - f[0]) / median_frequency_hz,
-                members: open.members,
+                members,
             }
         })
         .collect();
@@ -920,7 +886,7 @@ mod tests {
             poles: exact,
             skipped: vec![],
         };
-        assert_eq!(representative(&scan, &members, 16), 7);
+        assert_eq!(representative(&scan, &members, &members[3..]), 7);
         let noisy: Vec<ScanPole> = [5.001, 4.999, 5.0005, 4.9995, 5.0, 5.0002, 5.0001, 5.02]
             .iter()
             .enumerate()
@@ -930,7 +896,7 @@ mod tests {
             poles: noisy,
             ..scan
         };
-        let r = representative(&scan, &members, 16);
+        let r = representative(&scan, &members, &members[3..]);
         assert_ne!(r, 7);
         assert!((scan.poles[r].frequency_hz - 5.0).abs() < 3e-4, "{r}");
     }
