@@ -404,7 +404,7 @@ fn time_figure(e: &Experiment, run: usize, rate_hz: f64, dead_zone: f64) -> Figu
         &rec.relative_velocity[j],
         &rec.stroke[j],
     );
-    let stuck = z[..n].iter().filter(|x| **x == 0.0).count();
+    let stuck = stuck_samples(&z[..n]);
     Figure {
         title: format!(
             "run {}: actuator {}, first {FIGURE_SPAN_S:.0} s (stuck {:.0} % of samples)",
@@ -440,6 +440,12 @@ fn time_figure(e: &Experiment, run: usize, rate_hz: f64, dead_zone: f64) -> Figu
     }
 }
 
+/// Samples at which a proof mass is stuck: its LVT velocity (recorded without noise)
+/// is exactly 0 only then.
+fn stuck_samples(lvt: &[f64]) -> usize {
+    lvt.iter().filter(|v| **v == 0.0).count()
+}
+
 /// Over all runs, for each run's excited actuator(s): the share of analyzer samples at
 /// which the mass is stuck, and the share at which its speed is above the compensator's
 /// dead zone (where compensation acts).
@@ -448,7 +454,7 @@ fn motion_shares(e: &Experiment, dead_zone: f64) -> (f64, f64) {
     for rec in &e.records {
         for &j in &rec.excited {
             let z = &rec.relative_velocity[j];
-            stuck += z.iter().filter(|x| **x == 0.0).count();
+            stuck += stuck_samples(z);
             above += z.iter().filter(|x| x.abs() > dead_zone).count();
             total += z.len();
         }
@@ -534,7 +540,7 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     let shares = a
         .time_histories
         .as_ref()
-        .map(|_| motion_shares(&found, dead_zone));
+        .map(|dir| (dir, motion_shares(&found, dead_zone)));
     if let Some(mut s) = th_set.take() {
         for r in 0..found.records.len() {
             let text = time_csv(&found, r, spec.analyzer_rate_hz);
@@ -574,12 +580,12 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
             .collect::<Vec<_>>()
             .join(" ")
     ));
-    if let Some((stuck, above)) = shares {
+    if let Some((dir, (stuck, above))) = shares {
         human.print(&format!(
             "  excited actuators: stuck {:.1} % of the time, faster than the {dead_zone} in/s dead zone {:.1} % (time histories and figures in {})\n",
             100.0 * stuck,
             100.0 * above,
-            a.time_histories.as_ref().map_or(String::new(), |d| d.display().to_string())
+            dir.display()
         ));
     }
     let summary = json!({
@@ -591,8 +597,8 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         "excitation_rms_v": spec.excitation_rms_v,
         "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
         "max_stroke_in": found.max_stroke,
-        "excited_stuck_fraction": shares.map(|s| s.0),
-        "excited_above_dead_zone_fraction": shares.map(|s| s.1),
+        "excited_stuck_fraction": shares.map(|(_, s)| s.0),
+        "excited_above_dead_zone_fraction": shares.map(|(_, s)| s.1),
     });
     finish_output(
         &human,
