@@ -280,8 +280,9 @@ fn combined_fit(t: &[f64], y: &[f64], omega_d: f64, stiffness: f64) -> CombinedF
     let grid: Vec<f64> = std::iter::once(0.0)
         .chain((0..=120).map(|i| floor * (top / floor).powf(i as f64 / 120.0)))
         .collect();
+    let costs: Vec<f64> = grid.iter().map(|&sigma| cost(sigma)).collect();
     let best = (0..grid.len())
-        .min_by(|a, b| cost(grid[*a]).total_cmp(&cost(grid[*b])))
+        .min_by(|a, b| costs[*a].total_cmp(&costs[*b]))
         .unwrap_or(0);
     let (mut lo, mut hi) = (
         grid[best.saturating_sub(1)],
@@ -304,7 +305,7 @@ fn combined_fit(t: &[f64], y: &[f64], omega_d: f64, stiffness: f64) -> CombinedF
         }
     }
     let mut sigma = if f1 <= f2 { x1 } else { x2 };
-    if cost(grid[best]) < cost(sigma) {
+    if costs[best] < f1.min(f2) {
         sigma = grid[best];
     }
     let (_, r, residual) = combined_at(sigma, t, y);
@@ -593,7 +594,8 @@ pub struct DecaySummary {
 pub fn summarize(estimates: &[DecayEstimate]) -> DecaySummary {
     assert!(!estimates.is_empty(), "at least one estimate");
     let n = estimates.len() as f64;
-    let mean = estimates.iter().map(|e| e.coulomb_force).sum::<f64>() / n;
+    let mean_of = |field: fn(&DecayEstimate) -> f64| estimates.iter().map(field).sum::<f64>() / n;
+    let mean = mean_of(|e| e.coulomb_force);
     let var = if estimates.len() > 1 {
         estimates
             .iter()
@@ -606,20 +608,8 @@ pub fn summarize(estimates: &[DecayEstimate]) -> DecaySummary {
     DecaySummary {
         coulomb_force_mean: mean,
         coulomb_force_std: var.sqrt(),
-        natural_frequency_hz_mean: estimates
-            .iter()
-            .map(|e| e.natural_frequency_hz)
-            .sum::<f64>()
-            / n,
-        combined_coulomb_force_mean: estimates
-            .iter()
-            .map(|e| e.combined.coulomb_force)
-            .sum::<f64>()
-            / n,
-        combined_viscous_damping_ratio_mean: estimates
-            .iter()
-            .map(|e| e.combined.viscous_damping_ratio)
-            .sum::<f64>()
-            / n,
+        natural_frequency_hz_mean: mean_of(|e| e.natural_frequency_hz),
+        combined_coulomb_force_mean: mean_of(|e| e.combined.coulomb_force),
+        combined_viscous_damping_ratio_mean: mean_of(|e| e.combined.viscous_damping_ratio),
     }
 }
