@@ -150,6 +150,25 @@ fn small_time(dir: &Path) -> PathBuf {
     p
 }
 
+/// `simulate experiment` at its smallest: a two-mode structure, one actuator, one frame.
+const TINY_EXPERIMENT: &[&str] = &[
+    "simulate",
+    "experiment",
+    "-q",
+    "--modes",
+    "2",
+    "--dofs",
+    "2",
+    "--fmin",
+    "2",
+    "--fmax",
+    "5",
+    "--actuators",
+    "1",
+    "--averages",
+    "1",
+];
+
 /// The verbs that write one named file (plus, for frf, its coherence beside it), as
 /// argument lists with `OUT` where the output path goes.
 fn single_output_verbs(inputs: &Path) -> Vec<Vec<String>> {
@@ -194,26 +213,8 @@ fn single_output_verbs(inputs: &Path) -> Vec<Vec<String>> {
             "--out",
             "OUT.csv",
         ]),
-        // A two-mode structure, one actuator, one frame: the coherence goes beside it.
-        v(&[
-            "simulate",
-            "experiment",
-            "-q",
-            "--modes",
-            "2",
-            "--dofs",
-            "2",
-            "--fmin",
-            "2",
-            "--fmax",
-            "5",
-            "--actuators",
-            "1",
-            "--averages",
-            "1",
-            "--out",
-            "OUT.csv",
-        ]),
+        // The coherence goes beside it.
+        v(&[TINY_EXPERIMENT, &["--out", "OUT.csv"]].concat()),
         v(&[
             "friction",
             "simulate",
@@ -352,26 +353,11 @@ fn folder_verbs_refuse_hostile_entries_and_change_nothing() {
             &["compare.html", "pair_2_1.png"],
         ),
         (
-            vec![
-                "simulate",
-                "experiment",
-                "-q",
-                "--modes",
-                "2",
-                "--dofs",
-                "2",
-                "--fmin",
-                "2",
-                "--fmax",
-                "5",
-                "--actuators",
-                "1",
-                "--averages",
-                "1",
-                "--out",
-                s(&experiment_out),
-                "--time-histories",
-            ],
+            [
+                TINY_EXPERIMENT,
+                &["--out", s(&experiment_out), "--time-histories"],
+            ]
+            .concat(),
             &["run1.csv", "run1.png", "run1.svg"],
         ),
         (
