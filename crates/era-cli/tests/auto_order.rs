@@ -3,22 +3,8 @@
 //! on bad input.
 
 mod common;
-use common::{data_file, era, expect_input_error};
+use common::{data_file, era, expect_input_error, json_of, s};
 use std::path::Path;
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn json_of(args: &[&str]) -> serde_json::Value {
-    let out = era().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
 
 /// A DTA-like 8 x 8 set with the recipe; returns the true frequencies.
 fn dta_like(dir: &Path, seed: u64, noise: f64) -> (std::path::PathBuf, Vec<f64>) {

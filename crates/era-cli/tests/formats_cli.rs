@@ -2,7 +2,7 @@
 //! of issue 3: each exits 2 naming the file and the record or line, without a panic.
 
 mod common;
-use common::{era, expect_input_error};
+use common::{era, expect_input_error, s};
 use std::path::{Path, PathBuf};
 
 fn golden(name: &str) -> PathBuf {
@@ -15,10 +15,6 @@ fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../era-io/tests/fixtures")
         .join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 fn stdout_of(args: &[&str]) -> String {

@@ -3,14 +3,10 @@
 //! the LADISK plate (data/; a missing data file fails the test).
 
 mod common;
-use common::{data_file, era, expect_input_error};
+use common::{data_file, era, expect_input_error, json_of, s};
 use era::sim::{time_response, truth_model, Minstd};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// The truth model (ZOH at 25.6 kHz) driven by two seeded white forces on masses 1 and 2;
 /// time_s, f1, f2 and the displacements y1..y3 as a CSV.
@@ -37,16 +33,6 @@ fn truth_time_csv(dir: &Path, samples: usize) -> PathBuf {
     let path = dir.join("truth_time.csv");
     std::fs::write(&path, text).unwrap();
     path
-}
-
-fn json_of(args: &[&str]) -> serde_json::Value {
-    let out = era().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
 }
 
 fn modes(v: &serde_json::Value) -> Vec<(f64, f64)> {

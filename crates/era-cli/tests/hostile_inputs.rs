@@ -5,6 +5,7 @@
 
 mod common;
 use common::hostile::*;
+use common::s;
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {
@@ -15,10 +16,6 @@ fn fixture(name: &str) -> PathBuf {
 
 const FRF_CSV: &str =
     "# quantity: velocity\nfrequency_hz,H1_1_re,H1_1_im\n0,1,0\n0.5,2,-1\n1,3,0.5\n1.5,1,1\n";
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn mkfifo(path: &Path) {
     let c = std::ffi::CString::new(s(path)).unwrap();

@@ -5,6 +5,7 @@
 
 mod common;
 use common::hostile::*;
+use common::s;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -12,10 +13,6 @@ use std::path::{Path, PathBuf};
 /// Asserts a successful run.
 fn ok(o: Outcome) {
     assert_eq!(o.code, Some(0), "{:?}: {}", o.args, o.stderr);
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// Every entry under `dir` (not following links): relative path → content (files),

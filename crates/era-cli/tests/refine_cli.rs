@@ -3,23 +3,9 @@
 //! input exits 2 naming the flag or file.
 
 mod common;
-use common::era;
 use common::hostile::run_capped;
+use common::{era, json_of, s};
 use std::path::{Path, PathBuf};
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn json_of(args: &[&str]) -> serde_json::Value {
-    let out = era().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
 
 /// A seeded modal set (acceleration): returns the file and the true (frequency, damping).
 fn modal_set(dir: &Path, name: &str, extra: &[&str]) -> (PathBuf, Vec<(f64, f64)>) {

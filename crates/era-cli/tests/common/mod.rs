@@ -2,11 +2,28 @@
 #![allow(dead_code)]
 
 use assert_cmd::Command;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The `era` binary under test.
 pub fn era() -> Command {
     Command::cargo_bin("era").unwrap()
+}
+
+/// A path as the `&str` an argument list takes (the tests' paths are UTF-8).
+pub fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Runs `era`, expects success, and parses its stdout as JSON (`--json` runs).
+#[track_caller]
+pub fn json_of(args: &[&str]) -> serde_json::Value {
+    let out = era().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
 }
 
 /// Runs `era` and expects exit code 2 with `needle` in stderr, and no panic.
