@@ -3,7 +3,7 @@
 //! and the fit of each model to its own data.
 
 use crate::args::{CommonArgs, IdentifyArgs};
-use crate::identify::write_output;
+use crate::output::write_output;
 use crate::report::{finish_output, Human};
 use crate::usage;
 use clap::{Args, Parser};
@@ -134,7 +134,7 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
     argv.extend(flags.iter().cloned());
     let parsed = IdentifyFlags::try_parse_from(&argv)
         .map_err(|e| crate::UsageError(format!("--identify: {e}")))?;
-    let opts = crate::identify::options(&parsed.args)?;
+    let opts = crate::config::options(&parsed.args)?;
     let found = era::identify(frf, &opts)?;
     Ok(Side {
         model: found.model,

@@ -2,7 +2,7 @@
 //! with the thesis settings, without and with noise, beside the exact truth.
 
 use crate::args::DemoArgs;
-use crate::identify::{prepare_out_dir, write_output};
+use crate::output::{prepare_out_dir, write_identification, write_output};
 use crate::report::{parameter_echo, parameters, print_json, timings_table, Human};
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
@@ -178,33 +178,25 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             )?)
         })?;
         for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
-            let sub = Path::new(label);
-            write_output(&mut set, sub.join("model.json"), |p| {
-                Ok(ModelJson::from_identification(found, parameters(&options), None).write(p)?)
-            })?;
-            write_output(&mut set, sub.join("fit.json"), |p| {
-                Ok(FitJson::from_report(&found.fit).write(p)?)
-            })?;
-            write_output(&mut set, sub.join("model.mat"), |p| {
-                Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
-            })?;
             let title = format!("era demo: the truth model, {}", label.replace('_', " "));
-            let bar = crate::progress::bar(&a.common, 9, &format!("figures ({label})"));
-            crate::figures::write_all(
+            let model = ModelJson::from_identification(found, parameters(&options), None);
+            write_identification(
                 &mut set,
-                sub,
+                Path::new(label),
+                found,
+                &model,
+                &FitJson::from_report(&found.fit),
+                None,
                 &title,
                 &parameter_echo(&options),
-                found,
                 options.states,
-                &bar,
+                &a.common,
             )?;
-            bar.finish_and_clear();
         }
         // Both runs' outputs take their place together, or none does.
         set.commit()?;
         human.print(&format!(
-            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, model.mat, fit.json, report.html and figures ({1:.3} s)\n",
+            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, fit.json, model.mat, modes.uff, model_frf.uff, report.html and figures ({1:.3} s)\n",
             dir.display(),
             clock.elapsed().as_secs_f64()
         ));

@@ -3,7 +3,7 @@
 
 use crate::args::CommonArgs;
 use crate::figures::write_figure;
-use crate::identify::{output_name, write_output};
+use crate::output::{output_name, write_output};
 use crate::report::{finish_output, Human};
 use crate::usage;
 use clap::{Args, ValueEnum};

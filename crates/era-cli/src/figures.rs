@@ -1,6 +1,6 @@
 //! Writing the figures and `report.html` of one identification into an [`OutputSet`].
 
-use crate::identify::write_output;
+use crate::output::write_output;
 use era::identify::Identification;
 use era::FrfData;
 use era_io::atomic::{write_atomic, write_via, OutputSet};

@@ -2,7 +2,7 @@
 //! in another format.
 
 use crate::args::{ConvertArgs, InfoArgs};
-use crate::identify::{describe_input, read_frf, read_frf_bytes, shape_line};
+use crate::input::{describe_input, read_frf, read_frf_bytes, shape_line};
 use crate::report::{finish_output, Human};
 use anyhow::Context;
 use era_io::format::{write_frf_file, FrfFormat};

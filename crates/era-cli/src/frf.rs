@@ -2,7 +2,8 @@
 //! `era identify --from-time`.
 
 use crate::args::{DetrendArg, EstimatorArg, FrfArgs, QuantityArg, WelchArgs, WindowArg};
-use crate::identify::{output_name, shape_line, write_output, InputFrf};
+use crate::input::{shape_line, InputFrf};
+use crate::output::{output_name, write_output};
 use crate::report::{finish_output, Human};
 use anyhow::Context as _;
 use era::frf::estimate::{self, Detrend, Estimator, FrfEstimate, WelchOptions, Window};
@@ -485,8 +486,8 @@ pub fn prepare_estimate(out: &Path, binary: bool) -> anyhow::Result<OutputSet> {
         ));
     }
     let mut set = OutputSet::beside(out)?;
-    set.stage(crate::identify::output_name("--out", out)?)?;
-    set.stage(crate::identify::output_name("--out", &coherence_path(out))?)?;
+    set.stage(crate::output::output_name("--out", out)?)?;
+    set.stage(crate::output::output_name("--out", &coherence_path(out))?)?;
     Ok(set)
 }
 

@@ -6,6 +6,7 @@
 
 mod args;
 mod compare;
+mod config;
 mod demo;
 mod experiment;
 mod figures;
@@ -13,6 +14,8 @@ mod files;
 mod frf;
 mod friction;
 mod identify;
+mod input;
+mod output;
 mod plot;
 mod progress;
 mod refine;

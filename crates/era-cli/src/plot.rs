@@ -3,7 +3,8 @@
 
 use crate::args::PlotArgs;
 use crate::figures::{write_figure, write_frf_figures};
-use crate::identify::{prepare_out_dir, read_frf};
+use crate::input::read_frf;
+use crate::output::prepare_out_dir;
 use crate::report::{print_json, Human};
 use crate::usage;
 use anyhow::Context;

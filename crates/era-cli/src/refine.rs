@@ -3,7 +3,8 @@
 //! [`era::identify::refine_identification`]).
 
 use crate::args::{RefineArgs, RefineFitArgs};
-use crate::identify::{prepare_out_dir, read_frf, shape_line, write_identification};
+use crate::input::{read_frf, shape_line};
+use crate::output::{prepare_out_dir, write_identification};
 use crate::report::{identification_summary, print_json, Human};
 use anyhow::Context;
 use era::identify::{assess_model, refine_identification, EraOptions, Identification};
@@ -267,6 +268,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         let title = format!("era refine {} {}", a.model.display(), a.file.display());
         write_identification(
             set,
+            std::path::Path::new(""),
             &found,
             &json,
             &fit,
