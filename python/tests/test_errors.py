@@ -132,7 +132,7 @@ def test_identify_messages_are_the_clis(truth, tmp_path, era_cli, flags, kwargs)
     with pytest.raises(ValueError) as caught:
         era.identify(era.read_frf(path), **kwargs)
     # The CLI adds "identifying FILE: " before the core's own errors, which are passed
-    # on word for word (flags included).
+    # on word for word, the options they quote named as flags there and keywords here.
     raw = cli_error(era_cli, "identify", path, *flags)
     assert expected.endswith(str(caught.value)) or raw.endswith(str(caught.value)), (raw, str(caught.value))
 

@@ -88,7 +88,9 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(err)) => {
-            eprintln!("era: error: {err:#}");
+            // Core messages quote options by field name; here they are flags.
+            let message = era::params::render(era::params::Naming::Flag, &format!("{err:#}"));
+            eprintln!("era: error: {message}");
             ExitCode::from(exit_code(&err))
         }
         Err(_) => ExitCode::from(1),

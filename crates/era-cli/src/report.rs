@@ -302,7 +302,7 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
         fdb(fit.collocated_mean_db),
         fdb(fit.noncollocated_mean_db),
     );
-    for w in &found.realization.warnings {
+    for w in found.warnings(era::params::Naming::Flag) {
         let _ = writeln!(s, "warning: {w}");
     }
     s

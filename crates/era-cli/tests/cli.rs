@@ -765,3 +765,59 @@ fn identify_reads_mat_files_by_content() {
         "no FreqV variable",
     );
 }
+
+#[test]
+fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    // Padded four times with a short Hankel, the truth model's realization has a
+    // growing mode: the run succeeds, but says so, naming the flags to change.
+    let args = ["--states", "8", "--hankel-factor", "2", "--pad-to", "4096"];
+    let out = era().arg("identify").arg(&frf).args(args).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("warning: 1 mode(s) with negative damping") && text.contains("--states auto"),
+        "{text}"
+    );
+    let out = era()
+        .arg("identify")
+        .arg(&frf)
+        .args(args)
+        .args(["--json", "-q"])
+        .output()
+        .unwrap();
+    let model = json_of(&out);
+    let warnings: Vec<&str> = model["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    assert!(
+        warnings.iter().any(|w| w.contains("negative damping")),
+        "{warnings:?}"
+    );
+    assert!(model["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|m| m["damping_ratio"].as_f64().unwrap() < 0.0));
+    // The thesis settings give a stable model and no warning.
+    let out = era()
+        .arg("identify")
+        .arg(&frf)
+        .args([
+            "--states",
+            "8",
+            "--hankel-factor",
+            "4",
+            "--pad-to",
+            "1024",
+            "--json",
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(json_of(&out)["warnings"], serde_json::json!([]));
+}

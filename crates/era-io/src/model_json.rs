@@ -415,12 +415,8 @@ impl ModelJson {
                 path: found.realization.svd_path.name().into(),
                 svd_iterations: found.realization.svd_iterations,
             },
-            warnings: found
-                .realization
-                .warnings
-                .iter()
-                .map(ToString::to_string)
-                .collect(),
+            // model.json is the command line's file: its flags are named.
+            warnings: found.warnings(era::params::Naming::Flag),
             timings_s,
             stability: None,
             stabilization: found.stabilization.as_ref().map(stabilization_json),

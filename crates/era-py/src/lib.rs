@@ -42,10 +42,12 @@ mod model;
 /// An error of the core as a Python exception: `ValueError` for the caller's data or
 /// parameters, `RuntimeError` for a numerical failure.
 pub(crate) fn era_error(e: era::EraError) -> PyErr {
+    // Core messages quote options by field name; here they are keywords.
+    let message = era::params::render(era::params::Naming::Keyword, &e.to_string());
     if e.is_input_error() {
-        PyValueError::new_err(e.to_string())
+        PyValueError::new_err(message)
     } else {
-        PyRuntimeError::new_err(e.to_string())
+        PyRuntimeError::new_err(message)
     }
 }
 

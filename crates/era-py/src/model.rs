@@ -231,15 +231,11 @@ impl PyIdentification {
     fn hankel_size(&self) -> (usize, usize) {
         self.found.realization.hankel_size
     }
-    /// Warnings of the run.
+    /// Warnings of the run: the realization's, then suspect results (a Hankel too
+    /// short for the lowest mode, negative damping, poles outside the unit circle).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.found
-            .realization
-            .warnings
-            .iter()
-            .map(ToString::to_string)
-            .collect()
+        self.found.warnings(era::params::Naming::Keyword)
     }
     /// Every parameter of the run by its model.json name.
     #[getter]

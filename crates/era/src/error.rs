@@ -75,7 +75,7 @@ pub enum EraError {
     },
     /// The Hankel matrix asks for more Markov samples than the data has.
     #[error(
-        "the Hankel matrix needs {needed} Markov samples (states {states} x hankel-factor {hankel_factor}, plus the direct term), the data gives {available}: lower --hankel-factor or --states, or pad with --pad-to"
+        "the Hankel matrix needs {needed} Markov samples (states {states} x hankel-factor {hankel_factor}, plus the direct term), the data gives {available}: lower `hankel_factor` or `states`, or pad with `pad_to`"
     )]
     NotEnoughMarkovSamples {
         /// Samples needed.
@@ -90,7 +90,7 @@ pub enum EraError {
     /// The Hankel matrix is smaller than the requested model order (thesis §1.8 error,
     /// "increase the length of the time series").
     #[error(
-        "the Hankel matrix is {rows} x {cols}: it has only {available} singular values, fewer than the {states} states requested; increase --hankel-factor"
+        "the Hankel matrix is {rows} x {cols}: it has only {available} singular values, fewer than the {states} states requested; increase `hankel_factor`"
     )]
     HankelTooSmall {
         /// Rows of H0.
@@ -104,7 +104,7 @@ pub enum EraError {
     },
     /// The data's Hankel matrix has numerical rank below the requested order.
     #[error(
-        "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower --states"
+        "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower `states`"
     )]
     RankDeficient {
         /// Numerical rank.
@@ -116,7 +116,7 @@ pub enum EraError {
     },
     /// A discrete pole has no real logarithm (on or near the negative real axis, or zero).
     #[error(
-        "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep --time-domain discrete"
+        "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep `time_domain discrete`"
     )]
     NoRealLogarithm {
         /// Real part of the pole.

@@ -93,7 +93,7 @@ impl LowPass {
             return Err(EraError::InvalidParameter {
                 name: "lowpass-hz",
                 value: cutoff_hz.to_string(),
-                reason: format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower --lowpass-order"),
+                reason: format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower `lowpass_order`"),
             });
         }
         Ok(LowPass {
@@ -143,7 +143,7 @@ impl LowPass {
                 name: "lowpass-hz",
                 value: self.cutoff_hz.to_string(),
                 reason: format!(
-                    "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower --lowpass-order",
+                    "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower `lowpass_order`",
                     self.order
                 ),
             });

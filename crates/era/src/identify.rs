@@ -238,9 +238,29 @@ pub struct Identification {
     pub stabilization: Option<Stabilization>,
     /// The refinement that gave `model`, when one ran ([`refine_identification`]).
     pub refinement: Option<Refined>,
+    /// Results to treat with care ([`crate::suspect`]): a Hankel too short for the
+    /// lowest mode, negative damping, poles outside the unit circle.
+    pub suspects: Vec<crate::suspect::SuspectResult>,
 }
 
 impl Identification {
+    /// `self` with [`Identification::suspects`] found anew from its modes.
+    pub fn with_suspects(mut self) -> Self {
+        self.suspects = crate::suspect::check_identification(&self);
+        self
+    }
+
+    /// Every warning of the run, worded for `naming`'s front end: the realization's
+    /// (docs/design.md §1.8), then the suspect results.
+    pub fn warnings(&self, naming: crate::params::Naming) -> Vec<String> {
+        self.realization
+            .warnings
+            .iter()
+            .map(|w| w.message(naming))
+            .chain(self.suspects.iter().map(|s| s.message(naming)))
+            .collect()
+    }
+
     /// `model_response` as an [`FrfData`] on the lines of `measured`: the model's side of
     /// every overlay.
     ///
@@ -670,7 +690,9 @@ fn assess(
         band_hz,
         stabilization: None,
         refinement: None,
-    })
+        suspects: Vec::new(),
+    }
+    .with_suspects())
 }
 
 /// The first fitted line (past the zeroed lines, and past the 0 Hz line of integrated
@@ -852,7 +874,7 @@ pub fn default_orders(
             name: "states",
             value: "auto".into(),
             reason: format!(
-                "{markov_samples} Markov samples at hankel-factor {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with --pad-to, lower --hankel-factor, or give --states N"
+                "{markov_samples} Markov samples at hankel-factor {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with `pad_to`, lower `hankel_factor`, or give `states N`"
             ),
         });
     }
@@ -928,7 +950,7 @@ fn scan_front(
             name: "orders",
             value: range.to_string(),
             reason: format!(
-                "the largest order needs {needed} Markov samples at hankel-factor {}, the data has {available}: lower the orders or --hankel-factor, or pad with --pad-to",
+                "the largest order needs {needed} Markov samples at hankel-factor {}, the data has {available}: lower the orders or `hankel_factor`, or pad with `pad_to`",
                 options.hankel_factor
             ),
         },
@@ -1007,6 +1029,7 @@ pub fn identify_with_scan(
             None => {}
         }
     }
+    found.suspects = crate::suspect::check_identification(&found);
     found.stabilization = Some(Stabilization::new(
         range,
         s,
@@ -1050,7 +1073,7 @@ pub fn identify_auto(
             name: "states",
             value: "auto".into(),
             reason: format!(
-                "no mode is stable across orders {range} (rule: {}): give --states N, or a wider --orders range",
+                "no mode is stable across orders {range} (rule: {}): give `states N`, or a wider `orders` range",
                 selection.rule()
             ),
         });
@@ -1103,6 +1126,7 @@ pub fn identify_auto(
             q.reason = None;
         }
     }
+    found.suspects = crate::suspect::check_identification(&found);
     found.stabilization = Some(Stabilization::new(
         range,
         s,
@@ -1398,6 +1422,7 @@ pub fn refine_identification(
     found.model = model;
     found.modal = ModalParameters { modes, real_poles };
     found.quality = quality;
+    found.suspects = crate::suspect::check_identification(&found);
     found.timings.refine = clock.elapsed().as_secs_f64();
     found.refinement = Some(Refined {
         start_frequency_hz: start_poles

@@ -52,6 +52,7 @@ pub mod response;
 pub mod sim;
 pub mod stability;
 pub mod statespace;
+pub mod suspect;
 pub mod tsvd;
 
 pub use error::{EraError, Result};

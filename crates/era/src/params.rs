@@ -7,6 +7,12 @@
 //! `--states 0: the model needs at least one state` from the CLI,
 //! `states 0: the model needs at least one state` from Python.
 //!
+//! Messages built deeper in the core (an [`EraError`] raised while realizing, a
+//! warning) quote an option by its field name in backticks, `` `hankel_factor` ``; a
+//! front end shows them through [`render`], which rewrites each quote its way
+//! (`--hankel-factor`, or `hankel_factor`). Only the names in [`OPTION_KEYS`] are
+//! rewritten, so text quoted from a file passes through as it was.
+//!
 //! A refused value is [`EraError::Invalid`] (an input error: exit code 2 in the CLI,
 //! `ValueError` in Python), or [`EraError::Limit`] when a size is above one of
 //! [`crate::limits`].
@@ -36,6 +42,60 @@ impl Naming {
             },
         }
     }
+}
+
+/// The option field names that core messages quote in backticks: those of
+/// [`crate::EraOptions`], of the estimators and simulators, and the CLI-only scan range.
+pub const OPTION_KEYS: &[&str] = &[
+    "states",
+    "hankel_factor",
+    "integrations",
+    "lowpass_hz",
+    "lowpass_order",
+    "zero_lines",
+    "pad_to",
+    "time_domain",
+    "direct_term",
+    "svd",
+    "orders",
+    "frame",
+    "overlap",
+    "df",
+    "lines",
+    "duration",
+    "cycles",
+];
+
+/// `message` with each `` `key` `` or `` `key value` `` quote of an [`OPTION_KEYS`]
+/// name written as `naming`'s front end names it: `--pad-to`, `--states N` from the
+/// CLI, `pad_to`, `states N` from Python.
+pub fn render(naming: Naming, message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(open) = rest.find('`') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let Some(close) = after.find('`') else {
+            out.push_str(&rest[open..]);
+            return out;
+        };
+        let quoted = &after[..close];
+        let (key, tail) = quoted.split_once(' ').unwrap_or((quoted, ""));
+        if OPTION_KEYS.contains(&key) && !tail.contains(' ') {
+            out.push_str(&naming.name(key));
+            if !tail.is_empty() {
+                out.push(' ');
+                out.push_str(tail);
+            }
+            rest = &after[close + 1..];
+        } else {
+            // Not an option: keep the opening quote and look again after it.
+            out.push('`');
+            rest = after;
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// `Err(EraError::Invalid)` with `message`.
@@ -75,5 +135,20 @@ mod tests {
         assert!(e.is_input_error());
         assert!(check_positive(Naming::Flag, "df", f64::NAN, "x").is_err());
         assert!(check_positive(Naming::Flag, "df", 0.5, "x").is_ok());
+    }
+
+    #[test]
+    fn quoted_options_are_rendered_per_front_end() {
+        let m = "lower `hankel_factor` or `states N`, pad with `pad_to`; column `time_s` and `states` ` alone";
+        assert_eq!(
+            render(Naming::Flag, m),
+            "lower --hankel-factor or --states N, pad with --pad-to; column `time_s` and --states ` alone"
+        );
+        assert_eq!(
+            render(Naming::Keyword, m),
+            "lower hankel_factor or states N, pad with pad_to; column `time_s` and states ` alone"
+        );
+        assert_eq!(render(Naming::Flag, "no quotes"), "no quotes");
+        assert_eq!(render(Naming::Flag, "`lowpass_hz`"), "--lowpass-hz");
     }
 }

@@ -168,7 +168,7 @@ impl StateSpace {
         let err = relative_difference(&back.a, &self.a).max(relative_difference(&back.b, &self.b));
         if err.is_nan() || err >= 1e-8 {
             return Err(EraError::Conversion(format!(
-                "the zero-order-hold inverse is unreliable for this model (round trip error {err:.2e}): its eigenvectors are nearly dependent; keep --time-domain discrete"
+                "the zero-order-hold inverse is unreliable for this model (round trip error {err:.2e}): its eigenvectors are nearly dependent; keep `time_domain discrete`"
             )));
         }
         Ok(cont)

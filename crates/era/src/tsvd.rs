@@ -368,7 +368,7 @@ pub fn truncated_svd(
         }
     }
     Err(EraError::Numerical(format!(
-        "the truncated SVD did not converge in {} passes (residual {residual:.2e}, tolerance {:.0e}): use --svd dense",
+        "the truncated SVD did not converge in {} passes (residual {residual:.2e}, tolerance {:.0e}): use `svd dense`",
         options.max_iterations, options.tolerance
     )))
 }

@@ -261,7 +261,7 @@ impl WelchOptions {
                 name: "frame",
                 value: self.frame.to_string(),
                 reason: format!(
-                    "the time histories have only {samples} samples, fewer than one frame: use a shorter --frame"
+                    "the time histories have only {samples} samples, fewer than one frame: use a shorter `frame`"
                 ),
             });
         }
@@ -844,7 +844,7 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
     };
     let reason = if s.frames < p {
         format!(
-            "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter --frame or more overlap",
+            "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter `frame` or more `overlap`",
             s.frames, s.frames
         )
     } else {

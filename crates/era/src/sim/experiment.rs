@@ -283,7 +283,7 @@ impl Structure {
                     return Err(EraError::InvalidParameter {
                         name: "structure",
                         value: "velocity model with D != 0".into(),
-                        reason: "a velocity direct term would need an impulsive acceleration: identify with --direct-term zero".into(),
+                        reason: "a velocity direct term would need an impulsive acceleration: identify with `direct_term zero`".into(),
                     });
                 }
                 (&cont.c * &cont.a, &cont.c * &cont.b)

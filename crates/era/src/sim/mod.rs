@@ -519,7 +519,7 @@ impl ModalStructure {
                 name: "lines/df",
                 value: format!("{lines} lines at {spacing_hz} Hz"),
                 reason: format!(
-                    "the {quantity} FRFs overflow at these frequencies (up to {} Hz): lower --df or --lines",
+                    "the {quantity} FRFs overflow at these frequencies (up to {} Hz): lower `df` or `lines`",
                     spacing_hz * (lines - 1) as f64
                 ),
             });
