@@ -161,6 +161,7 @@ def identify(
     reciprocal: bool = False,
     weighting: Literal["pair-noise", "uniform"] = "pair-noise",
     max_iterations: int = 100,
+    threads: Optional[int] = None,
 ) -> Identification: ...
 def friction_estimate(
     time_s: npt.ArrayLike, velocity: npt.ArrayLike, stiffness: float

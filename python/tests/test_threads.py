@@ -31,3 +31,19 @@ def test_threads_on_different_data():
         assert np.array_equal(a, b)
     # Different noise, different models: the comparison above could fail.
     assert not np.array_equal(one[0], one[1])
+
+
+def test_a_thread_count_per_call():
+    # threads=N runs the call in a pool of N threads (rayon's loops and faer's kernels):
+    # one thread gives the model all cores give, to round-off.
+    frf = era.simulate_truth_model(noise=0.15, seed=3)
+    every_core = era.identify(frf, 8, hankel_factor=4, pad_to=1024)
+    one = era.identify(frf, 8, hankel_factor=4, pad_to=1024, threads=1)
+    assert np.allclose(one.eigenvalues, every_core.eigenvalues, rtol=1e-10, atol=1e-12)
+    for bad in (0, 5000):
+        try:
+            era.identify(frf, 8, threads=bad)
+        except ValueError as e:
+            assert str(e).startswith(f"threads {bad}: must be between 1 and 1024"), str(e)
+        else:
+            raise AssertionError(f"threads={bad} was accepted")

@@ -10,6 +10,11 @@ use std::path::PathBuf;
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// Threads for the run, shared by every parallel stage (rayon's loops and faer's
+    /// dense kernels): 1 for a batch of runs side by side. Default: every core (or
+    /// RAYON_NUM_THREADS).
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
 }
 
 #[derive(Debug, Subcommand)]

@@ -73,7 +73,7 @@ fn main() -> ExitCode {
             eprintln!("era: internal error: {info}");
         }
     }));
-    let result = std::panic::catch_unwind(|| match &cli.command {
+    let run = || match &cli.command {
         args::Command::Demo(a) => demo::run(a),
         args::Command::Identify(a) => identify::run(a),
         args::Command::Frf(a) => frf::run(a),
@@ -84,6 +84,13 @@ fn main() -> ExitCode {
         args::Command::Convert(a) => files::run_convert(a),
         args::Command::Compare(a) => compare::run(a),
         args::Command::Refine(a) => refine::run(a),
+    };
+    // One thread setting for rayon and faer (era::parallel); a refused count is a usage
+    // error like any flag's.
+    let result = std::panic::catch_unwind(|| {
+        era::parallel::with_threads(era::params::Naming::Flag, cli.threads, run)
+            .map_err(anyhow::Error::from)
+            .and_then(|r| r)
     });
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

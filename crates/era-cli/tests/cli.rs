@@ -821,3 +821,66 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
         .unwrap();
     assert_eq!(json_of(&out)["warnings"], serde_json::json!([]));
 }
+
+#[test]
+fn threads_sets_the_run_and_refuses_absurd_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = dir.path().join("dta.csv");
+    era()
+        .args([
+            "simulate",
+            "modal",
+            "--collocated",
+            "--noise",
+            "0.05",
+            "-q",
+            "--out",
+        ])
+        .arg(&frf)
+        .assert()
+        .success();
+    let run = |threads: &[&str]| {
+        let out = era()
+            .args(threads)
+            .arg("identify")
+            .arg(&frf)
+            .args([
+                "--states",
+                "80",
+                "--hankel-factor",
+                "5",
+                "--integrations",
+                "1",
+            ])
+            .args(["--zero-lines", "3", "--pad-to", "1024", "--json", "-q"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        json_of(&out)
+    };
+    let all = run(&[]);
+    let one = run(&["--threads", "1"]);
+    let freqs = |m: &Value| -> Vec<f64> {
+        m["modes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x["frequency_hz"].as_f64().unwrap())
+            .collect()
+    };
+    let (a, b) = (freqs(&all), freqs(&one));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-9 * x.abs(), "{x} vs {y}");
+    }
+    for bad in ["0", "100000"] {
+        expect_input_error(
+            &["identify", "--threads", bad, "x.csv", "--states", "2"],
+            &format!("--threads {bad}: must be between 1 and 1024"),
+        );
+    }
+}

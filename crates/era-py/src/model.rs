@@ -369,8 +369,11 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// 'upper', 'both'), `reciprocal`, `weighting` ('pair-noise', 'uniform') and
 /// `max_iterations` set it; the modes then carry `frequency_std_hz` and
 /// `damping_ratio_std`.
+///
+/// `threads` sets the threads of this call (rayon's and faer's together); by default
+/// every core.
 #[pyfunction]
-#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100)))]
+#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), threads=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -389,7 +392,16 @@ pub fn identify(
     reciprocal: bool,
     weighting: &str,
     max_iterations: Int,
+    threads: Option<Int>,
 ) -> PyResult<PyIdentification> {
+    let threads = match threads {
+        None => None,
+        Some(n) => {
+            let n = n.size("threads")?;
+            era::parallel::check_threads(Naming::Keyword, n).map_err(era_error)?;
+            Some(n)
+        }
+    };
     let chosen = states_of(states)?;
     let states = chosen.unwrap_or(0);
     let mut refine_options = era::refine::RefineOptions::default();
@@ -488,7 +500,7 @@ pub fn identify(
     checked.check(Naming::Keyword).map_err(era_error)?;
     let data = frf.get().inner.clone();
     let found = guarded(py, || {
-        match chosen {
+        era::parallel::with_threads(Naming::Keyword, threads, || match chosen {
             Some(_) => run_identify(&data, &options),
             None => identify_auto(
                 &data,
@@ -497,16 +509,20 @@ pub fn identify(
                 &mut |_| {},
                 &mut |_, _| {},
             ),
-        }
+        })
+        .and_then(|found| found)
         .and_then(|found| {
             if refine {
-                era::identify::refine_identification(
-                    found,
-                    &data,
-                    &refine_options,
-                    &mut |_| {},
-                    &mut |_, _| {},
-                )
+                era::parallel::with_threads(Naming::Keyword, threads, || {
+                    era::identify::refine_identification(
+                        found,
+                        &data,
+                        &refine_options,
+                        &mut |_| {},
+                        &mut |_, _| {},
+                    )
+                })
+                .and_then(|r| r)
             } else {
                 Ok(found)
             }

@@ -44,6 +44,7 @@ pub mod identify;
 pub mod limits;
 pub mod markov;
 pub mod modal;
+pub mod parallel;
 pub mod params;
 pub mod preprocess;
 pub mod realize;

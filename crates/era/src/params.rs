@@ -64,6 +64,7 @@ pub const OPTION_KEYS: &[&str] = &[
     "lines",
     "duration",
     "cycles",
+    "threads",
 ];
 
 /// `message` with each `` `key` `` or `` `key value` `` quote of an [`OPTION_KEYS`]
