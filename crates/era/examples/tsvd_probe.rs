@@ -83,6 +83,7 @@ pub fn old_truncated_svd(
                 v,
                 iterations: iteration,
                 residual,
+                timings: Default::default(),
             });
         }
         drop((u, v));

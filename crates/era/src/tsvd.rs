@@ -117,6 +117,20 @@ pub struct TruncatedSvd {
     pub iterations: usize,
     /// Largest residual of the wanted triplets at the end.
     pub residual: f64,
+    /// Where the wall time went.
+    pub timings: TsvdTimings,
+}
+
+/// Wall time of a [`truncated_svd`] by kind of work, s: what the cost model
+/// (`examples/cost_model.rs`) sets against the products' floor.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TsvdTimings {
+    /// Products with `H` and `Hᵀ`.
+    pub products: f64,
+    /// Block Gram–Schmidt and CholeskyQR of the new blocks.
+    pub orthogonalisation: f64,
+    /// The small SVDs of `T`, the residuals, restarts and the final vectors.
+    pub rayleigh_ritz: f64,
 }
 
 /// `x ← x R⁻¹` for upper-triangular `R = Lᵀ`: the lower solve `L (xᵀ) = xᵀ`.
@@ -279,12 +293,21 @@ pub fn truncated_svd(
     let mut s_mat = Mat::<f64>::zeros(0, 0);
     let mut previous_tail: Option<Mat<f64>> = None;
     let mut residual = f64::INFINITY;
+    let mut timings = TsvdTimings::default();
+    let mut clock = std::time::Instant::now();
+    let mut lap = |slot: &mut f64| {
+        *slot += clock.elapsed().as_secs_f64();
+        clock = std::time::Instant::now();
+    };
     for pass in 1..=options.max_iterations {
         let j = u_blocks.len();
         let width = (j + 1) * k;
         // Left: H V_j = Σ U_i T_ij + U_j T_jj.
+        lap(&mut timings.rayleigh_ritz);
         let hv = op.apply(v_blocks[j].as_ref());
+        lap(&mut timings.products);
         let (u_new, coefficients, r) = extend_basis(&u_blocks, hv);
+        lap(&mut timings.orthogonalisation);
         u_blocks.push(u_new);
         let mut grown = Mat::<f64>::zeros(width, width);
         grown
@@ -303,8 +326,11 @@ pub fn truncated_svd(
             .copy_from(&r);
         t = grown;
         // Right: Hᵀ U_j = Σ_(i≤j) V_i S_ij + V_(j+1) L_j.
+        lap(&mut timings.orthogonalisation);
         let htu = op.apply_transpose(u_blocks[j].as_ref());
+        lap(&mut timings.products);
         let (v_next, coefficients, tail) = extend_basis(&v_blocks, htu);
+        lap(&mut timings.orthogonalisation);
         let mut grown = Mat::<f64>::zeros(width, width);
         grown
             .as_mut()
@@ -343,12 +369,16 @@ pub fn truncated_svd(
             .fold(0.0, f64::max);
         if residual <= options.tolerance {
             let keep = k.min(width);
+            let u = combine(&u_blocks, x.subcols(0, keep));
+            let v = combine(&v_blocks, y.subcols(0, keep));
+            lap(&mut timings.rayleigh_ritz);
             return Ok(TruncatedSvd {
-                u: combine(&u_blocks, x.subcols(0, keep)),
+                u,
                 s: sigma[..keep].to_vec(),
-                v: combine(&v_blocks, y.subcols(0, keep)),
+                v,
                 iterations: pass,
                 residual,
+                timings,
             });
         }
         if j + 1 < depth {
@@ -362,7 +392,9 @@ pub fn truncated_svd(
             drop(v_next);
             u_blocks.clear();
             v_blocks.clear();
+            lap(&mut timings.rayleigh_ritz);
             v_blocks.push(block_qr(restart).0);
+            lap(&mut timings.orthogonalisation);
             t = Mat::zeros(0, 0);
             s_mat = Mat::zeros(0, 0);
         }

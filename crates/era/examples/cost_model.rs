@@ -1,0 +1,218 @@
+//! The cost model of the matrix-free ERA core (docs/design.md §7): wall time against the
+//! Hankel's size `m` (block rows = block columns), the outputs `q`, the inputs `p` and the
+//! order `n`, one varied at a time around the thesis case, with the fitted exponent of
+//! each, and the ratio of the time to its floor.
+//!
+//! `cargo run --release -p era --example cost_model [-- REPEATS]` (default 3, medians).
+//!
+//! **The floor** of a run is what its truncated SVD cannot avoid: the FFT Hankel
+//! products alone (one `H·X` and one `Hᵀ·Y` of `b = n + oversample` columns per pass,
+//! [`era::hankel_op::HankelOperator`]) at the pass count the run used, timed here on
+//! their own. `total / floor` is then what orthogonalisation, the small SVDs, the
+//! restarts and the products of the realization (§1.9) add.
+//!
+//! Data: [`era::sim::lightly_damped_markov`] (lightly damped modes, seed 7, `n/2` modes
+//! of `n` states), with 1 % white noise on every Markov sample so that the spectrum past
+//! the order has no gap, as measured data has none; and the DTA-like thesis case
+//! (`ModalSpec::default()`, 801 lines, 5 % noise on the FRFs, thesis preprocessing).
+
+use era::hankel::HankelShape;
+use era::hankel_op::{HankelOperator, LinearOperator};
+use era::markov::{markov_from_frf, MarkovSequence};
+use era::preprocess::preprocess;
+use era::realize::{realize_general, RealizeOptions, SvdPath};
+use era::sim::{add_noise, lightly_damped_markov, Minstd, ModalSpec, ModalStructure};
+use era::tsvd::TruncatedSvdOptions;
+use era::Quantity;
+use faer::Mat;
+use std::time::Instant;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// `markov` with white noise of `level` times its RMS added to every sample.
+fn noisy(markov: &MarkovSequence, level: f64) -> MarkovSequence {
+    let (q, p, k) = (markov.outputs(), markov.inputs(), markov.samples());
+    let mut sum = 0.0;
+    for s in 0..k {
+        for i in 0..q {
+            for j in 0..p {
+                sum += markov.get(s, i, j).powi(2);
+            }
+        }
+    }
+    let rms = (sum / (k * q * p) as f64).sqrt();
+    let mut rng = Minstd::new(11);
+    let noise: Vec<f64> = (0..k * q * p).map(|_| rng.normal() * level * rms).collect();
+    MarkovSequence::from_fn(q, p, k, |s, i, j| {
+        markov.get(s, i, j) + noise[(s * q + i) * p + j]
+    })
+}
+
+struct Row {
+    label: String,
+    m: usize,
+    q: usize,
+    p: usize,
+    n: usize,
+    seconds: f64,
+    passes: usize,
+    floor: f64,
+    /// The truncated SVD alone, by kind of work: products, orthogonalisation,
+    /// Rayleigh–Ritz (s).
+    parts: (f64, f64, f64),
+}
+
+fn measure(label: String, markov: &MarkovSequence, m: usize, n: usize, repeats: usize) -> Row {
+    let shape = HankelShape {
+        block_rows: m,
+        block_cols: m,
+        first_sample: 1,
+    };
+    let options = RealizeOptions {
+        svd: SvdPath::MatrixFree,
+        ..RealizeOptions::new(n, 1)
+    };
+    let mut times = Vec::new();
+    let mut passes = 0;
+    for _ in 0..repeats {
+        let clock = Instant::now();
+        let r = realize_general(markov, 1.0, &options, shape).expect("realizes");
+        times.push(clock.elapsed().as_secs_f64());
+        passes = r.svd_iterations.unwrap_or(0);
+    }
+    // The floor: `passes` products each way with a block as wide as the SVD's.
+    let op = HankelOperator::new(markov, shape).expect("shape fits");
+    let svd = era::tsvd::truncated_svd(&op, &TruncatedSvdOptions::new(n)).expect("converges");
+    let t = svd.timings;
+    let b = n + TruncatedSvdOptions::new(n).oversample;
+    let x = Mat::from_fn(op.ncols(), b, |i, j| {
+        ((i * 31 + j * 17) % 101) as f64 - 50.0
+    });
+    let y = Mat::from_fn(op.nrows(), b, |i, j| ((i * 29 + j * 13) % 97) as f64 - 48.0);
+    let mut floors = Vec::new();
+    for _ in 0..repeats {
+        let clock = Instant::now();
+        for _ in 0..passes.max(1) {
+            std::hint::black_box(op.apply(x.as_ref()));
+            std::hint::black_box(op.apply_transpose(y.as_ref()));
+        }
+        floors.push(clock.elapsed().as_secs_f64());
+    }
+    Row {
+        label,
+        m,
+        q: markov.outputs(),
+        p: markov.inputs(),
+        n,
+        seconds: median(times),
+        passes,
+        floor: median(floors),
+        parts: (t.products, t.orthogonalisation, t.rayleigh_ritz),
+    }
+}
+
+/// Least-squares slope of `ln y` on `ln x`.
+fn exponent(points: &[(f64, f64)]) -> f64 {
+    let k = points.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = points.iter().map(|(x, y)| (x.ln(), y.ln())).unzip();
+    let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+fn print(row: &Row) {
+    println!(
+        "{:<28} {:>6} {:>4} {:>4} {:>5} {:>11} {:>9.4} {:>6} {:>9.4} {:>7.1}   {:>3.0} {:>3.0} {:>3.0}",
+        row.label,
+        row.m,
+        row.q,
+        row.p,
+        row.n,
+        format!("{}x{}", row.m * row.q, row.m * row.p),
+        row.seconds,
+        row.passes,
+        row.floor,
+        row.seconds / row.floor,
+        100.0 * row.parts.0 / (row.parts.0 + row.parts.1 + row.parts.2),
+        100.0 * row.parts.1 / (row.parts.0 + row.parts.1 + row.parts.2),
+        100.0 * row.parts.2 / (row.parts.0 + row.parts.1 + row.parts.2),
+    );
+}
+
+fn main() {
+    let repeats: usize = std::env::args()
+        .nth(1)
+        .map_or(3, |r| r.parse().expect("REPEATS: a count"));
+    println!(
+        "{:<28} {:>6} {:>4} {:>4} {:>5} {:>11} {:>9} {:>6} {:>9} {:>7}   SVD time %: products, orth, Ritz",
+        "case", "m", "q", "p", "n", "H0", "time (s)", "passes", "floor (s)", "x floor"
+    );
+    // The thesis case first.
+    let structure = ModalStructure::random(&ModalSpec::default()).expect("DTA-like set");
+    let clean = structure
+        .frf(801, 0.025, Quantity::Acceleration)
+        .expect("FRF");
+    let frf = add_noise(&clean, 0.05, 42).expect("noise");
+    let pre = preprocess(&frf, 1, 1024, 3).expect("preprocess");
+    let dta = markov_from_frf(&pre.frf).expect("Markov");
+    print(&measure(
+        "thesis: DTA-like, 5 % noise".into(),
+        &dta,
+        199,
+        80,
+        repeats,
+    ));
+
+    let data = |q: usize, p: usize, n: usize, m: usize| {
+        noisy(&lightly_damped_markov(q, p, n / 2, 2 * m + 2, 7), 0.01)
+    };
+    let mut fits = Vec::new();
+    let mut sweep = |name: &str, rows: Vec<Row>, x: fn(&Row) -> usize| {
+        for r in &rows {
+            print(r);
+        }
+        let points: Vec<(f64, f64)> = rows.iter().map(|r| (x(r) as f64, r.seconds)).collect();
+        let floor: Vec<(f64, f64)> = rows.iter().map(|r| (x(r) as f64, r.floor)).collect();
+        fits.push((name.to_string(), exponent(&points), exponent(&floor)));
+    };
+    sweep(
+        "m (8x8, n 80)",
+        [200, 400, 800, 1600]
+            .into_iter()
+            .map(|m| measure(format!("m {m}"), &data(8, 8, 80, m), m, 80, repeats))
+            .collect(),
+        |r| r.m,
+    );
+    sweep(
+        "q (p 8, m 200, n 80)",
+        [4, 8, 16, 32]
+            .into_iter()
+            .map(|q| measure(format!("q {q}"), &data(q, 8, 80, 200), 200, 80, repeats))
+            .collect(),
+        |r| r.q,
+    );
+    sweep(
+        "p (q 8, m 200, n 80)",
+        [2, 4, 8, 16]
+            .into_iter()
+            .map(|p| measure(format!("p {p}"), &data(8, p, 80, 200), 200, 80, repeats))
+            .collect(),
+        |r| r.p,
+    );
+    sweep(
+        "n (8x8, m 400)",
+        [40, 80, 160, 320]
+            .into_iter()
+            .map(|n| measure(format!("n {n}"), &data(8, 8, n, 400), 400, n, repeats))
+            .collect(),
+        |r| r.n,
+    );
+    println!("\nfitted exponents (time ~ x^k), the whole core and the FFT products alone:");
+    for (name, k, kf) in fits {
+        println!("  {name:<24} k = {k:.2}   floor k = {kf:.2}");
+    }
+}
