@@ -15,6 +15,7 @@ pub mod report;
 pub mod stabilization;
 
 pub use figures::{
-    frf_grid, frf_overlay, singular_value_figure, Figure, Panel, Series, SeriesKind, YScale,
+    coherence_grid, frf_grid, frf_overlay, singular_value_figure, Figure, FrfUnits, FrfView, Panel,
+    PhaseView, Series, SeriesKind, YScale,
 };
 pub use render::{render_png, render_svg, PlotError};
