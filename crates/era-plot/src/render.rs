@@ -372,87 +372,171 @@ where
     Ok(())
 }
 
-/// The style sheet [`compact_svg`] puts in each SVG: one rule per kind of stroke
-/// instead of the same five attributes on each of thousands of elements, and the
-/// model's curve dashed (`stroke-dasharray`) as one polyline, not one per dash.
-pub const SVG_STYLE: &str = "text{font-family:sans-serif}polyline{fill:none}\
-.d1{stroke:#1F77B4;stroke-width:1}.d2{stroke:#1F77B4;stroke-width:2}\
-.m1{stroke:#D62728;stroke-width:1;stroke-dasharray:6 4}.m2{stroke:#D62728;stroke-width:2;stroke-dasharray:6 4}\
-.l1{stroke:#000;stroke-opacity:.1}.l2{stroke:#000;stroke-opacity:.2}";
+/// The drawing attributes [`compact_svg`] moves into a style sheet.
+const STYLE_ATTRIBUTES: [&str; 8] = [
+    "fill",
+    "fill-opacity",
+    "opacity",
+    "stroke",
+    "stroke-opacity",
+    "stroke-width",
+    "font-family",
+    "font-size",
+];
 
-/// Plotters' SVG with shared styles ([`SVG_STYLE`]): polylines of the measured and
-/// model colours and the mesh lines get a class, text loses its default attributes
-/// and its font size is rounded to 0.1 px. The drawing does not change.
+/// The dash pattern of the model's curve (the colour [`MODEL`]), in the style sheet:
+/// one polyline dashed by the browser instead of one polyline per dash.
+pub const MODEL_DASHES: &str = "stroke-dasharray:6 4";
+
+/// Plotters' SVG with shared styles: each element's drawing attributes (fill, stroke,
+/// width, opacity, font) become a class named by a hash of their values, with one
+/// rule per class in a `<style>` at the top. Figures inlined together in one page
+/// then share their rules (the same style has the same class in every figure, so the
+/// repeated rules agree), and each of thousands of elements carries one short class
+/// instead of five attributes. Polylines of the model's colour are dashed there
+/// ([`MODEL_DASHES`]). Font sizes are rounded to 0.1 px; nothing else changes.
 pub fn compact_svg(svg: &str) -> String {
-    let mut out = String::with_capacity(svg.len());
-    let classes = [
-        (
-            r##"<polyline fill="none" opacity="1" stroke="#1F77B4" stroke-width="1" "##,
-            r#"<polyline class="d1" "#,
-        ),
-        (
-            r##"<polyline fill="none" opacity="1" stroke="#1F77B4" stroke-width="2" "##,
-            r#"<polyline class="d2" "#,
-        ),
-        (
-            r##"<polyline fill="none" opacity="1" stroke="#D62728" stroke-width="1" "##,
-            r#"<polyline class="m1" "#,
-        ),
-        (
-            r##"<polyline fill="none" opacity="1" stroke="#D62728" stroke-width="2" "##,
-            r#"<polyline class="m2" "#,
-        ),
-        (
-            r##"<line opacity="0.1" stroke="#000000" stroke-width="1" "##,
-            r#"<line class="l1" "#,
-        ),
-        (
-            r##"<line opacity="0.2" stroke="#000000" stroke-width="1" "##,
-            r#"<line class="l2" "#,
-        ),
-    ];
-    let mut styled = false;
+    let mut rules: Vec<(String, String)> = Vec::new();
+    let mut body = String::with_capacity(svg.len());
+    let mut head = String::new();
     for line in svg.split_inclusive('\n') {
-        if let Some((from, to)) = classes.iter().find(|(from, _)| line.starts_with(from)) {
-            out.push_str(to);
-            out.push_str(&line[from.len()..]);
-        } else if line.starts_with("<text ") {
-            out.push_str(&compact_text(line));
-        } else {
-            out.push_str(line);
+        if line.starts_with("<svg") {
+            head.push_str(line);
+            continue;
         }
-        if !styled && line.starts_with("<svg") {
-            out.push_str("<style>");
-            out.push_str(SVG_STYLE);
-            out.push_str("</style>\n");
-            styled = true;
+        match restyle(line) {
+            Some((element, class, rule)) => {
+                if !rules.iter().any(|(c, _)| *c == class) {
+                    rules.push((class, rule));
+                }
+                body.push_str(&element);
+            }
+            None => body.push_str(line),
         }
     }
+    let mut out = String::with_capacity(head.len() + body.len() + 64 * rules.len());
+    out.push_str(&head);
+    if !rules.is_empty() {
+        out.push_str("<style>");
+        for (class, rule) in &rules {
+            out.push_str(&format!(".{class}{{{rule}}}"));
+        }
+        out.push_str("</style>\n");
+    }
+    out.push_str(&body);
     out
 }
 
-/// A `<text …>` tag without `font-family="sans-serif"` and a black fill at full
-/// opacity (the defaults [`SVG_STYLE`] sets), its font size rounded.
-fn compact_text(tag: &str) -> String {
-    let tag = tag
-        .replace(r#" font-family="sans-serif""#, "")
-        .replace(r##" opacity="1" fill="#000000""##, "");
-    match tag.find(r#"font-size=""#) {
-        Some(at) => {
-            let start = at + r#"font-size=""#.len();
-            let end = tag[start..].find('"').map_or(tag.len(), |e| start + e);
-            match tag[start..end].parse::<f64>() {
-                Ok(size) => format!(
-                    "{}{}{}",
-                    &tag[..start],
-                    format!("{size:.1}").trim_end_matches(".0"),
-                    &tag[end..]
+/// One element line with its drawing attributes replaced by a class: the new line,
+/// the class and its CSS rule; `None` for a line that is not a single element tag.
+fn restyle(line: &str) -> Option<(String, String, String)> {
+    let rest = line.strip_prefix('<')?;
+    let name_end = rest.find(' ')?;
+    let name = &rest[..name_end];
+    if !name.chars().all(|c| c.is_ascii_alphabetic()) {
+        return None;
+    }
+    let mut attrs = &rest[name_end..];
+    let mut geometry = String::new();
+    let mut style: Vec<(&str, String)> = Vec::new();
+    loop {
+        attrs = attrs.trim_start();
+        if attrs.is_empty() || attrs.starts_with('/') || attrs.starts_with('>') {
+            break;
+        }
+        let eq = attrs.find("=\"")?;
+        let key = &attrs[..eq];
+        let value_start = eq + 2;
+        let value_len = attrs[value_start..].find('"')?;
+        let value = &attrs[value_start..value_start + value_len];
+        if STYLE_ATTRIBUTES.contains(&key) {
+            let value = match key {
+                "font-size" => format!(
+                    "{}px",
+                    value
+                        .parse::<f64>()
+                        .map_or(value.to_string(), |v| format!("{v:.1}"))
                 ),
-                Err(_) => tag,
+                "stroke-width" => format!("{value}px"),
+                _ => value.to_string(),
+            };
+            style.push((key, value));
+        } else {
+            geometry.push(' ');
+            geometry.push_str(&attrs[..value_start + value_len + 1]);
+        }
+        attrs = &attrs[value_start + value_len + 1..];
+    }
+    if style.is_empty() {
+        return None;
+    }
+    let mut rule: String = style
+        .iter()
+        .map(|(k, v)| format!("{k}:{v}"))
+        .collect::<Vec<_>>()
+        .join(";");
+    let model_stroke = format!("#{:02X}{:02X}{:02X}", MODEL.0, MODEL.1, MODEL.2);
+    if name == "polyline"
+        && style
+            .iter()
+            .any(|(k, v)| *k == "stroke" && *v == model_stroke)
+    {
+        rule.push(';');
+        rule.push_str(MODEL_DASHES);
+    }
+    // FNV-1a of the rule: the same style, the same class, in every figure.
+    let hash = rule.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    let class = format!("s{:08x}", hash as u32 ^ (hash >> 32) as u32);
+    // A polyline becomes a path of relative moves: `M83 160l6 0 1-1` instead of
+    // `83,160 89,160 90,159`, half the bytes for the same points.
+    if name == "polyline" {
+        if let Some(d) = geometry
+            .strip_prefix(" points=\"")
+            .and_then(|g| g.strip_suffix('"'))
+            .and_then(relative_path)
+        {
+            return Some((
+                format!("<path class=\"{class}\" d=\"{d}\"{attrs}"),
+                class,
+                rule,
+            ));
+        }
+    }
+    Some((
+        format!("<{name} class=\"{class}\"{geometry}{attrs}"),
+        class,
+        rule,
+    ))
+}
+
+/// SVG path data of a polyline's integer points (`x,y x,y …`): an absolute move to
+/// the first, then relative line steps; `None` unless every coordinate is an integer.
+fn relative_path(points: &str) -> Option<String> {
+    let mut out = String::with_capacity(points.len() / 2 + 8);
+    let mut previous: Option<(i64, i64)> = None;
+    for pair in points.split_whitespace() {
+        let (x, y) = pair.split_once(',')?;
+        let (x, y) = (x.parse::<i64>().ok()?, y.parse::<i64>().ok()?);
+        match previous {
+            None => out.push_str(&format!("M{x} {y}l")),
+            Some((px, py)) => {
+                for (k, v) in [x - px, y - py].into_iter().enumerate() {
+                    // No separator before a minus sign, nor before the first step.
+                    if v >= 0 && !(k == 0 && out.ends_with('l')) {
+                        out.push(' ');
+                    }
+                    out.push_str(&v.to_string());
+                }
             }
         }
-        None => tag,
+        previous = Some((x, y));
     }
+    if out.ends_with('l') {
+        out.pop();
+    }
+    (!out.is_empty()).then_some(out)
 }
 
 /// The figure as SVG text.
@@ -621,26 +705,25 @@ mod tests {
         let m = frf(200, |k| Complex64::new(1.0 + k as f64, 1.0));
         let view = crate::figures::FrfView::by_index(1, 1);
         let svg = render_svg(&frf_overlay(&m, Some(&m), 0, 0, &view)).unwrap();
-        assert!(svg.contains("<style>") && svg.contains("stroke-dasharray:6 4"));
+        assert!(svg.contains("<style>") && svg.contains(MODEL_DASHES));
         // The model: one polyline per panel plus the legend's two strokes, all of the
-        // dashed class; no stroke attribute left on the curves.
-        let model = svg.matches(r#"<polyline class="m2""#).count();
-        assert_eq!(model, 2 + 2, "{model} dashed polylines");
-        assert!(!svg.contains(r##"stroke="#D62728""##));
-        // The legend's model mark: two strokes of 8 px with a gap, beside "ERA model".
-        let short = svg
-            .lines()
-            .filter(|l| l.starts_with(r#"<polyline class="m2""#))
-            .filter(|l| {
-                let pts: Vec<&str> = l
-                    .split('"')
-                    .nth(3)
-                    .unwrap_or("")
-                    .split_whitespace()
-                    .collect();
-                pts.len() == 2
-            })
-            .count();
+        // dashed class; no drawing attribute is left on an element.
+        let dashed = svg
+            .split("<style>")
+            .nth(1)
+            .and_then(|s| s.split("</style>").next())
+            .unwrap_or("")
+            .split('.')
+            .filter(|rule| rule.contains(MODEL_DASHES))
+            .map(|rule| rule.split('{').next().unwrap_or("").to_string())
+            .collect::<Vec<_>>();
+        assert_eq!(dashed.len(), 1, "{dashed:?}");
+        let marker = format!(r#"<path class="{}""#, dashed[0]);
+        let model: Vec<&str> = svg.lines().filter(|l| l.starts_with(&marker)).collect();
+        assert_eq!(model.len(), 2 + 2, "{} dashed paths", model.len());
+        assert!(!svg.contains(r#" stroke=""#) && !svg.contains(r#" font-family=""#));
+        // The legend's model mark: two 8 px strokes with a gap, beside "ERA model".
+        let short = model.iter().filter(|l| l.contains("l8 0\"")).count();
         assert_eq!(short, 2);
         assert!(svg.contains("ERA model"));
         // The same figure as PNG draws too.
@@ -664,5 +747,23 @@ mod tests {
         assert!(!svg.contains("lbf") && !svg.contains("in/s"));
         let grid = render_svg(&frf_grid(&m, Some(&m), &view)).unwrap();
         assert!(grid.contains("|G| (m/s^2)/N") && grid.contains("Frequency (Hz)"));
+    }
+
+    #[test]
+    fn polylines_become_relative_paths_with_the_same_points() {
+        assert_eq!(
+            relative_path("83,160 89,160 90,159 90,170").as_deref(),
+            Some("M83 160l6 0 1-1 0 11")
+        );
+        assert_eq!(relative_path("5,5").as_deref(), Some("M5 5"));
+        assert_eq!(relative_path("1.5,2 3,4"), None);
+        let (element, _, rule) =
+            restyle(r##"<polyline fill="none" opacity="1" stroke="#1F77B4" stroke-width="2" points="1,2 3,1 "/>"##)
+                .unwrap();
+        assert!(
+            element.starts_with("<path class=\"s") && element.ends_with(r#" d="M1 2l2-1"/>"#),
+            "{element}"
+        );
+        assert_eq!(rule, "fill:none;opacity:1;stroke:#1F77B4;stroke-width:2px");
     }
 }

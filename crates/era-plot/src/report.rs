@@ -4,8 +4,8 @@
 //! outputs × inputs matrix, the coherence when the input carries it, the overview grid
 //! and every pair's overlay.
 //!
-//! Size: each figure appears once, its strokes share one style sheet
-//! ([`crate::render::SVG_STYLE`]) and its curves are thinned to what a pixel shows
+//! Size: each figure appears once, its elements share style rules
+//! ([`crate::render::compact_svg`]) and its curves are thinned to what a pixel shows
 //! ([`crate::render::visible_points`], which keeps every peak), so an 8 × 8 set of 801
 //! lines stays well under 2 MB.
 
@@ -237,7 +237,7 @@ body{{font-family:sans-serif;margin:2em;max-width:1100px;color:#222}} h1{{font-s
 table{{border-collapse:collapse;margin:1em 0}} td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}} th{{background:#f3f3f3}}\
 pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%;height:auto}} .col{{background:#eef6ff}} .bad{{background:#fff1f0}} .suspect{{color:#a8071a}}\
 dl{{display:grid;grid-template-columns:max-content auto;gap:2px 1em}} dt{{font-weight:bold}} dd{{margin:0;font-family:monospace;overflow-wrap:anywhere}}\
-table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{{overflow-x:auto}} figure.wide svg{{max-width:none}}\
+table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{{width:calc(100vw - 4em)}}\
 </style></head><body>\n<h1>{}</h1>\n",
         escape(input.title),
         escape(input.title)
