@@ -215,7 +215,7 @@ pub fn write_all(
             set,
             folder,
             "coherence",
-            &coherence_grid("Coherence", &c.frequency_hz, &c.curves),
+            &coherence_grid(&c.title, &c.frequency_hz, &c.curves),
         )?),
         None => None,
     };

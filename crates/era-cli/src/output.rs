@@ -18,6 +18,8 @@ pub struct InputCoherence {
     pub frequency_hz: Vec<f64>,
     /// One (title, values) per curve.
     pub curves: Vec<(String, Vec<f64>)>,
+    /// The figure's title.
+    pub title: String,
     /// What the curves are.
     pub caption: String,
 }
@@ -32,6 +34,7 @@ impl InputCoherence {
             curves: (0..q)
                 .map(|i| (format!("Y{}", i + 1), estimate.multiple(i).to_vec()))
                 .collect(),
+            title: "Multiple coherence of each output".into(),
             caption: format!(
                 "Multiple coherence of each output with the {} input(s), from the Welch estimate: the part of the output's power the inputs explain (1 = all). Low coherence marks lines where noise, leakage or unmeasured inputs dominate; the FRF is less certain there.",
                 estimate.frf.inputs()

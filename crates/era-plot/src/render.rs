@@ -265,8 +265,18 @@ where
                         .map(|k| piece[k])
                         .collect();
                     let width = if compact { 1 } else { 2 };
+                    let colour = if s.kind == SeriesKind::Model {
+                        MODEL
+                    } else {
+                        MEASURED
+                    };
                     let drawn =
                         match s.kind {
+                            // A piece of one point (a noisy phase flipping across ±180°
+                            // line by line) is a dot, not an invisible one-point line.
+                            _ if points.len() == 1 => chart.draw_series(std::iter::once(
+                                Circle::new(points[0], width, colour.filled()),
+                            )),
                             SeriesKind::Model if !svg => chart.draw_series(DashedLineSeries::new(
                                 points,
                                 6,
@@ -384,7 +394,7 @@ const STYLE_ATTRIBUTES: [&str; 8] = [
     "font-size",
 ];
 
-/// The dash pattern of the model's curve (the colour [`MODEL`]), in the style sheet:
+/// The dash pattern of the model's curve (drawn in red, #D62728), in the style sheet:
 /// one polyline dashed by the browser instead of one polyline per dash.
 pub const MODEL_DASHES: &str = "stroke-dasharray:6 4";
 

@@ -119,6 +119,14 @@ fn input_html(s: &InputSection) -> String {
     if s.channels.is_empty() {
         h.push_str("<p id=\"channel-table\">The file has no channel table: outputs and inputs are known by their index only, and collocation is by index (output i with input i).</p>\n");
     } else {
+        // A long table folds away (still in the page, one click to open).
+        let _ = write!(
+            h,
+            "<details{}><summary>Channel table: {} outputs, {} inputs</summary>\n",
+            if s.channels.len() <= 16 { " open" } else { "" },
+            s.channels.iter().filter(|c| c.role == "output").count(),
+            s.channels.iter().filter(|c| c.role == "input").count()
+        );
         h.push_str("<table id=\"channel-table\"><tr><th>channel</th><th>node</th><th>direction</th><th>entity</th></tr>\n");
         for c in &s.channels {
             let _ = writeln!(
@@ -131,7 +139,7 @@ fn input_html(s: &InputSection) -> String {
                 escape(c.entity.as_deref().unwrap_or(""))
             );
         }
-        h.push_str("</table>\n<p>Collocated pairs (same node and direction) are shaded in the fit table.</p>\n");
+        h.push_str("</table></details>\n<p>Collocated pairs (same node and direction) are shaded in the fit table.</p>\n");
     }
     h
 }
