@@ -208,7 +208,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         if a.from_time {
             source.section.format = time_format.take().unwrap_or_default();
         }
-        source.coherence = coherence;
+        if coherence.is_some() {
+            source.coherence = coherence;
+        }
         source.phase = a.phase.into();
         write_identification(
             set,

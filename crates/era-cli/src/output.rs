@@ -43,6 +43,96 @@ impl InputCoherence {
     }
 }
 
+impl InputCoherence {
+    /// The coherence file `era frf` (and `simulate experiment`) writes beside an FRF
+    /// file (`NAME.coherence.csv`), when there is one: the multiple coherence of each
+    /// output (`mcoh<i>` columns), or else the ordinary coherence of each pair
+    /// (`coh<i>_<j>`). `Ok(None)` without such a file; `Err` (a note for the report)
+    /// when it does not fit `frf`: other lines, other outputs, unreadable values.
+    pub fn companion(frf_path: &Path, frf: &era::FrfData) -> Result<Option<Self>, String> {
+        let path = crate::frf::coherence_path(frf_path);
+        if !path.is_file() {
+            return Ok(None);
+        }
+        let name = path.display().to_string();
+        let bytes = era_io::input::read_input(&path).map_err(|e| format!("{name}: {e}"))?;
+        let text = std::str::from_utf8(&bytes).map_err(|_| format!("{name}: not UTF-8 text"))?;
+        let mut rows = text
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+        let header: Vec<&str> = rows
+            .next()
+            .ok_or_else(|| format!("{name}: no header"))?
+            .split(',')
+            .map(str::trim)
+            .collect();
+        let (q, p) = (frf.outputs(), frf.inputs());
+        let find = |column: String| header.iter().position(|h| *h == column);
+        let multiple: Option<Vec<usize>> = (1..=q).map(|i| find(format!("mcoh{i}"))).collect();
+        let (columns, titles, caption) = match multiple {
+            Some(c) => (
+                c,
+                (1..=q).map(|i| format!("Y{i}")).collect::<Vec<_>>(),
+                "Multiple coherence of each output",
+            ),
+            None => {
+                let ordinary: Option<Vec<usize>> = (1..=q)
+                    .flat_map(|i| (1..=p).map(move |j| (i, j)))
+                    .map(|(i, j)| find(format!("coh{i}_{j}")))
+                    .collect();
+                let c = ordinary.ok_or_else(|| {
+                    format!("{name}: no mcoh<i> or coh<i>_<j> columns for {q} outputs x {p} inputs")
+                })?;
+                let titles = (1..=q)
+                    .flat_map(|i| (1..=p).map(move |j| format!("Y{i} / F{j}")))
+                    .collect();
+                (c, titles, "Ordinary coherence of each pair")
+            }
+        };
+        let mut frequency_hz = Vec::with_capacity(frf.lines());
+        let mut values = vec![Vec::with_capacity(frf.lines()); columns.len()];
+        for (k, row) in rows.enumerate() {
+            let cells: Vec<&str> = row.split(',').map(str::trim).collect();
+            let number = |c: usize| -> Result<f64, String> {
+                cells
+                    .get(c)
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        format!(
+                            "{name}: data row {}: column {} is not a number",
+                            k + 1,
+                            c + 1
+                        )
+                    })
+            };
+            frequency_hz.push(number(0)?);
+            for (curve, &c) in values.iter_mut().zip(&columns) {
+                curve.push(number(c)?);
+            }
+        }
+        let f = frf.frequency_hz();
+        if frequency_hz.len() != f.len()
+            || frequency_hz
+                .iter()
+                .zip(f)
+                .any(|(a, b)| (a - b).abs() > 1e-6 * (1.0 + b.abs()))
+        {
+            return Err(format!(
+                "{name}: {} lines that are not the FRF file's {} lines; not shown",
+                frequency_hz.len(),
+                f.len()
+            ));
+        }
+        Ok(Some(InputCoherence {
+            frequency_hz,
+            curves: titles.into_iter().zip(values).collect(),
+            title: caption.to_string(),
+            caption: format!("{caption}, from {name} (the estimate beside the FRF file): 1 where the inputs explain all of the output's power; low coherence marks lines where noise, leakage or unmeasured inputs dominate, and the FRF is less certain there."),
+        }))
+    }
+}
+
 /// What went into a run, as the report and the figures need it: the input section,
 /// the FRFs' quantity and units as read, the channel table, the coherence and how to
 /// draw the phase.
@@ -72,6 +162,11 @@ impl RunInput {
             .map(|n| n.split(" | ").map(str::to_string).collect())
             .unwrap_or_default();
         let quantity = file.frf.quantity();
+        let mut notes: Vec<String> = notes;
+        let coherence = InputCoherence::companion(path, &file.frf).unwrap_or_else(|e| {
+            notes.push(format!("coherence file ignored: {e}"));
+            None
+        });
         RunInput {
             section: InputSection {
                 file: path.display().to_string(),
@@ -85,7 +180,7 @@ impl RunInput {
             quantity,
             units,
             channels: file.channels.clone(),
-            coherence: None,
+            coherence,
             phase: PhaseView::Wrapped,
         }
     }

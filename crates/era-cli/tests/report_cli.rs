@@ -248,4 +248,60 @@ fn from_time_reports_the_coherence() {
     assert!(html.contains("time histories"));
     // The time file says nothing of units: unknown, not assumed.
     assert!(html.contains("<dd>unit/unit</dd>"));
+    // In two steps: `era frf` writes the coherence beside the FRF file, and identify
+    // shows it from there.
+    let frf = dir.path().join("frf.csv");
+    era()
+        .args([
+            "frf",
+            s(&time),
+            "--inputs",
+            "f",
+            "--outputs",
+            "y",
+            "--frame",
+            "256",
+            "-q",
+            "--out",
+            s(&frf),
+        ])
+        .assert()
+        .success();
+    assert!(dir.path().join("frf.coherence.csv").is_file());
+    let out2 = dir.path().join("out2");
+    era()
+        .args([
+            "identify",
+            s(&frf),
+            "--states",
+            "2",
+            "-q",
+            "--out",
+            s(&out2),
+        ])
+        .assert()
+        .success();
+    let html = read(out2.join("report.html"));
+    assert!(html.contains("id=\"fig-coherence\""));
+    assert!(html.contains("frf.coherence.csv"));
+    // A companion that does not fit the FRF file is left out, with a note.
+    let bad = dir.path().join("frf.coherence.csv");
+    let text = read(&bad);
+    std::fs::write(&bad, text.lines().take(10).collect::<Vec<_>>().join("\n")).unwrap();
+    let out3 = dir.path().join("out3");
+    era()
+        .args([
+            "identify",
+            s(&frf),
+            "--states",
+            "2",
+            "-q",
+            "--out",
+            s(&out3),
+        ])
+        .assert()
+        .success();
+    let html = read(out3.join("report.html"));
+    assert!(!html.contains("id=\"fig-coherence\""));
+    assert!(html.contains("coherence file ignored"));
 }

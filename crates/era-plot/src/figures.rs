@@ -1,4 +1,25 @@
 //! Figure specifications: series and axis ranges computed from the data.
+//!
+//! **Magnitude** is `|G(f_k)|` on a log axis whose decades cover the data
+//! ([`log_range`]), labelled in the FRF's units. The units are the file's
+//! (`response_unit / force_unit`, [`FrfUnits`]); an FRF integrated `n` times over time
+//! has its response unit multiplied by `sⁿ` (`m/s² → m/s → m`), since
+//! `∫ a dt = v`. Unknown units read `unit/unit`: nothing is assumed.
+//!
+//! **Phase** is `φ_k = arg G(f_k)` in degrees. Wrapped ([`PhaseView::Wrapped`], the
+//! default) it is shown as it is, in (−180°, 180°], cut where it passes ±180°
+//! ([`gaps_at_wraps`]). Unwrapping adds `360° · m_k` so that the curve is continuous, but
+//! `m_k` is only known where the true change between lines is well under 180°: across a
+//! resonance narrower than the line spacing `Δf` (half-power bandwidth `2ζf_r < Δf`)
+//! the phase turns by nearly 180° between two lines and the fold is a guess. Classic
+//! unwrapping guesses at every such line and drifts by multiples of 360°.
+//! [`unwrapped_phase_deg`] only folds the certain steps (a raw step over 270°, a true
+//! change under 90°); the measurement is then shown on the model's branch
+//! ([`phase_on_branch_of`]: `φ + 360°·round((φ_model − φ)/360°)`), so measurement noise
+//! never picks a branch.
+//!
+//! **Collocation** (output and input at one node and direction) marks a pair's title;
+//! the caller says which pairs are ([`FrfView`]), from a channel table when there is one.
 
 use era::{Complex64, FrfData};
 

@@ -1,4 +1,25 @@
 //! Drawing a [`Figure`] with `plotters`, to SVG text or a PNG file.
+//!
+//! Two things are done here by hand, because neither plotters nor a well-kept small
+//! crate does them for us:
+//!
+//! - **Thinning a curve to what the pixels show** ([`visible_points`]). A curve of `N`
+//!   lines drawn `W` pixels wide needs at most four points per pixel column (the
+//!   first, lowest, highest and last, "M4" aggregation: Jugel et al., *M4: a
+//!   visualization-oriented time series data aggregation*, VLDB 2014), which keeps
+//!   every peak and notch exactly; then the Ramer–Douglas–Peucker simplification
+//!   (Douglas & Peucker, *Cartographica* 10(2), 1973) drops the points within
+//!   [`SIMPLIFY_TOLERANCE_PX`] of the chord between their kept neighbours. Both are a
+//!   few lines; the geometry crates that have RDP bring a large dependency tree for it.
+//! - **Sharing styles in SVG** ([`compact_svg`]). Plotters writes each element's fill,
+//!   stroke, width, opacity and font as attributes, and a dashed line as one element
+//!   per dash. The SVG is rewritten line by line: the drawing attributes become a
+//!   class (named by a hash of them, so that figures in one page agree), a polyline
+//!   becomes a path of relative steps, and the model's curve is one path dashed by
+//!   `stroke-dasharray`. A bitmap draws the dashes itself.
+//!
+//! A series is cut where a point is not drawable (NaN marks a gap, such as a wrapped
+//! phase passing ±180°); a piece of one point is drawn as a dot.
 
 use crate::figures::{Figure, Panel, SeriesKind, YScale};
 use plotters::coord::Shift;
