@@ -120,9 +120,9 @@ fn input_html(s: &InputSection) -> String {
         h.push_str("<p id=\"channel-table\">The file has no channel table: outputs and inputs are known by their index only, and collocation is by index (output i with input i).</p>\n");
     } else {
         // A long table folds away (still in the page, one click to open).
-        let _ = write!(
+        let _ = writeln!(
             h,
-            "<details{}><summary>Channel table: {} outputs, {} inputs</summary>\n",
+            "<details{}><summary>Channel table: {} outputs, {} inputs</summary>",
             if s.channels.len() <= 16 { " open" } else { "" },
             s.channels.iter().filter(|c| c.role == "output").count(),
             s.channels.iter().filter(|c| c.role == "input").count()
