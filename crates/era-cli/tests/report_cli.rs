@@ -71,6 +71,22 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
         assert!(text.contains("(m/s^2)/N"), "{svg}");
         assert!(!text.contains("lbf") && !text.contains("in/s"), "{svg}");
     }
+    assert!(read(plots.join("pairs/pair_1_2.svg")).contains("Phase (deg, wrapped)"));
+    // Unwrapped only when asked.
+    let unwrapped = dir.path().join("unwrapped");
+    era()
+        .args([
+            "plot",
+            s(&file),
+            "-q",
+            "--phase",
+            "unwrapped",
+            "--out",
+            s(&unwrapped),
+        ])
+        .assert()
+        .success();
+    assert!(read(unwrapped.join("pairs/pair_1_2.svg")).contains("Phase (deg, unwrapped)"));
     // Identified after one integration: the figures say (m/s)/N.
     let out = dir.path().join("out");
     era()

@@ -348,7 +348,7 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
     }
     let _ = write!(
         h,
-        "<h2 id=\"grid\">All pairs</h2>\n<p>|G| in {}; measured solid, model dashed.</p>\n<figure class=\"plot wide\" id=\"fig-grid\">{}</figure>\n",
+        "<h2 id=\"grid\">All pairs</h2>\n<p>|G| in {}.</p>\n<figure class=\"plot wide\" id=\"fig-grid\">{}</figure>\n",
         escape(&input.view.unit),
         input.grid_svg
     );
