@@ -181,18 +181,18 @@ fn draw_panel<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let font = if compact { 14 } else { 16 };
+    let font = if compact { 17 } else { 16 };
     let mut builder = ChartBuilder::on(area);
     builder
         .margin(if compact { 4 } else { 10 })
         .x_label_area_size(match (compact, panel.x_label.is_empty()) {
-            (true, true) => 22,
-            (true, false) => 38,
+            (true, true) => 26,
+            (true, false) => 44,
             (false, _) => 40,
         })
         .y_label_area_size(match (compact, panel.y_label.is_empty()) {
-            (true, true) => 48,
-            (true, false) => 66,
+            (true, true) => 56,
+            (true, false) => 76,
             (false, _) => 70,
         });
     if !panel.title.is_empty() {
@@ -389,8 +389,12 @@ where
     let body = if figure.title.is_empty() {
         root.clone()
     } else {
-        root.titled(&figure.title, ("sans-serif", 20))
-            .map_err(err)?
+        // A wide grid gets a title to match (20 px at 900 px wide, up to 32).
+        root.titled(
+            &figure.title,
+            ("sans-serif", (figure.size.0 / 60).clamp(20, 32)),
+        )
+        .map_err(err)?
     };
     let columns = figure.columns.max(1);
     let rows = figure.panels.len().div_ceil(columns).max(1);
