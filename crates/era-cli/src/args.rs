@@ -260,6 +260,10 @@ pub struct PlotArgs {
     /// set is not square.
     #[arg(long)]
     pub outputs: Option<usize>,
+    /// Phase in the figures: wrapped (−180…180°, the default) or unwrapped (where the
+    /// step between lines is unambiguous, the measurement on the model's branch).
+    #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped)]
+    pub phase: PhaseArg,
     /// Folder for the figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -429,6 +433,10 @@ pub struct IdentifyArgs {
     pub refine: bool,
     #[command(flatten)]
     pub refine_fit: RefineFitArgs,
+    /// Phase in the figures: wrapped (−180…180°, the default) or unwrapped (where the
+    /// step between lines is unambiguous, the measurement on the model's branch).
+    #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped)]
+    pub phase: PhaseArg,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
     /// figures (created if missing).
     #[arg(long, value_name = "DIR")]
@@ -612,4 +620,23 @@ pub struct FrictionTuneArgs {
     pub cycles: usize,
     #[command(flatten)]
     pub common: CommonArgs,
+}
+
+/// How the figures draw the phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum PhaseArg {
+    /// −180° … 180°: each line's own phase, nothing inferred (the default).
+    #[default]
+    Wrapped,
+    /// Unwrapped where unambiguous: the model's phase, the measurement on its branch.
+    Unwrapped,
+}
+
+impl From<PhaseArg> for era_plot::PhaseView {
+    fn from(p: PhaseArg) -> Self {
+        match p {
+            PhaseArg::Wrapped => era_plot::PhaseView::Wrapped,
+            PhaseArg::Unwrapped => era_plot::PhaseView::Unwrapped,
+        }
+    }
 }

@@ -301,9 +301,17 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
     if let Some(set) = set.as_mut() {
         let bar = crate::progress::bar(&a.common, (q * p) as u64, "figures");
         let mut overlays = Vec::new();
+        // The first set's units and channel table; the phase wrapped.
+        let view = crate::figures::frf_view(
+            &era_plot::FrfUnits::from_metadata(&fa.metadata),
+            ga.quantity(),
+            fa.channels.as_ref(),
+            ga,
+            era_plot::PhaseView::Wrapped,
+        );
         for i in 0..q {
             for j in 0..p {
-                let fig = era_plot::compare::compare_overlay(ga, gb, (&la, &lb), i, j);
+                let fig = era_plot::compare::compare_overlay(ga, gb, (&la, &lb), i, j, &view);
                 overlays.push((fig.title.clone(), era_plot::render_svg(&fig)?));
                 let name = format!("pair_{}_{}.png", i + 1, j + 1);
                 write_output(set, &name, |staged| {

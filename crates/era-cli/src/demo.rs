@@ -2,7 +2,7 @@
 //! with the thesis settings, without and with noise, beside the exact truth.
 
 use crate::args::DemoArgs;
-use crate::output::{prepare_out_dir, write_identification, write_output};
+use crate::output::{prepare_out_dir, write_identification, write_output, RunInput};
 use crate::report::{parameter_echo, parameters, print_json, timings_table, Human};
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
@@ -10,6 +10,7 @@ use era::modal::{modal_parameters, Mode};
 use era::sim::{truth_model, truth_model_frf, TABLE_5_2_ERA_NOISY};
 use era_io::csv::write_frf_csv;
 use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson};
+use era_plot::FrfUnits;
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -163,7 +164,12 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             Ok(write_frf_csv(
                 p,
                 &clean_frf,
-                &[("source", "era demo"), ("noise_fraction", "0")],
+                &[
+                    ("source", "era demo"),
+                    ("noise_fraction", "0"),
+                    ("response_unit", "in"),
+                    ("force_unit", "lbf"),
+                ],
             )?)
         })?;
         write_output(&mut set, "truth_frf_noisy.csv", |p| {
@@ -174,19 +180,37 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
                     ("source", "era demo"),
                     ("noise_fraction", &noise),
                     ("seed", &seed),
+                    ("response_unit", "in"),
+                    ("force_unit", "lbf"),
                 ],
             )?)
         })?;
         for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
             let title = format!("era demo: the truth model, {}", label.replace('_', " "));
             let model = ModelJson::from_identification(found, parameters(&options), None);
+            // The truth model is in inches and pounds-force (thesis section 4.2).
+            let source = RunInput::synthetic(
+                &format!(
+                    "the thesis's truth model (Table 5.2), {}",
+                    if label == "noisy" {
+                        format!("{} % noise, seed {}", 100.0 * a.noise, a.seed)
+                    } else {
+                        "no noise".into()
+                    }
+                ),
+                clean_frf.quantity(),
+                FrfUnits {
+                    response: Some("in".into()),
+                    force: Some("lbf".into()),
+                },
+            );
             write_identification(
                 &mut set,
                 Path::new(label),
                 found,
                 &model,
                 &FitJson::from_report(&found.fit),
-                None,
+                &source,
                 &title,
                 &parameter_echo(&options),
                 options.states,

@@ -1,14 +1,59 @@
 //! Writing the figures and `report.html` of one identification into an [`OutputSet`].
 
-use crate::output::write_output;
+use crate::output::{write_output, RunInput};
 use era::identify::Identification;
-use era::FrfData;
+use era::{FrfData, Quantity};
 use era_io::atomic::{write_atomic, write_via, OutputSet};
+use era_io::uff::ChannelTable;
 use era_io::IoError;
-use era_plot::report::{report_html, ReportInput};
+use era_plot::report::{report_html, CoherenceInput, ReportInput};
 use era_plot::stabilization::{stabilization_png, stabilization_svg, StabilizationPlot};
-use era_plot::{frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure};
+use era_plot::{
+    coherence_grid, frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure,
+    FrfUnits, FrfView, PhaseView,
+};
 use std::path::Path;
+
+/// How many times a quantity is integrated to become another (acceleration → velocity
+/// is 1); 0 when it is not reached by integration.
+fn integrations_between(read: Quantity, shown: Quantity) -> usize {
+    let mut q = Some(read);
+    for n in 0..3 {
+        if q == Some(shown) {
+            return n;
+        }
+        q = q.and_then(Quantity::integrated);
+    }
+    0
+}
+
+/// Whether output `i` and input `j` of `table` are at the same node and direction.
+pub fn collocated_in(table: &ChannelTable, i: usize, j: usize) -> bool {
+    matches!((table.outputs.get(i), table.inputs.get(j)), (Some(o), Some(n)) if o.dof == n.dof)
+}
+
+/// The figures' view of `shown` (the FRFs as plotted, after any integrations) of an
+/// input read as `read` in `units`: the unit label integrated along, the phase view,
+/// and collocation from the channel table when it fits the set (same node and
+/// direction), by index otherwise.
+pub fn frf_view(
+    units: &FrfUnits,
+    read: Quantity,
+    channels: Option<&ChannelTable>,
+    shown: &FrfData,
+    phase: PhaseView,
+) -> FrfView {
+    let (q, p) = (shown.outputs(), shown.inputs());
+    let mut view = FrfView::by_index(q, p);
+    view.unit = units
+        .integrated(integrations_between(read, shown.quantity()))
+        .label();
+    view.phase = phase;
+    if let Some(t) = channels.filter(|t| (t.outputs.len(), t.inputs.len()) == (q, p)) {
+        view.collocated = (0..q * p).map(|k| collocated_in(t, k / p, k % p)).collect();
+    }
+    view
+}
 
 /// The last 12 bytes of every complete PNG: the empty IEND chunk and its CRC.
 const PNG_END: [u8; 12] = [0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xAE, 0x42, 0x60, 0x82];
@@ -83,15 +128,15 @@ pub fn write_frf_figures(
     folder: &Path,
     measured: &FrfData,
     model: Option<&FrfData>,
+    view: &FrfView,
     progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<(String, Vec<(String, String)>)> {
-    let square = measured.outputs() == measured.inputs();
-    let grid_svg = write_figure(set, folder, "grid", &frf_grid(measured, model, square))?;
+    let grid_svg = write_figure(set, folder, "grid", &frf_grid(measured, model, view))?;
     let pairs = folder.join("pairs");
     let mut overlays = Vec::new();
     for i in 0..measured.outputs() {
         for j in 0..measured.inputs() {
-            let figure = frf_overlay(measured, model, i, j, square && i == j);
+            let figure = frf_overlay(measured, model, i, j, view);
             let svg = write_figure(set, &pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
             overlays.push((figure.title.clone(), svg));
             progress.inc(1);
@@ -101,7 +146,8 @@ pub fn write_frf_figures(
 }
 
 /// Figures and report of `found` into `folder` of `set`: `singular_values`, `grid`,
-/// `pairs/pair_I_J` (SVG and PNG) and `report.html`.
+/// `pairs/pair_I_J`, `coherence` when `source` carries it (SVG and PNG) and
+/// `report.html`, in the units and with the collocation `source` gives.
 #[allow(clippy::too_many_arguments)]
 pub fn write_all(
     set: &mut OutputSet,
@@ -109,6 +155,7 @@ pub fn write_all(
     title: &str,
     parameters: &str,
     found: &Identification,
+    source: &RunInput,
     states: usize,
     progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<()> {
@@ -156,9 +203,36 @@ pub fn write_all(
         }
         None => None,
     };
-    let (grid_svg, overlays) = write_frf_figures(set, folder, measured, Some(&model), progress)?;
+    let view = frf_view(
+        &source.units,
+        source.quantity,
+        source.channels.as_ref(),
+        measured,
+        source.phase,
+    );
+    let coherence_svg = match &source.coherence {
+        Some(c) => Some(write_figure(
+            set,
+            folder,
+            "coherence",
+            &coherence_grid(&c.title, &c.frequency_hz, &c.curves),
+        )?),
+        None => None,
+    };
+    let (grid_svg, overlays) =
+        write_frf_figures(set, folder, measured, Some(&model), &view, progress)?;
     let html = report_html(&ReportInput {
         title,
+        source: &source.section,
+        view: &view,
+        coherence: source
+            .coherence
+            .as_ref()
+            .zip(coherence_svg.as_deref())
+            .map(|(c, svg)| CoherenceInput {
+                caption: &c.caption,
+                svg,
+            }),
         parameters,
         found,
         singular_values_svg: &sv_svg,

@@ -34,6 +34,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let clock = Instant::now();
     let mut estimate_s = None;
+    let mut coherence = None;
+    let mut time_format = None;
     let input = if a.from_time {
         let inputs = a.inputs.as_deref().unwrap_or_default();
         let Some(outputs) = a.outputs.as_deref() else {
@@ -62,6 +64,16 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             ));
         }
         estimate_s = Some(found.timings.1);
+        coherence = Some(crate::output::InputCoherence::multiple(&found.estimate));
+        let text = |key: &str| found.json[key].to_string().replace('"', "");
+        time_format = Some(format!(
+            "time histories ({}); FRFs estimated here: {} estimator, {} window, frame {}, {} averages",
+            text("format"),
+            text("estimator"),
+            text("window"),
+            text("frame"),
+            text("averages")
+        ));
         found.input
     } else {
         let outputs = match a.outputs.as_deref() {
@@ -192,13 +204,21 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if let Some(set) = outputs.as_mut() {
         let clock = Instant::now();
         let title = format!("era identify {}", a.file.display());
+        let mut source = crate::output::RunInput::from_file(&a.file, &input);
+        if a.from_time {
+            source.section.format = time_format.take().unwrap_or_default();
+        }
+        if coherence.is_some() {
+            source.coherence = coherence;
+        }
+        source.phase = a.phase.into();
         write_identification(
             set,
             std::path::Path::new(""),
             &found,
             &model,
             &fit,
-            input.file.channels.as_ref(),
+            &source,
             &title,
             &echo,
             states,

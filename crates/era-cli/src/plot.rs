@@ -2,7 +2,7 @@
 //! model of the same shape.
 
 use crate::args::PlotArgs;
-use crate::figures::{write_figure, write_frf_figures};
+use crate::figures::{frf_view, write_figure, write_frf_figures};
 use crate::input::read_frf;
 use crate::output::prepare_out_dir;
 use crate::report::{print_json, Human};
@@ -11,14 +11,15 @@ use anyhow::Context;
 use era::preprocess::{integrate, zero_leading_lines};
 use era::response::model_frf;
 use era_io::model_json::ModelJson;
-use era_plot::singular_value_figure;
+use era_plot::{singular_value_figure, FrfUnits};
 use serde_json::json;
 use std::path::Path;
 
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let mut set = prepare_out_dir(&a.out)?;
-    let frf = read_frf(&a.file, a.quantity, a.outputs)?.file.frf;
+    let input = read_frf(&a.file, a.quantity, a.outputs)?;
+    let frf = input.file.frf.clone();
     let model = match &a.model {
         Some(path) => {
             Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
@@ -74,8 +75,21 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         (measured.outputs() * measured.inputs()) as u64,
         "figures",
     );
-    let (_, overlays) =
-        write_frf_figures(&mut set, Path::new(""), &measured, model_frf.as_ref(), &bar)?;
+    let view = frf_view(
+        &FrfUnits::from_metadata(&input.file.metadata),
+        frf.quantity(),
+        input.file.channels.as_ref(),
+        &measured,
+        a.phase.into(),
+    );
+    let (_, overlays) = write_frf_figures(
+        &mut set,
+        Path::new(""),
+        &measured,
+        model_frf.as_ref(),
+        &view,
+        &bar,
+    )?;
     bar.finish_and_clear();
     set.commit()?;
     human.print(&format!(

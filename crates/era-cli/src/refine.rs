@@ -272,7 +272,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
             &found,
             &json,
             &fit,
-            input.file.channels.as_ref(),
+            &crate::output::RunInput::from_file(&a.file, &input),
             &title,
             &format!("refined from {}\n", a.model.display()),
             states,

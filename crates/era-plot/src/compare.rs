@@ -4,14 +4,15 @@
 //! modes matched side by side.
 
 use crate::figures::{
-    log_range, pair_title, phase_on_branch_of, stepped_range, unwrapped_phase_deg, Figure, Panel,
-    Series, SeriesKind, YScale,
+    log_range, pair_title, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind,
+    YScale,
 };
 use era::{Complex64, FrfData};
 use std::fmt::Write as _;
 
 /// Magnitude and phase of one pair of two sets, `a` solid and `b` dashed, with their
-/// labels; lines where either is exactly zero are left out.
+/// labels, in the units and phase view of `view`; lines where either is exactly zero
+/// are left out.
 ///
 /// # Panics
 /// If the sets differ in shape or the pair is out of range.
@@ -22,6 +23,7 @@ pub fn compare_overlay(
     labels: (&str, &str),
     output: usize,
     input: usize,
+    view: &FrfView,
 ) -> Figure {
     assert_eq!(
         (a.outputs(), a.inputs(), a.lines()),
@@ -39,8 +41,8 @@ pub fn compare_overlay(
     let x_range = (0.0, f[f.len() - 1]);
     let mag = |g: &[Complex64]| g.iter().map(|v| v.norm()).collect::<Vec<f64>>();
     let (ma, mb) = (mag(&pa), mag(&pb));
-    let phb = unwrapped_phase_deg(&pb);
-    let pha = phase_on_branch_of(&unwrapped_phase_deg(&pa), &phb);
+    let (pha, phb, phase_range) = phase_curves(&pa, Some(&pb), view.phase);
+    let phb = phb.unwrap_or_default();
     let two = |ya: &[f64], yb: &[f64]| {
         vec![
             Series {
@@ -60,7 +62,7 @@ pub fn compare_overlay(
     let magnitude = Panel {
         title: String::new(),
         x_label: "Frequency (Hz)".into(),
-        y_label: "|G|".into(),
+        y_label: format!("|G| {}", view.unit),
         y_scale: YScale::Log,
         x_range,
         y_range: log_range(ma.iter().chain(&mb).copied()),
@@ -75,14 +77,17 @@ pub fn compare_overlay(
         y_label: "Phase (deg)".into(),
         y_scale: YScale::Linear,
         x_range,
-        y_range: stepped_range(pha.iter().chain(&phb).copied(), 90.0),
-        series: two(&pha, &phb),
+        y_range: phase_range,
+        series: vec![
+            phase_series(&x, &pha, labels.0, SeriesKind::Measured, view.phase),
+            phase_series(&x, &phb, labels.1, SeriesKind::Model, view.phase),
+        ],
         marker_x: None,
         guide_y: None,
         legend: false,
     };
     Figure {
-        title: pair_title(output, input, output == input),
+        title: pair_title(output, input, view.is_collocated(output, input)),
         panels: vec![magnitude, phase],
         columns: 1,
         size: (900, 640),

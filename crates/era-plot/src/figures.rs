@@ -1,4 +1,25 @@
 //! Figure specifications: series and axis ranges computed from the data.
+//!
+//! **Magnitude** is `|G(f_k)|` on a log axis whose decades cover the data
+//! ([`log_range`]), labelled in the FRF's units. The units are the file's
+//! (`response_unit / force_unit`, [`FrfUnits`]); an FRF integrated `n` times over time
+//! has its response unit multiplied by `sⁿ` (`m/s² → m/s → m`), since
+//! `∫ a dt = v`. Unknown units read `unit/unit`: nothing is assumed.
+//!
+//! **Phase** is `φ_k = arg G(f_k)` in degrees. Wrapped ([`PhaseView::Wrapped`], the
+//! default) it is shown as it is, in (−180°, 180°], cut where it passes ±180°
+//! ([`gaps_at_wraps`]). Unwrapping adds `360° · m_k` so that the curve is continuous, but
+//! `m_k` is only known where the true change between lines is well under 180°: across a
+//! resonance narrower than the line spacing `Δf` (half-power bandwidth `2ζf_r < Δf`)
+//! the phase turns by nearly 180° between two lines and the fold is a guess. Classic
+//! unwrapping guesses at every such line and drifts by multiples of 360°.
+//! [`unwrapped_phase_deg`] only folds the certain steps (a raw step over 270°, a true
+//! change under 90°); the measurement is then shown on the model's branch
+//! ([`phase_on_branch_of`]: `φ + 360°·round((φ_model − φ)/360°)`), so measurement noise
+//! never picks a branch.
+//!
+//! **Collocation** (output and input at one node and direction) marks a pair's title;
+//! the caller says which pairs are ([`FrfView`]), from a channel table when there is one.
 
 use era::{Complex64, FrfData};
 
@@ -127,37 +148,168 @@ pub fn phase_on_branch_of(phase: &[f64], reference: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Phase in degrees, unwrapped along the lines (jumps over 180° are folded back).
+/// Phase in degrees on the principal branch, −180° … 180° (the argument of each value).
+pub fn wrapped_phase_deg(values: &[Complex64]) -> Vec<f64> {
+    values.iter().map(|v| v.arg().to_degrees()).collect()
+}
+
+/// The smallest raw step between two lines, in degrees, that [`unwrapped_phase_deg`]
+/// takes for a wrap: the true change is then under 360° − 270° = 90°, so the 360° jump
+/// is certain. A raw step between 180° and 270° is ambiguous and left alone.
+pub const UNAMBIGUOUS_WRAP_DEG: f64 = 270.0;
+
+/// Phase in degrees, unwrapped along the lines where that is unambiguous.
+///
+/// Classic unwrapping folds every step `Δ = φₖ − φₖ₋₁` into (−180°, 180°]. Across a
+/// resonance narrower than one line, the true step is itself close to ±180° and the
+/// fold picks a side by the noise: each resonance then adds or removes 360° at random
+/// and the curve drifts (a collocated velocity FRF, whose phase stays within ±90°,
+/// drew down to −3000°). Here a step is folded only when `|Δ| >` [`UNAMBIGUOUS_WRAP_DEG`]
+/// (the true change is then below 90°, a certain wrap); other steps are kept as they
+/// are, so an ambiguous jump shows as a jump and never shifts the rest of the curve.
 pub fn unwrapped_phase_deg(values: &[Complex64]) -> Vec<f64> {
     let mut out = Vec::with_capacity(values.len());
     let mut offset = 0.0;
-    let mut previous: Option<f64> = None;
+    let mut previous_raw: Option<f64> = None;
     for v in values {
         let raw = v.arg().to_degrees();
-        if let Some(p) = previous {
-            let mut d = raw + offset - p;
-            while d > 180.0 {
+        if let Some(p) = previous_raw {
+            let step = raw - p;
+            if step > UNAMBIGUOUS_WRAP_DEG {
                 offset -= 360.0;
-                d -= 360.0;
-            }
-            while d < -180.0 {
+            } else if step < -UNAMBIGUOUS_WRAP_DEG {
                 offset += 360.0;
-                d += 360.0;
             }
         }
-        let value = raw + offset;
-        out.push(value);
-        previous = Some(value);
+        out.push(raw + offset);
+        previous_raw = Some(raw);
     }
     out
 }
 
-/// The unit of an FRF of this quantity in the thesis's units (per lbf).
-fn unit(frf: &FrfData) -> &'static str {
-    match frf.quantity() {
-        era::Quantity::Acceleration => "(in/s²)/lbf",
-        era::Quantity::Velocity => "(in/s)/lbf",
-        era::Quantity::Displacement => "in/lbf",
+/// How the phase panels draw the phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PhaseView {
+    /// −180° … 180°, each line's own argument: nothing is inferred (the default).
+    #[default]
+    Wrapped,
+    /// The model's phase unwrapped where unambiguous ([`unwrapped_phase_deg`]), the
+    /// measurement shown on the model's branch ([`phase_on_branch_of`]); without a
+    /// model, the measurement unwrapped where unambiguous.
+    Unwrapped,
+}
+
+/// The units of an FRF: response unit over force unit, as the input file states them
+/// (UFF axis records, `# response_unit:` / `# force_unit:` lines of a CSV, MAT
+/// variables, `--units`). Unknown units stay unknown: the label then says `unit`, never
+/// an assumed system of units.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct FrfUnits {
+    /// Response unit (e.g. `m/s^2`), when known.
+    pub response: Option<String>,
+    /// Force unit (e.g. `N`), when known.
+    pub force: Option<String>,
+}
+
+impl FrfUnits {
+    /// The units of the metadata keys `response_unit` and `force_unit`; blank, `NONE`
+    /// and `unknown` values count as unknown.
+    pub fn from_metadata(metadata: &std::collections::BTreeMap<String, String>) -> Self {
+        let get = |key: &str| {
+            metadata
+                .get(key)
+                .map(|v| v.trim())
+                .filter(|v| {
+                    !v.is_empty()
+                        && !v.eq_ignore_ascii_case("none")
+                        && !v.eq_ignore_ascii_case("unknown")
+                })
+                .map(str::to_string)
+        };
+        FrfUnits {
+            response: get("response_unit"),
+            force: get("force_unit"),
+        }
+    }
+
+    /// The units after `times` integrations over time (`m/s^2` → `m/s` → `m`): a
+    /// trailing `/s^2`, `/s²` becomes `/s`, a trailing `/s` goes, and any other unit
+    /// gains a factor `·s`.
+    pub fn integrated(&self, times: usize) -> FrfUnits {
+        let once = |u: &str| -> String {
+            for square in ["/s^2", "/s²", "/s**2"] {
+                if let Some(stem) = u.strip_suffix(square) {
+                    return format!("{stem}/s");
+                }
+            }
+            match u.strip_suffix("/s") {
+                Some(stem) if !stem.is_empty() => stem.to_string(),
+                _ => format!("{}·s", parenthesised(u)),
+            }
+        };
+        let mut response = self.response.clone();
+        for _ in 0..times {
+            response = response.map(|u| once(&u));
+        }
+        FrfUnits {
+            response,
+            force: self.force.clone(),
+        }
+    }
+
+    /// The FRF's unit as a label: `(m/s^2)/N`, `in/lbf`; `unit` for an unknown side
+    /// (`unit/unit` when neither is known).
+    pub fn label(&self) -> String {
+        let side = |u: &Option<String>| u.as_deref().map_or("unit".to_string(), parenthesised);
+        format!("{}/{}", side(&self.response), side(&self.force))
+    }
+}
+
+/// `u` in parentheses when it is compound (`m/s^2` → `(m/s^2)`), so that `… / N`
+/// reads unambiguously.
+fn parenthesised(u: &str) -> String {
+    if u.contains(['/', '·', '*', ' ']) && !(u.starts_with('(') && u.ends_with(')')) {
+        format!("({u})")
+    } else {
+        u.to_string()
+    }
+}
+
+/// What an FRF figure shows besides the data: the unit of |G|, the phase view and
+/// which pairs are collocated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfView {
+    /// Unit label of |G| (see [`FrfUnits::label`]).
+    pub unit: String,
+    /// How phase is drawn.
+    pub phase: PhaseView,
+    /// Whether pair (i, j) is collocated, at `i · inputs + j`.
+    pub collocated: Vec<bool>,
+    /// Inputs (columns of the FRF matrix), to index `collocated`.
+    pub inputs: usize,
+}
+
+impl FrfView {
+    /// Unknown units, wrapped phase, and collocation by index (output i with input i)
+    /// for a square set, none otherwise: the fallback when no channel table says.
+    pub fn by_index(outputs: usize, inputs: usize) -> Self {
+        let square = outputs == inputs;
+        FrfView {
+            unit: FrfUnits::default().label(),
+            phase: PhaseView::Wrapped,
+            collocated: (0..outputs * inputs)
+                .map(|k| square && k / inputs.max(1) == k % inputs.max(1))
+                .collect(),
+            inputs,
+        }
+    }
+
+    /// Whether pair (output, input) is collocated.
+    pub fn is_collocated(&self, output: usize, input: usize) -> bool {
+        self.collocated
+            .get(output * self.inputs + input)
+            .copied()
+            .unwrap_or(false)
     }
 }
 
@@ -175,11 +327,74 @@ pub fn pair_title(output: usize, input: usize, collocated: bool) -> String {
     }
 }
 
-/// Measured and model FRF of one pair: log magnitude over frequency, and unwrapped
-/// phase in degrees (thesis `plotfrfs.m`), the measured phase on the model's branch
-/// ([`phase_on_branch_of`]). `measured` should be the processed
-/// measurement (after the same integrations as the model); lines whose measured value is
-/// exactly zero (the zeroed low end) are left out.
+/// The phase panel's curves and range: the model's and the measurement's phase in the
+/// chosen [`PhaseView`].
+pub fn phase_curves(
+    measured: &[Complex64],
+    model: Option<&[Complex64]>,
+    view: PhaseView,
+) -> (Vec<f64>, Option<Vec<f64>>, (f64, f64)) {
+    match view {
+        PhaseView::Wrapped => {
+            let pm = wrapped_phase_deg(measured);
+            let px = model.map(wrapped_phase_deg);
+            (pm, px, (-180.0, 180.0))
+        }
+        PhaseView::Unwrapped => {
+            let px = model.map(unwrapped_phase_deg);
+            let pm = match &px {
+                Some(p) => phase_on_branch_of(&wrapped_phase_deg(measured), p),
+                None => unwrapped_phase_deg(measured),
+            };
+            let range = stepped_range(pm.iter().chain(px.iter().flatten()).copied(), 90.0);
+            (pm, px, range)
+        }
+    }
+}
+
+/// `(x, y)` with a NaN point (a gap) inserted wherever consecutive values jump by more
+/// than 180°: a wrapped phase passing ±180° is drawn as two pieces, not as a vertical
+/// stroke across the panel.
+pub fn gaps_at_wraps(x: &[f64], y: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let mut xs = Vec::with_capacity(x.len() + 8);
+    let mut ys = Vec::with_capacity(y.len() + 8);
+    for k in 0..x.len().min(y.len()) {
+        if k > 0 && (y[k] - y[k - 1]).abs() > 180.0 {
+            xs.push(0.5 * (x[k - 1] + x[k]));
+            ys.push(f64::NAN);
+        }
+        xs.push(x[k]);
+        ys.push(y[k]);
+    }
+    (xs, ys)
+}
+
+/// The phase series of a panel: in the wrapped view, cut at the ±180° jumps
+/// ([`gaps_at_wraps`]).
+pub fn phase_series(
+    x: &[f64],
+    y: &[f64],
+    label: &str,
+    kind: SeriesKind,
+    view: PhaseView,
+) -> Series {
+    let (x, y) = match view {
+        PhaseView::Wrapped => gaps_at_wraps(x, y),
+        PhaseView::Unwrapped => (x.to_vec(), y.to_vec()),
+    };
+    Series {
+        label: label.into(),
+        x,
+        y,
+        kind,
+    }
+}
+
+/// Measured and model FRF of one pair: log magnitude over frequency in the data's
+/// units, and phase in degrees (thesis `plotfrfs.m`), wrapped unless `view` asks for
+/// [`PhaseView::Unwrapped`]. `measured` should be the processed measurement (after the
+/// same integrations as the model); lines whose measured value is exactly zero (the
+/// zeroed low end) are left out.
 ///
 /// # Panics
 /// If the two FRF sets differ in shape or the pair is out of range.
@@ -189,7 +404,7 @@ pub fn frf_overlay(
     model: Option<&FrfData>,
     output: usize,
     input: usize,
-    collocated: bool,
+    view: &FrfView,
 ) -> Figure {
     if let Some(m) = model {
         assert_eq!(
@@ -210,11 +425,7 @@ pub fn frf_overlay(
     let mag = |g: &[Complex64]| g.iter().map(|v| v.norm()).collect::<Vec<f64>>();
     let mm = mag(&gm);
     let mx = gx.as_deref().map(mag);
-    let px = gx.as_deref().map(unwrapped_phase_deg);
-    let pm = match &px {
-        Some(p) => phase_on_branch_of(&unwrapped_phase_deg(&gm), p),
-        None => unwrapped_phase_deg(&gm),
-    };
+    let (pm, px, phase_range) = phase_curves(&gm, gx.as_deref(), view.phase);
     let series = |a: &[f64], b: Option<&Vec<f64>>| {
         let mut out = vec![Series {
             label: "measured".into(),
@@ -232,19 +443,13 @@ pub fn frf_overlay(
         }
         out
     };
-    let all = |a: &[f64], b: Option<&Vec<f64>>| {
-        a.iter()
-            .chain(b.into_iter().flatten())
-            .copied()
-            .collect::<Vec<f64>>()
-    };
     let magnitude = Panel {
         title: String::new(),
         x_label: "Frequency (Hz)".into(),
-        y_label: format!("|G| {}", unit(measured)),
+        y_label: format!("|G| {}", view.unit),
         y_scale: YScale::Log,
         x_range,
-        y_range: log_range(all(&mm, mx.as_ref()).into_iter()),
+        y_range: log_range(mm.iter().chain(mx.iter().flatten()).copied()),
         series: series(&mm, mx.as_ref()),
         marker_x: None,
         guide_y: None,
@@ -253,60 +458,147 @@ pub fn frf_overlay(
     let phase = Panel {
         title: String::new(),
         x_label: "Frequency (Hz)".into(),
-        y_label: "Phase (deg)".into(),
+        y_label: match view.phase {
+            PhaseView::Wrapped => "Phase (deg, wrapped)".into(),
+            PhaseView::Unwrapped => "Phase (deg, unwrapped)".into(),
+        },
         y_scale: YScale::Linear,
         x_range,
-        y_range: stepped_range(all(&pm, px.as_ref()).into_iter(), 90.0),
-        series: series(&pm, px.as_ref()),
+        y_range: phase_range,
+        series: std::iter::once(phase_series(
+            &x,
+            &pm,
+            "measured",
+            SeriesKind::Measured,
+            view.phase,
+        ))
+        .chain(
+            px.as_ref()
+                .map(|p| phase_series(&x, p, "ERA model", SeriesKind::Model, view.phase)),
+        )
+        .collect(),
         marker_x: None,
         guide_y: None,
         legend: false,
     };
     Figure {
-        title: pair_title(output, input, collocated),
+        title: pair_title(output, input, view.is_collocated(output, input)),
         panels: vec![magnitude, phase],
         columns: 1,
         size: (900, 640),
     }
 }
 
-/// A q×p overview: magnitude of every pair, measured and (when given) model.
+/// The most panel columns an overview grid takes.
+pub const MAX_GRID_COLUMNS: usize = 10;
+
+/// Columns of a grid of `rows × cols` small panels: the matrix's own columns, with
+/// several of its rows side by side while the grid would be over twice as tall (in
+/// panels) as wide — a 28 × 2 set is laid out 6 wide and 10 high, not 2 × 28 — and at
+/// most [`MAX_GRID_COLUMNS`].
+pub fn grid_columns(rows: usize, cols: usize) -> usize {
+    let cols = cols.max(1);
+    if cols >= MAX_GRID_COLUMNS {
+        return MAX_GRID_COLUMNS;
+    }
+    let mut per_row = 1;
+    while rows.div_ceil(per_row) > 2 * per_row * cols && (per_row + 1) * cols <= MAX_GRID_COLUMNS {
+        per_row += 1;
+    }
+    per_row * cols
+}
+
+/// Pixel size of one grid cell.
+const GRID_CELL: (u32, u32) = (280, 210);
+
+/// A grid figure of small panels, laid out [`grid_columns`] wide; the left column
+/// keeps its ordinate label and the bottom panel of each column its abscissa label.
+fn small_multiples(title: String, mut panels: Vec<Panel>, matrix_columns: usize) -> Figure {
+    let n = panels.len();
+    let columns = grid_columns(n.div_ceil(matrix_columns.max(1)), matrix_columns).min(n.max(1));
+    let rows = n.div_ceil(columns).max(1);
+    for (k, panel) in panels.iter_mut().enumerate() {
+        panel.legend = false;
+        if k % columns != 0 {
+            panel.y_label = String::new();
+        }
+        if k + columns < n {
+            panel.x_label = String::new();
+        }
+    }
+    Figure {
+        title,
+        panels,
+        columns,
+        size: (
+            GRID_CELL.0 * columns as u32 + 40,
+            GRID_CELL.1 * rows as u32 + 60,
+        ),
+    }
+}
+
+/// A q×p overview: magnitude of every pair, measured and (when given) model, with
+/// axis titles in the data's units on the outer panels.
 ///
 /// # Panics
 /// As [`frf_overlay`].
 #[track_caller]
-pub fn frf_grid(measured: &FrfData, model: Option<&FrfData>, collocated: bool) -> Figure {
+pub fn frf_grid(measured: &FrfData, model: Option<&FrfData>, view: &FrfView) -> Figure {
     let (q, p) = (measured.outputs(), measured.inputs());
     let mut panels = Vec::with_capacity(q * p);
     for i in 0..q {
         for j in 0..p {
-            let mut panel = frf_overlay(measured, model, i, j, collocated && i == j)
+            let mut panel = frf_overlay(measured, model, i, j, view)
                 .panels
                 .swap_remove(0);
             panel.title = format!(
                 "Y{} / F{}{}",
                 i + 1,
                 j + 1,
-                if collocated && i == j { " (col.)" } else { "" }
+                if view.is_collocated(i, j) {
+                    " (col.)"
+                } else {
+                    ""
+                }
             );
-            panel.legend = false;
-            panel.x_label = String::new();
-            panel.y_label = String::new();
+            panel.y_label = format!("|G| {}", view.unit);
             panels.push(panel);
         }
     }
-    let cell = if p <= 3 { 320 } else { 220 };
     let title = if model.is_some() {
         "All pairs: measured (solid) and ERA model (dashed), magnitude"
     } else {
         "All pairs: measured magnitude"
     };
-    Figure {
-        title: title.into(),
-        panels,
-        columns: p,
-        size: (cell * p as u32 + 40, (cell * 3 / 4) * q as u32 + 60),
-    }
+    small_multiples(title.into(), panels, p)
+}
+
+/// Coherence (0 … 1) over frequency, one small panel per curve: `curves` holds each
+/// curve's title and values on `frequency_hz`. `era identify --from-time` shows the
+/// multiple coherence of each output (the part of its power the inputs explain).
+pub fn coherence_grid(title: &str, frequency_hz: &[f64], curves: &[(String, Vec<f64>)]) -> Figure {
+    let x_range = (0.0, frequency_hz.last().copied().unwrap_or(1.0));
+    let panels = curves
+        .iter()
+        .map(|(name, values)| Panel {
+            title: name.clone(),
+            x_label: "Frequency (Hz)".into(),
+            y_label: "Coherence".into(),
+            y_scale: YScale::Linear,
+            x_range,
+            y_range: (0.0, 1.0),
+            series: vec![Series {
+                label: "coherence".into(),
+                x: frequency_hz.to_vec(),
+                y: values.clone(),
+                kind: SeriesKind::Measured,
+            }],
+            marker_x: None,
+            guide_y: None,
+            legend: false,
+        })
+        .collect();
+    small_multiples(title.into(), panels, 1)
 }
 
 /// The noise floor of a singular-value tail when one is evident: at least 5 values
@@ -385,20 +677,35 @@ mod tests {
     #[test]
     fn overlay_has_two_panels_two_series_and_ranges_from_the_data() {
         let m = sample();
-        let fig = frf_overlay(&m, Some(&m), 1, 2, false);
+        let view = FrfView::by_index(2, 3);
+        let fig = frf_overlay(&m, Some(&m), 1, 2, &view);
         assert_eq!(fig.title, "Measurement 2, Excitation Actuator 3");
         assert_eq!(fig.panels.len(), 2);
         for p in &fig.panels {
             assert_eq!(p.series.len(), 2);
-            assert_eq!(p.series[0].x.len(), 49); // the zero line is left out
+            // The zero line is left out (the phase has NaN gaps at its wraps).
+            assert_eq!(p.series[0].y.iter().filter(|y| y.is_finite()).count(), 49);
             assert_eq!(p.x_range, (0.0, 49.0));
         }
         // |G| runs from 4/49 to 4: decades 0.01 .. 10.
         assert_eq!(fig.panels[0].y_range, (0.01, 10.0));
         assert_eq!(fig.panels[0].y_scale, YScale::Log);
+        // Wrapped phase by default: the principal branch.
+        assert_eq!(fig.panels[1].y_range, (-180.0, 180.0));
         // Phase −0.2 k rad, unwrapped: −11.5° down to −561°: −630 .. 0 in 90° steps.
+        let unwrapped = FrfView {
+            phase: PhaseView::Unwrapped,
+            ..view.clone()
+        };
+        let fig = frf_overlay(&m, Some(&m), 1, 2, &unwrapped);
         assert_eq!(fig.panels[1].y_range, (-630.0, 0.0));
-        assert!(frf_overlay(&m, Some(&m), 0, 0, true)
+        // Square sets are collocated on the diagonal by index; a 2 x 3 set is not.
+        assert!(!frf_overlay(&m, Some(&m), 0, 0, &view)
+            .title
+            .ends_with("(collocated)"));
+        let mut marked = view.clone();
+        marked.collocated[0] = true;
+        assert!(frf_overlay(&m, Some(&m), 0, 0, &marked)
             .title
             .ends_with("(collocated)"));
     }
@@ -427,11 +734,12 @@ mod tests {
     #[test]
     fn without_a_model_each_panel_has_the_measurement_only() {
         let m = sample();
-        let fig = frf_overlay(&m, None, 0, 1, false);
+        let view = FrfView::by_index(2, 3);
+        let fig = frf_overlay(&m, None, 0, 1, &view);
         assert!(fig.panels.iter().all(|p| p.series.len() == 1));
         assert_eq!(fig.panels[0].y_range, (0.01, 10.0));
         assert_eq!(
-            frf_grid(&m, None, false).title,
+            frf_grid(&m, None, &view).title,
             "All pairs: measured magnitude"
         );
     }
@@ -439,9 +747,154 @@ mod tests {
     #[test]
     fn grid_has_one_panel_per_pair() {
         let m = sample();
-        let fig = frf_grid(&m, Some(&m), false);
+        let fig = frf_grid(&m, Some(&m), &FrfView::by_index(2, 3));
         assert_eq!((fig.panels.len(), fig.columns), (6, 3));
         assert_eq!(fig.panels[5].title, "Y2 / F3");
+        // Axis titles on the outer panels only: the left column and the bottom row.
+        assert_eq!(fig.panels[0].y_label, "|G| unit/unit");
+        assert!(fig.panels[1].y_label.is_empty() && fig.panels[0].x_label.is_empty());
+        assert_eq!(fig.panels[4].x_label, "Frequency (Hz)");
+    }
+
+    #[test]
+    fn tall_grids_wrap_into_a_reasonable_shape() {
+        // 28 x 2 (DaISy): three output rows side by side, 6 x 10 panels, not 2 x 28.
+        assert_eq!(grid_columns(28, 2), 6);
+        assert_eq!(grid_columns(8, 8), 8);
+        assert_eq!(grid_columns(2, 2), 2);
+        assert_eq!(grid_columns(30, 1), 4);
+        assert_eq!(grid_columns(3, 40), MAX_GRID_COLUMNS);
+        let m = FrfData::from_fn(
+            uniform_lines(10, 1.0),
+            28,
+            2,
+            Quantity::Velocity,
+            |_, _, k| Complex64::new(1.0 + k as f64, 0.0),
+        )
+        .unwrap();
+        let fig = frf_grid(&m, None, &FrfView::by_index(28, 2));
+        let (w, h) = fig.size;
+        assert!((0.5..=2.0).contains(&(h as f64 / w as f64)), "{w} x {h} px");
+    }
+
+    #[test]
+    fn units_come_from_the_metadata_and_follow_integration() {
+        let meta = |r: &str, f: &str| {
+            [("response_unit", r), ("force_unit", f)]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect::<std::collections::BTreeMap<_, _>>()
+        };
+        let si = FrfUnits::from_metadata(&meta("m/s^2", "N"));
+        assert_eq!(si.label(), "(m/s^2)/N");
+        assert_eq!(si.integrated(1).label(), "(m/s)/N");
+        assert_eq!(si.integrated(2).label(), "m/N");
+        assert_eq!(
+            FrfUnits::from_metadata(&meta("in/s²", "lbf"))
+                .integrated(1)
+                .label(),
+            "(in/s)/lbf"
+        );
+        assert_eq!(
+            FrfUnits::from_metadata(&meta("g", "N"))
+                .integrated(1)
+                .label(),
+            "(g·s)/N"
+        );
+        // Unknown stays unknown, never imperial by assumption.
+        assert_eq!(
+            FrfUnits::from_metadata(&meta("NONE", "")).label(),
+            "unit/unit"
+        );
+        assert_eq!(FrfUnits::default().integrated(2).label(), "unit/unit");
+        assert_eq!(FrfView::by_index(1, 1).unit, "unit/unit");
+    }
+
+    /// A collocated velocity FRF of 20 lightly damped modes (ζ = 0.2 %) on lines
+    /// coarser than their half-power bandwidths, clean (true phase within ±90°) and
+    /// with seeded additive noise of 15 % of its RMS (random phase at the
+    /// antiresonances).
+    fn collocated_velocity() -> (FrfData, FrfData) {
+        let modes: Vec<f64> = (0..20)
+            .map(|k| 1.3 + 0.71 * k as f64 + 0.2 * (1.7 * k as f64).sin())
+            .collect();
+        let mut state = 12345u64;
+        let mut noise = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let lines = uniform_lines(400, 0.13);
+        let clean: Vec<Complex64> = lines
+            .iter()
+            .map(|&f| {
+                let w = 2.0 * std::f64::consts::PI * f;
+                modes
+                    .iter()
+                    .map(|fr| {
+                        let wr = 2.0 * std::f64::consts::PI * fr;
+                        Complex64::new(0.0, w)
+                            / Complex64::new(wr * wr - w * w, 2.0 * 0.002 * wr * w)
+                    })
+                    .sum()
+            })
+            .collect();
+        let rms = (clean.iter().map(|v| v.norm_sqr()).sum::<f64>() / clean.len() as f64).sqrt();
+        let noisy: Vec<Complex64> = clean
+            .iter()
+            .map(|v| v + 0.15 * rms * Complex64::new(noise(), noise()))
+            .collect();
+        let set =
+            |v: Vec<Complex64>| FrfData::new(lines.clone(), 1, 1, v, Quantity::Velocity).unwrap();
+        (set(clean), set(noisy))
+    }
+
+    #[test]
+    fn collocated_phase_is_drawn_wrapped_and_does_not_drift_when_unwrapped() {
+        let (model, measured) = collocated_velocity();
+        let view = FrfView::by_index(1, 1);
+        let fig = frf_overlay(&measured, Some(&model), 0, 0, &view);
+        let phase = &fig.panels[1];
+        assert_eq!(phase.y_range, (-180.0, 180.0));
+        for s in &phase.series {
+            // Every drawn point (NaN marks the gap at a wrap).
+            assert!(s
+                .y
+                .iter()
+                .filter(|p| !p.is_nan())
+                .all(|p| (-180.0..=180.0).contains(p)));
+            assert!(s.y.iter().filter(|p| !p.is_nan()).count() >= 399);
+        }
+        // Folding every step into ±180° drifts here (the noise makes each jump at an
+        // antiresonance a coin toss); the model's unambiguous unwrapping, with the
+        // measurement on its branch, does not.
+        let mut naive: Vec<f64> = vec![];
+        let mut offset = 0.0f64;
+        for (k, p) in wrapped_phase_deg(measured.pair(0, 0)).iter().enumerate() {
+            if k > 0 {
+                let d = p + offset - naive[k - 1];
+                offset -= 360.0 * (d / 360.0).round();
+            }
+            naive.push(p + offset);
+        }
+        let spread = |v: &[f64]| {
+            v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+        };
+        assert!(
+            spread(&naive) > 1000.0,
+            "the case is not hard: {}",
+            spread(&naive)
+        );
+        let unwrapped = FrfView {
+            phase: PhaseView::Unwrapped,
+            ..view
+        };
+        let fig = frf_overlay(&measured, Some(&model), 0, 0, &unwrapped);
+        let (m, x) = (&fig.panels[1].series[0].y, &fig.panels[1].series[1].y);
+        assert!(spread(x) <= 360.0, "model: {}", spread(x));
+        assert!(m.iter().zip(x).all(|(m, x)| (m - x).abs() <= 180.0));
+        assert!(fig.panels[1].y_range.1 - fig.panels[1].y_range.0 <= 720.0);
     }
 
     #[test]

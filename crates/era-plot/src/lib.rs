@@ -1,6 +1,7 @@
-//! Figures for `era`: FRF overlays (thesis Figs. 5.1–5.11 and Appendices A–I), the
-//! singular-value plot of the thesis's `cut` option, a q×p overview grid, and a
-//! self-contained HTML report.
+//! Figures for `era`: FRF overlays (thesis Figs. 5.1–5.11 and Appendices A–I) in the
+//! data's units with wrapped phase by default, the singular-value plot of the thesis's
+//! `cut` option, a q×p overview grid (wrapped when tall), coherence, and a
+//! self-contained HTML report that says what went in.
 //!
 //! Plotting stays out of the numeric core. A figure is first a [`Figure`]: panels with
 //! their series and axis ranges, computed from the data by pure functions that tests can
@@ -15,6 +16,7 @@ pub mod report;
 pub mod stabilization;
 
 pub use figures::{
-    frf_grid, frf_overlay, singular_value_figure, Figure, Panel, Series, SeriesKind, YScale,
+    coherence_grid, frf_grid, frf_overlay, singular_value_figure, Figure, FrfUnits, FrfView, Panel,
+    PhaseView, Series, SeriesKind, YScale,
 };
 pub use render::{render_png, render_svg, PlotError};

@@ -1,18 +1,79 @@
 //! `report.html`: one self-contained file (inline SVG, inline CSS, no script, no
-//! network) with the parameters, singular values, modal and fit tables, the overview
-//! grid and every pair's overlay.
+//! network) with what went in (file, format, units, channel table, command line,
+//! version, date), the parameters, singular values, modal table, the fit as an
+//! outputs × inputs matrix, the coherence when the input carries it, the overview grid
+//! and every pair's overlay.
+//!
+//! Size: each figure appears once, its elements share style rules
+//! ([`crate::render::compact_svg`]) and its curves are thinned to what a pixel shows
+//! ([`crate::render::visible_points`], which keeps every peak), so an 8 × 8 set of 801
+//! lines stays well under 2 MB.
 
+use crate::figures::FrfView;
 use era::identify::Identification;
 use std::fmt::Write as _;
+
+/// One row of the channel table: which DOF an output or input is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelRow {
+    /// `output` or `input`.
+    pub role: &'static str,
+    /// 1-based index in the FRF matrix.
+    pub index: usize,
+    /// Node number.
+    pub node: i64,
+    /// Direction (`+Z`, `-X`, …).
+    pub direction: String,
+    /// Entity name, when the file gives one.
+    pub entity: Option<String>,
+}
+
+/// What went into the run: the report's first section.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct InputSection {
+    /// The input file (or a description of a synthetic set).
+    pub file: String,
+    /// Its format (`CSV`, `UFF 58`, `MAT v5`, time histories …).
+    pub format: String,
+    /// The FRFs' quantity as read (acceleration, velocity, displacement), with where
+    /// it came from.
+    pub quantity: String,
+    /// The FRFs' units as read (`(m/s^2)/N`; `unit/unit` when the file does not say).
+    pub units: String,
+    /// The channel table, when there is one.
+    pub channels: Vec<ChannelRow>,
+    /// Notes on the input (padding, layout, estimation settings).
+    pub notes: Vec<String>,
+    /// The command line.
+    pub command_line: String,
+    /// `era` version.
+    pub version: String,
+    /// Date and time of the run (UTC).
+    pub date: String,
+}
+
+/// Coherence of the input: a figure, and what it shows.
+pub struct CoherenceInput<'a> {
+    /// What the curves are (e.g. multiple coherence of each output).
+    pub caption: &'a str,
+    /// The figure, SVG.
+    pub svg: &'a str,
+}
 
 /// What goes into a report besides the identification itself.
 pub struct ReportInput<'a> {
     /// Page title.
     pub title: &'a str,
+    /// What went in.
+    pub source: &'a InputSection,
+    /// Units and collocation of the pairs (from the channel table when there is one).
+    pub view: &'a FrfView,
     /// The parameter echo, as printed before the run.
     pub parameters: &'a str,
     /// The identification.
     pub found: &'a Identification,
+    /// Coherence, when the input carries it.
+    pub coherence: Option<CoherenceInput<'a>>,
     /// Singular-value figure, SVG.
     pub singular_values_svg: &'a str,
     /// Stabilization diagram, SVG, when a scan ran.
@@ -31,6 +92,113 @@ fn escape(text: &str) -> String {
 
 fn opt(v: Option<f64>, digits: usize) -> String {
     v.map_or("–".into(), |x| format!("{x:.digits$}"))
+}
+
+/// The input section: a definition list and the channel table.
+fn input_html(s: &InputSection) -> String {
+    let mut h = String::from("<h2 id=\"input\">Input</h2>\n<dl id=\"input-facts\">");
+    for (term, value) in [
+        ("File", &s.file),
+        ("Format", &s.format),
+        ("Quantity", &s.quantity),
+        ("Units", &s.units),
+        ("Command", &s.command_line),
+        ("era version", &s.version),
+        ("Date", &s.date),
+    ] {
+        let _ = write!(h, "<dt>{term}</dt><dd>{}</dd>", escape(value));
+    }
+    h.push_str("</dl>\n");
+    if !s.notes.is_empty() {
+        h.push_str("<ul id=\"input-notes\">");
+        for n in &s.notes {
+            let _ = write!(h, "<li>{}</li>", escape(n));
+        }
+        h.push_str("</ul>\n");
+    }
+    if s.channels.is_empty() {
+        h.push_str("<p id=\"channel-table\">The file has no channel table: outputs and inputs are known by their index only, and collocation is by index (output i with input i).</p>\n");
+    } else {
+        // A long table folds away (still in the page, one click to open).
+        let _ = writeln!(
+            h,
+            "<details{}><summary>Channel table: {} outputs, {} inputs</summary>",
+            if s.channels.len() <= 16 { " open" } else { "" },
+            s.channels.iter().filter(|c| c.role == "output").count(),
+            s.channels.iter().filter(|c| c.role == "input").count()
+        );
+        h.push_str("<table id=\"channel-table\"><tr><th>channel</th><th>node</th><th>direction</th><th>entity</th></tr>\n");
+        for c in &s.channels {
+            let _ = writeln!(
+                h,
+                "<tr><td>{} {}</td><td>{}</td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+                c.role,
+                c.index,
+                c.node,
+                escape(&c.direction),
+                escape(c.entity.as_deref().unwrap_or(""))
+            );
+        }
+        h.push_str("</table></details>\n<p>Collocated pairs (same node and direction) are shaded in the fit table.</p>\n");
+    }
+    h
+}
+
+/// The fit as an outputs × inputs matrix: each cell the pair's relative error and its
+/// RMS log-magnitude error (dB); collocated pairs shaded.
+fn fit_matrix_html(fit: &era::response::FitReport, view: &FrfView, q: usize, p: usize) -> String {
+    let mut h =
+        String::from("<table id=\"fit-table\" class=\"matrix\"><tr><th>output \\ input</th>");
+    for j in 1..=p {
+        let _ = write!(h, "<th>{j}</th>");
+    }
+    h.push_str("</tr>\n");
+    for i in 0..q {
+        let _ = write!(h, "<tr><th>{}</th>", i + 1);
+        for j in 0..p {
+            match fit.pairs.iter().find(|f| f.output == i && f.input == j) {
+                Some(f) => {
+                    let _ = write!(
+                        h,
+                        "<td{}>{:.3e}<br><small>{:.2} dB</small></td>",
+                        if view.is_collocated(i, j) {
+                            " class=\"col\""
+                        } else {
+                            ""
+                        },
+                        f.relative_error,
+                        f.rms_log_magnitude_db
+                    );
+                }
+                None => h.push_str("<td>–</td>"),
+            }
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n");
+    h
+}
+
+/// Mean relative error and mean RMS log-magnitude error (dB) of the pairs whose
+/// collocation is `collocated`.
+fn fit_means(
+    fit: &era::response::FitReport,
+    view: &FrfView,
+    collocated: bool,
+) -> (Option<f64>, Option<f64>) {
+    let chosen: Vec<_> = fit
+        .pairs
+        .iter()
+        .filter(|f| view.is_collocated(f.output, f.input) == collocated)
+        .collect();
+    if chosen.is_empty() {
+        return (None, None);
+    }
+    let n = chosen.len() as f64;
+    (
+        Some(chosen.iter().map(|f| f.relative_error).sum::<f64>() / n),
+        Some(chosen.iter().map(|f| f.rms_log_magnitude_db).sum::<f64>() / n),
+    )
 }
 
 /// The whole page.
@@ -76,10 +244,13 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
 body{{font-family:sans-serif;margin:2em;max-width:1100px;color:#222}} h1{{font-size:1.6em}} h2{{margin-top:2em;border-bottom:1px solid #ccc}}\
 table{{border-collapse:collapse;margin:1em 0}} td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}} th{{background:#f3f3f3}}\
 pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%;height:auto}} .col{{background:#eef6ff}} .bad{{background:#fff1f0}} .suspect{{color:#a8071a}}\
+dl{{display:grid;grid-template-columns:max-content auto;gap:2px 1em}} dt{{font-weight:bold}} dd{{margin:0;font-family:monospace;overflow-wrap:anywhere}}\
+table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{{width:calc(100vw - 4em)}}\
 </style></head><body>\n<h1>{}</h1>\n",
         escape(input.title),
         escape(input.title)
     );
+    h.push_str(&input_html(input.source));
     let _ = write!(
         h,
         "<h2 id=\"parameters\">Parameters</h2>\n<pre>{}</pre>\n",
@@ -146,38 +317,51 @@ pre{{background:#f7f7f7;padding:1em}} figure{{margin:1em 0}} svg{{max-width:100%
         h.push_str("</p>\n");
     }
     let fit = &f.fit;
+    let (col, noncol) = (
+        fit_means(fit, input.view, true),
+        fit_means(fit, input.view, false),
+    );
     let _ = write!(
         h,
-        "<h2 id=\"fit\">Fit</h2>\n<p>{} lines from line {} ({} FRFs). Mean relative error: collocated {}, non-collocated {}. Mean RMS log-magnitude error: collocated {} dB, non-collocated {} dB.</p>\n<table id=\"fit-table\"><tr><th>output</th><th>input</th><th>collocated</th><th>relative error</th><th>RMS log-magnitude (dB)</th></tr>\n",
+        "<h2 id=\"fit\">Fit</h2>\n<p>{} lines from line {} ({} FRFs). Mean relative error: collocated {}, non-collocated {}. Mean RMS log-magnitude error: collocated {} dB, non-collocated {} dB. Each cell: relative error ‖G − Ĝ‖/‖G‖ of the pair over the band, and below it the RMS log-magnitude error; rows are outputs, columns inputs, collocated pairs shaded.</p>\n",
         fit.lines,
         fit.first_line,
         f.processed.quantity(),
-        opt(fit.collocated_mean_relative_error, 4),
-        opt(fit.noncollocated_mean_relative_error, 4),
-        opt(fit.collocated_mean_db, 3),
-        opt(fit.noncollocated_mean_db, 3),
+        opt(col.0, 4),
+        opt(noncol.0, 4),
+        opt(col.1, 3),
+        opt(noncol.1, 3),
     );
-    for p in &fit.pairs {
-        let _ = writeln!(
+    h.push_str(&fit_matrix_html(
+        fit,
+        input.view,
+        f.measured.outputs(),
+        f.measured.inputs(),
+    ));
+    if let Some(c) = &input.coherence {
+        let _ = write!(
             h,
-            "<tr{}><td>{}</td><td>{}</td><td>{}</td><td>{:.4e}</td><td>{:.3}</td></tr>",
-            if p.collocated { " class=\"col\"" } else { "" },
-            p.output + 1,
-            p.input + 1,
-            if p.collocated { "yes" } else { "" },
-            p.relative_error,
-            p.rms_log_magnitude_db
+            "<h2 id=\"coherence\">Coherence</h2>\n<p>{}</p>\n<figure class=\"plot wide\" id=\"fig-coherence\">{}</figure>\n",
+            escape(c.caption),
+            c.svg
         );
     }
-    h.push_str("</table>\n");
     let _ = write!(
         h,
-        "<h2 id=\"grid\">All pairs</h2>\n<figure class=\"plot\" id=\"fig-grid\">{}</figure>\n",
+        "<h2 id=\"grid\">All pairs</h2>\n<p>|G| in {}.</p>\n<figure class=\"plot wide\" id=\"fig-grid\">{}</figure>\n",
+        escape(&input.view.unit),
         input.grid_svg
     );
     h.push_str("<h2 id=\"overlays\">Each pair</h2>\n");
+    // The title is drawn in each figure; the figure carries it as its label only.
     for (k, (title, svg)) in input.overlays.iter().enumerate() {
-        let _ = writeln!(h, "<figure class=\"plot overlay\" id=\"fig-pair-{}\"><figcaption>{}</figcaption>{}</figure>", k + 1, escape(title), svg);
+        let _ = writeln!(
+            h,
+            "<figure class=\"plot overlay\" id=\"fig-pair-{}\" aria-label=\"{}\">{}</figure>",
+            k + 1,
+            escape(title).replace('"', "&quot;"),
+            svg
+        );
     }
     h.push_str("</body></html>\n");
     h

@@ -237,7 +237,7 @@ pub fn stabilization_svg(plot: &StabilizationPlot) -> Result<String, PlotError> 
         let root = SVGBackend::with_string(&mut out, plot.size).into_drawing_area();
         draw(root, plot)?;
     }
-    Ok(out)
+    Ok(crate::render::compact_svg(&out))
 }
 
 /// The diagram as a PNG file.

@@ -1,0 +1,323 @@
+//! What the figures and report.html say about the data: units from the input file,
+//! wrapped phase, collocation from the channel table, the input section, the fit
+//! matrix, the dashed legend, coherence, and the size of an 8 x 8 report.
+
+mod common;
+
+use common::{era, s};
+use std::path::{Path, PathBuf};
+
+/// A 2 x 2 acceleration set (3 modes) with SI units and a channel table in which
+/// output 1 (node 11) and input 1 (node 101) are not collocated, but output 2 and
+/// input 2 (node 5, +Z) are.
+fn si_set(dir: &Path) -> PathBuf {
+    let plain = dir.join("plain.csv");
+    era()
+        .args([
+            "simulate",
+            "modal",
+            "-q",
+            "--outputs",
+            "2",
+            "--inputs",
+            "2",
+            "--modes",
+            "3",
+            "--fmin",
+            "1",
+            "--fmax",
+            "4",
+            "--lines",
+            "201",
+            "--df",
+            "0.05",
+            "--collocated",
+            "--seed",
+            "3",
+            "--out",
+        ])
+        .arg(&plain)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&plain).unwrap();
+    let file = dir.join("si.csv");
+    std::fs::write(
+        &file,
+        format!(
+            "# response_unit: m/s^2\n# force_unit: N\n# output_1: node 11 +Z\n# output_2: node 5 +Z\n# input_1: node 101 +Z\n# input_2: node 5 +Z\n{text}"
+        ),
+    )
+    .unwrap();
+    file
+}
+
+fn read(path: impl AsRef<Path>) -> String {
+    std::fs::read_to_string(path.as_ref())
+        .unwrap_or_else(|e| panic!("{}: {e}", path.as_ref().display()))
+}
+
+#[test]
+fn si_units_channel_table_and_input_section_reach_figures_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = si_set(dir.path());
+    // Plotted as read: (m/s^2)/N, never imperial.
+    let plots = dir.path().join("plots");
+    era()
+        .args(["plot", s(&file), "-q", "--out", s(&plots)])
+        .assert()
+        .success();
+    for svg in ["grid.svg", "pairs/pair_1_2.svg"] {
+        let text = read(plots.join(svg));
+        assert!(text.contains("(m/s^2)/N"), "{svg}");
+        assert!(!text.contains("lbf") && !text.contains("in/s"), "{svg}");
+    }
+    assert!(read(plots.join("pairs/pair_1_2.svg")).contains("Phase (deg, wrapped)"));
+    // Unwrapped only when asked.
+    let unwrapped = dir.path().join("unwrapped");
+    era()
+        .args([
+            "plot",
+            s(&file),
+            "-q",
+            "--phase",
+            "unwrapped",
+            "--out",
+            s(&unwrapped),
+        ])
+        .assert()
+        .success();
+    assert!(read(unwrapped.join("pairs/pair_1_2.svg")).contains("Phase (deg, unwrapped)"));
+    // Identified after one integration: the figures say (m/s)/N.
+    let out = dir.path().join("out");
+    era()
+        .args([
+            "identify",
+            s(&file),
+            "--states",
+            "6",
+            "--integrations",
+            "1",
+            "-q",
+            "--out",
+            s(&out),
+        ])
+        .assert()
+        .success();
+    let pair = read(out.join("pairs/pair_1_1.svg"));
+    assert!(pair.contains("|G| (m/s)/N") && !pair.contains("lbf"));
+    assert!(pair.contains("Phase (deg, wrapped)"));
+    let html = read(out.join("report.html"));
+    // The input section: file, format, quantity, units, channel table, command line,
+    // version and date.
+    let input = &html[html.find("id=\"input\"").expect("input section")
+        ..html.find("id=\"parameters\"").unwrap()];
+    for needle in [
+        s(&file),
+        "CSV",
+        "acceleration",
+        "(m/s^2)/N",
+        "--integrations 1",
+        env!("CARGO_PKG_VERSION"),
+        " UTC",
+        "<td>101</td>",
+        "<td>11</td>",
+        "+Z",
+    ] {
+        assert!(input.contains(needle), "{needle} missing from: {input}");
+    }
+    // Collocation from the channel table: 2/2 (node 5 with node 5), not 1/1 (11 vs 101).
+    assert!(html.contains("Measurement 2, Excitation Actuator 2 (collocated)"));
+    assert!(!html.contains("Measurement 1, Excitation Actuator 1 (collocated)"));
+    // The fit is a 2 x 2 matrix: a header with the inputs, one row per output, the
+    // collocated cell shaded.
+    let table = &html[html
+        .find("<table id=\"fit-table\" class=\"matrix\">")
+        .unwrap()..];
+    let table = &table[..table.find("</table>").unwrap()];
+    assert_eq!(table.matches("<tr>").count(), 1 + 2);
+    assert!(table.contains("<th>1</th><th>2</th>"));
+    assert_eq!(table.matches("<td class=\"col\">").count(), 1);
+    assert_eq!(table.matches("<td").count(), 4);
+    let rows: Vec<&str> = table.split("<tr>").collect();
+    assert!(
+        rows[3].contains("class=\"col\""),
+        "output 2's row holds the shaded cell"
+    );
+    // Each pair's title once: drawn in its figure, not repeated as a caption.
+    assert!(!html.contains("<figcaption>"));
+    assert_eq!(
+        html.matches("\nMeasurement 1, Excitation Actuator 2\n")
+            .count(),
+        1
+    );
+    // The legend and curve of the model are dashed (a dashed style, no solid copy).
+    assert!(html.contains("stroke-dasharray:6 4"));
+    // The grid has axis titles with units.
+    let grid = read(out.join("grid.svg"));
+    assert!(grid.contains("|G| (m/s)/N") && grid.contains("Frequency (Hz)"));
+}
+
+#[test]
+fn the_demo_says_its_units_are_inches_and_pounds_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    era()
+        .args(["demo", "-q", "--out", s(&out)])
+        .assert()
+        .success();
+    assert!(read(out.join("truth_frf.csv")).contains("# response_unit: in"));
+    assert!(read(out.join("noisy/pairs/pair_1_2.svg")).contains("|G| in/lbf"));
+    let html = read(out.join("noisy/report.html"));
+    assert!(html.contains("<dd>in/lbf</dd>"));
+    assert!(html.contains("synthetic"));
+}
+
+#[test]
+fn an_8x8_report_stays_under_2_mb() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("dta.csv");
+    era()
+        .args([
+            "simulate",
+            "modal",
+            "-q",
+            "--collocated",
+            "--seed",
+            "3",
+            "--noise",
+            "0.15",
+            "--out",
+            s(&file),
+        ])
+        .assert()
+        .success();
+    let out = dir.path().join("out");
+    era()
+        .args([
+            "identify",
+            s(&file),
+            "-q",
+            "--states",
+            "80",
+            "--hankel-factor",
+            "5",
+            "--integrations",
+            "1",
+            "--zero-lines",
+            "3",
+            "--pad-to",
+            "1024",
+            "--out",
+            s(&out),
+        ])
+        .assert()
+        .success();
+    let size = std::fs::metadata(out.join("report.html")).unwrap().len();
+    // It was 7.2-7.7 MB before the styles were shared and the curves thinned.
+    assert!(size < 2_000_000, "report.html is {size} bytes");
+    let html = read(out.join("report.html"));
+    assert_eq!(html.matches("class=\"plot overlay\"").count(), 64);
+    // Each figure once: 64 overlays, the grid and the singular values.
+    assert_eq!(html.matches("<svg").count(), 66);
+}
+
+#[test]
+fn from_time_reports_the_coherence() {
+    let dir = tempfile::tempdir().unwrap();
+    // One force, one response of a lightly damped resonance, 4096 samples at 1 kHz.
+    let mut csv = String::from("time_s,f,y\n");
+    let (mut y1, mut y2, mut state) = (0.0f64, 0.0f64, 7u64);
+    for k in 0..4096 {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let f = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        let y = 1.8 * y1 - 0.95 * y2 + f;
+        csv.push_str(&format!("{},{f},{y}\n", k as f64 * 1e-3));
+        (y2, y1) = (y1, y);
+    }
+    let time = dir.path().join("time.csv");
+    std::fs::write(&time, csv).unwrap();
+    let out = dir.path().join("out");
+    era()
+        .args([
+            "identify",
+            "--from-time",
+            s(&time),
+            "--inputs",
+            "f",
+            "--outputs",
+            "y",
+            "--frame",
+            "256",
+            "--states",
+            "2",
+            "-q",
+            "--out",
+            s(&out),
+        ])
+        .assert()
+        .success();
+    assert!(out.join("coherence.svg").is_file() && out.join("coherence.png").is_file());
+    let html = read(out.join("report.html"));
+    assert!(html.contains("id=\"fig-coherence\""));
+    assert!(html.contains("time histories"));
+    // The time file says nothing of units: unknown, not assumed.
+    assert!(html.contains("<dd>unit/unit</dd>"));
+    // In two steps: `era frf` writes the coherence beside the FRF file, and identify
+    // shows it from there.
+    let frf = dir.path().join("frf.csv");
+    era()
+        .args([
+            "frf",
+            s(&time),
+            "--inputs",
+            "f",
+            "--outputs",
+            "y",
+            "--frame",
+            "256",
+            "-q",
+            "--out",
+            s(&frf),
+        ])
+        .assert()
+        .success();
+    assert!(dir.path().join("frf.coherence.csv").is_file());
+    let out2 = dir.path().join("out2");
+    era()
+        .args([
+            "identify",
+            s(&frf),
+            "--states",
+            "2",
+            "-q",
+            "--out",
+            s(&out2),
+        ])
+        .assert()
+        .success();
+    let html = read(out2.join("report.html"));
+    assert!(html.contains("id=\"fig-coherence\""));
+    assert!(html.contains("frf.coherence.csv"));
+    // A companion that does not fit the FRF file is left out, with a note.
+    let bad = dir.path().join("frf.coherence.csv");
+    let text = read(&bad);
+    std::fs::write(&bad, text.lines().take(10).collect::<Vec<_>>().join("\n")).unwrap();
+    let out3 = dir.path().join("out3");
+    era()
+        .args([
+            "identify",
+            s(&frf),
+            "--states",
+            "2",
+            "-q",
+            "--out",
+            s(&out3),
+        ])
+        .assert()
+        .success();
+    let html = read(out3.join("report.html"));
+    assert!(!html.contains("id=\"fig-coherence\""));
+    assert!(html.contains("coherence file ignored"));
+}
