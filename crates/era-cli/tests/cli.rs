@@ -803,6 +803,33 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
         .unwrap()
         .iter()
         .any(|m| m["damping_ratio"].as_f64().unwrap() < 0.0));
+    // The report says so before anything else of the run.
+    let bundle = dir.path().join("suspect");
+    era()
+        .arg("identify")
+        .arg(&frf)
+        .args(args)
+        .args(["-q", "--out"])
+        .arg(&bundle)
+        .assert()
+        .success();
+    let html = std::fs::read_to_string(bundle.join("report.html")).unwrap();
+    let at = html
+        .find("id=\"warning-list\"")
+        .expect("a warnings section");
+    assert!(at < html.find("id=\"parameters\"").unwrap());
+    assert!(html[at..].contains("negative damping"));
+    let clean = dir.path().join("clean");
+    era()
+        .arg("identify")
+        .arg(&frf)
+        .args(["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"])
+        .args(["-q", "--out"])
+        .arg(&clean)
+        .assert()
+        .success();
+    let html = std::fs::read_to_string(clean.join("report.html")).unwrap();
+    assert!(!html.contains("id=\"warning-list\""));
     // The thesis settings give a stable model and no warning.
     let out = era()
         .arg("identify")

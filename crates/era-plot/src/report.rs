@@ -251,6 +251,16 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
         escape(input.title)
     );
     h.push_str(&input_html(input.source));
+    // Results to treat with care (era::suspect) come before anything else of the run: a
+    // reader who skims should not miss them. The report is the CLI's: flags are named.
+    let warnings = f.warnings(era::params::Naming::Flag);
+    if !warnings.is_empty() {
+        h.push_str("<h2 id=\"warnings\">Warnings</h2>\n<ul id=\"warning-list\" class=\"suspect\">");
+        for w in &warnings {
+            let _ = write!(h, "<li>{}</li>", escape(w));
+        }
+        h.push_str("</ul>\n");
+    }
     let _ = write!(
         h,
         "<h2 id=\"parameters\">Parameters</h2>\n<pre>{}</pre>\n",
