@@ -221,6 +221,7 @@ pub fn read_frf(
     let opts = ReadOptions {
         default_quantity: Quantity::Acceleration,
         outputs,
+        ..ReadOptions::default()
     };
     let frf = guarded(py, || {
         let (file, _) = read_frf_file(&path, &opts).map_err(io_error)?;
