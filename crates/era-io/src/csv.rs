@@ -132,7 +132,7 @@ pub fn parse_frf_csv(
             time,
             format!(
                 "a time column: this file holds time histories, not FRFs; {}",
-                crate::format::TIME_HINT
+                crate::format::time_hint(path)
             ),
         ));
     }

@@ -124,7 +124,8 @@ impl FrfFormat {
                 path,
                 "",
                 format!(
-                    "is an HDF5 file, which holds time histories for era, not FRFs: {TIME_HINT}"
+                    "is an HDF5 file, which holds time histories for era, not FRFs: {}",
+                    time_hint(path)
                 ),
             ));
         } else if crate::uff::looks_like_uff(head) {
@@ -148,8 +149,13 @@ impl FrfFormat {
     }
 }
 
-/// What to do with time histories given where FRFs are expected.
-pub const TIME_HINT: &str = "estimate the FRFs with `era frf FILE --inputs CHANNELS --outputs CHANNELS --out frf.csv`, or identify from the time histories directly with `era identify --from-time FILE --inputs CHANNELS --outputs CHANNELS`";
+/// What to do with the time histories in `path`, given where FRFs are expected.
+pub fn time_hint(path: &Path) -> String {
+    let f = crate::text::escaped_message(&path.display().to_string());
+    format!(
+        "estimate the FRFs with `era frf {f} --inputs CHANNELS --outputs CHANNELS --out frf.csv`, or identify from the time histories directly with `era identify --from-time {f} --inputs CHANNELS --outputs CHANNELS`"
+    )
+}
 
 fn first_line(head: &[u8]) -> String {
     let line = head.split(|b| *b == b'\n').next().unwrap_or(&[]);
