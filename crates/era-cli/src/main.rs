@@ -65,13 +65,18 @@ fn exit_code(err: &anyhow::Error) -> u8 {
     1
 }
 
-/// The error and its causes, `: `-joined as anyhow's `{:#}` does, but a context such as
+/// The error and its causes, `: `-joined as anyhow's `{:#}` does, with the core's
+/// remedies naming flags ([`era::EraError::message`]), and a context such as
 /// `reading FILE` followed by a cause that starts `FILE: ` names the file once:
 /// `reading FILE: line 3: …`, not `reading FILE: FILE: line 3: …`.
 fn message(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for cause in err.chain() {
-        let text = cause.to_string();
+        // The core names options by their fields; the CLI's users know them as flags.
+        let text = match cause.downcast_ref::<era::EraError>() {
+            Some(e) => e.message(era::params::Naming::Flag),
+            None => cause.to_string(),
+        };
         let named = parts.last().and_then(|context| {
             let (_, subject) = context.split_once(' ')?;
             let rest = text.strip_prefix(subject)?.strip_prefix(": ")?;

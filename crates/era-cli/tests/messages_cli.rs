@@ -24,7 +24,11 @@ frequency_hz,H1_1_re,H1_1_im,H2_1_re,H2_1_im\n\
 #[test]
 fn time_histories_given_as_frfs_are_sent_to_era_frf() {
     let dir = tempfile::tempdir().unwrap();
-    let csv = write(dir.path(), "th.csv", "time_s,force,accel\n0,1,2\n0.001,3,4\n");
+    let csv = write(
+        dir.path(),
+        "th.csv",
+        "time_s,force,accel\n0,1,2\n0.001,3,4\n",
+    );
     let h5 = data_file("ladisk-plate-sweep/view_0.hdf5");
     for file in [&csv, &h5] {
         let out = run_capped(&["identify", s(file), "--states", "2"], None, None);
@@ -48,7 +52,11 @@ fn a_semicolon_csv_is_told_its_separator_not_echoed() {
     out.assert_input_error()
         .says("separated by semicolons")
         .says("save the file with ','");
-    assert!(!out.stderr.contains("frequency_hz;H1_1_re"), "{}", out.stderr);
+    assert!(
+        !out.stderr.contains("frequency_hz;H1_1_re"),
+        "{}",
+        out.stderr
+    );
 }
 
 #[test]
@@ -84,7 +92,11 @@ fn a_late_start_is_padded_in_csv_and_mat_and_an_off_grid_one_refused() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(
         stdout.contains("the lines start at 1 Hz; the 2 lines below were added as zeros"),
         "{stdout}"
@@ -148,7 +160,11 @@ fn units_flag_sets_the_units_every_writer_keeps() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert!(
         stdout.contains("units m/s^2 / N from --units; the file says m/s / N"),
         "{stdout}"
@@ -158,7 +174,13 @@ fn units_flag_sets_the_units_every_writer_keeps() {
         text.contains("# response_unit: m/s^2\n") && text.contains("# force_unit: N\n"),
         "{text}"
     );
-    for bad in ["m/s^2/N", "m/s^2,", ",N", "m/s^2,N,V", "m/s^2,a_force_unit_far_too_long"] {
+    for bad in [
+        "m/s^2/N",
+        "m/s^2,",
+        ",N",
+        "m/s^2,N,V",
+        "m/s^2,a_force_unit_far_too_long",
+    ] {
         // clap refuses the value: exit 2 naming the flag and the value.
         expect_input_error(&["convert", s(&csv), s(&out), "--units", bad], "--units");
         expect_input_error(&["convert", s(&csv), s(&out), "--units", bad], bad);
@@ -174,11 +196,39 @@ fn the_mat_frequency_variable_is_named_by_a_flag() {
     let info = json_of(&["info", s(&mat), "--freq-variable", "FreqV", "--json"]);
     assert_eq!(info["lines"], 4, "{info}");
     run_capped(
-        &["identify", s(&mat), "--states", "2", "--freq-variable", "f_hz"],
+        &[
+            "identify",
+            s(&mat),
+            "--states",
+            "2",
+            "--freq-variable",
+            "f_hz",
+        ],
         None,
         None,
     )
     .assert_input_error()
     .says("no numeric variable f_hz")
     .says("FreqV 4x1");
+}
+
+#[test]
+fn the_cores_remedies_reach_the_cli_as_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = write(dir.path(), "si.csv", SI_CSV);
+    run_capped(
+        &[
+            "identify",
+            s(&csv),
+            "--states",
+            "2",
+            "--hankel-factor",
+            "300",
+        ],
+        None,
+        None,
+    )
+    .assert_input_error()
+    .says("Markov samples (states 2 x hankel factor 300")
+    .says("lower --hankel-factor or --states, or pad with --pad-to");
 }
