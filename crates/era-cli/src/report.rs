@@ -303,7 +303,11 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
         fdb(fit.noncollocated_mean_db),
     );
     for w in &found.realization.warnings {
-        let _ = writeln!(s, "warning: {w}");
+        let _ = writeln!(
+            s,
+            "warning: {}",
+            w.message(era::params::Naming::Flag)
+        );
     }
     s
 }
