@@ -19,7 +19,7 @@ pub enum Command {
     Demo(DemoArgs),
     /// Identify a model from an FRF file (docs/design.md §1), or from time histories with
     /// --from-time.
-    Identify(IdentifyArgs),
+    Identify(Box<IdentifyArgs>),
     /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
     /// HDF5): Welch-averaged spectra, H1, H2 or Hv.
     Frf(FrfArgs),
