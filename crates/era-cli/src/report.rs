@@ -303,11 +303,7 @@ pub fn identification_summary(found: &Identification, states: usize) -> String {
         fdb(fit.noncollocated_mean_db),
     );
     for w in &found.realization.warnings {
-        let _ = writeln!(
-            s,
-            "warning: {}",
-            w.message(era::params::Naming::Flag)
-        );
+        let _ = writeln!(s, "warning: {}", w.message(era::params::Naming::Flag));
     }
     s
 }
