@@ -125,6 +125,13 @@ pub enum EraError {
     /// The model could not be converted reliably (e.g. defective eigenvectors).
     #[error("{0}")]
     Conversion(String),
+    /// The zero-order-hold inverse does not reproduce the discrete model: its
+    /// eigenvectors are nearly dependent.
+    #[error("{}", self.message(Naming::Keyword))]
+    UnreliableContinuous {
+        /// Relative difference of `c2d(d2c(A, B))` from `(A, B)`.
+        round_trip_error: f64,
+    },
     /// A time-history sample is NaN or infinite.
     #[error("non-finite sample in {role} {channel} at sample {sample} (0-based)")]
     NonFiniteSample {
@@ -201,6 +208,10 @@ impl EraError {
                 "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower {}",
                 n("states")
             ),
+            EraError::UnreliableContinuous { round_trip_error } => format!(
+                "the zero-order-hold inverse is unreliable for this model (round trip error {round_trip_error:.2e}): its eigenvectors are nearly dependent; keep {} discrete",
+                n("time_domain")
+            ),
             EraError::NoRealLogarithm { re, im } => format!(
                 "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep {} discrete",
                 n("time_domain")
@@ -247,6 +258,11 @@ mod tests {
             .message(Naming::Flag)
             .ends_with("keep --time-domain discrete"));
         assert!(e.to_string().ends_with("keep time_domain discrete"));
+        let e = EraError::UnreliableContinuous {
+            round_trip_error: 3e-6,
+        };
+        assert!(e.message(Naming::Flag).ends_with("keep --time-domain discrete"));
+        assert!(e.to_string().contains("round trip error 3.00e-6"));
         // Variants without a remedy read the same either way.
         assert_eq!(
             EraError::AllZero.message(Naming::Flag),
