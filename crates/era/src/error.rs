@@ -261,7 +261,9 @@ mod tests {
         let e = EraError::UnreliableContinuous {
             round_trip_error: 3e-6,
         };
-        assert!(e.message(Naming::Flag).ends_with("keep --time-domain discrete"));
+        assert!(e
+            .message(Naming::Flag)
+            .ends_with("keep --time-domain discrete"));
         assert!(e.to_string().contains("round trip error 3.00e-6"));
         // Variants without a remedy read the same either way.
         assert_eq!(
