@@ -762,6 +762,6 @@ fn identify_reads_mat_files_by_content() {
             "--states",
             "2",
         ],
-        "no FreqV variable",
+        "holds a state-space model",
     );
 }

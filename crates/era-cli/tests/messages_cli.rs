@@ -30,7 +30,8 @@ fn time_histories_given_as_frfs_are_sent_to_era_frf() {
         "time_s,force,accel\n0,1,2\n0.001,3,4\n",
     );
     let h5 = data_file("ladisk-plate-sweep/view_0.hdf5");
-    for file in [&csv, &h5] {
+    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
+    for file in [&csv, &h5, &mat] {
         let out = run_capped(&["identify", s(file), "--states", "2"], None, None);
         out.assert_input_error()
             .says(s(file))

@@ -739,6 +739,21 @@ fn frf_from_variables(
             "",
             match &opts.frequency_variable {
                 Some(v) => format!("no numeric variable {v} (the file has: {})", has()),
+                None if ["a", "b", "c", "d"].iter().all(|k| vars.contains_key(*k)) => format!(
+                    "holds a state-space model (the file has: {}), not FRFs: give the FRF file (FRF + FreqV, xferIJ + FreqV, or a q x p x lines array + FreqV)",
+                    has()
+                ),
+                // Only real arrays and no FRF name: time histories, most likely.
+                None if vars.values().all(|a| a.im.is_none())
+                    && !vars.contains_key("FRF")
+                    && !vars.keys().any(|k| k.starts_with("xfer")) =>
+                {
+                    format!(
+                        "no FreqV variable and no complex array (the file has: {}): real matrices like these are time histories; {}; if the file holds FRFs with the frequencies under another name, give it with --freq-variable NAME",
+                        has(),
+                        crate::format::time_hint(path)
+                    )
+                }
                 None => format!(
                     "no FreqV variable, the frequencies in Hz (the file has: {}): if they are under another name, give it with --freq-variable NAME",
                     has()
