@@ -108,7 +108,27 @@ fn temporary_for(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
         // the output is the user's file.
         .permissions(std::fs::Permissions::from_mode(0o666))
         .tempfile_in(folder)
-        .map_err(|e| IoError::io(path, e))
+        .map_err(|e| temporary_error(path, folder, e))
+}
+
+/// Why the temporary file could not be made, said of the destination: a missing folder
+/// by name, else the OS error without `tempfile`'s "at path .era-tmp-…" (a name the user
+/// never gave).
+fn temporary_error(path: &Path, folder: &Path, e: std::io::Error) -> IoError {
+    if !folder.is_dir() {
+        let what = if folder.exists() {
+            "is not a folder"
+        } else {
+            "does not exist: create it first"
+        };
+        return IoError::format(path, "", format!("the folder {} {what}", folder.display()));
+    }
+    let text = e.to_string();
+    let plain = match text.rfind(" at path ") {
+        Some(at) => text[..at].to_string(),
+        None => text,
+    };
+    IoError::io(path, std::io::Error::new(e.kind(), plain))
 }
 
 /// Syncs the temporary file, checks the target once more and renames over it.
@@ -508,6 +528,21 @@ mod tests {
             "{name}"
         );
         assert!(names(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn a_missing_folder_is_named_not_the_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("absent").join("a.csv");
+        let e = write_atomic(&target, b"x").unwrap_err().to_string();
+        assert!(
+            e.contains("a.csv") && e.contains("absent does not exist: create it first"),
+            "{e}"
+        );
+        assert!(
+            !e.contains(TEMPORARY_PREFIX) && !e.contains("at path"),
+            "{e}"
+        );
     }
 
     #[test]
