@@ -115,18 +115,20 @@ fn temporary_for(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
 /// by name, else the OS error without `tempfile`'s "at path .era-tmp-…" (a name the user
 /// never gave).
 fn temporary_error(path: &Path, folder: &Path, e: std::io::Error) -> IoError {
-    if !folder.is_dir() {
+    // The OS error's kind is kept (Python maps it to FileNotFoundError and the like).
+    let plain = if !folder.is_dir() {
         let what = if folder.exists() {
             "is not a folder"
         } else {
             "does not exist: create it first"
         };
-        return IoError::format(path, "", format!("the folder {} {what}", folder.display()));
-    }
-    let text = e.to_string();
-    let plain = match text.rfind(" at path ") {
-        Some(at) => text[..at].to_string(),
-        None => text,
+        format!("the folder {} {what}", folder.display())
+    } else {
+        let text = e.to_string();
+        match text.rfind(" at path ") {
+            Some(at) => text[..at].to_string(),
+            None => text,
+        }
     };
     IoError::io(path, std::io::Error::new(e.kind(), plain))
 }
@@ -542,6 +544,11 @@ mod tests {
         assert!(
             !e.contains(TEMPORARY_PREFIX) && !e.contains("at path"),
             "{e}"
+        );
+        let e = write_atomic(&target, b"x").unwrap_err();
+        assert!(
+            matches!(&e, IoError::Io { error, .. } if error.kind() == std::io::ErrorKind::NotFound),
+            "{e:?}"
         );
     }
 
