@@ -112,7 +112,10 @@ class Identification:
     def to_control(self) -> Any: ...
 
 def read_frf(
-    path: PathLike, quantity: Optional[Quantity] = None, outputs: Optional[int] = None
+    path: PathLike,
+    quantity: Optional[Quantity] = None,
+    outputs: Optional[int] = None,
+    freq_variable: Optional[str] = None,
 ) -> FrfData: ...
 def write_frf(path: PathLike, frf: FrfData, binary: bool = False) -> None: ...
 def read_time(

@@ -162,6 +162,18 @@ def test_malformed_files_are_value_errors_naming_the_file(tmp_path, era_cli, tex
     assert message in cli_error(era_cli, "info", path)
 
 
+def test_mat_frequency_variable(tmp_path, truth, era_cli):
+    path = tmp_path / "truth.mat"
+    era.write_frf(path, truth)
+    named = era.read_frf(path, freq_variable="FreqV")
+    np.testing.assert_array_equal(named.frequency_hz, truth.frequency_hz)
+    with pytest.raises(ValueError) as caught:
+        era.read_frf(path, freq_variable="f_hz")
+    message = str(caught.value)
+    assert "no numeric variable f_hz" in message and "FreqV 1025x1" in message
+    assert message in cli_error(era_cli, "identify", path, "--states", "8", "--freq-variable", "f_hz")
+
+
 def test_folder_and_wrong_format(tmp_path):
     with pytest.raises((ValueError, OSError)) as caught:
         era.read_frf(tmp_path)

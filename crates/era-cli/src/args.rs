@@ -24,7 +24,7 @@ pub enum Command {
     Demo(DemoArgs),
     /// Identify a model from an FRF file (docs/design.md §1), or from time histories with
     /// --from-time.
-    Identify(IdentifyArgs),
+    Identify(Box<IdentifyArgs>),
     /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
     /// HDF5): Welch-averaged spectra, H1, H2 or Hv.
     Frf(FrfArgs),
@@ -111,6 +111,13 @@ pub struct RefineArgs {
     /// Outputs of a MAT file's FRF matrix, when the file does not say.
     #[arg(long, value_name = "N")]
     pub outputs: Option<usize>,
+    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
+    /// Plots, tables and the report show them; files written carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
+    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
     #[command(flatten)]
     pub fit: RefineFitArgs,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
@@ -212,6 +219,9 @@ pub enum DetrendArg {
 pub struct InfoArgs {
     /// FRF file: CSV, UFF (58/58b) or MAT v5.
     pub file: PathBuf,
+    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -235,6 +245,13 @@ pub struct ConvertArgs {
     /// set is not square.
     #[arg(long)]
     pub outputs: Option<usize>,
+    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
+    /// Plots, tables and the report show them; files written carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
+    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -264,6 +281,13 @@ pub struct PlotArgs {
     /// step between lines is unambiguous, the measurement on the model's branch).
     #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped)]
     pub phase: PhaseArg,
+    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
+    /// Plots, tables and the report show them; files written carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
+    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
     /// Folder for the figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -342,6 +366,48 @@ impl From<QuantityArg> for era::Quantity {
     }
 }
 
+/// `--units RESPONSE,FORCE`: the FRFs' units, e.g. `m/s^2,N` or `in,lbf`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnitsArg {
+    /// The response's unit (`m/s^2`).
+    pub response: String,
+    /// The force's (reference's) unit (`N`).
+    pub force: String,
+}
+
+/// The UFF units field is 20 characters; a longer unit would be cut when written.
+const UNIT_CHARS: usize = 20;
+
+/// Parses `RESPONSE,FORCE`. A comma, not a slash, separates them: units themselves
+/// have slashes (`m/s^2/N` could be `m` per `s^2/N`).
+pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
+    let expected = "expected RESPONSE,FORCE, e.g. m/s^2,N or m/s,N or in,lbf";
+    let (response, force) = text
+        .split_once(',')
+        .ok_or_else(|| format!("no ',' in '{text}': {expected}"))?;
+    let (response, force) = (response.trim(), force.trim());
+    for (part, what) in [(response, "response"), (force, "force")] {
+        if part.is_empty() {
+            return Err(format!("the {what} unit is empty in '{text}': {expected}"));
+        }
+        if part.contains(',') || part.chars().any(char::is_control) {
+            return Err(format!(
+                "the {what} unit '{}' has a comma or a control character: {expected}",
+                part.escape_default()
+            ));
+        }
+        if part.chars().count() > UNIT_CHARS {
+            return Err(format!(
+                "the {what} unit '{part}' is longer than {UNIT_CHARS} characters (the UFF units field)"
+            ));
+        }
+    }
+    Ok(UnitsArg {
+        response: response.to_string(),
+        force: force.to_string(),
+    })
+}
+
 /// `--states N` or `--states auto`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StatesArg {
@@ -408,6 +474,13 @@ pub struct IdentifyArgs {
     /// era frf --outputs).
     #[arg(long, value_name = "N | CHANNELS")]
     pub outputs: Option<String>,
+    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
+    /// Plots, tables and the report show them; files written carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
+    /// MAT FRF files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
     /// Model orders of the stabilization diagram, MIN..MAX[:STEP] (step 2 by default)
     /// or a list such as 50,70,80; all are realized from one SVD. With --states N the
     /// modes of that model are judged against the scan; with --states auto the default

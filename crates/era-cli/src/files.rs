@@ -2,7 +2,7 @@
 //! in another format.
 
 use crate::args::{ConvertArgs, InfoArgs};
-use crate::input::{describe_input, read_frf, read_frf_bytes, shape_line};
+use crate::input::{describe_input, read_frf_bytes, read_frf_with, shape_line, FrfFlags};
 use crate::report::{finish_output, Human};
 use anyhow::Context;
 use era_io::format::{write_frf_file, FrfFormat};
@@ -27,7 +27,15 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
         ));
     }
     let clock = Instant::now();
-    let input = read_frf(&a.input, a.quantity, a.outputs)?;
+    let input = read_frf_with(
+        &a.input,
+        &FrfFlags {
+            quantity: a.quantity,
+            outputs: a.outputs,
+            units: a.units.as_ref(),
+            frequency_variable: a.freq_variable.as_deref(),
+        },
+    )?;
     let read_s = clock.elapsed().as_secs_f64();
     let frf = &input.file.frf;
     let clock = Instant::now();
@@ -54,9 +62,6 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
         input.note,
         describe_input(&input),
     ));
-    if target == FrfFormat::Mat && input.file.channels.is_some() {
-        human.print("  note: MAT files do not keep the channel table (nodes and directions)\n");
-    }
     finish_output(
         &human,
         &a.common,
@@ -75,10 +80,9 @@ pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let clock = Instant::now();
     // Read once: a pipe or `/dev/stdin` cannot be read a second time.
-    let bytes = era_io::input::read_input(&a.file)
-        .with_context(|| format!("reading {}", a.file.display()))?;
-    let format = FrfFormat::detect_bytes(&bytes, &a.file)
-        .with_context(|| format!("reading {}", a.file.display()))?;
+    // The file's errors name it: no "reading FILE" context to say it twice.
+    let bytes = era_io::input::read_input(&a.file)?;
+    let format = FrfFormat::detect_bytes(&bytes, &a.file)?;
     let (text, summary) = match format {
         FrfFormat::Uff => uff_info(a, &bytes)?,
         FrfFormat::Mat => mat_info(a, &bytes)?,
@@ -94,8 +98,7 @@ pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
 }
 
 fn uff_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
-    let contents = era_io::uff::parse_uff(bytes, &a.file, false)
-        .with_context(|| format!("reading {}", a.file.display()))?;
+    let contents = era_io::uff::parse_uff(bytes, &a.file, false)?;
     let mut text = format!("{}: UFF\n", a.file.display());
     let mut by_type: BTreeMap<String, usize> = BTreeMap::new();
     for (f, _) in &contents.functions {
@@ -239,25 +242,31 @@ fn uff_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::V
 }
 
 fn mat_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
-    let vars = era_io::mat::list_variables_in(bytes, &a.file)
-        .with_context(|| format!("reading {}", a.file.display()))?;
+    let vars = era_io::mat::list_variables_in(bytes, &a.file)?;
     let mut text = format!("{}: MAT v5\n  variables:\n", a.file.display());
     for (name, what) in &vars {
         text.push_str(&format!("    {name}: {what}\n"));
     }
     let mut summary = json!({"file": a.file, "format": "MAT",
         "variables": vars.iter().map(|(n, w)| json!({"name": n, "what": w})).collect::<Vec<_>>()});
-    match read_frf_bytes(bytes, &a.file, None, None) {
+    match read_frf_bytes(bytes, &a.file, &info_flags(a)) {
         Ok(input) => {
             let frf = &input.file.frf;
             text.push_str(&format!(
-                "  FRFs: {} outputs x {} inputs, {} lines at {} Hz{}\n",
+                "  FRFs: {} outputs x {} inputs, {} lines at {} Hz, {}{}\n",
                 frf.outputs(),
                 frf.inputs(),
                 frf.lines(),
                 frf.spacing_hz(),
+                frf.quantity(),
                 input.note
             ));
+            text.push_str(&describe_input(&input));
+            summary["quantity"] = json!(frf.quantity().name());
+            summary["metadata"] = json!(input.file.metadata);
+            if let Some(t) = &input.file.channels {
+                summary["channels"] = json!(t.describe());
+            }
             summary["outputs"] = json!(frf.outputs());
             summary["inputs"] = json!(frf.inputs());
             summary["lines"] = json!(frf.lines());
@@ -272,18 +281,22 @@ fn root(e: &anyhow::Error) -> String {
     e.root_cause().to_string()
 }
 
+fn info_flags(a: &InfoArgs) -> FrfFlags<'_> {
+    FrfFlags {
+        frequency_variable: a.freq_variable.as_deref(),
+        ..FrfFlags::default()
+    }
+}
+
 fn csv_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
-    let input = read_frf_bytes(bytes, &a.file, None, None)?;
+    let input = read_frf_bytes(bytes, &a.file, &info_flags(a))?;
     let frf = &input.file.frf;
     let meta = &input.file.metadata;
-    let unit = |k: &str| meta.get(k).cloned().unwrap_or_else(|| "not stated".into());
     let mut text = format!(
-        "{}: CSV\n  {}{}\n  units: {} / {}\n",
+        "{}: CSV\n  {}{}\n",
         a.file.display(),
         shape_line(frf),
         input.note,
-        unit("response_unit"),
-        unit("force_unit"),
     );
     text.push_str(&describe_input(&input));
     Ok((

@@ -4,7 +4,7 @@
 
 use crate::args::{IdentifyArgs, QuantityArg, StatesArg};
 use crate::config::{options, scan_orders};
-use crate::input::{describe_input, read_frf, shape_line};
+use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
 use crate::output::{pair_fit_table, prepare_out_dir, write_identification, write_output};
 use crate::report::{
     identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
@@ -42,7 +42,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             return crate::usage("--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)");
         };
         let quantity = a.quantity.unwrap_or(QuantityArg::Acceleration);
-        let found = crate::frf::estimate_from_time(
+        let mut found = crate::frf::estimate_from_time(
             std::slice::from_ref(&a.file),
             inputs,
             outputs,
@@ -50,6 +50,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             quantity,
             &a.common,
         )?;
+        set_units(&mut found.input, a.units.as_ref());
         human.print(&format!(
             "era identify --from-time {}\n{}",
             a.file.display(),
@@ -84,7 +85,15 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
                 ))
             })?),
         };
-        let input = read_frf(&a.file, a.quantity, outputs)?;
+        let input = read_frf_with(
+            &a.file,
+            &FrfFlags {
+                quantity: a.quantity,
+                outputs,
+                units: a.units.as_ref(),
+                frequency_variable: a.freq_variable.as_deref(),
+            },
+        )?;
         human.print(&format!("era identify {}\n", a.file.display()));
         input
     };

@@ -2,8 +2,7 @@
 //! quantity and layout notes the summaries print. `identify`, `plot`, `refine`, `info`
 //! and `convert` read through here; time histories go through `frf`.
 
-use crate::args::QuantityArg;
-use anyhow::Context;
+use crate::args::{QuantityArg, UnitsArg};
 use era::Quantity;
 use era_io::format::{parse_frf_bytes, FrfFormat, ReadOptions};
 
@@ -17,32 +16,42 @@ pub struct InputFrf {
     pub note: String,
 }
 
-/// Reads an FRF file in any format, told apart by content (the extension is a hint).
-/// `--quantity` overrides the file's tag; with neither, acceleration is assumed.
-pub fn read_frf(
-    path: &std::path::Path,
-    quantity: Option<QuantityArg>,
-    outputs: Option<usize>,
-) -> anyhow::Result<InputFrf> {
-    let bytes =
-        era_io::input::read_input(path).with_context(|| format!("reading {}", path.display()))?;
-    read_frf_bytes(&bytes, path, quantity, outputs)
+/// The flags that say how to read an FRF file, beyond its name.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrfFlags<'a> {
+    /// `--quantity`: overrides the file's tag.
+    pub quantity: Option<QuantityArg>,
+    /// `--outputs`: the split of a MAT `FRF` matrix.
+    pub outputs: Option<usize>,
+    /// `--units`: override the file's units (the `response_unit` and `force_unit`
+    /// metadata every writer and figure reads).
+    pub units: Option<&'a UnitsArg>,
+    /// `--freq-variable`: the MAT variable of the frequencies.
+    pub frequency_variable: Option<&'a str>,
 }
 
-/// [`read_frf`] on the bytes of a file already read once (`era info` looks at them
+/// Reads an FRF file in any format, told apart by content (the extension is a hint).
+/// `--quantity` overrides the file's tag; with neither, acceleration is assumed.
+pub fn read_frf_with(path: &std::path::Path, flags: &FrfFlags) -> anyhow::Result<InputFrf> {
+    // The file's errors name it: no "reading FILE" context to say it twice.
+    let bytes = era_io::input::read_input(path)?;
+    read_frf_bytes(&bytes, path, flags)
+}
+
+/// [`read_frf_with`] on the bytes of a file already read once (`era info` looks at them
 /// twice); `path` names them in messages.
 pub fn read_frf_bytes(
     bytes: &[u8],
     path: &std::path::Path,
-    quantity: Option<QuantityArg>,
-    outputs: Option<usize>,
+    flags: &FrfFlags,
 ) -> anyhow::Result<InputFrf> {
     let opts = ReadOptions {
         default_quantity: Quantity::Acceleration,
-        outputs,
+        outputs: flags.outputs,
+        frequency_variable: flags.frequency_variable.map(str::to_string),
     };
-    let (mut file, format) = parse_frf_bytes(bytes, path, &opts)
-        .with_context(|| format!("reading {}", path.display()))?;
+    let (mut file, format) = parse_frf_bytes(bytes, path, &opts)?;
+    let quantity = flags.quantity;
     let layout = file
         .metadata
         .get("layout")
@@ -57,7 +66,41 @@ pub fn read_frf_bytes(
         None if file.quantity_given => layout,
         None => format!(" (assumed: the file does not say; set --quantity){layout}"),
     };
-    Ok(InputFrf { file, format, note })
+    let mut input = InputFrf { file, format, note };
+    set_units(&mut input, flags.units);
+    Ok(input)
+}
+
+/// `--units` on a file read: sets `response_unit` and `force_unit`, noting what the file
+/// said when it differs.
+pub fn set_units(input: &mut InputFrf, units: Option<&UnitsArg>) {
+    let Some(u) = units else { return };
+    let meta = &mut input.file.metadata;
+    let said = match (meta.get("response_unit"), meta.get("force_unit")) {
+        (Some(r), Some(f)) if (r, f) != (&u.response, &u.force) => {
+            format!("; the file says {r} / {f}")
+        }
+        _ => String::new(),
+    };
+    meta.insert("response_unit".into(), u.response.clone());
+    meta.insert("force_unit".into(), u.force.clone());
+    input.note.push_str(&format!(
+        " (units {} / {} from --units{said})",
+        u.response, u.force
+    ));
+}
+
+/// `m/s^2 / N` from the metadata, `unit / unit` when the file does not say (never
+/// imperial by assumption).
+pub fn units_line(input: &InputFrf) -> String {
+    let meta = &input.file.metadata;
+    let unit = |k: &str| {
+        meta.get(k)
+            .filter(|u| !u.is_empty() && *u != "NONE")
+            .cloned()
+            .unwrap_or_else(|| "unit".into())
+    };
+    format!("{} / {}", unit("response_unit"), unit("force_unit"))
 }
 
 /// `8 outputs x 8 inputs, 801 lines, 0 .. 20 Hz at 0.025 Hz, acceleration`.
@@ -75,7 +118,7 @@ pub fn shape_line(frf: &era::FrfData) -> String {
 
 /// The channel table and the notes of a file, as lines for the human summary.
 pub fn describe_input(input: &InputFrf) -> String {
-    let mut text = String::new();
+    let mut text = format!("  units: {}\n", units_line(input));
     if let Some(table) = &input.file.channels {
         text.push_str("  channels:\n");
         for line in table.describe() {

@@ -65,6 +65,28 @@ fn exit_code(err: &anyhow::Error) -> u8 {
     1
 }
 
+/// The error and its causes, `: `-joined as anyhow's `{:#}` does, with the core's
+/// remedies naming flags ([`era::EraError::message`]), and a context such as
+/// `reading FILE` followed by a cause that starts `FILE: ` names the file once:
+/// `reading FILE: line 3: …`, not `reading FILE: FILE: line 3: …`.
+fn message(err: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in err.chain() {
+        // The core names options by their fields; the CLI's users know them as flags.
+        let text = match cause.downcast_ref::<era::EraError>() {
+            Some(e) => e.message(era::params::Naming::Flag),
+            None => cause.to_string(),
+        };
+        let named = parts.last().and_then(|context| {
+            let (_, subject) = context.split_once(' ')?;
+            let rest = text.strip_prefix(subject)?.strip_prefix(": ")?;
+            (!subject.is_empty()).then(|| rest.to_string())
+        });
+        parts.push(named.unwrap_or(text));
+    }
+    parts.join(": ")
+}
+
 fn main() -> ExitCode {
     let cli = args::Cli::parse();
     std::panic::set_hook(Box::new(|info| {
@@ -95,11 +117,31 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(err)) => {
-            // Core messages quote options by field name; here they are flags.
-            let message = era::params::render(era::params::Naming::Flag, &format!("{err:#}"));
-            eprintln!("era: error: {message}");
+            // Core errors spell options as flags (EraError::message), and options quoted
+            // in other core messages are rendered as flags too (era::params::render).
+            let text = era::params::render(era::params::Naming::Flag, &message(&err));
+            eprintln!("era: error: {text}");
             ExitCode::from(exit_code(&err))
         }
         Err(_) => ExitCode::from(1),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::message;
+    use anyhow::Context;
+
+    #[test]
+    fn a_file_named_by_the_context_and_its_error_is_named_once() {
+        let io = std::io::Error::from(std::io::ErrorKind::NotFound);
+        let err: anyhow::Result<()> = Err(anyhow::anyhow!("data/x.csv: {io}"));
+        let err = err.context("reading data/x.csv").unwrap_err();
+        let m = message(&err);
+        assert_eq!(m, format!("reading data/x.csv: {io}"));
+        // Other chains are joined as anyhow joins them.
+        let err: anyhow::Result<()> = Err(anyhow::anyhow!("b.csv: bad"));
+        let err = err.context("reading a.csv").unwrap_err();
+        assert_eq!(message(&err), format!("{err:#}"));
     }
 }

@@ -265,8 +265,8 @@ fn bad_csv_files_exit_2_naming_the_problem() {
         ),
         (
             "offset.csv",
-            "frequency_hz,H1_1_re,H1_1_im\n5,1,1\n6,1,1\n",
-            "frequencies must start at 0 Hz",
+            "frequency_hz,H1_1_re,H1_1_im\n5.5,1,1\n6.5,1,1\n",
+            "line 2, column frequency_hz: the first line is 5.5 Hz, 5.5000 increments",
         ),
     ];
     for (name, text, needle) in cases {
@@ -762,7 +762,7 @@ fn identify_reads_mat_files_by_content() {
             "--states",
             "2",
         ],
-        "no FreqV variable",
+        "holds a state-space model",
     );
 }
 

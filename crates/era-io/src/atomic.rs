@@ -108,7 +108,29 @@ fn temporary_for(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
         // the output is the user's file.
         .permissions(std::fs::Permissions::from_mode(0o666))
         .tempfile_in(folder)
-        .map_err(|e| IoError::io(path, e))
+        .map_err(|e| temporary_error(path, folder, e))
+}
+
+/// Why the temporary file could not be made, said of the destination: a missing folder
+/// by name, else the OS error without `tempfile`'s "at path .era-tmp-…" (a name the user
+/// never gave).
+fn temporary_error(path: &Path, folder: &Path, e: std::io::Error) -> IoError {
+    // The OS error's kind is kept (Python maps it to FileNotFoundError and the like).
+    let plain = if !folder.is_dir() {
+        let what = if folder.exists() {
+            "is not a folder"
+        } else {
+            "does not exist: create it first"
+        };
+        format!("the folder {} {what}", folder.display())
+    } else {
+        let text = e.to_string();
+        match text.rfind(" at path ") {
+            Some(at) => text[..at].to_string(),
+            None => text,
+        }
+    };
+    IoError::io(path, std::io::Error::new(e.kind(), plain))
 }
 
 /// Syncs the temporary file, checks the target once more and renames over it.
@@ -508,6 +530,26 @@ mod tests {
             "{name}"
         );
         assert!(names(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn a_missing_folder_is_named_not_the_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("absent").join("a.csv");
+        let e = write_atomic(&target, b"x").unwrap_err().to_string();
+        assert!(
+            e.contains("a.csv") && e.contains("absent does not exist: create it first"),
+            "{e}"
+        );
+        assert!(
+            !e.contains(TEMPORARY_PREFIX) && !e.contains("at path"),
+            "{e}"
+        );
+        let e = write_atomic(&target, b"x").unwrap_err();
+        assert!(
+            matches!(&e, IoError::Io { error, .. } if error.kind() == std::io::ErrorKind::NotFound),
+            "{e:?}"
+        );
     }
 
     #[test]

@@ -161,6 +161,33 @@ pub fn parse_frf_csv(
         }
     };
     let names: Vec<String> = header.iter().map(str::to_string).collect();
+    if let [only] = names.as_slice() {
+        let separators = [(';', "semicolons"), ('\t', "tabs"), ('|', "bars")];
+        if let Some((sep, what)) = separators.iter().find(|(c, _)| only.contains(*c)) {
+            return Err(fail(
+                header_line,
+                "",
+                format!(
+                    "the header is one column: its names are separated by {what} ('{}'), and era reads comma-separated files with '.' decimals; save the file with ',' as the separator (frequency_hz,H1_1_re,H1_1_im,...)",
+                    sep.escape_default()
+                ),
+            ));
+        }
+    }
+    if let Some(time) = names.iter().find(|n| {
+        ["time_s", "time", "t", "time_ms", "seconds"]
+            .iter()
+            .any(|t| n.eq_ignore_ascii_case(t))
+    }) {
+        return Err(fail(
+            header_line,
+            time,
+            format!(
+                "a time column: this file holds time histories, not FRFs; {}",
+                crate::format::time_hint(path)
+            ),
+        ));
+    }
     let mut frequency_col = None;
     let mut columns: BTreeMap<(usize, usize, u8), usize> = BTreeMap::new();
     let (mut q, mut p) = (0, 0);
@@ -262,19 +289,36 @@ pub fn parse_frf_csv(
         return Err(IoError::format(path, "", "no data rows"));
     }
 
-    let lines = rows.len();
+    // Lines from 0 Hz: a start a whole number of increments above is padded with zero
+    // lines (as in every format), another start is refused with the remedy.
+    let mut metadata = metadata;
+    let start = crate::frf_file::zero_start(
+        path,
+        &format!("line {}, column frequency_hz: ", line_of_row[0]),
+        &frequency_hz,
+        q * p,
+    )?;
+    let added = start.as_ref().map_or(0, |z| z.added);
+    if let Some(z) = &start {
+        crate::frf_file::add_note(&mut metadata, z.note());
+        frequency_hz = z.frequency_hz.clone();
+    }
+    let lines = rows.len() + added;
     let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
     for i in 1..=q {
         for j in 1..=p {
             let (re, im) = (columns[&(i, j, 0)], columns[&(i, j, 1)]);
             for (k, row) in rows.iter().enumerate() {
-                values[((i - 1) * p + (j - 1)) * lines + k] = Complex64::new(row[re], row[im]);
+                values[((i - 1) * p + (j - 1)) * lines + added + k] =
+                    Complex64::new(row[re], row[im]);
             }
         }
     }
+    // A line index of the padded set is row `line − added` of the file.
+    let row_line = |line: usize| line_of_row[line.saturating_sub(added).min(rows.len() - 1)];
     let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
         EraError::NonUniformFrequencies { line, .. } | EraError::NonFinite { line, .. } => {
-            fail(line_of_row[line], "frequency_hz", e.to_string())
+            fail(row_line(line), "frequency_hz", e.to_string())
         }
         EraError::FirstLineNotZero { .. } => fail(line_of_row[0], "frequency_hz", e.to_string()),
         other => IoError::format(path, "", other.to_string()),
@@ -407,6 +451,58 @@ mod tests {
     }
 
     #[test]
+    fn a_late_start_on_the_grid_is_padded_with_zero_lines() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(
+            &dir,
+            "late.csv",
+            "frequency_hz,H1_1_re,H1_1_im,H2_1_re,H2_1_im\n0.5,1,2,5,6\n0.75,3,4,7,8\n",
+        );
+        let f = read_frf_csv(&p, Quantity::Velocity).unwrap();
+        assert_eq!(f.frf.frequency_hz(), &[0.0, 0.25, 0.5, 0.75]);
+        let zero = Complex64::new(0.0, 0.0);
+        assert_eq!(
+            f.frf.pair(0, 0),
+            &[
+                zero,
+                zero,
+                Complex64::new(1.0, 2.0),
+                Complex64::new(3.0, 4.0)
+            ]
+        );
+        assert_eq!(f.frf.pair(1, 0)[3], Complex64::new(7.0, 8.0));
+        let note = &f.metadata["notes"];
+        assert!(
+            note.contains("start at 0.5 Hz") && note.contains("2 lines"),
+            "{note}"
+        );
+        // An uneven line after the padding is named by its line in the file.
+        let p = write(
+            &dir,
+            "late_uneven.csv",
+            "frequency_hz,H1_1_re,H1_1_im\n2,1,1\n3,1,1\n4.5,1,1\n",
+        );
+        let e = read_frf_csv(&p, Quantity::Velocity)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 4, column frequency_hz: frequencies are not uniformly spaced"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_semicolon_header_is_not_echoed_as_one_column_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(&dir, "semi.csv", "frequency_hz;H1_1_re;H1_1_im\n0;1;1\n");
+        let e = read_frf_csv(&p, Quantity::Velocity)
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains("frequency_hz;H1_1_re"), "{e}");
+        assert!(e.contains("save the file with ','"), "{e}");
+    }
+
+    #[test]
     fn errors_name_file_line_and_column() {
         let dir = tempfile::tempdir().unwrap();
         let cases = [
@@ -432,8 +528,18 @@ mod tests {
             ),
             (
                 "start.csv",
-                "frequency_hz,H1_1_re,H1_1_im\n1,1,1\n2,1,1\n",
-                "line 2, column frequency_hz: frequencies must start at 0 Hz",
+                "frequency_hz,H1_1_re,H1_1_im\n1.5,1,1\n2.5,1,1\n",
+                "line 2, column frequency_hz: the first line is 1.5 Hz, 1.5000 increments",
+            ),
+            (
+                "semicolons.csv",
+                "frequency_hz;H1_1_re;H1_1_im\n0;1;1\n",
+                "line 1: the header is one column: its names are separated by semicolons (';')",
+            ),
+            (
+                "time.csv",
+                "time_s,force,accel\n0,1,1\n0.001,1,1\n",
+                "line 1, column time_s: a time column: this file holds time histories, not FRFs; estimate the FRFs with `era frf",
             ),
             (
                 "short.csv",

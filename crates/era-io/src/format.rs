@@ -30,12 +30,14 @@ pub enum FrfFormat {
 }
 
 /// What a reader needs beyond the path.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ReadOptions {
     /// Tag for files that do not say what they measure.
     pub default_quantity: Quantity,
     /// How many of a MAT `FRF` matrix's columns are outputs, when the file does not say.
     pub outputs: Option<usize>,
+    /// The MAT variable holding the frequencies (Hz), when not `FreqV`.
+    pub frequency_variable: Option<String>,
 }
 
 impl Default for ReadOptions {
@@ -43,6 +45,7 @@ impl Default for ReadOptions {
         ReadOptions {
             default_quantity: Quantity::Acceleration,
             outputs: None,
+            frequency_variable: None,
         }
     }
 }
@@ -116,6 +119,15 @@ impl FrfFormat {
                 "",
                 "MAT v7.3 (HDF5) files are not read: save with -v7 (the default) or -v6",
             ));
+        } else if crate::time::hdf5_offset(bytes).is_some() {
+            return Err(IoError::format(
+                path,
+                "",
+                format!(
+                    "is an HDF5 file, which holds time histories for era, not FRFs: {}",
+                    time_hint(path)
+                ),
+            ));
         } else if crate::uff::looks_like_uff(head) {
             Some(FrfFormat::Uff)
         } else {
@@ -137,6 +149,14 @@ impl FrfFormat {
     }
 }
 
+/// What to do with the time histories in `path`, given where FRFs are expected.
+pub fn time_hint(path: &Path) -> String {
+    let f = crate::text::escaped_message(&path.display().to_string());
+    format!(
+        "estimate the FRFs with `era frf {f} --inputs CHANNELS --outputs CHANNELS --out frf.csv`, or identify from the time histories directly with `era identify --from-time {f} --inputs CHANNELS --outputs CHANNELS`"
+    )
+}
+
 fn first_line(head: &[u8]) -> String {
     let line = head.split(|b| *b == b'\n').next().unwrap_or(&[]);
     let s: String = String::from_utf8_lossy(line).chars().take(40).collect();
@@ -148,7 +168,9 @@ impl FrfReader for FrfFormat {
         match self {
             FrfFormat::Csv => read_frf_csv(path, opts.default_quantity),
             FrfFormat::Uff => crate::uff::read_frf_uff(path, opts.default_quantity),
-            FrfFormat::Mat => crate::mat::read_frf_mat(path, opts.outputs, opts.default_quantity),
+            FrfFormat::Mat => {
+                crate::mat::parse_frf_mat_with(&crate::input::read_input(path)?, path, opts)
+            }
         }
     }
 }
@@ -167,7 +189,7 @@ impl FrfWriter for FrfFormat {
                 (unit("response_unit"), unit("force_unit")),
                 uff,
             ),
-            FrfFormat::Mat => crate::mat::write_frf_mat(path, &file.frf),
+            FrfFormat::Mat => crate::mat::write_frf_mat_file(path, file),
         }
     }
 }
@@ -228,9 +250,7 @@ pub fn parse_frf_bytes(
             let contents = crate::uff::parse_uff(bytes, path, true)?;
             crate::uff::frf_from_uff(path, &contents, opts.default_quantity)?
         }
-        FrfFormat::Mat => {
-            crate::mat::parse_frf_mat_with(bytes, path, opts.outputs, opts.default_quantity)?
-        }
+        FrfFormat::Mat => crate::mat::parse_frf_mat_with(bytes, path, opts)?,
     };
     Ok((file, format))
 }
@@ -265,6 +285,25 @@ mod tests {
         assert_eq!(meta["output_2"], "node 2 -RY");
         assert_eq!(channels_from_metadata(&meta, 2, 1), Some(t));
         assert_eq!(channels_from_metadata(&meta, 3, 1), None);
+    }
+
+    #[test]
+    fn an_hdf5_file_is_sent_to_era_frf() {
+        let mut bytes = b"\x89HDF\r\n\x1a\n".to_vec();
+        bytes.resize(2048, 0);
+        for name in ["view_0.hdf5", "frf.csv"] {
+            let e = FrfFormat::detect_bytes(&bytes, Path::new(name))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(name)
+                    && e.contains("HDF5")
+                    && e.contains("era frf")
+                    && e.contains("--from-time"),
+                "{e}"
+            );
+            assert!(!e.contains("UTF-8"), "{e}");
+        }
     }
 
     #[test]

@@ -213,3 +213,116 @@ pub fn channels_from_metadata(
         inputs: take("input", inputs)?,
     })
 }
+
+/// Lines that start above 0 Hz, made to start at 0 Hz.
+///
+/// ERA reads the FRF as the DFT of the Markov sequence, `H(f_k) = Σ_n Y_n e^{−2πi k n / N}`
+/// with `f_k = k Δf` for `k = 0, 1, …` (docs/design.md §1): the inverse FFT needs every line
+/// from `k = 0`. Analysers often leave the lowest lines out (`f_0 = n₀ Δf`, `n₀ ≥ 1`);
+/// when `n₀` is a whole number those lines are added as zeros, which is what the thesis
+/// does with the lines it cannot trust (`nz`, the leading lines set to zero). A start
+/// that is not a whole number of increments lies on another grid and is refused, with
+/// the remedy: no line can be added without resampling.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ZeroStart {
+    /// Zero lines added before the file's first line.
+    pub added: usize,
+    /// The file's first line, Hz.
+    pub first_hz: f64,
+    /// The added lines `k Δf`, then the file's own.
+    pub frequency_hz: Vec<f64>,
+}
+
+impl ZeroStart {
+    /// The note a summary prints: which lines were added.
+    pub fn note(&self) -> String {
+        format!(
+            "the lines start at {} Hz; the {} lines below were added as zeros (ERA needs lines from 0 Hz)",
+            self.first_hz, self.added
+        )
+    }
+
+    /// `values` (pair-major: pair `s`, line `k` at `s · lines + k`) with the added
+    /// zero lines in front of each pair.
+    pub fn pad_values(&self, values: &[era::Complex64], pairs: usize) -> Vec<era::Complex64> {
+        if self.added == 0 {
+            return values.to_vec();
+        }
+        let old = values.len() / pairs.max(1);
+        let new = old + self.added;
+        let mut out = vec![era::Complex64::new(0.0, 0.0); pairs * new];
+        for s in 0..pairs {
+            out[s * new + self.added..(s + 1) * new]
+                .copy_from_slice(&values[s * old..(s + 1) * old]);
+        }
+        out
+    }
+}
+
+/// Decides whether `frequency_hz` (the file's lines) can be padded to start at 0 Hz
+/// (see [`ZeroStart`]), judging by the first line and the step to the second; `None`
+/// when they already start at 0 Hz or there is no step to judge by (the frequency checks
+/// of [`era::FrfData`] then speak, and they also check every later line). `pairs` sizes
+/// the padded set, checked against [`era::limits`] before anything is allocated (a file
+/// starting at 10⁷ Hz would ask for millions of lines).
+///
+/// # Errors
+/// [`crate::IoError`] naming the file and `location` for a start that is not a whole
+/// number of increments (with the remedy), or a padded size over a limit.
+pub fn zero_start(
+    path: &std::path::Path,
+    location: &str,
+    frequency_hz: &[f64],
+    pairs: usize,
+) -> Result<Option<ZeroStart>, crate::IoError> {
+    let (first_hz, spacing_hz) = match frequency_hz {
+        [f0, f1, ..] => (*f0, f1 - f0),
+        _ => return Ok(None),
+    };
+    if first_hz == 0.0 || !first_hz.is_finite() || !(spacing_hz > 0.0 && spacing_hz.is_finite()) {
+        return Ok(None);
+    }
+    let increments = first_hz / spacing_hz;
+    let whole = increments.round();
+    if first_hz < 0.0 || (increments - whole).abs() > 1e-6 || whole < 1.0 {
+        return Err(crate::IoError::format(
+            path,
+            location,
+            format!(
+                "the first line is {first_hz} Hz, {increments:.4} increments of the {spacing_hz} Hz spacing: ERA needs lines k x {spacing_hz} Hz from 0 Hz, and this start is not on that grid; export the FRFs from 0 Hz, or resample them onto whole multiples of the spacing"
+            ),
+        ));
+    }
+    // At most 2^53: beyond, the count is not exact in f64 (and far past any limit).
+    let added = whole.min(9.0e15) as u64;
+    let padded = added.saturating_add(frequency_hz.len() as u64);
+    era::limits::LINES
+        .check(
+            format!("the lines start at {first_hz} Hz (line {added} at {spacing_hz} Hz spacing); padding to 0 Hz"),
+            padded,
+        )
+        .map_err(|e| crate::IoError::limit(path, e))?;
+    era::limits::VALUES
+        .check_product("FRF values after padding to 0 Hz", &[padded, pairs as u64])
+        .map_err(|e| crate::IoError::limit(path, e))?;
+    let added = added as usize;
+    let mut padded_hz: Vec<f64> = (0..added).map(|k| k as f64 * spacing_hz).collect();
+    padded_hz.extend_from_slice(frequency_hz);
+    Ok(Some(ZeroStart {
+        added,
+        first_hz,
+        frequency_hz: padded_hz,
+    }))
+}
+
+/// Adds a note to a file's `notes` metadata (notes are joined by ` | `, as the CLI
+/// prints them one a line).
+pub fn add_note(metadata: &mut BTreeMap<String, String>, note: String) {
+    metadata
+        .entry("notes".to_string())
+        .and_modify(|n| {
+            n.push_str(" | ");
+            n.push_str(&note);
+        })
+        .or_insert(note);
+}

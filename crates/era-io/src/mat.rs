@@ -6,7 +6,11 @@
 //!   so that `load model.mat; sys = ss(a,b,c,d,Ts)` works;
 //! - [`write_frf_mat`]: the thesis's layout, `FRF` (lines × q·p, complex, column
 //!   `(j−1)·q + i` is output i from input j, output-fastest) and `FreqV` (lines × 1, Hz),
-//!   plus `outputs` and `inputs` so that the file says how to split the columns;
+//!   plus `outputs` and `inputs` so that the file says how to split the columns, and the
+//!   facts the other formats carry: `quantity`, `response_unit`, `force_unit` (char) and
+//!   the channel table as `output_nodes`, `output_directions`, `input_nodes`,
+//!   `input_directions` (UFF direction codes: ±1..±3 translation X, Y, Z, ±4..±6
+//!   rotation), so that CSV → MAT → UFF keeps what the file measured, in what units, where;
 //! - [`read_frf_mat`]: FRFs from MAT v5 files, compressed (MATLAB's default `-v7`) or
 //!   not, single or double precision, in three layouts:
 //!   1. `FRF` + `FreqV` as above; the split of the q·p columns comes from the file's
@@ -17,11 +21,18 @@
 //!      (`xfer110`: 1 and 10, or 11 and 0?) and refused unless written `xferI_J`;
 //!   3. one q×p×L complex array + `FreqV`.
 //!
+//!   The frequency variable is `FreqV` unless the caller names another
+//!   ([`crate::format::ReadOptions::frequency_variable`], `--freq-variable` in the CLI).
+//!   The facts above are read back when present. Lines that start a whole number of
+//!   increments above 0 Hz are padded with zero lines, as in every format
+//!   ([`crate::frf_file::zero_start`]).
+//!
 //! Arrays are built with `matrw`'s `NumericArray::new` (column-major values and
 //! dimensions), the one constructor it offers for arrays built at run time.
 
 use crate::atomic::write_via;
-use crate::frf_file::FrfFile;
+use crate::format::ReadOptions;
+use crate::frf_file::{Channel, ChannelTable, Dof, FrfFile};
 use crate::IoError;
 use era::modal::ModalParameters;
 use era::{Complex64, EraError, FrfData, Quantity, StateSpace};
@@ -63,6 +74,14 @@ fn complex(rows: usize, cols: usize, f: impl Fn(usize, usize) -> era::Complex64)
     )
 }
 
+fn text(value: &str) -> MatVariable {
+    let chars: Vec<char> = value.chars().collect();
+    MatVariable::NumericArray(
+        NumericArray::new(vec![1, chars.len()], MatlabType::UTF8(chars), None)
+            .expect("sizes agree"),
+    )
+}
+
 /// Saves through [`write_via`] (a temporary file, then a rename). `matrw` does not
 /// report write errors (it discards them), so the temporary file is read back and
 /// must hold every variable before it replaces the destination.
@@ -84,7 +103,7 @@ fn save_atomic(path: &Path, file: MatFile) -> Result<(), IoError> {
         })?;
         let missing: Vec<&String> = expected
             .iter()
-            .filter(|n| !back.numeric.contains_key(*n))
+            .filter(|n| !back.numeric.contains_key(*n) && !back.text.contains_key(*n))
             .collect();
         if !missing.is_empty() {
             return Err(IoError::format(
@@ -128,11 +147,43 @@ pub fn write_model_mat(
     save_atomic(path, file)
 }
 
-/// Writes FRFs as `FRF` + `FreqV` (the thesis's layout).
+/// Writes FRFs as `FRF` + `FreqV` (the thesis's layout), with `outputs`, `inputs` and
+/// `quantity`.
 ///
 /// # Errors
 /// [`IoError`] naming the file.
 pub fn write_frf_mat(path: &Path, frf: &FrfData) -> Result<(), IoError> {
+    save_atomic(path, frf_variables(frf))
+}
+
+/// Writes an FRF file's data and facts: [`write_frf_mat`]'s variables, plus
+/// `response_unit` and `force_unit` when the metadata has them and the channel table
+/// (`output_nodes`, `output_directions`, `input_nodes`, `input_directions`) when it has
+/// one. Entity names are not kept (a UFF-only detail).
+///
+/// # Errors
+/// [`IoError`] naming the file.
+pub fn write_frf_mat_file(path: &Path, file: &FrfFile) -> Result<(), IoError> {
+    let mut vars = frf_variables(&file.frf);
+    for key in ["response_unit", "force_unit"] {
+        if let Some(u) = file.metadata.get(key).filter(|u| !u.is_empty()) {
+            vars.insert(key, text(u));
+        }
+    }
+    if let Some(t) = &file.channels {
+        let row = |cs: &[Channel], f: &dyn Fn(&Dof) -> i64| {
+            let v: Vec<f64> = cs.iter().map(|c| f(&c.dof) as f64).collect();
+            real(1, v.len(), |_, j| v[j])
+        };
+        vars.insert("output_nodes", row(&t.outputs, &|d| d.node));
+        vars.insert("output_directions", row(&t.outputs, &|d| d.direction));
+        vars.insert("input_nodes", row(&t.inputs, &|d| d.node));
+        vars.insert("input_directions", row(&t.inputs, &|d| d.direction));
+    }
+    save_atomic(path, vars)
+}
+
+fn frf_variables(frf: &FrfData) -> MatFile {
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
     let mut file = MatFile::new();
     file.insert(
@@ -142,7 +193,8 @@ pub fn write_frf_mat(path: &Path, frf: &FrfData) -> Result<(), IoError> {
     file.insert("FreqV", real(lines, 1, |k, _| frf.frequency_hz()[k]));
     file.insert("outputs", real(1, 1, |_, _| q as f64));
     file.insert("inputs", real(1, 1, |_, _| p as f64));
-    save_atomic(path, file)
+    file.insert("quantity", text(frf.quantity().name()));
+    file
 }
 
 /// True when the file starts like a MAT v5 file ("MATLAB 5.0 MAT-file").
@@ -180,9 +232,11 @@ fn to_f64(t: &MatlabType) -> Option<Vec<f64>> {
     })
 }
 
-/// The variables of a MAT file: numeric arrays, and the others by name and class.
+/// The variables of a MAT file: numeric arrays, char arrays as text, and the others
+/// (char arrays too) by name and class.
 struct Variables {
     numeric: BTreeMap<String, Array>,
+    text: BTreeMap<String, String>,
     /// Variables that are not numeric arrays: (name, class).
     other: Vec<(String, &'static str)>,
 }
@@ -277,6 +331,7 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
         };
     let names: Vec<String> = file.iter().map(|(k, _)| k.clone()).collect();
     let mut numeric = BTreeMap::new();
+    let mut text = BTreeMap::new();
     let mut other = Vec::new();
     for name in names {
         match file.take(&name) {
@@ -292,13 +347,22 @@ fn parse_variables(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
                         },
                     );
                 }
-                None => other.push((name, "char or logical")),
+                None => {
+                    if let MatlabType::UTF8(chars) | MatlabType::UTF16(chars) = &a.value {
+                        text.insert(name.clone(), chars.iter().collect::<String>());
+                    }
+                    other.push((name, "char or logical"))
+                }
             },
             Some(v) => other.push((name.clone(), class_of(&v))),
             None => {}
         }
     }
-    Ok(Variables { numeric, other })
+    Ok(Variables {
+        numeric,
+        text,
+        other,
+    })
 }
 
 /// The first informative line of a `matrw`/`binrw` error (which spans many lines
@@ -327,16 +391,6 @@ fn first_error_line(text: &str) -> String {
         .trim_start_matches("0: ")
         .to_string();
     line.replace("Error: ", "")
-}
-
-/// The numeric arrays of MAT bytes; an error naming the other classes when there are
-/// none.
-fn numeric_arrays(bytes: &[u8], path: &Path) -> Result<BTreeMap<String, Array>, IoError> {
-    let vars = parse_variables(bytes, path)?;
-    if vars.numeric.is_empty() {
-        return Err(unsupported_only(path, &vars));
-    }
-    Ok(vars.numeric)
 }
 
 fn unsupported_only(path: &Path, vars: &Variables) -> IoError {
@@ -518,11 +572,13 @@ pub fn list_variables_in(bytes: &[u8], path: &Path) -> Result<Vec<(String, Strin
                 format!("{dims} {}", if a.im.is_some() { "complex" } else { "real" }),
             )
         })
-        .chain(
-            vars.other
-                .iter()
-                .map(|(n, c)| (n.clone(), format!("({c})"))),
-        )
+        .chain(vars.other.iter().map(|(n, c)| match vars.text.get(n) {
+            Some(t) => (
+                n.clone(),
+                format!("char '{}'", crate::text::escaped_message(t)),
+            ),
+            None => (n.clone(), format!("({c})")),
+        }))
         .collect())
 }
 
@@ -531,7 +587,7 @@ pub fn list_variables_in(bytes: &[u8], path: &Path) -> Result<Vec<(String, Strin
 /// # Errors
 /// As [`read_frf_mat`].
 pub fn parse_frf_mat(bytes: &[u8], path: &Path) -> Result<FrfFile, IoError> {
-    parse_frf_mat_with(bytes, path, None, Quantity::Acceleration)
+    parse_frf_mat_with(bytes, path, &ReadOptions::default())
 }
 
 /// [`read_frf_mat`] on bytes already read; `path` names them in messages.
@@ -541,10 +597,18 @@ pub fn parse_frf_mat(bytes: &[u8], path: &Path) -> Result<FrfFile, IoError> {
 pub fn parse_frf_mat_with(
     bytes: &[u8],
     path: &Path,
-    outputs: Option<usize>,
-    quantity: Quantity,
+    opts: &ReadOptions,
 ) -> Result<FrfFile, IoError> {
-    frf_from_arrays(path, &numeric_arrays(bytes, path)?, outputs, quantity)
+    frf_from_variables(path, &frf_variables_of(bytes, path)?, opts)
+}
+
+/// The variables of MAT bytes; an error naming the other classes when none is numeric.
+fn frf_variables_of(bytes: &[u8], path: &Path) -> Result<Variables, IoError> {
+    let vars = parse_variables(bytes, path)?;
+    if vars.numeric.is_empty() {
+        return Err(unsupported_only(path, &vars));
+    }
+    Ok(vars)
 }
 
 fn scalar(vars: &BTreeMap<String, Array>, name: &str) -> Option<usize> {
@@ -584,28 +648,129 @@ pub fn read_frf_mat(
     quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
     let bytes = crate::input::read_input(path)?;
-    frf_from_arrays(path, &numeric_arrays(&bytes, path)?, outputs, quantity)
+    let opts = ReadOptions {
+        default_quantity: quantity,
+        outputs,
+        ..ReadOptions::default()
+    };
+    parse_frf_mat_with(&bytes, path, &opts)
 }
 
-fn frf_from_arrays(
+/// The channel table from `output_nodes`, `output_directions`, `input_nodes` and
+/// `input_directions`; `None` when the file has none of them.
+fn channels_of(
     path: &Path,
     vars: &BTreeMap<String, Array>,
-    outputs: Option<usize>,
-    quantity: Quantity,
+    q: usize,
+    p: usize,
+) -> Result<Option<ChannelTable>, IoError> {
+    const NAMES: [&str; 4] = [
+        "output_nodes",
+        "output_directions",
+        "input_nodes",
+        "input_directions",
+    ];
+    if NAMES.iter().all(|n| !vars.contains_key(*n)) {
+        return Ok(None);
+    }
+    let whole = |name: &str, count: usize| -> Result<Vec<i64>, IoError> {
+        let fail = |m: String| IoError::format(path, format!("variable {name}: "), m);
+        let a = vars.get(name).ok_or_else(|| {
+            IoError::format(
+                path,
+                "",
+                format!("no {name} variable, though the file has part of a channel table ({}): write all four or none", NAMES.join(", ")),
+            )
+        })?;
+        if a.re.len() != count {
+            return Err(fail(format!(
+                "has {} values, the FRFs have {count}",
+                a.re.len()
+            )));
+        }
+        a.re.iter()
+            .map(|v| {
+                (v.fract() == 0.0 && v.abs() < 1e15)
+                    .then_some(*v as i64)
+                    .ok_or_else(|| fail(format!("{v} is not a whole number")))
+            })
+            .collect()
+    };
+    let side = |nodes: &str, directions: &str, count: usize| -> Result<Vec<Channel>, IoError> {
+        Ok(whole(nodes, count)?
+            .into_iter()
+            .zip(whole(directions, count)?)
+            .map(|(node, direction)| Channel {
+                dof: Dof { node, direction },
+                entity: "NONE".into(),
+            })
+            .collect())
+    };
+    Ok(Some(ChannelTable {
+        outputs: side(NAMES[0], NAMES[1], q)?,
+        inputs: side(NAMES[2], NAMES[3], p)?,
+    }))
+}
+
+fn frf_from_variables(
+    path: &Path,
+    all: &Variables,
+    opts: &ReadOptions,
 ) -> Result<FrfFile, IoError> {
+    let vars = &all.numeric;
+    let outputs = opts.outputs;
     let fail = |variable: &str, message: String| {
         IoError::format(path, format!("variable {variable}: "), message)
     };
-    let freq = vars.get("FreqV").ok_or_else(|| {
+    let has = || {
+        vars.iter()
+            .map(|(n, a)| {
+                let dims = a.dim.iter().map(usize::to_string).collect::<Vec<_>>();
+                format!("{n} {}", dims.join("x"))
+            })
+            .chain(all.other.iter().map(|(n, c)| format!("{n} ({c})")))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let frequency_name = opts.frequency_variable.as_deref().unwrap_or("FreqV");
+    let freq = vars.get(frequency_name).ok_or_else(|| {
         IoError::format(
             path,
             "",
-            format!(
-                "no FreqV variable (the file has: {})",
-                vars.keys().cloned().collect::<Vec<_>>().join(", ")
-            ),
+            match &opts.frequency_variable {
+                Some(v) => format!("no numeric variable {v} (the file has: {})", has()),
+                None if ["a", "b", "c", "d"].iter().all(|k| vars.contains_key(*k)) => format!(
+                    "holds a state-space model (the file has: {}), not FRFs: give the FRF file (FRF + FreqV, xferIJ + FreqV, or a q x p x lines array + FreqV)",
+                    has()
+                ),
+                // Only real arrays and no FRF name: time histories, most likely.
+                None if vars.values().all(|a| a.im.is_none())
+                    && !vars.contains_key("FRF")
+                    && !vars.keys().any(|k| k.starts_with("xfer")) =>
+                {
+                    format!(
+                        "no FreqV variable and no complex array (the file has: {}): real matrices like these are time histories; {}; if the file holds FRFs with the frequencies under another name, give it with --freq-variable NAME",
+                        has(),
+                        crate::format::time_hint(path)
+                    )
+                }
+                None => format!(
+                    "no FreqV variable, the frequencies in Hz (the file has: {}): if they are under another name, give it with --freq-variable NAME",
+                    has()
+                ),
+            },
         )
     })?;
+    if freq.im.is_some() || freq.dim.iter().filter(|d| **d > 1).count() > 1 {
+        return Err(fail(
+            frequency_name,
+            format!(
+                "is {}{:?}: the frequencies must be a real vector (Hz)",
+                if freq.im.is_some() { "complex " } else { "" },
+                freq.dim
+            ),
+        ));
+    }
     let lines = freq.re.len();
     let frequency_hz = freq.re.clone();
     let mut notes = BTreeMap::new();
@@ -614,7 +779,7 @@ fn frf_from_arrays(
             return Err(fail(
                 "FRF",
                 format!(
-                    "is {:?}, expected {lines} lines (FreqV) x outputs·inputs columns",
+                    "is {:?}, expected {lines} lines ({frequency_name}) x outputs·inputs columns",
                     frf.dim
                 ),
             ));
@@ -668,7 +833,7 @@ fn frf_from_arrays(
                     if a.re.len() != lines {
                         return Err(fail(
                             name,
-                            format!("has {} values, FreqV has {lines}", a.re.len()),
+                            format!("has {} values, {frequency_name} has {lines}", a.re.len()),
                         ));
                     }
                     pairs.insert(ij, a);
@@ -740,17 +905,45 @@ fn frf_from_arrays(
             ),
         ));
     };
+    // Lines from 0 Hz, as in every format.
+    let mut frequency_hz = frequency_hz;
+    let mut values = values;
+    let location = format!("variable {frequency_name}: ");
+    if let Some(start) = crate::frf_file::zero_start(path, &location, &frequency_hz, q * p)? {
+        values = start.pad_values(&values, q * p);
+        crate::frf_file::add_note(&mut notes, start.note());
+        frequency_hz = start.frequency_hz;
+    }
+    // The facts a file of ours carries.
+    let (quantity, quantity_given) = match all.text.get("quantity") {
+        Some(q) => (
+            Quantity::parse(q).ok_or_else(|| {
+                fail(
+                    "quantity",
+                    format!("unknown quantity '{q}' (acceleration, velocity or displacement)"),
+                )
+            })?,
+            true,
+        ),
+        None => (opts.default_quantity, false),
+    };
+    for key in ["response_unit", "force_unit"] {
+        if let Some(u) = all.text.get(key) {
+            notes.insert(key.to_string(), u.clone());
+        }
+    }
+    let channels = channels_of(path, vars, q, p)?;
     let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
         EraError::NonUniformFrequencies { .. } | EraError::FirstLineNotZero { .. } => {
-            fail("FreqV", e.to_string())
+            fail(frequency_name, e.to_string())
         }
         other => IoError::format(path, "", other.to_string()),
     })?;
     Ok(FrfFile {
         frf,
-        quantity_given: false,
+        quantity_given,
         metadata: notes,
-        channels: None,
+        channels,
     })
 }
 
@@ -881,6 +1074,103 @@ mod tests {
         write_frf_mat(&path, &frf).unwrap();
         let back = read_frf_mat(&path, None, Quantity::Displacement).unwrap();
         assert_eq!(back.frf, frf);
+    }
+
+    #[test]
+    fn our_frf_files_keep_quantity_units_and_channels() {
+        let frf = truth_model_frf(None)
+            .unwrap()
+            .with_quantity(Quantity::Velocity);
+        let mut table = ChannelTable::numbered(3, 3);
+        table.outputs[1].dof = Dof {
+            node: 11,
+            direction: -2,
+        };
+        table.inputs[2].dof = Dof {
+            node: 101,
+            direction: 5,
+        };
+        let metadata = [("response_unit", "m/s"), ("force_unit", "N")]
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        let file = FrfFile {
+            frf: frf.clone(),
+            quantity_given: true,
+            metadata,
+            channels: Some(table.clone()),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("frf.mat");
+        write_frf_mat_file(&path, &file).unwrap();
+        let back = read_frf_mat(&path, None, Quantity::Displacement).unwrap();
+        assert_eq!(back.frf, frf);
+        assert!(back.quantity_given);
+        assert_eq!(back.metadata["response_unit"], "m/s");
+        assert_eq!(back.metadata["force_unit"], "N");
+        assert_eq!(back.channels, Some(table));
+        let listed = list_variables(&path).unwrap();
+        assert!(
+            listed.contains(&("force_unit".to_string(), "char 'N'".to_string())),
+            "{listed:?}"
+        );
+    }
+
+    /// A MAT file of a 1 x 1 FRF `(k+1) + 0i` with the frequencies under `name`.
+    fn frf_with_frequencies(dir: &std::path::Path, name: &str, hz: &[f64]) -> std::path::PathBuf {
+        let mut file = MatFile::new();
+        file.insert(
+            "FRF",
+            complex(hz.len(), 1, |k, _| Complex64::new(k as f64 + 1.0, 0.0)),
+        );
+        file.insert(name, real(hz.len(), 1, |k, _| hz[k]));
+        let path = dir.join(format!("{name}.mat"));
+        save_atomic(&path, file).unwrap();
+        path
+    }
+
+    #[test]
+    fn the_frequency_variable_can_be_named_and_late_starts_are_padded() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = frf_with_frequencies(dir.path(), "f", &[2.0, 3.0, 4.0]);
+        let e = read_frf_mat(&path, None, Quantity::Velocity)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no FreqV variable") && e.contains("f 3x1") && e.contains("--freq-variable"),
+            "{e}"
+        );
+        let opts = ReadOptions {
+            frequency_variable: Some("f".into()),
+            ..ReadOptions::default()
+        };
+        let bytes = std::fs::read(&path).unwrap();
+        let f = parse_frf_mat_with(&bytes, &path, &opts).unwrap();
+        assert_eq!(f.frf.frequency_hz(), &[0.0, 1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(f.frf.pair(0, 0)[1], Complex64::new(0.0, 0.0));
+        assert_eq!(f.frf.pair(0, 0)[2], Complex64::new(1.0, 0.0));
+        assert!(f.metadata["notes"].contains("2 lines below were added as zeros"));
+        let named_wrong = ReadOptions {
+            frequency_variable: Some("freq".into()),
+            ..ReadOptions::default()
+        };
+        let e = parse_frf_mat_with(&bytes, &path, &named_wrong)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no numeric variable freq") && e.contains("FRF 3x1"),
+            "{e}"
+        );
+        // Off the grid: refused, with the remedy.
+        let path = frf_with_frequencies(dir.path(), "FreqV", &[0.5, 1.25, 2.0]);
+        let e = read_frf_mat(&path, None, Quantity::Velocity)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("variable FreqV: the first line is 0.5 Hz")
+                && e.contains("export the FRFs from 0 Hz"),
+            "{e}"
+        );
     }
 
     #[test]

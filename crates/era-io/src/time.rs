@@ -72,7 +72,7 @@ impl TimeFormat {
 const HDF5_SIGNATURE: &[u8] = b"\x89HDF\r\n\x1a\n";
 
 /// Where the HDF5 superblock starts: 0, 512, 1024, 2048, …
-fn hdf5_offset(bytes: &[u8]) -> Option<usize> {
+pub(crate) fn hdf5_offset(bytes: &[u8]) -> Option<usize> {
     let mut at = 0;
     while at + HDF5_SIGNATURE.len() <= bytes.len() {
         if bytes[at..].starts_with(HDF5_SIGNATURE) {

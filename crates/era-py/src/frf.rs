@@ -205,14 +205,16 @@ impl PyFrfData {
 ///
 /// `quantity` overrides the file's tag (acceleration is assumed when neither says);
 /// `outputs` is the number of outputs of a MAT file's FRF matrix when the file does
-/// not say and the set is not square.
+/// not say and the set is not square; `freq_variable` names a MAT file's frequency
+/// variable when it is not `FreqV`.
 #[pyfunction]
-#[pyo3(signature = (path, quantity=None, outputs=None))]
+#[pyo3(signature = (path, quantity=None, outputs=None, freq_variable=None))]
 pub fn read_frf(
     py: Python<'_>,
     path: PathBuf,
     quantity: Option<&str>,
     outputs: Option<Int>,
+    freq_variable: Option<String>,
 ) -> PyResult<PyFrfData> {
     let tag = quantity
         .map(|q| crate::frf::quantity("quantity", q))
@@ -221,6 +223,7 @@ pub fn read_frf(
     let opts = ReadOptions {
         default_quantity: Quantity::Acceleration,
         outputs,
+        frequency_variable: freq_variable,
     };
     let frf = guarded(py, || {
         let (file, _) = read_frf_file(&path, &opts).map_err(io_error)?;

@@ -5,7 +5,13 @@
 //! split into *input* problems (bad data or impossible parameters: a CLI exits 2) and
 //! *numerical* failures (a decomposition did not converge: exit 1); see
 //! [`EraError::is_input_error`].
+//!
+//! A remedy names the option to change by its field in [`crate::EraOptions`]
+//! (`hankel_factor`, `pad_to`), as Python writes it; a front end that names options
+//! otherwise (the CLI's `--hankel-factor`) prints [`EraError::message`] with its
+//! [`Naming`], so the core never quotes one front end's spelling to another's users.
 
+use crate::params::Naming;
 use thiserror::Error;
 
 /// Everything that can go wrong in the numeric core.
@@ -74,9 +80,7 @@ pub enum EraError {
         reason: String,
     },
     /// The Hankel matrix asks for more Markov samples than the data has.
-    #[error(
-        "the Hankel matrix needs {needed} Markov samples (states {states} x hankel-factor {hankel_factor}, plus the direct term), the data gives {available}: lower `hankel_factor` or `states`, or pad with `pad_to`"
-    )]
+    #[error("{}", self.message(Naming::Keyword))]
     NotEnoughMarkovSamples {
         /// Samples needed.
         needed: usize,
@@ -89,9 +93,7 @@ pub enum EraError {
     },
     /// The Hankel matrix is smaller than the requested model order (thesis §1.8 error,
     /// "increase the length of the time series").
-    #[error(
-        "the Hankel matrix is {rows} x {cols}: it has only {available} singular values, fewer than the {states} states requested; increase `hankel_factor`"
-    )]
+    #[error("{}", self.message(Naming::Keyword))]
     HankelTooSmall {
         /// Rows of H0.
         rows: usize,
@@ -103,9 +105,7 @@ pub enum EraError {
         states: usize,
     },
     /// The data's Hankel matrix has numerical rank below the requested order.
-    #[error(
-        "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower `states`"
-    )]
+    #[error("{}", self.message(Naming::Keyword))]
     RankDeficient {
         /// Numerical rank.
         rank: usize,
@@ -115,9 +115,7 @@ pub enum EraError {
         threshold: f64,
     },
     /// A discrete pole has no real logarithm (on or near the negative real axis, or zero).
-    #[error(
-        "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep `time_domain discrete`"
-    )]
+    #[error("{}", self.message(Naming::Keyword))]
     NoRealLogarithm {
         /// Real part of the pole.
         re: f64,
@@ -127,6 +125,13 @@ pub enum EraError {
     /// The model could not be converted reliably (e.g. defective eigenvectors).
     #[error("{0}")]
     Conversion(String),
+    /// The zero-order-hold inverse does not reproduce the discrete model: its
+    /// eigenvectors are nearly dependent.
+    #[error("{}", self.message(Naming::Keyword))]
+    UnreliableContinuous {
+        /// Relative difference of `c2d(d2c(A, B))` from `(A, B)`.
+        round_trip_error: f64,
+    },
     /// A time-history sample is NaN or infinite.
     #[error("non-finite sample in {role} {channel} at sample {sample} (0-based)")]
     NonFiniteSample {
@@ -168,6 +173,53 @@ pub enum EraError {
 }
 
 impl EraError {
+    /// The message, with the options a remedy names spelled as `naming` spells them
+    /// (`--hankel-factor` for [`Naming::Flag`], `hankel_factor` for
+    /// [`Naming::Keyword`], which `Display` uses). Variants without a remedy read as
+    /// their `Display`.
+    pub fn message(&self, naming: Naming) -> String {
+        let n = |key: &str| naming.name(key);
+        match self {
+            EraError::NotEnoughMarkovSamples {
+                needed,
+                available,
+                states,
+                hankel_factor,
+            } => format!(
+                "the Hankel matrix needs {needed} Markov samples (states {states} x hankel factor {hankel_factor}, plus the direct term), the data gives {available}: lower {} or {}, or pad with {}",
+                n("hankel_factor"),
+                n("states"),
+                n("pad_to")
+            ),
+            EraError::HankelTooSmall {
+                rows,
+                cols,
+                available,
+                states,
+            } => format!(
+                "the Hankel matrix is {rows} x {cols}: it has only {available} singular values, fewer than the {states} states requested; increase {}",
+                n("hankel_factor")
+            ),
+            EraError::RankDeficient {
+                rank,
+                states,
+                threshold,
+            } => format!(
+                "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower {}",
+                n("states")
+            ),
+            EraError::UnreliableContinuous { round_trip_error } => format!(
+                "the zero-order-hold inverse is unreliable for this model (round trip error {round_trip_error:.2e}): its eigenvectors are nearly dependent; keep {} discrete",
+                n("time_domain")
+            ),
+            EraError::NoRealLogarithm { re, im } => format!(
+                "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep {} discrete",
+                n("time_domain")
+            ),
+            other => other.to_string(),
+        }
+    }
+
     /// True for problems with the caller's data or parameters (exit code 2 in the CLI),
     /// false for internal numerical failures (exit code 1).
     pub fn is_input_error(&self) -> bool {
@@ -177,3 +229,46 @@ impl EraError {
 
 /// Result alias of the core.
 pub type Result<T> = std::result::Result<T, EraError>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn remedies_name_options_as_the_front_end_does() {
+        let e = EraError::NotEnoughMarkovSamples {
+            needed: 401,
+            available: 320,
+            states: 8,
+            hankel_factor: 50,
+        };
+        let flag = e.message(Naming::Flag);
+        assert!(
+            flag.ends_with("lower --hankel-factor or --states, or pad with --pad-to"),
+            "{flag}"
+        );
+        let shown = e.to_string();
+        assert!(
+            shown.ends_with("lower hankel_factor or states, or pad with pad_to"),
+            "{shown}"
+        );
+        assert!(!shown.contains("--"), "{shown}");
+        let e = EraError::NoRealLogarithm { re: -0.5, im: 0.0 };
+        assert!(e
+            .message(Naming::Flag)
+            .ends_with("keep --time-domain discrete"));
+        assert!(e.to_string().ends_with("keep time_domain discrete"));
+        let e = EraError::UnreliableContinuous {
+            round_trip_error: 3e-6,
+        };
+        assert!(e
+            .message(Naming::Flag)
+            .ends_with("keep --time-domain discrete"));
+        assert!(e.to_string().contains("round trip error 3.00e-6"));
+        // Variants without a remedy read the same either way.
+        assert_eq!(
+            EraError::AllZero.message(Naming::Flag),
+            EraError::AllZero.to_string()
+        );
+    }
+}

@@ -120,23 +120,25 @@ pub enum RealizeWarning {
 }
 
 impl RealizeWarning {
-    /// The warning in the words of `naming`'s front end.
+    /// The warning, with the options its remedy names spelled as `naming` spells them
+    /// (`Display` uses the option fields, [`crate::params::Naming::Keyword`]).
     pub fn message(&self, naming: crate::params::Naming) -> String {
-        let hf = naming.name("hankel_factor");
+        let n = |key: &str| naming.name(key);
         match self {
             RealizeWarning::FewSingularValues { available, states } => format!(
-                "the Hankel matrix has {available} singular values, fewer than 2 x {states} states: increase {hf}"
+                "the Hankel matrix has {available} singular values, fewer than 2 x {states} states: increase {}",
+                n("hankel_factor")
             ),
             RealizeWarning::PastHalfPeriod { last_sample, samples } => format!(
-                "the Hankel uses Markov samples up to {last_sample} of a {samples}-sample circular impulse response: samples past the half wrap around; pad with {} or lower {hf}",
-                naming.name("pad_to")
+                "the Hankel uses Markov samples up to {last_sample} of a {samples}-sample circular impulse response: samples past the half wrap around; pad with {} or lower {}",
+                n("pad_to"),
+                n("hankel_factor")
             ),
         }
     }
 }
 
 impl std::fmt::Display for RealizeWarning {
-    /// Worded with the option fields' names ([`crate::params::Naming::Keyword`]).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.message(crate::params::Naming::Keyword))
     }

@@ -126,7 +126,7 @@ impl StateSpace {
     ///
     /// # Errors
     /// [`EraError::NoRealLogarithm`] for a pole at zero or on the negative real axis;
-    /// [`EraError::Conversion`] when the model is not reliably diagonalisable.
+    /// [`EraError::UnreliableContinuous`] when the model is not reliably diagonalisable.
     pub fn d2c(&self) -> Result<StateSpace> {
         let TimeDomain::Discrete { sample_time_s: ts } = self.domain else {
             return Err(EraError::InvalidParameter {
@@ -167,9 +167,9 @@ impl StateSpace {
         let back = cont.c2d(ts)?;
         let err = relative_difference(&back.a, &self.a).max(relative_difference(&back.b, &self.b));
         if err.is_nan() || err >= 1e-8 {
-            return Err(EraError::Conversion(format!(
-                "the zero-order-hold inverse is unreliable for this model (round trip error {err:.2e}): its eigenvectors are nearly dependent; keep `time_domain discrete`"
-            )));
+            return Err(EraError::UnreliableContinuous {
+                round_trip_error: err,
+            });
         }
         Ok(cont)
     }

@@ -270,41 +270,21 @@ pub fn frf_from_uff(
         }
         None => default_quantity,
     };
-    // Lines from 0 Hz.
+    // Lines from 0 Hz: a whole number of increments above is padded with zero lines
+    // (as CSV and MAT files are), another start is refused with the remedy.
     let mut frequency_hz = abscissa;
     let mut pad = 0usize;
-    if first.even && first.abscissa_min != 0.0 && first.abscissa_inc > 0.0 {
-        let n0 = first.abscissa_min / first.abscissa_inc;
-        if n0 > 0.0 && (n0 - n0.round()).abs() < 1e-6 && n0.round() <= 1e15 {
-            pad = n0.round() as usize;
-            // A record starting at 1e7 Hz would otherwise pad millions of zero lines:
-            // the padded count, and the values it makes, are checked before anything
-            // is allocated.
-            let padded = (pad as u64).saturating_add(frequency_hz.len() as u64);
-            era::limits::LINES
-                .check(
-                    format!(
-                        "the lines start at {} Hz (line {pad} at {} Hz spacing); padding to 0 Hz",
-                        first.abscissa_min, first.abscissa_inc
-                    ),
-                    padded,
-                )
-                .map_err(|e| IoError::limit(path, e))?;
-            era::limits::VALUES
-                .check_product(
-                    "FRF values after padding to 0 Hz",
-                    &[padded, q as u64, p as u64],
-                )
-                .map_err(|e| IoError::limit(path, e))?;
-            let inc = first.abscissa_inc;
-            frequency_hz = (0..pad + frequency_hz.len())
-                .map(|k| k as f64 * inc)
-                .collect();
-            notes.push(format!(
-                "the lines start at {} Hz; the {pad} lines below were added as zeros (ERA needs lines from 0 Hz)",
-                first.abscissa_min
-            ));
-        }
+    let location = format!("record {}: ", first.record);
+    // An uneven abscissa has no grid to pad on: the frequency checks refuse it below.
+    let start = if first.even {
+        crate::frf_file::zero_start(path, &location, &frequency_hz, q * p)?
+    } else {
+        None
+    };
+    if let Some(start) = start {
+        notes.push(start.note());
+        pad = start.added;
+        frequency_hz = start.frequency_hz;
     }
     let lines = frequency_hz.len();
     let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
