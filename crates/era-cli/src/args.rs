@@ -146,6 +146,10 @@ pub struct FrfArgs {
     /// What the outputs measure (the FRFs' quantity).
     #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
     pub quantity: QuantityArg,
+    /// Units of the estimated FRFs, RESPONSE,FORCE (e.g. m/s^2,N), written into the FRF
+    /// file for identify, plot and the report; time files seldom carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
     /// FRF file to write: .csv, .uff/.unv (UFF 58) or .mat. The coherence goes beside
     /// it, to <name>.coherence.csv.
     #[arg(long, value_name = "FILE")]

@@ -531,9 +531,12 @@ pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     // Refuse a bad --out before reading anything.
     let set = prepare_estimate(&a.out, a.binary)?;
-    let found = estimate_from_time(
+    let mut found = estimate_from_time(
         &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, &a.common,
     )?;
+    // Time files seldom say their units; --units writes them into the FRF file, where
+    // identify, plot and the report find them.
+    crate::input::set_units(&mut found.input, a.units.as_ref());
     human.print(&format!(
         "era frf {}\n{}  FRFs: {}\n",
         a.files

@@ -322,11 +322,21 @@ fn ladisk_plate_runs_average_to_one_coherent_frf_and_era_finds_its_peaks() {
         "0",
         "--max-hz",
         "560",
+        // The PROVENANCE's units (force in N, acceleration in m/s²): the HDF5 files do
+        // not carry them, so they are given here and written into the FRF file.
+        "--units",
+        "m/s^2,N",
         "--out",
         s(&frf),
         "--json",
     ]);
     let v = json_of(&args);
+    let text = std::fs::read_to_string(&frf).unwrap();
+    assert!(
+        text.contains("# response_unit: m/s^2\n") && text.contains("# force_unit: N\n"),
+        "{}",
+        &text[..400]
+    );
     assert_eq!(v["averages"], 5);
     assert_eq!(v["lines"], 1121);
     let median = v["coherence"][0]["median_multiple_coherence"]
