@@ -133,9 +133,17 @@ pub struct TsvdTimings {
     pub rayleigh_ritz: f64,
 }
 
-/// `x ← x R⁻¹` for upper-triangular `R = Lᵀ`: the lower solve `L (xᵀ) = xᵀ`.
-fn solve_right_upper(x: MatMut<'_, f64>, lower: MatRef<'_, f64>) {
-    solve_lower_triangular_in_place(lower, x.transpose_mut(), Par::Seq);
+/// `x ← x R⁻¹` for upper-triangular `R = Lᵀ`, as `x · (L⁻¹)ᵀ`: `L⁻¹` is `b × b`, and
+/// the product with the tall `x` is one parallel GEMM, where a triangular solve with
+/// `m` right-hand sides in rows ran on one thread. `R` is well conditioned here
+/// ([`cholesky_factor`] refuses `min R_ii < 1e-6 · max R_ii` before CholeskyQR2 uses it),
+/// and the second CholeskyQR pass removes what the explicit inverse loses.
+fn solve_right_upper(mut x: MatMut<'_, f64>, lower: MatRef<'_, f64>) {
+    let b = lower.nrows();
+    let mut inverse = Mat::<f64>::identity(b, b);
+    solve_lower_triangular_in_place(lower, inverse.as_mut(), Par::Seq);
+    let product = &x * inverse.transpose();
+    x.copy_from(&product);
 }
 
 /// `R` (upper) with `xᵀx + shift·I = RᵀR`, or `None` when Cholesky fails or
