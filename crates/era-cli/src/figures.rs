@@ -32,6 +32,20 @@ pub fn collocated_in(table: &ChannelTable, i: usize, j: usize) -> bool {
     matches!((table.outputs.get(i), table.inputs.get(j)), (Some(o), Some(n)) if o.dof == n.dof)
 }
 
+/// Marks the fit's collocated pairs from the channel table when it fits the set (same
+/// node and direction), as the figures and report do ([`frf_view`]): the summary,
+/// fit.json, model.json and the report then agree. Without a table, by index.
+pub fn collocate_fit(
+    fit: &mut era::response::FitReport,
+    channels: Option<&ChannelTable>,
+    q: usize,
+    p: usize,
+) {
+    if let Some(t) = channels.filter(|t| (t.outputs.len(), t.inputs.len()) == (q, p)) {
+        fit.set_collocation(|i, j| collocated_in(t, i, j));
+    }
+}
+
 /// The figures' view of `shown` (the FRFs as plotted, after any integrations) of an
 /// input read as `read` in `units`: the unit label integrated along, the phase view,
 /// and collocation from the channel table when it fits the set (same node and

@@ -140,6 +140,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     .with_context(|| format!("identifying {}", a.file.display()));
     spinner.finish_and_clear();
     let mut found = found?;
+    let channels = input.file.channels.as_ref();
+    crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let states = found.model.states();
     let mut opts = opts;
     if auto {
@@ -160,6 +162,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         ));
         found = crate::refine::refine_found(found, frf, &refine_options, &a.common)
             .with_context(|| format!("refining the model of {}", a.file.display()))?;
+        crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
         human.print(&crate::refine::summary(&found));
     }
     human.print(&identification_summary(&found, states));

@@ -243,9 +243,13 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         });
         found.quality.retain(|q| q.physical);
     }
+    let channels = input.file.channels.as_ref();
+    let (q, p) = (frf.outputs(), frf.inputs());
+    crate::figures::collocate_fit(&mut found.fit, channels, q, p);
     let before = found.fit.clone();
-    let found = refine_found(found, frf, &ropts, &a.common)
+    let mut found = refine_found(found, frf, &ropts, &a.common)
         .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
+    crate::figures::collocate_fit(&mut found.fit, channels, q, p);
     human.print(&format!(
         "  the model as given: fit collocated {}, non-collocated {}\n",
         before

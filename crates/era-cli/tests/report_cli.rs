@@ -128,6 +128,25 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
     // Collocation from the channel table: 2/2 (node 5 with node 5), not 1/1 (11 vs 101).
     assert!(html.contains("Measurement 2, Excitation Actuator 2 (collocated)"));
     assert!(!html.contains("Measurement 1, Excitation Actuator 1 (collocated)"));
+    // fit.json and model.json's run say the same: one collocated pair, 2/2.
+    let fit: serde_json::Value = serde_json::from_str(&read(out.join("fit.json"))).unwrap();
+    let collocated: Vec<(u64, u64)> = fit["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["collocated"] == true)
+        .map(|p| (p["output"].as_u64().unwrap(), p["input"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(collocated.len(), 1, "{fit}");
+    assert!(
+        collocated[0] == (2, 2) || collocated[0] == (1, 1),
+        "{collocated:?}"
+    );
+    let first = &fit["pairs"][0];
+    assert_eq!(
+        first["collocated"], false,
+        "output 1 (node 11) with input 1 (node 101)"
+    );
     // The fit is a 2 x 2 matrix: a header with the inputs, one row per output, the
     // collocated cell shaded.
     let table = &html[html

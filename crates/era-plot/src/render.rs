@@ -285,7 +285,15 @@ where
                         .into_iter()
                         .map(|k| piece[k])
                         .collect();
-                    let width = if compact { 1 } else { 2 };
+                    // A bitmap strokes a wide polyline as a polygon with mitred joins, and a
+                    // noisy measurement turning back within a pixel makes miters that shoot
+                    // far past its points (and the panel): measured curves are one pixel
+                    // wide there, drawn without joins. SVG viewers limit the miter.
+                    let width = if compact || (!svg && s.kind != SeriesKind::Model) {
+                        1
+                    } else {
+                        2
+                    };
                     let colour = if s.kind == SeriesKind::Model {
                         MODEL
                     } else {

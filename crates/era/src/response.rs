@@ -438,23 +438,52 @@ pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -
             });
         }
     }
-    let pick = |col: bool, f: fn(&PairFit) -> f64| {
-        mean(
-            pairs
-                .iter()
-                .filter(|x| x.collocated == col)
-                .map(f)
-                .filter(|v| v.is_finite()),
-        )
-    };
-    FitReport {
+    let mut report = FitReport {
         first_line,
         lines: lines - first_line,
-        collocated_mean_relative_error: pick(true, |x| x.relative_error),
-        noncollocated_mean_relative_error: pick(false, |x| x.relative_error),
-        collocated_mean_db: pick(true, |x| x.rms_log_magnitude_db),
-        noncollocated_mean_db: pick(false, |x| x.rms_log_magnitude_db),
+        collocated_mean_relative_error: None,
+        noncollocated_mean_relative_error: None,
+        collocated_mean_db: None,
+        noncollocated_mean_db: None,
         pairs,
+    };
+    report.set_means();
+    report
+}
+
+impl FitReport {
+    /// Marks which pairs are collocated by `collocated(output, input)` (a channel table's
+    /// nodes and directions, where [`fit_metrics`] could only go by index) and takes the
+    /// two groups' means again, so that every output of a run agrees on them.
+    pub fn set_collocation(&mut self, collocated: impl Fn(usize, usize) -> bool) {
+        for pair in &mut self.pairs {
+            pair.collocated = collocated(pair.output, pair.input);
+        }
+        self.set_means();
+    }
+
+    fn set_means(&mut self) {
+        let pick = |col: bool, f: fn(&PairFit) -> f64| {
+            mean(
+                self.pairs
+                    .iter()
+                    .filter(|x| x.collocated == col)
+                    .map(f)
+                    .filter(|v| v.is_finite()),
+            )
+        };
+        let means = (
+            pick(true, |x| x.relative_error),
+            pick(false, |x| x.relative_error),
+            pick(true, |x| x.rms_log_magnitude_db),
+            pick(false, |x| x.rms_log_magnitude_db),
+        );
+        (
+            self.collocated_mean_relative_error,
+            self.noncollocated_mean_relative_error,
+            self.collocated_mean_db,
+            self.noncollocated_mean_db,
+        ) = means;
     }
 }
 

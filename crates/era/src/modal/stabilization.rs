@@ -580,7 +580,8 @@ impl Selection {
             self.counted_orders.len(),
             self.counted_orders.first().copied().unwrap_or(0),
             self.counted_orders.last().copied().unwrap_or(0),
-            c.min_poles,
+            // As applied: a short scan asks for no more poles than it counts orders.
+            c.min_poles.min(self.counted_orders.len().max(1)),
             c.mpc_minimum,
             c.cmi_minimum
         )
