@@ -169,7 +169,12 @@ where
         )))
         .map_err(err)?
         .label("physical mode (automatic choice)")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], CHOSEN.stroke_width(1)));
+        // Dashed, as the lines are drawn.
+        .legend(|(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (8, 0)], CHOSEN.stroke_width(1))
+                + PathElement::new(vec![(12, 0), (20, 0)], CHOSEN.stroke_width(1))
+        });
     let groups = [
         (PoleStatus::New, "new", NEW),
         (PoleStatus::Frequency, "stable in frequency", FREQ),
@@ -220,7 +225,8 @@ where
         .position(SeriesLabelPosition::LowerRight)
         .label_font(("sans-serif", 13))
         .border_style(BLACK)
-        .background_style(WHITE.mix(0.9))
+        // See-through enough that poles under the legend still show.
+        .background_style(WHITE.mix(0.65))
         .draw()
         .map_err(err)?;
     root.present().map_err(err)?;
