@@ -266,10 +266,18 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
         "<h2 id=\"parameters\">Parameters</h2>\n<pre>{}</pre>\n",
         escape(input.parameters)
     );
-    let (rows, cols) = f.realization.hankel_size;
+    // With a scan the figure shows the scan's H0 (factored once for every order), which
+    // is larger than the one the fixed-order model alone would need.
+    let ((rows, cols), whose) = match &f.stabilization {
+        Some(st) => (
+            st.hankel_size,
+            "the scan's H0, factored once for every order,",
+        ),
+        None => (f.realization.hankel_size, "H0"),
+    };
     let _ = write!(
         h,
-        "<h2 id=\"singular-values\">Singular values</h2>\n<p>H0 is {rows} × {cols}, computed on the {} path; sample time {:.6e} s.</p>\n<figure class=\"plot\" id=\"fig-singular-values\">{}</figure>\n",
+        "<h2 id=\"singular-values\">Singular values</h2>\n<p>Shown: {whose} {rows} × {cols}, computed on the {} path; sample time {:.6e} s.</p>\n<figure class=\"plot\" id=\"fig-singular-values\">{}</figure>\n",
         f.realization.svd_path.name(),
         f.sample_time_s,
         input.singular_values_svg
