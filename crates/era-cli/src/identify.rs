@@ -162,7 +162,6 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         ));
         found = crate::refine::refine_found(found, frf, &refine_options, &a.common)
             .with_context(|| format!("refining the model of {}", a.file.display()))?;
-        crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
         human.print(&crate::refine::summary(&found));
     }
     human.print(&identification_summary(&found, states));

@@ -243,13 +243,12 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         });
         found.quality.retain(|q| q.physical);
     }
+    // Collocation from the channel table; the refinement keeps it.
     let channels = input.file.channels.as_ref();
-    let (q, p) = (frf.outputs(), frf.inputs());
-    crate::figures::collocate_fit(&mut found.fit, channels, q, p);
+    crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let before = found.fit.clone();
-    let mut found = refine_found(found, frf, &ropts, &a.common)
+    let found = refine_found(found, frf, &ropts, &a.common)
         .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
-    crate::figures::collocate_fit(&mut found.fit, channels, q, p);
     human.print(&format!(
         "  the model as given: fit collocated {}, non-collocated {}\n",
         before

@@ -147,6 +147,29 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
         first["collocated"], false,
         "output 1 (node 11) with input 1 (node 101)"
     );
+    // The refinement keeps the table's collocation in its fit.
+    let refined = dir.path().join("refined");
+    era()
+        .args([
+            "identify",
+            s(&file),
+            "--states",
+            "6",
+            "--refine",
+            "-q",
+            "--out",
+        ])
+        .arg(&refined)
+        .assert()
+        .success();
+    let fit: serde_json::Value = serde_json::from_str(&read(refined.join("fit.json"))).unwrap();
+    let flags: Vec<bool> = fit["pairs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["collocated"].as_bool().unwrap())
+        .collect();
+    assert_eq!(flags, [false, false, false, true], "{fit}");
     // The fit is a 2 x 2 matrix: a header with the inputs, one row per output, the
     // collocated cell shaded.
     let table = &html[html

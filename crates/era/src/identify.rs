@@ -1415,7 +1415,12 @@ pub fn refine_identification(
             *v = Complex64::new(0.0, 0.0);
         }
     }
+    // The pairs keep the collocation the caller gave the start's fit (a channel table's,
+    // `FitReport::set_collocation`); `fit_metrics` alone goes by index.
+    let collocated: Vec<bool> = found.fit.pairs.iter().map(|f| f.collocated).collect();
     found.fit = fit_metrics(&found.measured, &response, first);
+    let p = found.measured.inputs();
+    found.fit.set_collocation(|i, j| collocated[i * p + j]);
     found.model_response = response;
     found.first_line = first;
     found.band_hz = band_hz;
