@@ -108,22 +108,14 @@ pub fn check(
 ) -> Vec<SuspectResult> {
     let mut found = Vec::new();
     if let Some((samples, ts)) = hankel_window {
-        let physical = modal
+        // The lowest physical mode; every mode counts when none is judged physical.
+        let any_physical = quality.iter().any(|q| q.physical);
+        let lowest = modal
             .modes
             .iter()
-            .zip(quality)
-            .filter(|(_, q)| q.physical)
-            .map(|(m, _)| m.frequency_hz);
-        let lowest = physical
-            .chain(
-                if quality.iter().any(|q| q.physical) {
-                    None
-                } else {
-                    Some(modal.modes.iter().map(|m| m.frequency_hz))
-                }
-                .into_iter()
-                .flatten(),
-            )
+            .enumerate()
+            .filter(|(k, _)| !any_physical || quality.get(*k).is_some_and(|q| q.physical))
+            .map(|(_, m)| m.frequency_hz)
             .filter(|f| f.is_finite() && *f > 0.0)
             .min_by(f64::total_cmp);
         let window_s = samples as f64 * ts;
