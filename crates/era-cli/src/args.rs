@@ -105,19 +105,8 @@ pub struct RefineArgs {
     pub model: PathBuf,
     /// The FRF file it was identified from (same shape and lines).
     pub file: PathBuf,
-    /// Quantity of the FRFs; overrides the file's (as era identify --quantity).
-    #[arg(long, value_enum)]
-    pub quantity: Option<QuantityArg>,
-    /// Outputs of a MAT file's FRF matrix, when the file does not say.
-    #[arg(long, value_name = "N")]
-    pub outputs: Option<usize>,
-    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
-    /// Plots, tables and the report show them; files written carry them.
-    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
-    pub units: Option<UnitsArg>,
-    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
-    #[arg(long, value_name = "NAME")]
-    pub freq_variable: Option<String>,
+    #[command(flatten)]
+    pub read: FrfReadArgs,
     #[command(flatten)]
     pub fit: RefineFitArgs,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
@@ -242,20 +231,8 @@ pub struct ConvertArgs {
     /// UFF output: single precision (ASCII 6 significant digits, binary f32).
     #[arg(long)]
     pub single: bool,
-    /// Quantity of the FRFs; overrides what the input says.
-    #[arg(long, value_enum)]
-    pub quantity: Option<QuantityArg>,
-    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
-    /// set is not square.
-    #[arg(long)]
-    pub outputs: Option<usize>,
-    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
-    /// Plots, tables and the report show them; files written carry them.
-    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
-    pub units: Option<UnitsArg>,
-    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
-    #[arg(long, value_name = "NAME")]
-    pub freq_variable: Option<String>,
+    #[command(flatten)]
+    pub read: FrfReadArgs,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -273,25 +250,12 @@ pub struct PlotArgs {
     /// Leading lines left out (default: the model's, or 0).
     #[arg(long)]
     pub zero_lines: Option<usize>,
-    /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration is
-    /// assumed when neither says).
-    #[arg(long, value_enum)]
-    pub quantity: Option<QuantityArg>,
-    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
-    /// set is not square.
-    #[arg(long)]
-    pub outputs: Option<usize>,
+    #[command(flatten)]
+    pub read: FrfReadArgs,
     /// Phase in the figures: wrapped (−180…180°, the default) or unwrapped (where the
     /// step between lines is unambiguous, the measurement on the model's branch).
     #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped)]
     pub phase: PhaseArg,
-    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
-    /// Plots, tables and the report show them; files written carry them.
-    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
-    pub units: Option<UnitsArg>,
-    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
-    #[arg(long, value_name = "NAME")]
-    pub freq_variable: Option<String>,
     /// Folder for the figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -366,6 +330,47 @@ impl From<QuantityArg> for era::Quantity {
             QuantityArg::Acceleration => era::Quantity::Acceleration,
             QuantityArg::Velocity => era::Quantity::Velocity,
             QuantityArg::Displacement => era::Quantity::Displacement,
+        }
+    }
+}
+
+/// What an FRF file may not say about itself, given on the command line (identify,
+/// plot, convert, refine).
+#[derive(Debug, Args)]
+pub struct FrfFactsArgs {
+    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
+    /// Plots, tables and the report show them; files written carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
+    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
+}
+
+/// How plot, convert and refine read an FRF file beyond its name (identify's
+/// `--outputs` also takes time-history channels, so it has its own).
+#[derive(Debug, Args)]
+pub struct FrfReadArgs {
+    /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration is
+    /// assumed when neither says).
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
+    /// set is not square.
+    #[arg(long, value_name = "N")]
+    pub outputs: Option<usize>,
+    #[command(flatten)]
+    pub facts: FrfFactsArgs,
+}
+
+impl FrfReadArgs {
+    /// The flags as [`crate::input::read_frf_with`] takes them.
+    pub fn flags(&self) -> crate::input::FrfFlags<'_> {
+        crate::input::FrfFlags {
+            quantity: self.quantity,
+            outputs: self.outputs,
+            units: self.facts.units.as_ref(),
+            frequency_variable: self.facts.freq_variable.as_deref(),
         }
     }
 }
@@ -478,13 +483,8 @@ pub struct IdentifyArgs {
     /// era frf --outputs).
     #[arg(long, value_name = "N | CHANNELS")]
     pub outputs: Option<String>,
-    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
-    /// Plots, tables and the report show them; files written carry them.
-    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
-    pub units: Option<UnitsArg>,
-    /// MAT FRF files: the variable holding the frequencies in Hz, when not FreqV.
-    #[arg(long, value_name = "NAME")]
-    pub freq_variable: Option<String>,
+    #[command(flatten)]
+    pub facts: FrfFactsArgs,
     /// Model orders of the stabilization diagram, MIN..MAX[:STEP] (step 2 by default)
     /// or a list such as 50,70,80; all are realized from one SVD. With --states N the
     /// modes of that model are judged against the scan; with --states auto the default

@@ -27,15 +27,7 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
         ));
     }
     let clock = Instant::now();
-    let input = read_frf_with(
-        &a.input,
-        &FrfFlags {
-            quantity: a.quantity,
-            outputs: a.outputs,
-            units: a.units.as_ref(),
-            frequency_variable: a.freq_variable.as_deref(),
-        },
-    )?;
+    let input = read_frf_with(&a.input, &a.read.flags())?;
     let read_s = clock.elapsed().as_secs_f64();
     let frf = &input.file.frf;
     let clock = Instant::now();

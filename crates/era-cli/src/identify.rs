@@ -50,7 +50,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             quantity,
             &a.common,
         )?;
-        set_units(&mut found.input, a.units.as_ref());
+        set_units(&mut found.input, a.facts.units.as_ref());
         human.print(&format!(
             "era identify --from-time {}\n{}",
             a.file.display(),
@@ -90,8 +90,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             &FrfFlags {
                 quantity: a.quantity,
                 outputs,
-                units: a.units.as_ref(),
-                frequency_variable: a.freq_variable.as_deref(),
+                units: a.facts.units.as_ref(),
+                frequency_variable: a.facts.freq_variable.as_deref(),
             },
         )?;
         human.print(&format!("era identify {}\n", a.file.display()));

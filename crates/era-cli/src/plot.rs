@@ -3,7 +3,7 @@
 
 use crate::args::PlotArgs;
 use crate::figures::{frf_view, write_figure, write_frf_figures};
-use crate::input::{read_frf_with, FrfFlags};
+use crate::input::read_frf_with;
 use crate::output::prepare_out_dir;
 use crate::report::{print_json, Human};
 use crate::usage;
@@ -18,15 +18,7 @@ use std::path::Path;
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
     let mut set = prepare_out_dir(&a.out)?;
-    let input = read_frf_with(
-        &a.file,
-        &FrfFlags {
-            quantity: a.quantity,
-            outputs: a.outputs,
-            units: a.units.as_ref(),
-            frequency_variable: a.freq_variable.as_deref(),
-        },
-    )?;
+    let input = read_frf_with(&a.file, &a.read.flags())?;
     let frf = input.file.frf.clone();
     let model = match &a.model {
         Some(path) => {

@@ -3,7 +3,7 @@
 //! [`era::identify::refine_identification`]).
 
 use crate::args::{RefineArgs, RefineFitArgs};
-use crate::input::{read_frf_with, shape_line, FrfFlags};
+use crate::input::{read_frf_with, shape_line};
 use crate::output::{prepare_out_dir, write_identification};
 use crate::report::{identification_summary, print_json, Human};
 use anyhow::Context;
@@ -151,15 +151,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
     };
-    let input = read_frf_with(
-        &a.file,
-        &FrfFlags {
-            quantity: a.quantity,
-            outputs: a.outputs,
-            units: a.units.as_ref(),
-            frequency_variable: a.freq_variable.as_deref(),
-        },
-    )?;
+    let input = read_frf_with(&a.file, &a.read.flags())?;
     let frf = &input.file.frf;
     if (model.outputs, model.inputs) != (frf.outputs(), frf.inputs()) {
         return crate::usage(format!(
