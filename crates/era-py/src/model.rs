@@ -500,20 +500,20 @@ pub fn identify(
     checked.check(Naming::Keyword).map_err(era_error)?;
     let data = frf.get().inner.clone();
     let found = guarded(py, || {
-        era::parallel::with_threads(Naming::Keyword, threads, || match chosen {
-            Some(_) => run_identify(&data, &options),
-            None => identify_auto(
-                &data,
-                &options,
-                &ScanOptions::default(),
-                &mut |_| {},
-                &mut |_, _| {},
-            ),
-        })
-        .and_then(|found| found)
-        .and_then(|found| {
-            if refine {
-                era::parallel::with_threads(Naming::Keyword, threads, || {
+        // One pool for the whole call: identification and refinement alike.
+        era::parallel::with_threads(Naming::Keyword, threads, || {
+            match chosen {
+                Some(_) => run_identify(&data, &options),
+                None => identify_auto(
+                    &data,
+                    &options,
+                    &ScanOptions::default(),
+                    &mut |_| {},
+                    &mut |_, _| {},
+                ),
+            }
+            .and_then(|found| {
+                if refine {
                     era::identify::refine_identification(
                         found,
                         &data,
@@ -521,12 +521,12 @@ pub fn identify(
                         &mut |_| {},
                         &mut |_, _| {},
                     )
-                })
-                .and_then(|r| r)
-            } else {
-                Ok(found)
-            }
+                } else {
+                    Ok(found)
+                }
+            })
         })
+        .and_then(|found| found)
         .map_err(era_error)
     })?;
     Ok(PyIdentification {
