@@ -326,40 +326,23 @@ fn from_time_reports_the_coherence() {
         .assert()
         .success();
     assert!(dir.path().join("frf.coherence.csv").is_file());
-    let out2 = dir.path().join("out2");
-    era()
-        .args([
-            "identify",
-            s(&frf),
-            "--states",
-            "2",
-            "-q",
-            "--out",
-            s(&out2),
-        ])
-        .assert()
-        .success();
-    let html = read(out2.join("report.html"));
+    // The report of `frf` identified at 2 states into the folder `name`.
+    let report_of = |name: &str| {
+        let out = dir.path().join(name);
+        era()
+            .args(["identify", s(&frf), "--states", "2", "-q", "--out", s(&out)])
+            .assert()
+            .success();
+        read(out.join("report.html"))
+    };
+    let html = report_of("out2");
     assert!(html.contains("id=\"fig-coherence\""));
     assert!(html.contains("frf.coherence.csv"));
     // A companion that does not fit the FRF file is left out, with a note.
     let bad = dir.path().join("frf.coherence.csv");
     let text = read(&bad);
     std::fs::write(&bad, text.lines().take(10).collect::<Vec<_>>().join("\n")).unwrap();
-    let out3 = dir.path().join("out3");
-    era()
-        .args([
-            "identify",
-            s(&frf),
-            "--states",
-            "2",
-            "-q",
-            "--out",
-            s(&out3),
-        ])
-        .assert()
-        .success();
-    let html = read(out3.join("report.html"));
+    let html = report_of("out3");
     assert!(!html.contains("id=\"fig-coherence\""));
     assert!(html.contains("coherence file ignored"));
 }
