@@ -1,13 +1,13 @@
 //! `era::refine` at the DTA size: 8×8 acceleration FRFs, 40 modes in 0.5–14 Hz, 801
 //! lines at 0.025 Hz (`era simulate modal` defaults) with 5 % noise, refined from the true
 //! poles perturbed by ±0.3 % in frequency and ±20 % in damping. The target is ≤ 1 s on
-//! 2 cores. The naive reference (finite differences, a dense solve per pair) is timed
+//! 2 cores, for the uniform weighting and for the CLI's default, `PairNoise`. The naive reference (finite differences, a dense solve per pair) is timed
 //! on a 2×2, 4-mode set beside the fast path on the same set.
 //!
 //! `cargo bench -p era --bench refine`. Setup happens outside the timed closures.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use era::refine::{refine, refine_naive, RefineOptions, Residuals};
+use era::refine::{refine, refine_naive, RefineOptions, Residuals, Weighting};
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::{Complex64, Quantity};
 use std::f64::consts::PI;
@@ -43,6 +43,12 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("noise_5_percent", |b| {
         b.iter(|| refine(black_box(&noisy), &start, &options, &mut |_, _| {}).unwrap())
+    });
+    // The CLI's default weighting: a uniform first pass, then each pair by its noise.
+    let mut pair_noise = options.clone();
+    pair_noise.weighting = Weighting::PairNoise;
+    g.bench_function("noise_5_percent_pair_noise", |b| {
+        b.iter(|| refine(black_box(&noisy), &start, &pair_noise, &mut |_, _| {}).unwrap())
     });
     g.finish();
 

@@ -429,3 +429,50 @@ fn bad_input_is_an_error_that_names_it() {
     rc.reciprocal = true;
     expect_invalid(refine(&rect, &start, &rc, &mut |_, _| {}), "reciprocal");
 }
+
+#[test]
+fn weights_constant_per_pair_share_one_basis_and_fit_as_per_line_weights() {
+    // Constant weights per pair are fitted through each unit's weighted mean with one
+    // basis; weights that vary by one part in 1e9 on one line are fitted pair by pair.
+    // The two must give the same fit, plain and reciprocal.
+    let spec = ModalSpec {
+        fmin_hz: 2.0,
+        fmax_hz: 8.0,
+        damping_min: 0.01,
+        damping_max: 0.03,
+        ..ModalSpec::new(2, 2, 3)
+    };
+    let s = ModalStructure::random(&spec).unwrap();
+    let frf = add_noise(&s.frf(401, 0.025, Quantity::Acceleration).unwrap(), 0.05, 9).unwrap();
+    let nl = frf.lines();
+    let variance: Vec<f64> = (0..frf.values().len())
+        .map(|k| [1.0, 4.0, 0.25, 9.0][k / nl])
+        .collect();
+    let mut nudged = variance.clone();
+    nudged[nl + 7] *= 1.0 + 1e-9;
+    for reciprocal in [false, true] {
+        let fit = |v: &Vec<f64>| {
+            let mut options = RefineOptions::default();
+            options.residuals = Residuals::Upper;
+            options.reciprocal = reciprocal;
+            options.weighting = Weighting::InverseVariance(v.clone());
+            refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap()
+        };
+        let (shared, separate) = (fit(&variance), fit(&nudged));
+        assert_eq!(shared.modes.len(), 3);
+        assert_eq!(separate.modes.len(), 3);
+        assert!(
+            (shared.cost_after - separate.cost_after).abs() <= 1e-7 * shared.cost_after,
+            "reciprocal {reciprocal}: {} vs {}",
+            shared.cost_after,
+            separate.cost_after
+        );
+        for (a, b) in shared.modes.iter().zip(&separate.modes) {
+            assert!((a.pole - b.pole).norm() <= 1e-7 * a.pole.norm());
+            for (x, y) in a.residue.iter().zip(&b.residue) {
+                assert!((x - y).norm() <= 1e-6 * x.norm().max(1e-3));
+            }
+            assert!((a.frequency_std_hz / b.frequency_std_hz - 1.0).abs() < 1e-5);
+        }
+    }
+}

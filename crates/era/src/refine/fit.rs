@@ -30,12 +30,17 @@ pub(crate) enum Outcome {
     Deficient { column: usize, mode: Option<usize> },
 }
 
-pub(crate) type Evaluator = fn(&Problem, &[f64]) -> Result<Outcome>;
+/// `evaluate(problem, θ, jacobian)`: with `jacobian` false only the cost and the
+/// coefficients (`jtj` and `jtr` empty), for trial steps that may be rejected.
+pub(crate) type Evaluator = fn(&Problem, &[f64], bool) -> Result<Outcome>;
 
 /// A mode whose share of the band's FRF norm falls below this has collapsed.
 pub const MIN_CONTRIBUTION: f64 = 1e-10;
 /// Two poles closer than this, relative to their modulus, have coalesced.
 pub const COALESCED: f64 = 1e-9;
+/// A step that lowers the cost by less than this many noise variances `σ̂²` ends the
+/// fit.
+pub(crate) const STATISTICAL_STOP: f64 = 1e-2;
 /// Cost below this fraction of the (weighted) data's squared norm is an exact fit.
 const EXACT_FIT: f64 = 1e-28;
 
@@ -157,15 +162,25 @@ pub(crate) fn run(
         }
         normalise(&mut trial);
         let outcome = if trial.iter().all(|t| t.is_finite()) {
-            Some(evaluate(&problem, &trial)?)
+            Some(evaluate(&problem, &trial, false)?)
         } else {
             None
         };
         match outcome {
             Some(Outcome::Ready(next)) if next.cost < current.cost => {
                 let relative = (current.cost - next.cost) / current.cost;
+                let decrease = current.cost - next.cost;
                 state.theta = trial;
-                current = next;
+                // The trial was evaluated without its Jacobian; the accepted point needs it.
+                current = match evaluate(&problem, &state.theta, true)? {
+                    Outcome::Ready(e) => e,
+                    Outcome::Deficient { .. } => {
+                        return Err(EraError::Numerical(
+                            "the basis was deficient at a point that was not a moment before"
+                                .into(),
+                        ))
+                    }
+                };
                 iterations += 1;
                 lambda = (lambda / 5.0).max(1e-15);
                 let before_checks = state.ids.len();
@@ -175,7 +190,13 @@ pub(crate) fn run(
                     lambda = 1e-3;
                     continue;
                 }
-                if relative <= options.tolerance {
+                // A decrease below a hundredth of one noise unit `σ²` moves the
+                // parameters by about a tenth of their standard deviation or less: the
+                // rest is noise (module doc, "Stopping").
+                let noise_unit = problem
+                    .degrees_of_freedom(state.theta.len())
+                    .map_or(0.0, |dof| current.cost / dof as f64);
+                if relative <= options.tolerance || decrease <= STATISTICAL_STOP * noise_unit {
                     converged = true;
                     break;
                 }
@@ -311,7 +332,7 @@ fn settle(
                 ),
             ));
         }
-        match evaluate(problem, &state.theta)? {
+        match evaluate(problem, &state.theta, true)? {
             Outcome::Ready(e) => return settle_ready(problem, state, e, evaluate, dropped),
             Outcome::Deficient { mode: Some(m), .. } => {
                 let s = problem.parameters.pole(&state.theta, m);
@@ -425,13 +446,9 @@ fn finish(
     let pm = layout.per_mode;
     let poles = problem.parameters.poles(&state.theta);
     let n_modes = poles.len();
-    let units: usize = problem.blocks.iter().map(|b| b.units.len()).sum();
-    let unknowns = state.theta.len() + layout.columns(n_modes) * units;
-    let noise_variance = if problem.observations > unknowns {
-        e.cost / (problem.observations - unknowns) as f64
-    } else {
-        f64::NAN
-    };
+    let noise_variance = problem
+        .degrees_of_freedom(state.theta.len())
+        .map_or(f64::NAN, |dof| e.cost / dof as f64);
     let covariance = covariance(&e.jtj, noise_variance);
     let contributions = contributions(problem, &poles, &e.coefficients);
     let mut modes: Vec<RefinedMode> = poles

@@ -81,6 +81,21 @@
 //! `e^0.7` in damping: beyond a resonance's width the cost is far from quadratic, and
 //! without the limit one badly predicted mode forces `λ` up for all.
 //!
+//! ## Stopping
+//!
+//! The fit has converged when an accepted step lowers the cost by less than
+//! [`RefineOptions::tolerance`] of itself, or by less than a hundredth of one noise
+//! variance `σ̂² = cost/(observations − unknowns)`. A parameter that moves by `δ`
+//! standard deviations changes the cost by about `δ²σ̂²`, so such a step moves every
+//! parameter by a tenth of its standard deviation or less: with noise, the rest is
+//! noise. An exact fit has `σ̂² ≈ 0` and runs to the relative tolerance (or to
+//! round-off). Trial steps are evaluated without their Jacobian; only an accepted
+//! one pays for it.
+//!
+//! The weighted pass of [`Weighting::PairNoise`] fits with one weight per pair, so every
+//! pair still shares one basis and one QR (see `model::Block::scales`); its uniform first
+//! pass stops at a relative decrease of 1e-4, since it only has to estimate the noise.
+//!
 //! # Sampled data: the z-domain model
 //!
 //! FRFs computed from a zero-order-hold discrete model (the truth model's,
@@ -309,6 +324,9 @@ pub fn refine(
     run(frf, start_poles, options, progress, varpro::evaluate)
 }
 
+/// The relative decrease that ends the uniform first pass of [`Weighting::PairNoise`].
+const FIRST_PASS_TOLERANCE: f64 = 1e-4;
+
 /// The fit, or for [`Weighting::PairNoise`] a uniform fit and a reweighted one.
 fn run(
     frf: &FrfData,
@@ -320,8 +338,11 @@ fn run(
     if options.weighting != Weighting::PairNoise {
         return fit::run(frf, start_poles, options, progress, evaluate);
     }
+    // The first fit only has to be good enough to estimate each pair's noise, which
+    // small moves of the poles hardly change: a looser tolerance.
     let uniform = RefineOptions {
         weighting: Weighting::Uniform,
+        tolerance: options.tolerance.max(FIRST_PASS_TOLERANCE),
         ..options.clone()
     };
     let first = fit::run(frf, start_poles, &uniform, progress, evaluate)?;

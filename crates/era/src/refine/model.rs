@@ -231,13 +231,16 @@ pub(crate) struct Block {
     /// Square-root weights of each stacked segment per band line (`None`: 1).
     pub segment_weights: Vec<Option<Vec<f64>>>,
     /// For each unit, the pair indices (`i·p + j`) sharing its coefficients: one per
-    /// segment, or all fitted through their mean when `averaged`.
+    /// segment, or all fitted through their weighted mean (`scales`).
     pub units: Vec<Vec<usize>>,
-    /// Uniform weights: the pairs of a unit are fitted through `√n·ȳ` (the same
-    /// minimiser, Jacobian and gradient as fitting each pair, one basis for all), the
-    /// coefficients come out scaled by `√n`, and the cost misses `Σ‖y − ȳ‖²`, which
-    /// is `cost_offset`.
-    pub averaged: bool,
+    /// Per unit, what its coefficients come out scaled by: 1, or `√W` when the weights
+    /// are constant over the band (uniform, or one per pair such as
+    /// [`Weighting::PairNoise`]'s). Then the pairs `k` of a unit, with square-root
+    /// weights `w_k`, are fitted through `√W·ȳ`, `W = Σ w_k²`, `ȳ = Σ w_k² y_k / W`:
+    /// the same minimiser, Jacobian and gradient as fitting each pair with its weight
+    /// (`Σ w_k²‖y_k − Φc‖² = W‖ȳ − Φc‖² + Σ w_k²‖y_k − ȳ‖²`), with one basis and one
+    /// QR for every pair. The cost misses the last sum, which is `cost_offset`.
+    pub scales: Vec<f64>,
     /// The part of the cost that no parameter changes.
     pub cost_offset: f64,
     /// Weighted data, `segments·2L × units`.
@@ -245,14 +248,10 @@ pub(crate) struct Block {
 }
 
 impl Block {
-    /// `√n` for an averaged unit of `n` pairs, 1 otherwise: its coefficients are
-    /// divided by this.
+    /// `√W` for a unit fitted through its weighted mean, 1 otherwise: its coefficients
+    /// are divided by this.
     pub fn unit_scale(&self, u: usize) -> f64 {
-        if self.averaged {
-            (self.units[u].len() as f64).sqrt()
-        } else {
-            1.0
-        }
+        self.scales[u]
     }
 
     /// The basis (or its derivative columns) stacked and weighted per segment.
@@ -395,65 +394,76 @@ impl Problem {
         } else {
             (0..pair_count).map(|pair| vec![pair]).collect()
         };
-        let mut blocks = Vec::new();
-        match &weights {
-            None => {
-                // Uniform: every unit shares one basis.
-                blocks.push(Block {
-                    segment_weights: vec![None],
-                    units: units.clone(),
-                    averaged: true,
-                    cost_offset: 0.0,
-                    rhs: Mat::zeros(0, 0),
-                });
-            }
-            Some(w) => {
-                for unit in &units {
-                    blocks.push(Block {
-                        segment_weights: unit.iter().map(|&pair| Some(w[pair].clone())).collect(),
-                        units: vec![unit.clone()],
-                        averaged: false,
-                        cost_offset: 0.0,
-                        rhs: Mat::zeros(0, 0),
-                    });
-                }
-                for (pair, wp) in w.iter().enumerate() {
-                    if wp.iter().all(|&x| x == 0.0) {
-                        return Err(invalid(
-                            "weighting",
-                            format!("output {}, input {}", pair / p + 1, pair % p + 1),
-                            "every weight of this pair in the band is zero",
-                        ));
-                    }
+        if let Some(w) = &weights {
+            for (pair, wp) in w.iter().enumerate() {
+                if wp.iter().all(|&x| x == 0.0) {
+                    return Err(invalid(
+                        "weighting",
+                        format!("output {}, input {}", pair / p + 1, pair % p + 1),
+                        "every weight of this pair in the band is zero",
+                    ));
                 }
             }
         }
-        for block in &mut blocks {
-            let segments = block.segment_weights.len();
-            let mut rhs = Mat::<f64>::zeros(segments * 2 * nl, block.units.len());
-            for (u, unit) in block.units.iter().enumerate() {
-                if block.averaged {
-                    let n = unit.len() as f64;
+        // One weight per pair over the whole band (uniform included): every unit shares
+        // one basis (`Block::scales`).
+        let pair_weight: Option<Vec<f64>> = match &weights {
+            None => Some(vec![1.0; pair_count]),
+            Some(w) => w
+                .iter()
+                .map(|wp| wp.iter().all(|&x| x == wp[0]).then_some(wp[0]))
+                .collect(),
+        };
+        let mut blocks = Vec::new();
+        match (&pair_weight, &weights) {
+            (Some(pw), _) => {
+                let mut block = Block {
+                    segment_weights: vec![None],
+                    units: units.clone(),
+                    scales: Vec::with_capacity(units.len()),
+                    cost_offset: 0.0,
+                    rhs: Mat::zeros(2 * nl, units.len()),
+                };
+                for (u, unit) in units.iter().enumerate() {
+                    let total: f64 = unit.iter().map(|&pair| pw[pair] * pw[pair]).sum();
+                    let root = total.sqrt();
+                    block.scales.push(root);
                     for k in 0..nl {
-                        let mean = unit.iter().map(|&pair| data[pair][k]).sum::<Complex64>() / n;
-                        rhs[(k, u)] = n.sqrt() * mean.re;
-                        rhs[(nl + k, u)] = n.sqrt() * mean.im;
+                        let mean = unit
+                            .iter()
+                            .map(|&pair| pw[pair] * pw[pair] * data[pair][k])
+                            .sum::<Complex64>()
+                            / total;
+                        block.rhs[(k, u)] = root * mean.re;
+                        block.rhs[(nl + k, u)] = root * mean.im;
                         block.cost_offset += unit
                             .iter()
-                            .map(|&pair| (data[pair][k] - mean).norm_sqr())
+                            .map(|&pair| pw[pair] * pw[pair] * (data[pair][k] - mean).norm_sqr())
                             .sum::<f64>();
                     }
-                    continue;
                 }
-                for (seg, &pair) in unit.iter().enumerate() {
-                    for k in 0..nl {
-                        let w = block.segment_weights[seg].as_ref().map_or(1.0, |w| w[k]);
-                        rhs[(seg * 2 * nl + k, u)] = w * data[pair][k].re;
-                        rhs[(seg * 2 * nl + nl + k, u)] = w * data[pair][k].im;
+                blocks.push(block);
+            }
+            (None, Some(w)) => {
+                for unit in &units {
+                    let segments = unit.len();
+                    let mut rhs = Mat::<f64>::zeros(segments * 2 * nl, 1);
+                    for (seg, &pair) in unit.iter().enumerate() {
+                        for k in 0..nl {
+                            rhs[(seg * 2 * nl + k, 0)] = w[pair][k] * data[pair][k].re;
+                            rhs[(seg * 2 * nl + nl + k, 0)] = w[pair][k] * data[pair][k].im;
+                        }
                     }
+                    blocks.push(Block {
+                        segment_weights: unit.iter().map(|&pair| Some(w[pair].clone())).collect(),
+                        units: vec![unit.clone()],
+                        scales: vec![1.0],
+                        cost_offset: 0.0,
+                        rhs,
+                    });
                 }
             }
-            block.rhs = rhs;
+            (None, None) => unreachable!("uniform weights are one per pair"),
         }
         Ok(Problem {
             layout,
@@ -470,6 +480,14 @@ impl Problem {
             data_norm2,
             observations: 2 * nl * pair_count,
         })
+    }
+
+    /// Real observations less unknowns (`parameters` pole parameters and every unit's
+    /// linear coefficients), or `None` when there are not more observations.
+    pub fn degrees_of_freedom(&self, parameters: usize) -> Option<usize> {
+        let units: usize = self.blocks.iter().map(|b| b.units.len()).sum();
+        let unknowns = parameters + self.layout.columns(parameters / 2) * units;
+        self.observations.checked_sub(unknowns).filter(|&d| d > 0)
     }
 
     /// Checks that there are more real observations per unit than linear unknowns.

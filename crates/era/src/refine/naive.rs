@@ -52,12 +52,12 @@ fn residual(problem: &Problem, theta: &[f64]) -> Result<Projected> {
 }
 
 /// Cost, finite-difference normal matrix, gradient and coefficients at `theta`.
-pub(crate) fn evaluate(problem: &Problem, theta: &[f64]) -> Result<Outcome> {
+pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Result<Outcome> {
     let (r0, coefficients) = match residual(problem, theta)? {
         Ok(x) => x,
         Err(outcome) => return Ok(outcome),
     };
-    let n_par = theta.len();
+    let n_par = if jacobian { theta.len() } else { 0 };
     let mut jac = Mat::<f64>::zeros(r0.len(), n_par);
     for k in 0..n_par {
         let h = 1e-6 * theta[k].abs().max(1.0);
