@@ -287,7 +287,7 @@ impl PyIdentification {
         let model = &self.found.model;
         let (q, p, l) = (model.outputs(), model.inputs(), f.len());
         let values = guarded(py, || {
-            Ok(era::response::HessenbergForm::new(model).response(&f))
+            Ok(era::response::frequency_response_blocks(model, &f))
         })?;
         vector(py, values).reshape([q, p, l])
     }

@@ -187,8 +187,14 @@ fn report_dta(
                         .total_cmp(&(b - rm.frequency_hz).abs())
                 })
                 .unwrap();
+            let (q, p) = (r.refinement.outputs, r.refinement.inputs);
+            let residue = faer::Mat::from_fn(q, p, |i, j| {
+                let z = rm.residue[i * p + j];
+                faer::c64::new(z.re, z.im)
+            });
+            let sv = residue.singular_values().unwrap();
             println!(
-                "  {} start {:.4} -> {:.4} (truth {:.4}) zeta {:.4} ± {:.1e} share {:.2e} f-std {:.1e}",
+                "  {} start {:.4} -> {:.4} (truth {:.4}) zeta {:.4} ± {:.1e} share {:.2e} f-std {:.1e} rank ratio {:.3}",
                 if matched.contains(&j) { "  " } else { "!!" },
                 start,
                 rm.frequency_hz,
@@ -196,7 +202,8 @@ fn report_dta(
                 rm.damping_ratio,
                 rm.damping_ratio_std,
                 rm.contribution,
-                rm.frequency_std_hz
+                rm.frequency_std_hz,
+                sv.get(1).copied().unwrap_or(0.0) / sv[0]
             );
             j += 1;
         }

@@ -15,9 +15,7 @@ use crate::realize::{
     realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
     SvdPath,
 };
-use crate::response::{
-    fit_metrics, frequency_response_naive, frequency_response_with, FitReport, HessenbergForm,
-};
+use crate::response::{fit_metrics, frequency_response_naive, frequency_response_with, FitReport};
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
@@ -1406,7 +1404,8 @@ pub fn refine_identification(
             }
         })
         .collect();
-    let mut response = HessenbergForm::new(&model).response(found.measured.frequency_hz());
+    let mut response =
+        crate::response::frequency_response_blocks(&model, found.measured.frequency_hz());
     // Below the band the lower residual's integrators are infinite at 0 Hz: those lines
     // were not fitted (like the zeroed measured lines) and are written as 0.
     let nl = found.measured.lines();

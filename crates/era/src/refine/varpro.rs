@@ -67,7 +67,14 @@ fn thin_qr(a: Mat<f64>) -> (Mat<f64>, Mat<f64>) {
 /// `Aᵀ B` on the calling thread.
 fn at_b(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::<f64>::zeros(a.ncols(), b.ncols());
-    matmul(out.as_mut(), Accum::Replace, a.transpose(), b, 1.0, Par::Seq);
+    matmul(
+        out.as_mut(),
+        Accum::Replace,
+        a.transpose(),
+        b,
+        1.0,
+        Par::Seq,
+    );
     out
 }
 
@@ -86,10 +93,7 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Resu
     let n_col = layout.columns(poles.len());
     let (phi, deriv) = rayon::join(
         || basis(layout, &problem.omega, &poles),
-        || {
-            jacobian
-                .then(|| basis_derivatives(layout, problem.parameters, &problem.omega, &poles))
-        },
+        || jacobian.then(|| basis_derivatives(layout, problem.parameters, &problem.omega, &poles)),
     );
     let n_jac = if jacobian { n_par } else { 0 };
     let mut jtj = Mat::<f64>::zeros(n_jac, n_jac);
@@ -121,7 +125,14 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Resu
         let mut theta_b = qty.clone();
         r.solve_upper_triangular_in_place(&mut theta_b);
         let mut res = block.rhs.clone();
-        matmul(res.as_mut(), Accum::Add, q.as_ref(), qty.as_ref(), -1.0, Par::Seq);
+        matmul(
+            res.as_mut(),
+            Accum::Add,
+            q.as_ref(),
+            qty.as_ref(),
+            -1.0,
+            Par::Seq,
+        );
         cost += res.squared_norm_l2() + block.cost_offset;
         for (u, unit) in block.units.iter().enumerate() {
             let scale = block.unit_scale(u);
@@ -135,15 +146,36 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Resu
             continue;
         };
         // E = P⊥D, formed: DᵀD − XᵀX would cancel as the fit converges.
-        matmul(e.as_mut(), Accum::Add, q.as_ref(), x.as_ref(), -1.0, Par::Seq);
+        matmul(
+            e.as_mut(),
+            Accum::Add,
+            q.as_ref(),
+            x.as_ref(),
+            -1.0,
+            Par::Seq,
+        );
         let (g, dtr) = rayon::join(
             || at_b(e.as_ref(), e.as_ref()),
             || at_b(e.as_ref(), res.as_ref()),
         );
         let mut z = Mat::<f64>::zeros(dtr.nrows(), theta_b.nrows());
-        matmul(z.as_mut(), Accum::Replace, dtr.as_ref(), theta_b.transpose(), 1.0, Par::Seq);
+        matmul(
+            z.as_mut(),
+            Accum::Replace,
+            dtr.as_ref(),
+            theta_b.transpose(),
+            1.0,
+            Par::Seq,
+        );
         let mut t = Mat::<f64>::zeros(n_col, n_col);
-        matmul(t.as_mut(), Accum::Replace, theta_b.as_ref(), theta_b.transpose(), 1.0, Par::Seq);
+        matmul(
+            t.as_mut(),
+            Accum::Replace,
+            theta_b.as_ref(),
+            theta_b.transpose(),
+            1.0,
+            Par::Seq,
+        );
         for k in 0..n_par {
             let mode_k = k / 2;
             for c in 0..pm {
