@@ -582,6 +582,51 @@ mod tests {
     }
 
     #[test]
+    fn diagonal_blocks_are_evaluated_one_by_one_to_round_off() {
+        // States interleaved: a 2 × 2 mode on {0, 3}, an integrator chain on {1, 4, 5},
+        // another mode on {2, 6}; B, C and D dense.
+        let mut a = Mat::<f64>::zeros(7, 7);
+        for (x, y, s) in [
+            (0, 3, Complex64::new(-0.3, 20.0)),
+            (2, 6, Complex64::new(-1.1, 55.0)),
+        ] {
+            a[(x, x)] = s.re;
+            a[(x, y)] = s.im;
+            a[(y, x)] = -s.im;
+            a[(y, y)] = s.re;
+        }
+        a[(1, 4)] = 1.0;
+        a[(4, 5)] = 1.0;
+        a[(5, 5)] = -0.5;
+        let b = Mat::from_fn(7, 2, |i, j| ((i * 3 + j) as f64 * 0.7).sin());
+        let c = Mat::from_fn(3, 7, |i, j| ((i * 5 + j) as f64 * 0.3).cos());
+        let d = Mat::from_fn(3, 2, |i, j| (i + 2 * j) as f64 * 0.1);
+        assert_eq!(
+            diagonal_blocks(&a),
+            vec![vec![0, 3], vec![1, 4, 5], vec![2, 6]]
+        );
+        let f: Vec<f64> = (1..200).map(|k| 0.05 * k as f64).collect();
+        for domain in [
+            TimeDomain::Continuous,
+            TimeDomain::Discrete {
+                sample_time_s: 0.01,
+            },
+        ] {
+            let mut a = a.clone();
+            if domain != TimeDomain::Continuous {
+                // Keep the discrete poles inside the unit circle.
+                a = Mat::from_fn(7, 7, |i, j| {
+                    0.01 * a[(i, j)] + f64::from(u8::from(i == j)) * 0.9
+                });
+            }
+            let model = StateSpace::new(a, b.clone(), c.clone(), d.clone(), domain);
+            let blocks = frequency_response_blocks(&model, &f);
+            let naive = frequency_response_naive(&model, &f);
+            assert!(worst_relative(&blocks, &naive) < 1e-12);
+        }
+    }
+
+    #[test]
     fn hessenberg_form_is_similar_to_a() {
         let model = truth_model();
         let form = HessenbergForm::new(&model);
