@@ -78,9 +78,15 @@ pub struct RefineFitArgs {
     /// Residual terms of the refined model (default both).
     #[arg(long, value_enum, value_name = "none|lower|upper|both")]
     pub residuals: Option<ResidualsArg>,
-    /// Reciprocity: symmetric residues and residuals (square, collocated sets).
+    /// Reciprocity: symmetric residues and residuals (square, collocated sets); with
+    /// rank-one residues each is `ψψᵀ`.
     #[arg(long)]
     pub reciprocal: bool,
+    /// Keep a free residue matrix per pole instead of a mode shape times a
+    /// participation (rank one, the default): faster, but a pole may then stand in for
+    /// several modes, and the model has up to 2·min(outputs, inputs) states per mode.
+    #[arg(long)]
+    pub free_residues: bool,
     /// Levenberg–Marquardt iterations of the refinement at most (default 100).
     #[arg(long, value_name = "N")]
     pub max_iterations: Option<usize>,

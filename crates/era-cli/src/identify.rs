@@ -20,7 +20,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let opts = options(a)?;
     if !a.refine && crate::refine::any_given(&a.refine_fit) {
         return crate::usage(
-            "--residuals, --reciprocal, --weighting and --max-iterations set the refinement: add --refine",
+            "--residuals, --reciprocal, --free-residues, --weighting and --max-iterations set the refinement: add --refine",
         );
     }
     let refine_options = crate::refine::options(&a.refine_fit)?;
@@ -193,6 +193,10 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         params.insert(
             "reciprocal".into(),
             serde_json::json!(refine_options.reciprocal),
+        );
+        params.insert(
+            "rank_one".into(),
+            serde_json::json!(refine_options.rank_one),
         );
         params.insert(
             "weighting".into(),

@@ -21,6 +21,7 @@ pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
         o.residuals = r.into();
     }
     o.reciprocal = fit.reciprocal;
+    o.rank_one = !fit.free_residues;
     o.weighting = match fit.weighting {
         Some(crate::args::WeightingArg::Uniform) => era::refine::Weighting::Uniform,
         Some(crate::args::WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
@@ -39,6 +40,7 @@ pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
 pub fn any_given(fit: &RefineFitArgs) -> bool {
     fit.residuals.is_some()
         || fit.reciprocal
+        || fit.free_residues
         || fit.max_iterations.is_some()
         || fit.weighting.is_some()
 }

@@ -10,7 +10,7 @@
 //!
 //! A refined model (`era identify --refine`, `era refine`) adds `refinement`
 //! (`iterations`, `converged`, `cost_before`, `cost_after`, `fit_before`, `fit_after`,
-//! the residual terms, the dropped modes) and, per mode, `frequency_std_hz` and
+//! the residual terms, the dropped modes, `rank_one`) and, per mode, `frequency_std_hz` and
 //! `damping_ratio_std`. `frf_lines` records the lines of the FRF the model was fitted
 //! to, so that `era refine` can check a file against it.
 
@@ -275,6 +275,10 @@ pub struct RefinementJson {
     pub residual_states: usize,
     /// Start modes dropped: `"the mode at f Hz was dropped: why"`.
     pub dropped: Vec<String>,
+    /// Whether each residue is a shape times a participation (two states per mode);
+    /// false for free residues (`--free-residues`, or weights that vary by line).
+    #[serde(default)]
+    pub rank_one: bool,
 }
 
 impl RefinementJson {
@@ -296,6 +300,7 @@ impl RefinementJson {
             upper_residual: f.upper.as_ref().map(rows),
             residual_states: r.residual_states,
             dropped: r.dropped_lines(),
+            rank_one: f.rank_one,
         }
     }
 }

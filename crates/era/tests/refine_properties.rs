@@ -67,9 +67,10 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 8, .. ProptestConfig::default() })]
 
     /// Random stable systems, noise-free, are recovered to round-off from poles 0.5 % off
-    /// in frequency and 20 % off in damping.
+    /// in frequency and 20 % off in damping: with rank-one residues (a structure's, the
+    /// default fit) and with free ones (`rank_one` false).
     #[test]
-    fn random_stable_systems_are_recovered(seed in 1u64..1_000_000, modes in 1usize..4, qi in 0usize..3) {
+    fn random_stable_systems_are_recovered(seed in 1u64..1_000_000, modes in 1usize..4, qi in 0usize..3, rank_one in any::<bool>()) {
         let quantity = quantity_of(qi);
         let mut rng = Minstd::new(seed);
         let (q, p) = (2, 3);
@@ -77,7 +78,15 @@ proptest! {
             .map(|r| pole(2.0 + 3.0 * r as f64 + rng.uniform(), 0.01 + 0.04 * rng.uniform()))
             .collect();
         let residues: Vec<Vec<Complex64>> = (0..modes)
-            .map(|_| (0..q * p).map(|_| rng.complex_normal()).collect())
+            .map(|_| {
+                if rank_one {
+                    let u: Vec<Complex64> = (0..q).map(|_| rng.complex_normal()).collect();
+                    let v: Vec<Complex64> = (0..p).map(|_| rng.complex_normal()).collect();
+                    (0..q * p).map(|k| u[k / p] * v[k % p]).collect()
+                } else {
+                    (0..q * p).map(|_| rng.complex_normal()).collect()
+                }
+            })
             .collect();
         let system = System {
             poles: poles.clone(),
@@ -97,8 +106,11 @@ proptest! {
                 pole(f, -s.re / s.norm() * (1.0 - 0.2 * sign))
             })
             .collect();
-        let r = refine(&frf, &start, &RefineOptions::default(), &mut |_, _| {}).unwrap();
+        let mut options = RefineOptions::default();
+        options.rank_one = rank_one;
+        let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
         prop_assert_eq!(r.modes.len(), modes);
+        prop_assert_eq!(r.rank_one, rank_one);
         for (s, res) in poles.iter().zip(&residues) {
             let m = r.modes.iter().min_by(|a, b| (a.pole - s).norm().total_cmp(&(b.pole - s).norm())).unwrap();
             prop_assert!((m.pole - s).norm() <= 1e-9 * s.norm(), "{} vs {}", m.pole, s);
@@ -108,6 +120,17 @@ proptest! {
             }
         }
         prop_assert!(r.fit_after <= 1e-10, "{}", r.fit_after);
+        if rank_one {
+            // Two states per mode, and the lower residual's double integrator per input.
+            let model = r.to_state_space(quantity).unwrap();
+            let chains: usize = r
+                .residual_terms(quantity)
+                .iter()
+                .filter(|(e, _)| *e < 0)
+                .map(|(e, _)| e.unsigned_abs() as usize * p)
+                .sum();
+            prop_assert_eq!(model.states(), 2 * modes + chains);
+        }
     }
 }
 
@@ -141,6 +164,8 @@ fn naive_and_fast_paths_agree() {
     let (s, frf) = small(Quantity::Acceleration, 0.05, 3);
     let mut options = RefineOptions::default();
     options.residuals = Residuals::Upper;
+    // The variable-projection fit itself (the rank-one stage after it is shared).
+    options.rank_one = false;
     let fast = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
     let naive = refine_naive(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
     assert_eq!(fast.modes.len(), 3);
@@ -176,6 +201,7 @@ fn reciprocal_fit_is_symmetric_and_stable() {
     options.reciprocal = true;
     let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
     assert_eq!(r.modes.len(), 4);
+    assert!(r.rank_one);
     for m in &r.modes {
         assert!(m.pole.re < 0.0 && m.pole.im > 0.0);
         for i in 0..3 {
@@ -183,7 +209,23 @@ fn reciprocal_fit_is_symmetric_and_stable() {
                 assert_eq!(m.residue[i * 3 + j], m.residue[j * 3 + i]);
             }
         }
+        // ψψᵀ: rank one, R_ii R_jj = R_ij², with noise.
+        for i in 0..3 {
+            for j in 0..3 {
+                let (a, b) = (
+                    m.residue[i * 4] * m.residue[j * 4],
+                    m.residue[i * 3 + j].powi(2),
+                );
+                assert!((a - b).norm() <= 1e-10 * a.norm().max(b.norm()));
+            }
+        }
     }
+    // Free residues (reciprocal too) are not rank one with noise.
+    options.rank_one = false;
+    let free = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    let m = &free.modes[0];
+    let (a, b) = (m.residue[0] * m.residue[4], m.residue[1].powi(2));
+    assert!((a - b).norm() > 1e-6 * a.norm());
     for term in [&r.lower, &r.upper] {
         let t = term.as_ref().unwrap();
         for i in 0..3 {
@@ -456,6 +498,8 @@ fn weights_constant_per_pair_share_one_basis_and_fit_as_per_line_weights() {
             options.residuals = Residuals::Upper;
             options.reciprocal = reciprocal;
             options.weighting = Weighting::InverseVariance(v.clone());
+            // The free fit: rank-one residues need weights constant per pair.
+            options.rank_one = false;
             refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap()
         };
         let (shared, separate) = (fit(&variance), fit(&nudged));

@@ -42,7 +42,7 @@ pub const COALESCED: f64 = 1e-9;
 /// fit.
 pub(crate) const STATISTICAL_STOP: f64 = 1e-2;
 /// Cost below this fraction of the (weighted) data's squared norm is an exact fit.
-const EXACT_FIT: f64 = 1e-28;
+pub(crate) const EXACT_FIT: f64 = 1e-28;
 
 /// The active modes: their start indices and parameters.
 struct State {
@@ -235,6 +235,8 @@ pub(crate) fn run(
             converged,
             cost_before,
             fit_before,
+            max_iterations: options.max_iterations,
+            tolerance: options.tolerance,
         },
     )
 }
@@ -244,6 +246,8 @@ struct Summary {
     converged: bool,
     cost_before: f64,
     fit_before: f64,
+    max_iterations: usize,
+    tolerance: f64,
 }
 
 /// Largest step of a mode's frequency, in units of its `σ` (half the half-power
@@ -254,7 +258,7 @@ const MAX_LOG_DAMPING_STEP: f64 = 0.7;
 
 /// Shortens each mode's part of the step to the region where its linearisation holds,
 /// so that one badly predicted mode does not force `λ` up for all.
-fn limit_step(mut step: Vec<f64>, theta: &[f64], log_damping: bool) -> Vec<f64> {
+pub(crate) fn limit_step(mut step: Vec<f64>, theta: &[f64], log_damping: bool) -> Vec<f64> {
     for r in 0..theta.len() / 2 {
         let sigma = if log_damping {
             theta[2 * r].exp()
@@ -277,7 +281,7 @@ fn limit_step(mut step: Vec<f64>, theta: &[f64], log_damping: bool) -> Vec<f64> 
 }
 
 /// `ω_d < 0` is the conjugate pole: keep the representative with `Im s > 0`.
-fn normalise(theta: &mut [f64]) {
+pub(crate) fn normalise(theta: &mut [f64]) {
     for r in 0..theta.len() / 2 {
         theta[2 * r + 1] = theta[2 * r + 1].abs();
     }
@@ -444,12 +448,39 @@ fn finish(
     let (q, p) = (problem.outputs, problem.inputs);
     let layout = &problem.layout;
     let pm = layout.per_mode;
+    let mut state = state;
+    let mut summary = summary;
+    let mut e = e;
+    let joint = if problem.rank_one {
+        super::rank_one::fit(
+            problem,
+            &state.theta,
+            &e.coefficients,
+            summary.max_iterations,
+            summary.tolerance,
+        )?
+    } else {
+        None
+    };
+    let rank_one = joint.is_some();
+    let (noise_variance, covariance) = match joint {
+        Some(j) => {
+            state.theta = j.theta;
+            e.coefficients = j.coefficients;
+            e.cost = j.cost;
+            summary.iterations += j.iterations;
+            summary.converged &= j.converged;
+            (j.noise_variance, j.covariance)
+        }
+        None => {
+            let noise_variance = problem
+                .degrees_of_freedom(state.theta.len())
+                .map_or(f64::NAN, |dof| e.cost / dof as f64);
+            (noise_variance, covariance(&e.jtj, noise_variance))
+        }
+    };
     let poles = problem.parameters.poles(&state.theta);
     let n_modes = poles.len();
-    let noise_variance = problem
-        .degrees_of_freedom(state.theta.len())
-        .map_or(f64::NAN, |dof| e.cost / dof as f64);
-    let covariance = covariance(&e.jtj, noise_variance);
     let contributions = contributions(problem, &poles, &e.coefficients);
     let mut modes: Vec<RefinedMode> = poles
         .iter()
@@ -519,6 +550,7 @@ fn finish(
         inputs: p,
         band: problem.band,
         sample_time_s: problem.layout.sample_time_s,
+        rank_one,
     })
 }
 

@@ -287,6 +287,13 @@ pub(crate) struct Problem {
     pub data_norm2: f64,
     /// Real observations `2·L·q·p` (each pair counted once).
     pub observations: usize,
+    /// Square-root weight of each pair when the weights are constant over the band
+    /// (uniform: all 1), `None` when they vary from line to line.
+    pub pair_weights: Option<Vec<f64>>,
+    /// [`RefineOptions::rank_one`].
+    pub rank_one: bool,
+    /// [`RefineOptions::reciprocal`].
+    pub reciprocal: bool,
 }
 
 fn invalid(name: &'static str, value: String, reason: impl Into<String>) -> EraError {
@@ -428,6 +435,8 @@ impl Problem {
                     let total: f64 = unit.iter().map(|&pair| pw[pair] * pw[pair]).sum();
                     let root = total.sqrt();
                     block.scales.push(root);
+                    // `k` indexes the line of every pair of the unit, not one slice.
+                    #[allow(clippy::needless_range_loop)]
                     for k in 0..nl {
                         let mean = unit
                             .iter()
@@ -479,6 +488,9 @@ impl Problem {
             data,
             data_norm2,
             observations: 2 * nl * pair_count,
+            pair_weights: pair_weight,
+            rank_one: options.rank_one,
+            reciprocal: options.reciprocal,
         })
     }
 
