@@ -1,7 +1,8 @@
 //! `era::refine` at the DTA size: 8×8 acceleration FRFs, 40 modes in 0.5–14 Hz, 801
 //! lines at 0.025 Hz (`era simulate modal` defaults) with 5 % noise, refined from the true
 //! poles perturbed by ±0.3 % in frequency and ±20 % in damping. The target is ≤ 1 s on
-//! 2 cores, for the uniform weighting and for the CLI's default, `PairNoise`. The naive reference (finite differences, a dense solve per pair) is timed
+//! 2 cores, for the uniform weighting and for the CLI's default, `PairNoise`, with
+//! rank-one residues (the default) and with free ones (`--free-residues`). The naive reference (finite differences, a dense solve per pair) is timed
 //! on a 2×2, 4-mode set beside the fast path on the same set.
 //!
 //! `cargo bench -p era --bench refine`. Setup happens outside the timed closures.
@@ -49,6 +50,12 @@ fn bench(c: &mut Criterion) {
     pair_noise.weighting = Weighting::PairNoise;
     g.bench_function("noise_5_percent_pair_noise", |b| {
         b.iter(|| refine(black_box(&noisy), &start, &pair_noise, &mut |_, _| {}).unwrap())
+    });
+    // `--free-residues`: the variable-projection stage alone.
+    let mut free = pair_noise.clone();
+    free.rank_one = false;
+    g.bench_function("noise_5_percent_pair_noise_free_residues", |b| {
+        b.iter(|| refine(black_box(&noisy), &start, &free, &mut |_, _| {}).unwrap())
     });
     g.finish();
 

@@ -13,7 +13,7 @@
 //! (default 1..=100), and the median of the fit's own predicted standard deviation.
 //!
 //! Environment: `PAIRNOISE=1` weights each pair by its estimated noise (the CLI's
-//! default, `--weighting pair-noise`); `NORES=1` fits without residual terms and
+//! default, `--weighting pair-noise`); `FREE=1` keeps free residues (`--free-residues`); `NORES=1` fits without residual terms and
 //! `RECIP=1` with reciprocity (Table 5.2 only); `DEBUG=1` lists every refined mode of a
 //! DTA-like set with its start, truth and standard deviations.
 
@@ -125,6 +125,9 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             let mut ropts = RefineOptions::default();
             if std::env::var("PAIRNOISE").is_ok() {
                 ropts.weighting = era::refine::Weighting::PairNoise;
+            }
+            if std::env::var("FREE").is_ok() {
+                ropts.rank_one = false;
             }
             let found = refine_identification(found, &frf, &ropts, &mut |_| {}, &mut |_, _| {})?;
             let seconds = clock.elapsed().as_secs_f64();
@@ -270,6 +273,9 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
         }
         if std::env::var("PAIRNOISE").is_ok() {
             ropts.weighting = era::refine::Weighting::PairNoise;
+        }
+        if std::env::var("FREE").is_ok() {
+            ropts.rank_one = false;
         }
         match refine_identification(found, &frf, &ropts, &mut |_| {}, &mut |_, _| {}) {
             Ok(refined) => {

@@ -451,7 +451,7 @@ fn finish(
     let mut state = state;
     let mut summary = summary;
     let mut e = e;
-    let joint = if problem.rank_one {
+    let joint = if problem.rank_one_follows() {
         super::rank_one::fit(
             problem,
             &state.theta,

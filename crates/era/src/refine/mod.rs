@@ -371,9 +371,12 @@ fn run(
     }
     // The first fit only has to be good enough to estimate each pair's noise, which
     // small moves of the poles hardly change: a looser tolerance.
+    // The free residues' fit is enough for that too: the rank-one stage runs once, after
+    // the weighted pass.
     let uniform = RefineOptions {
         weighting: Weighting::Uniform,
         tolerance: options.tolerance.max(FIRST_PASS_TOLERANCE),
+        rank_one: false,
         ..options.clone()
     };
     let first = fit::run(frf, start_poles, &uniform, progress, evaluate)?;

@@ -502,6 +502,12 @@ impl Problem {
         self.observations.checked_sub(unknowns).filter(|&d| d > 0)
     }
 
+    /// Whether the rank-one stage will follow the free fit: asked for, weights
+    /// constant per pair, complex modes.
+    pub fn rank_one_follows(&self) -> bool {
+        self.rank_one && self.pair_weights.is_some() && self.layout.per_mode == 2
+    }
+
     /// Checks that there are more real observations per unit than linear unknowns.
     pub fn check_size(&self, modes: usize) -> Result<()> {
         let cols = self.layout.columns(modes);
