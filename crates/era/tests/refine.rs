@@ -137,6 +137,12 @@ fn dta_with_5_percent_noise_reaches_the_noise_floor() {
     assert!(r.fit_after <= 1.1 * 0.05, "{}", r.fit_after);
     assert!(median(ze.clone()) <= 0.015, "{}", median(ze));
     assert!(r.modes.iter().all(|m| m.pole.re < 0.0));
+    // Rank-one residues: two states per mode (free ones gave up to 16 here).
+    assert!(r.rank_one);
+    assert_eq!(
+        r.to_state_space(Quantity::Acceleration).unwrap().states(),
+        2 * r.modes.len()
+    );
     let sse = state_space_error(&frf, &r);
     assert!(
         (sse - r.fit_after).abs() <= 1e-9,

@@ -520,3 +520,21 @@ fn weights_constant_per_pair_share_one_basis_and_fit_as_per_line_weights() {
         }
     }
 }
+
+#[test]
+fn pair_noise_weighting_of_exact_data_still_gives_rank_one_residues() {
+    // An exact fit has no noise to weight by and skips the weighted pass; the residues
+    // are still the rank-one ones asked for.
+    let (s, frf) = small(Quantity::Acceleration, 0.0, 1);
+    let mut options = RefineOptions::default();
+    options.weighting = Weighting::PairNoise;
+    let r = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
+    assert!(r.rank_one);
+    assert!(r.fit_after <= 1e-10, "{}", r.fit_after);
+    assert_eq!(
+        r.to_state_space(Quantity::Acceleration).unwrap().states(),
+        2 * 3
+    );
+    options.rank_one = false;
+    assert!(!refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap().rank_one);
+}

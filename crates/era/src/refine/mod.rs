@@ -111,10 +111,11 @@
 //! (`cargo run --release -p era --example refine_targets`) it brings every mode back to
 //! one pole: no spurious physical mode on seeds 11–16 where the free fit had one, and
 //! about half the median damping error. The model then has two states per mode. Its
-//! cost: the joint normal matrix is over every parameter (about 1400 for 8 × 8 and 40
-//! modes), so it takes several times the free fit's time. It needs weights constant over
-//! the band per pair and complex modes; otherwise the residues stay free and
-//! [`Refinement::rank_one`] is false.
+//! cost: the joint normal matrix is over every parameter (1424 for 8 × 8 and 40 modes;
+//! 640 once each output's shapes are eliminated), so it takes two to four times the
+//! free fit's time. It needs weights constant over the band per pair, complex modes and
+//! at most `rank_one::MAX_PARAMETERS` (4000) parameters; otherwise the residues stay
+//! free and [`Refinement::rank_one`] is false.
 //!
 //! # Sampled data: the z-domain model
 //!
@@ -380,9 +381,31 @@ fn run(
         ..options.clone()
     };
     let first = fit::run(frf, start_poles, &uniform, progress, evaluate)?;
-    // NaN (no fit measure) is returned as it is, like an exact fit.
+    // NaN (no fit measure) is returned as it is, like an exact fit: with the rank-one
+    // stage when it was asked for (the first pass ran without it).
     if first.fit_after.is_nan() || first.fit_after < 1e-9 {
-        return Ok(first);
+        if !options.rank_one {
+            return Ok(first);
+        }
+        let poles: Vec<Complex64> = first.modes.iter().map(|m| m.pole).collect();
+        let mut exact = fit::run(
+            frf,
+            &poles,
+            &RefineOptions {
+                band: Some(first.band),
+                rank_one: true,
+                ..uniform.clone()
+            },
+            progress,
+            evaluate,
+        )?;
+        for m in &mut exact.modes {
+            m.start = first.modes[m.start].start;
+        }
+        exact.dropped = first.dropped.clone();
+        exact.iterations += first.iterations;
+        exact.fit_before = first.fit_before;
+        return Ok(exact);
     }
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
     let (a, b) = first.band;

@@ -43,6 +43,10 @@ use faer::linalg::solvers::Solve;
 use faer::Mat;
 use num_complex::Complex64;
 
+/// Most free parameters of the joint fit (its normal matrix is dense: 4000² values are
+/// 128 MB, one per thread while it is assembled); beyond, the residues stay free.
+pub(crate) const MAX_PARAMETERS: usize = 4000;
+
 /// The result of the joint fit.
 pub(crate) struct Joint {
     pub theta: Vec<f64>,
@@ -673,6 +677,9 @@ pub(crate) fn fit(
         })
         .collect();
     let layout = Layout::new(n, q, p, n_res, problem.reciprocal, &fixed);
+    if layout.free > MAX_PARAMETERS {
+        return Ok(None);
+    }
     let y = stacked_data(problem);
     // The best shapes for the start's participations.
     let mut solved = x.clone();
@@ -760,8 +767,10 @@ pub(crate) fn fit(
                     normal_equations(problem, &x, &layout, &phi, &residual, weights);
                 reduced = None;
                 let noise_unit = dof.map_or(0.0, |d| current / d as f64);
-                if decrease <= tolerance * (current + decrease)
-                    || decrease <= STATISTICAL_STOP * noise_unit
+                // A step shortened by one mode's limit says nothing about convergence.
+                if factor == 1.0
+                    && (decrease <= tolerance * (current + decrease)
+                        || decrease <= STATISTICAL_STOP * noise_unit)
                 {
                     converged = true;
                     break;
