@@ -531,6 +531,8 @@ fn pair_noise_weighting_of_exact_data_still_gives_rank_one_residues() {
     let r = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
     assert!(r.rank_one);
     assert!(r.fit_after <= 1e-10, "{}", r.fit_after);
+    // `before` is at the caller's start poles, not at the first pass's optimum.
+    assert!(r.cost_after < r.cost_before && r.fit_before > 1e-3);
     assert_eq!(
         r.to_state_space(Quantity::Acceleration).unwrap().states(),
         2 * 3

@@ -404,7 +404,9 @@ fn run(
         }
         exact.dropped = first.dropped.clone();
         exact.iterations += first.iterations;
+        // Before: at the caller's start poles, with the same (uniform) weights.
         exact.fit_before = first.fit_before;
+        exact.cost_before = first.cost_before;
         return Ok(exact);
     }
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
