@@ -538,5 +538,9 @@ fn pair_noise_weighting_of_exact_data_still_gives_rank_one_residues() {
         2 * 3
     );
     options.rank_one = false;
-    assert!(!refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap().rank_one);
+    assert!(
+        !refine(&frf, &start_of(&s), &options, &mut |_, _| {})
+            .unwrap()
+            .rank_one
+    );
 }

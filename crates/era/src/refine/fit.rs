@@ -168,8 +168,8 @@ pub(crate) fn run(
         };
         match outcome {
             Some(Outcome::Ready(next)) if next.cost < current.cost => {
-                let relative = (current.cost - next.cost) / current.cost;
                 let decrease = current.cost - next.cost;
+                let relative = decrease / current.cost;
                 state.theta = trial;
                 // The trial was evaluated without its Jacobian; the accepted point needs it.
                 current = match evaluate(&problem, &state.theta, true)? {
@@ -289,27 +289,34 @@ pub(crate) fn normalise(theta: &mut [f64]) {
 
 /// `(JᵀJ + λ diag JᵀJ) δ = −Jᵀr` (Marquardt's scaling, with a floor on the diagonal).
 fn marquardt_step(jtj: &Mat<f64>, jtr: &[f64], lambda: f64) -> Option<Vec<f64>> {
-    let n = jtr.len();
-    let largest = (0..n).map(|k| jtj[(k, k)]).fold(0.0, f64::max);
+    use faer::linalg::solvers::Solve;
+    let m = damped(jtj, lambda)?;
+    let rhs = Mat::from_fn(jtr.len(), 1, |k, _| -jtr[k]);
+    let step = match m.llt(faer::Side::Lower) {
+        Ok(llt) => llt.solve(&rhs),
+        Err(_) => m.partial_piv_lu().solve(&rhs),
+    };
+    finite_column(&step)
+}
+
+/// `N + λ diag N`, each diagonal entry floored at 1e-14 of the largest (Marquardt's
+/// scaling), or `None` when `N` has no positive finite diagonal.
+pub(crate) fn damped(normal: &Mat<f64>, lambda: f64) -> Option<Mat<f64>> {
+    let n = normal.nrows();
+    let largest = (0..n).map(|k| normal[(k, k)]).fold(0.0, f64::max);
     if !(largest > 0.0 && largest.is_finite()) {
         return None;
     }
-    let mut m = jtj.clone();
+    let mut m = normal.clone();
     for k in 0..n {
-        m[(k, k)] += lambda * jtj[(k, k)].max(1e-14 * largest);
+        m[(k, k)] += lambda * normal[(k, k)].max(1e-14 * largest);
     }
-    let rhs = Mat::from_fn(n, 1, |k, _| -jtr[k]);
-    let step = match m.llt(faer::Side::Lower) {
-        Ok(llt) => {
-            use faer::linalg::solvers::Solve;
-            llt.solve(&rhs)
-        }
-        Err(_) => {
-            use faer::linalg::solvers::Solve;
-            m.partial_piv_lu().solve(&rhs)
-        }
-    };
-    let v: Vec<f64> = (0..n).map(|k| step[(k, 0)]).collect();
+    Some(m)
+}
+
+/// The column as a vector, or `None` when an entry is not finite.
+pub(crate) fn finite_column(step: &Mat<f64>) -> Option<Vec<f64>> {
+    let v: Vec<f64> = (0..step.nrows()).map(|k| step[(k, 0)]).collect();
     v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
@@ -440,17 +447,14 @@ fn fit_of(problem: &Problem, theta: &[f64], coefficients: &Mat<f64>) -> f64 {
 
 fn finish(
     problem: &Problem,
-    state: State,
-    e: Evaluation,
+    mut state: State,
+    mut e: Evaluation,
     dropped: Vec<(usize, String)>,
-    summary: Summary,
+    mut summary: Summary,
 ) -> Result<Refinement> {
     let (q, p) = (problem.outputs, problem.inputs);
     let layout = &problem.layout;
     let pm = layout.per_mode;
-    let mut state = state;
-    let mut summary = summary;
-    let mut e = e;
     let joint = if problem.rank_one_follows() {
         super::rank_one::fit(
             problem,

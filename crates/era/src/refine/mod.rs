@@ -108,9 +108,9 @@
 //! Levenberg–Marquardt fit of the poles, shapes, participations and residual terms,
 //! started from the free fit's poles and each residue's leading singular pair
 //! (`rank_one` module). On the DTA-like 8 × 8 set with 5 % noise
-//! (`cargo run --release -p era --example refine_targets`) it brings every mode back to
-//! one pole: no spurious physical mode on seeds 11–16 where the free fit had one, and
-//! about half the median damping error. The model then has two states per mode. Its
+//! (`cargo run --release -p era --example refine_targets`, seeds 11–18) it finds as many
+//! modes as the free fit, with as many spurious ones (one on each of two seeds), and
+//! about half its median damping error. The model then has two states per mode. Its
 //! cost: the joint normal matrix is over every parameter (1424 for 8 × 8 and 40 modes;
 //! 640 once each output's shapes are eliminated), so it takes two to four times the
 //! free fit's time. It needs weights constant over the band per pair, complex modes and
@@ -146,10 +146,11 @@
 //!
 //! so that `C (jωI − A)⁻¹ B = u vᵀ/(jω − s) + ū v̄ᵀ/(jω − s̄)`. Rank-one residues (the
 //! default, and any noise-free fit of a structure) give two states per mode; free
-//! residues of a noisy fit up to `2 min(q, p)`. The residual terms: a term `K (jω)^0` goes into `D`; a term
-//! `K/(jω)^m` (`m` = 1, 2) is `m·p` states at `s = 0`, an integrator chain per input
-//! (`ẋ₁ = x₂, …, ẋ_m = u_j`, output `K x₁`). So for displacement data the lower residual
-//! is a double integrator and the upper one `D`; for acceleration data both are in `D`.
+//! residues of a noisy fit up to `2 min(q, p)`. The residual terms: a term `K (jω)^0`
+//! goes into `D`; a term `K/(jω)^m` (`m` = 1, 2) is `m·p` states at `s = 0`, an
+//! integrator chain per input (`ẋ₁ = x₂, …, ẋ_m = u_j`, output `K x₁`). So for
+//! displacement data the lower residual is a double integrator and the upper one `D`;
+//! for acceleration data both are in `D`.
 //!
 //! A z-domain fit is realised the same way in `z` (blocks of `e^(sTs)`, `B_d`), and
 //! returned as the continuous model whose `c2d(Ts)` it is: per block
@@ -371,9 +372,8 @@ fn run(
         return fit::run(frf, start_poles, options, progress, evaluate);
     }
     // The first fit only has to be good enough to estimate each pair's noise, which
-    // small moves of the poles hardly change: a looser tolerance.
-    // The free residues' fit is enough for that too: the rank-one stage runs once, after
-    // the weighted pass.
+    // small moves of the poles hardly change: a looser tolerance, and free residues (the
+    // rank-one stage runs once, after the weighted pass).
     let uniform = RefineOptions {
         weighting: Weighting::Uniform,
         tolerance: options.tolerance.max(FIRST_PASS_TOLERANCE),

@@ -36,7 +36,7 @@
 //! free parameter, `σ̂² = cost/(observations − parameters)`: fewer nuisance parameters
 //! than the free fit's, so slightly smaller standard deviations where modes overlap.
 
-use super::fit::{limit_step, normalise, EXACT_FIT, STATISTICAL_STOP};
+use super::fit::{damped, finite_column, limit_step, normalise, EXACT_FIT, STATISTICAL_STOP};
 use super::model::{basis, basis_derivatives, Problem};
 use crate::error::{EraError, Result};
 use faer::linalg::solvers::Solve;
@@ -73,7 +73,7 @@ struct Parameters {
 }
 
 /// Where each raw parameter (θ, u, v, K, in that order) goes among the free ones.
-struct Layout {
+struct Indices {
     n: usize,
     q: usize,
     p: usize,
@@ -82,7 +82,7 @@ struct Layout {
     free: usize,
 }
 
-impl Layout {
+impl Indices {
     fn u(&self, i: usize, r: usize, part: usize) -> usize {
         2 * self.n + (i * self.n + r) * 2 + part
     }
@@ -97,7 +97,7 @@ impl Layout {
     }
 
     fn new(n: usize, q: usize, p: usize, n_res: usize, reciprocal: bool, fixed: &[usize]) -> Self {
-        let mut layout = Layout {
+        let mut ix = Indices {
             n,
             q,
             p,
@@ -105,7 +105,7 @@ impl Layout {
             reduced: Vec::new(),
             free: 0,
         };
-        let mut reduced = vec![None; layout.raw()];
+        let mut reduced = vec![None; ix.raw()];
         let mut next = 0;
         let mut take = |slot: &mut Option<usize>| {
             *slot = Some(next);
@@ -117,7 +117,7 @@ impl Layout {
         for i in 0..q {
             for r in 0..n {
                 for part in 0..2 {
-                    take(&mut reduced[layout.u(i, r, part)]);
+                    take(&mut reduced[ix.u(i, r, part)]);
                 }
             }
         }
@@ -126,15 +126,15 @@ impl Layout {
             for j in 0..p {
                 for r in 0..n {
                     for part in 0..2 {
-                        reduced[layout.v(j, r, part)] = reduced[layout.u(j, r, part)];
+                        reduced[ix.v(j, r, part)] = reduced[ix.u(j, r, part)];
                     }
                 }
             }
             for i in 0..q {
                 for j in i..p {
                     for e in 0..n_res {
-                        take(&mut reduced[layout.k(i * p + j, e)]);
-                        reduced[layout.k(j * p + i, e)] = reduced[layout.k(i * p + j, e)];
+                        take(&mut reduced[ix.k(i * p + j, e)]);
+                        reduced[ix.k(j * p + i, e)] = reduced[ix.k(i * p + j, e)];
                     }
                 }
             }
@@ -145,19 +145,19 @@ impl Layout {
                         continue;
                     }
                     for part in 0..2 {
-                        take(&mut reduced[layout.v(j, r, part)]);
+                        take(&mut reduced[ix.v(j, r, part)]);
                     }
                 }
             }
             for pair in 0..q * p {
                 for e in 0..n_res {
-                    take(&mut reduced[layout.k(pair, e)]);
+                    take(&mut reduced[ix.k(pair, e)]);
                 }
             }
         }
-        layout.reduced = reduced;
-        layout.free = next;
-        layout
+        ix.reduced = reduced;
+        ix.free = next;
+        ix
     }
 }
 
@@ -174,8 +174,8 @@ fn stacked_data(problem: &Problem) -> Mat<f64> {
     })
 }
 
-fn coefficients(x: &Parameters, layout: &Layout, n_col: usize) -> Mat<f64> {
-    let (n, q, p) = (layout.n, layout.q, layout.p);
+fn coefficients(x: &Parameters, ix: &Indices, n_col: usize) -> Mat<f64> {
+    let (n, q, p) = (ix.n, ix.q, ix.p);
     Mat::from_fn(n_col, q * p, |c, pair| {
         let (i, j) = (pair / p, pair % p);
         if c < 2 * n {
@@ -186,39 +186,46 @@ fn coefficients(x: &Parameters, layout: &Layout, n_col: usize) -> Mat<f64> {
                 z.im
             }
         } else {
-            x.k[pair * layout.n_res + (c - 2 * n)]
+            x.k[pair * ix.n_res + (c - 2 * n)]
         }
     })
 }
 
-/// Weighted cost and the residual `Y − ΦC`.
+/// The free fit's basis `Φ` at the poles of `theta`.
+fn basis_at(problem: &Problem, theta: &[f64]) -> Mat<f64> {
+    basis(
+        &problem.layout,
+        &problem.omega,
+        &problem.parameters.poles(theta),
+    )
+}
+
+/// Weighted cost and the residual `Y − ΦC`, `phi` the basis at `x`'s poles.
 fn cost(
-    problem: &Problem,
     x: &Parameters,
-    layout: &Layout,
+    ix: &Indices,
+    phi: &Mat<f64>,
     y: &Mat<f64>,
     weights: &[f64],
-) -> (f64, Mat<f64>, Mat<f64>) {
-    let poles = problem.parameters.poles(&x.theta);
-    let phi = basis(&problem.layout, &problem.omega, &poles);
-    let c = coefficients(x, layout, phi.ncols());
-    let residual = y - &phi * &c;
+) -> (f64, Mat<f64>) {
+    let c = coefficients(x, ix, phi.ncols());
+    let residual = y - phi * &c;
     let total = (0..residual.ncols())
         .map(|pair| weights[pair] * weights[pair] * residual.col(pair).squared_norm_l2())
         .sum();
-    (total, residual, phi)
+    (total, residual)
 }
 
 /// `(N, g)` over the free parameters at `x` (`N = JᵀWJ`, `g = JᵀW r`).
 fn normal_equations(
     problem: &Problem,
     x: &Parameters,
-    layout: &Layout,
+    ix: &Indices,
     phi: &Mat<f64>,
     residual: &Mat<f64>,
     weights: &[f64],
 ) -> (Mat<f64>, Vec<f64>) {
-    let (n, q, p, n_res) = (layout.n, layout.q, layout.p, layout.n_res);
+    let (n, q, p, n_res) = (ix.n, ix.q, ix.p, ix.n_res);
     let poles = problem.parameters.poles(&x.theta);
     let d = basis_derivatives(&problem.layout, problem.parameters, &problem.omega, &poles);
     let h = phi.transpose() * phi;
@@ -226,7 +233,7 @@ fn normal_equations(
     let m = d.transpose() * &d;
     let phi_r = phi.transpose() * residual;
     let d_r = d.transpose() * residual;
-    let free = layout.free;
+    let free = ix.free;
     // A linear parameter of a pair: its free index, its (column, value) entries and how
     // many of them are used.
     type Linear = (usize, [(usize, f64); 2], usize);
@@ -247,12 +254,12 @@ fn normal_equations(
                 let (a, b) = (2 * r, 2 * r + 1);
                 // R = u v: ∂(Re R, Im R)/∂(Re u) = (Re v, Im v), /∂(Im u) = (−Im v, Re v).
                 for (raw, entries) in [
-                    (layout.u(i, r, 0), [(a, v.re), (b, v.im)]),
-                    (layout.u(i, r, 1), [(a, -v.im), (b, v.re)]),
-                    (layout.v(j, r, 0), [(a, u.re), (b, u.im)]),
-                    (layout.v(j, r, 1), [(a, -u.im), (b, u.re)]),
+                    (ix.u(i, r, 0), [(a, v.re), (b, v.im)]),
+                    (ix.u(i, r, 1), [(a, -v.im), (b, v.re)]),
+                    (ix.v(j, r, 0), [(a, u.re), (b, u.im)]),
+                    (ix.v(j, r, 1), [(a, -u.im), (b, u.re)]),
                 ] {
-                    if let Some(f) = layout.reduced[raw] {
+                    if let Some(f) = ix.reduced[raw] {
                         linear.push((f, entries, 2));
                     }
                 }
@@ -263,7 +270,7 @@ fn normal_equations(
                 }
             }
             for e_res in 0..n_res {
-                if let Some(f) = layout.reduced[layout.k(pair, e_res)] {
+                if let Some(f) = ix.reduced[ix.k(pair, e_res)] {
                     linear.push((f, [(2 * n + e_res, 1.0), (0, 0.0)], 1));
                 }
             }
@@ -352,19 +359,19 @@ struct Reduced {
 }
 
 impl Reduced {
-    fn new(normal: &Mat<f64>, gradient: &[f64], layout: &Layout) -> Option<Self> {
-        let (n, q, p, n_res) = (layout.n, layout.q, layout.p, layout.n_res);
-        let mut in_block = vec![false; layout.free];
+    fn new(normal: &Mat<f64>, gradient: &[f64], ix: &Indices) -> Option<Self> {
+        let (n, q, p, n_res) = (ix.n, ix.q, ix.p, ix.n_res);
+        let mut in_block = vec![false; ix.free];
         let blocks: Vec<Vec<usize>> = (0..q)
             .map(|i| {
                 let mut b: Vec<usize> = (0..n)
-                    .flat_map(|r| [layout.u(i, r, 0), layout.u(i, r, 1)])
+                    .flat_map(|r| [ix.u(i, r, 0), ix.u(i, r, 1)])
                     .chain(
                         (0..p)
                             .flat_map(|j| (0..n_res).map(move |e| (i * p + j, e)))
-                            .map(|(pair, e)| layout.k(pair, e)),
+                            .map(|(pair, e)| ix.k(pair, e)),
                     )
-                    .filter_map(|raw| layout.reduced[raw])
+                    .filter_map(|raw| ix.reduced[raw])
                     .collect();
                 b.sort_unstable();
                 for &f in &b {
@@ -373,7 +380,7 @@ impl Reduced {
                 b
             })
             .collect();
-        let z: Vec<usize> = (0..layout.free).filter(|&f| !in_block[f]).collect();
+        let z: Vec<usize> = (0..ix.free).filter(|&f| !in_block[f]).collect();
         let nz = z.len();
         let mut s = Mat::from_fn(nz, nz, |a, b| normal[(z[a], z[b])]);
         let mut g: Vec<f64> = z.iter().map(|&f| gradient[f]).collect();
@@ -426,7 +433,7 @@ impl Reduced {
             s,
             g,
             back,
-            free: layout.free,
+            free: ix.free,
         })
     }
 
@@ -450,28 +457,21 @@ impl Reduced {
 
 /// `(N + λ diag N) δ = g`, or `None` when it is not solvable.
 fn damped_step(normal: &Mat<f64>, gradient: &[f64], lambda: f64) -> Option<Vec<f64>> {
-    let n = gradient.len();
-    let largest = (0..n).map(|k| normal[(k, k)]).fold(0.0, f64::max);
-    if !(largest > 0.0 && largest.is_finite()) {
-        return None;
-    }
-    let mut a = normal.clone();
-    for k in 0..n {
-        a[(k, k)] += lambda * normal[(k, k)].max(1e-14 * largest);
-    }
-    let rhs = Mat::from_fn(n, 1, |k, _| gradient[k]);
-    let step = a.llt(faer::Side::Lower).ok()?.solve(&rhs);
-    let v: Vec<f64> = (0..n).map(|k| step[(k, 0)]).collect();
-    v.iter().all(|x| x.is_finite()).then_some(v)
+    let rhs = Mat::from_fn(gradient.len(), 1, |k, _| gradient[k]);
+    let step = damped(normal, lambda)?
+        .llt(faer::Side::Lower)
+        .ok()?
+        .solve(&rhs);
+    finite_column(&step)
 }
 
 /// The parameters after `step` (shortened as below), and the factor it was shortened by.
-fn apply(x: &Parameters, layout: &Layout, step: &[f64], log_damping: bool) -> (Parameters, f64) {
+fn apply(x: &Parameters, ix: &Indices, step: &[f64], log_damping: bool) -> (Parameters, f64) {
     // The poles' part of the step is kept within each resonance's width (as in the
     // free fit); the whole step is shortened by the same factor, so that the shapes
     // move with the poles they were computed for.
     let theta_raw: Vec<f64> = (0..x.theta.len())
-        .map(|index| layout.reduced[index].map_or(0.0, |f| step[f]))
+        .map(|index| ix.reduced[index].map_or(0.0, |f| step[f]))
         .collect();
     let limited = limit_step(theta_raw.clone(), &x.theta, log_damping);
     let factor = theta_raw
@@ -480,26 +480,26 @@ fn apply(x: &Parameters, layout: &Layout, step: &[f64], log_damping: bool) -> (P
         .filter(|(a, _)| **a != 0.0)
         .map(|(a, b)| b / a)
         .fold(1.0, f64::min);
-    let raw = |index: usize| layout.reduced[index].map_or(0.0, |f| factor * step[f]);
+    let raw = |index: usize| ix.reduced[index].map_or(0.0, |f| factor * step[f]);
     let mut next = x.clone();
     for (k, t) in next.theta.iter_mut().enumerate() {
         *t += raw(k);
     }
     normalise(&mut next.theta);
-    let n = layout.n;
-    for i in 0..layout.q {
+    let n = ix.n;
+    for i in 0..ix.q {
         for r in 0..n {
-            next.u[i * n + r] += Complex64::new(raw(layout.u(i, r, 0)), raw(layout.u(i, r, 1)));
+            next.u[i * n + r] += Complex64::new(raw(ix.u(i, r, 0)), raw(ix.u(i, r, 1)));
         }
     }
-    for j in 0..layout.p {
+    for j in 0..ix.p {
         for r in 0..n {
-            next.v[j * n + r] += Complex64::new(raw(layout.v(j, r, 0)), raw(layout.v(j, r, 1)));
+            next.v[j * n + r] += Complex64::new(raw(ix.v(j, r, 0)), raw(ix.v(j, r, 1)));
         }
     }
-    for pair in 0..layout.q * layout.p {
-        for e in 0..layout.n_res {
-            next.k[pair * layout.n_res + e] += raw(layout.k(pair, e));
+    for pair in 0..ix.q * ix.p {
+        for e in 0..ix.n_res {
+            next.k[pair * ix.n_res + e] += raw(ix.k(pair, e));
         }
     }
     (next, factor)
@@ -515,16 +515,15 @@ fn apply(x: &Parameters, layout: &Layout, step: &[f64], log_damping: bool) -> (P
 fn solve_linear(
     problem: &Problem,
     x: &mut Parameters,
-    layout: &Layout,
+    ix: &Indices,
+    phi: &Mat<f64>,
     y: &Mat<f64>,
     weights: &[f64],
 ) -> bool {
     if problem.reciprocal {
         return true;
     }
-    let (n, q, p, n_res) = (layout.n, layout.q, layout.p, layout.n_res);
-    let poles = problem.parameters.poles(&x.theta);
-    let phi = basis(&problem.layout, &problem.omega, &poles);
+    let (n, q, p, n_res) = (ix.n, ix.q, ix.p, ix.n_res);
     let qr = phi.qr();
     let r = qr.thin_R().to_owned();
     let qm = qr.compute_thin_Q();
@@ -676,24 +675,21 @@ pub(crate) fn fit(
                 .unwrap_or(0)
         })
         .collect();
-    let layout = Layout::new(n, q, p, n_res, problem.reciprocal, &fixed);
-    if layout.free > MAX_PARAMETERS {
+    let ix = Indices::new(n, q, p, n_res, problem.reciprocal, &fixed);
+    if ix.free > MAX_PARAMETERS {
         return Ok(None);
     }
     let y = stacked_data(problem);
     // The best shapes for the start's participations.
+    let mut phi = basis_at(problem, &x.theta);
     let mut solved = x.clone();
-    if solve_linear(problem, &mut solved, &layout, &y, weights) {
+    if solve_linear(problem, &mut solved, &ix, &phi, &y, weights) {
         x = solved;
     }
     let log_damping = problem.parameters.log_damping;
-    let dof = problem
-        .observations
-        .checked_sub(layout.free)
-        .filter(|&d| d > 0);
-    let (mut current, mut residual, mut phi) = cost(problem, &x, &layout, &y, weights);
-    let (mut normal, mut gradient) =
-        normal_equations(problem, &x, &layout, &phi, &residual, weights);
+    let dof = problem.observations.checked_sub(ix.free).filter(|&d| d > 0);
+    let (mut current, mut residual) = cost(&x, &ix, &phi, &y, weights);
+    let (mut normal, mut gradient) = normal_equations(problem, &x, &ix, &phi, &residual, weights);
     // Levenberg–Marquardt with Nielsen's (1999) update of λ from the gain ratio
     // ρ = actual / predicted decrease: no oscillation between accepted and rejected
     // steps.
@@ -711,7 +707,7 @@ pub(crate) fn fit(
             break;
         }
         if reduced.is_none() && !problem.reciprocal {
-            reduced = Reduced::new(&normal, &gradient, &layout);
+            reduced = Reduced::new(&normal, &gradient, &ix);
         }
         let step = match &reduced {
             Some(r) => r.step(lambda),
@@ -724,7 +720,7 @@ pub(crate) fn fit(
             }
             continue;
         };
-        let (mut trial, factor) = apply(&x, &layout, &step, log_damping);
+        let (mut trial, factor) = apply(&x, &ix, &step, log_damping);
         // The linear model's decrease, `2fδᵀg − f²δᵀNδ`.
         let predicted = {
             let d = Mat::from_fn(step.len(), 1, |k, _| step[k]);
@@ -736,8 +732,9 @@ pub(crate) fn fit(
         // The step's poles and participations, with the shapes that fit them best
         // (variable projection: the bilinear product makes the linearised shape step
         // poor far from the optimum).
+        let trial_phi = basis_at(problem, &trial.theta);
         let mut solved = trial.clone();
-        if solve_linear(problem, &mut solved, &layout, &y, weights) {
+        if solve_linear(problem, &mut solved, &ix, &trial_phi, &y, weights) {
             trial = solved;
         }
         let finite = trial.theta.iter().all(|t| t.is_finite())
@@ -746,14 +743,14 @@ pub(crate) fn fit(
                 .iter()
                 .chain(&trial.v)
                 .all(|z| z.re.is_finite() && z.im.is_finite());
-        let evaluated = finite.then(|| cost(problem, &trial, &layout, &y, weights));
+        let evaluated = finite.then(|| cost(&trial, &ix, &trial_phi, &y, weights));
         match evaluated {
-            Some((next, next_residual, next_phi)) if next < current => {
+            Some((next, next_residual)) if next < current => {
                 let decrease = current - next;
                 x = trial;
                 current = next;
                 residual = next_residual;
-                phi = next_phi;
+                phi = trial_phi;
                 iterations += 1;
                 let rho = if predicted > 0.0 {
                     decrease / predicted
@@ -763,8 +760,7 @@ pub(crate) fn fit(
                 lambda = (lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho.min(1.0) - 1.0).powi(3)))
                     .max(1e-15);
                 nu = 2.0;
-                (normal, gradient) =
-                    normal_equations(problem, &x, &layout, &phi, &residual, weights);
+                (normal, gradient) = normal_equations(problem, &x, &ix, &phi, &residual, weights);
                 reduced = None;
                 let noise_unit = dof.map_or(0.0, |d| current / d as f64);
                 // A step shortened by one mode's limit says nothing about convergence.
@@ -798,10 +794,7 @@ pub(crate) fn fit(
             };
             Mat::from_fn(2 * n, 2 * n, |a, b| noise_variance * x[(a, b)])
         };
-        match (
-            problem.reciprocal,
-            Reduced::new(&normal, &gradient, &layout),
-        ) {
+        match (problem.reciprocal, Reduced::new(&normal, &gradient, &ix)) {
             (false, Some(r)) => poles_block(&r.s),
             _ => poles_block(&normal),
         }
@@ -809,7 +802,7 @@ pub(crate) fn fit(
     let covariance = covariance
         .filter(|c| (0..c.nrows()).all(|a| (0..c.ncols()).all(|b| c[(a, b)].is_finite())));
     Ok(Some(Joint {
-        coefficients: coefficients(&x, &layout, phi.ncols()),
+        coefficients: coefficients(&x, &ix, phi.ncols()),
         theta: x.theta,
         cost: current,
         covariance,

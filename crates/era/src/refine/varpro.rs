@@ -83,8 +83,8 @@ fn at_b(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 ///
 /// The products run on the calling thread, side by side under `rayon::join`: at this
 /// size (1602 × 82 for the 8 × 8 set) splitting each product across threads costs more
-/// in synchronisation than it saves. `EᵀE = DᵀD − (QᵀD)ᵀ(QᵀD)` and
-/// `EᵀP⊥Y = DᵀP⊥Y` (the residual is orthogonal to `Q` already), so `E` is never formed.
+/// in synchronisation than it saves. `E = D − Q(QᵀD)` is formed: `DᵀD − (QᵀD)ᵀ(QᵀD)`
+/// would cancel as the fit converges.
 pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Result<Outcome> {
     let poles = problem.parameters.poles(theta);
     let layout = &problem.layout;
