@@ -176,10 +176,18 @@ fn report_dta(
         let mut j = 0;
         for (rm, q) in r.refinement.modes.iter().zip(&found.quality) {
             if !q.physical {
-                println!("    not physical {:.4} ({:?})", rm.frequency_hz, q.reason);
+                println!(
+                    "    not physical {:.4} start {:.4} ({:?})",
+                    rm.frequency_hz, r.start_frequency_hz[rm.start], q.reason
+                );
                 continue;
             }
             let start = r.start_frequency_hz[rm.start];
+            let added = if rm.start >= r.start_modes() {
+                "+"
+            } else {
+                " "
+            };
             let truth = structure
                 .frequencies_hz
                 .iter()
@@ -197,7 +205,7 @@ fn report_dta(
             });
             let sv = residue.singular_values().unwrap();
             println!(
-                "  {} start {:.4} -> {:.4} (truth {:.4}) zeta {:.4} ± {:.1e} share {:.2e} f-std {:.1e} rank ratio {:.3}",
+                "  {}{added}start {:.4} -> {:.4} (truth {:.4}) zeta {:.4} ± {:.1e} share {:.2e} sig {:.1} f-std {:.1e} rank ratio {:.3}",
                 if matched.contains(&j) { "  " } else { "!!" },
                 start,
                 rm.frequency_hz,
@@ -205,10 +213,20 @@ fn report_dta(
                 rm.damping_ratio,
                 rm.damping_ratio_std,
                 rm.contribution,
+                rm.significance,
                 rm.frequency_std_hz,
                 sv.get(1).copied().unwrap_or(0.0) / sv[0]
             );
             j += 1;
+        }
+        let hit: Vec<usize> = m.iter().map(|&(i, _)| i).collect();
+        for (i, f) in structure.frequencies_hz.iter().enumerate() {
+            if !hit.contains(&i) {
+                println!(
+                    "  -- missed truth {f:.4} Hz, zeta {:.4}",
+                    structure.damping_ratios[i]
+                );
+            }
         }
     }
     let first = found.first_line;

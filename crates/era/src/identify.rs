@@ -280,9 +280,10 @@ impl Identification {
 pub struct Refined {
     /// The fit ([`crate::refine::refine`]).
     pub refinement: crate::refine::Refinement,
-    /// Frequencies of the start poles (ERA's modes), Hz, in the refinement's start order:
-    /// [`crate::refine::Refinement::dropped`] and [`crate::refine::RefinedMode::start`]
-    /// index them.
+    /// Frequencies of the start poles (ERA's modes), Hz, in the refinement's start order,
+    /// then of the poles it added for modes the start missed
+    /// ([`crate::refine::Refinement::added`]): [`crate::refine::Refinement::dropped`]
+    /// and [`crate::refine::RefinedMode::start`] index them.
     pub start_frequency_hz: Vec<f64>,
     /// Integrator states of the lower residual in the model (they are its real poles at
     /// `s = 0`).
@@ -290,7 +291,12 @@ pub struct Refined {
 }
 
 impl Refined {
-    /// `"mode at 12.3456 Hz: why"` for every dropped start pole.
+    /// The caller's start poles (ERA's modes), without the ones added for missed modes.
+    pub fn start_modes(&self) -> usize {
+        self.start_frequency_hz.len() - self.refinement.added.len()
+    }
+
+    /// `"the mode at 12.3456 Hz was dropped: why"` for every dropped start pole.
     pub fn dropped_lines(&self) -> Vec<String> {
         self.refinement
             .dropped
@@ -302,6 +308,28 @@ impl Refined {
                 )
             })
             .collect()
+    }
+
+    /// Frequencies (Hz) of the poles the refinement added for modes the start missed.
+    pub fn added_hz(&self) -> Vec<f64> {
+        self.refinement
+            .added
+            .iter()
+            .map(|s| s.norm() / (2.0 * std::f64::consts::PI))
+            .collect()
+    }
+
+    /// `"the residual showed …"`, when poles were added for modes the start missed.
+    pub fn added_line(&self) -> Option<String> {
+        let added = self.added_hz();
+        (!added.is_empty()).then(|| {
+            let list: Vec<String> = added.iter().map(|f| format!("{f:.4}")).collect();
+            format!(
+                "the residual showed {} mode(s) the start missed: poles added at {} Hz",
+                added.len(),
+                list.join(", ")
+            )
+        })
     }
 }
 
@@ -1366,7 +1394,11 @@ pub fn refine_identification(
         .iter()
         .zip(&modes)
         .map(|(rm, m)| {
-            let before = found.quality.get(starts[rm.start]).cloned();
+            // A mode added for one the start missed has no judgement from before.
+            let before = starts
+                .get(rm.start)
+                .and_then(|&k| found.quality.get(k))
+                .cloned();
             let mut reason = hard_rejection(m.frequency_hz, m.damping_ratio, None, band_hz, &criteria)
                 .map(|r| r.to_string());
             if reason.is_none() && rm.contribution < criteria.contribution_minimum {
@@ -1374,6 +1406,13 @@ pub fn refine_identification(
                     crate::modal::stabilization::Rejection::NoContribution(rm.contribution)
                         .to_string(),
                 );
+            }
+            let least = refinement.significance_minimum();
+            if reason.is_none() && rm.significance < least {
+                reason = Some(format!(
+                    "it explains {:.2} noise variances per parameter, fewer than the {least:.2} that tell a mode from noise",
+                    rm.significance,
+                ));
             }
             if reason.is_none() && rm.contribution > MAX_REFINED_SHARE {
                 reason = Some(format!(
@@ -1431,6 +1470,7 @@ pub fn refine_identification(
     found.refinement = Some(Refined {
         start_frequency_hz: start_poles
             .iter()
+            .chain(&refinement.added)
             .map(|s| s.norm() / (2.0 * std::f64::consts::PI))
             .collect(),
         refinement,

@@ -237,3 +237,89 @@ fn truth_model_with_15_percent_noise_improves_on_era() {
         "refined {refined_err} Hz, ERA {era_err} Hz"
     );
 }
+
+/// The two modes farthest from their neighbours, in half-power bandwidths.
+fn isolated_modes(s: &ModalStructure) -> Vec<usize> {
+    let f = &s.frequencies_hz;
+    let mut gaps: Vec<(f64, usize)> = (0..f.len())
+        .map(|r| {
+            let nearest = (0..f.len())
+                .filter(|&k| k != r)
+                .map(|k| (f[k] - f[r]).abs())
+                .fold(f64::INFINITY, f64::min);
+            (nearest / (s.damping_ratios[r] * f[r]), r)
+        })
+        .collect();
+    gaps.sort_by(|a, b| b.0.total_cmp(&a.0));
+    gaps.iter().take(2).map(|g| g.1).collect()
+}
+
+#[test]
+fn modes_the_start_missed_are_found_in_the_residual() {
+    let (s, frf) = dta(0.05);
+    let missing = isolated_modes(&s);
+    let start: Vec<Complex64> = (0..s.frequencies_hz.len())
+        .filter(|r| !missing.contains(r))
+        .map(|r| pole(s.frequencies_hz[r] * 1.001, s.damping_ratios[r]))
+        .collect();
+    let mut options = RefineOptions::default();
+    options.residuals = Residuals::Upper;
+    let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    assert!(!r.added.is_empty(), "nothing added");
+    for &m in &missing {
+        let f = s.frequencies_hz[m];
+        let best = r
+            .modes
+            .iter()
+            .min_by(|a, b| {
+                (a.frequency_hz - f)
+                    .abs()
+                    .total_cmp(&(b.frequency_hz - f).abs())
+            })
+            .unwrap();
+        assert!(
+            (best.frequency_hz - f).abs() <= 1e-3 * f,
+            "missed {f} Hz: nearest {} Hz, added {:?}",
+            best.frequency_hz,
+            r.added
+        );
+        assert!(best.significance >= r.significance_minimum());
+    }
+    // Without the scan the fit cannot find them.
+    options.add_missed = false;
+    let without = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    assert!(without.added.is_empty());
+    assert!(without.fit_after > r.fit_after);
+    let (_, _, found) = errors(&s, &without);
+    let (_, _, found_with) = errors(&s, &r);
+    assert!(found < found_with, "{found} vs {found_with}");
+}
+
+#[test]
+fn noise_alone_adds_no_mode_and_every_true_mode_is_significant() {
+    let (s, frf) = dta(0.05);
+    // Every true pole, the frequency off by ±0.3 % and the damping by ±20 %.
+    let start: Vec<Complex64> = (0..s.frequencies_hz.len())
+        .map(|r| {
+            let sign = if r % 2 == 0 { 1.0 } else { -1.0 };
+            pole(
+                s.frequencies_hz[r] * (1.0 + 0.003 * sign),
+                s.damping_ratios[r] * (1.0 - 0.2 * sign),
+            )
+        })
+        .collect();
+    let mut options = RefineOptions::default();
+    options.residuals = Residuals::Upper;
+    let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    assert!(r.added.is_empty(), "added {:?}", r.added);
+    let least = r.significance_minimum();
+    assert!(least > 10.0 && least < 13.0, "{least}");
+    for m in &r.modes {
+        assert!(
+            m.significance >= least,
+            "{} Hz: {}",
+            m.frequency_hz,
+            m.significance
+        );
+    }
+}

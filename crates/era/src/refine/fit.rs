@@ -374,7 +374,10 @@ fn settle_ready(
     dropped: &mut Vec<(usize, String)>,
 ) -> Result<Evaluation> {
     let poles = problem.parameters.poles(&state.theta);
-    let contributions = contributions(problem, &poles, &e.coefficients);
+    let contributions: Vec<f64> = contributions(problem, &poles, &e.coefficients)
+        .into_iter()
+        .map(|c| c.0)
+        .collect();
     let mut victim: Option<(usize, String)> = None;
     for (m, s) in poles.iter().enumerate() {
         if s.im <= 1e-8 * s.norm() {
@@ -417,8 +420,13 @@ fn settle_ready(
     }
 }
 
-/// Per mode, `‖Σ_pairs mode FRF‖ / ‖data‖` over the band (unweighted).
-fn contributions(problem: &Problem, poles: &[Complex64], coefficients: &Mat<f64>) -> Vec<f64> {
+/// Per mode, `‖Σ_pairs mode FRF‖ / ‖data‖` over the band (unweighted), and its
+/// weighted energy `Σ_pairs w²‖mode FRF‖²` (NaN when the weights vary by line).
+fn contributions(
+    problem: &Problem,
+    poles: &[Complex64],
+    coefficients: &Mat<f64>,
+) -> Vec<(f64, f64)> {
     let phi = basis(&problem.layout, &problem.omega, poles);
     let pm = problem.layout.per_mode;
     let norm = problem.data_norm2.sqrt();
@@ -426,7 +434,13 @@ fn contributions(problem: &Problem, poles: &[Complex64], coefficients: &Mat<f64>
         .map(|r| {
             let cols = phi.subcols(r * pm, pm);
             let coef = coefficients.subrows(r * pm, pm);
-            (cols * coef).norm_l2() / norm
+            let g = cols * coef;
+            let weighted = problem.pair_weights.as_ref().map_or(f64::NAN, |w| {
+                (0..g.ncols())
+                    .map(|pair| w[pair] * w[pair] * g.col(pair).squared_norm_l2())
+                    .sum()
+            });
+            (g.norm_l2() / norm, weighted)
         })
         .collect()
 }
@@ -486,6 +500,9 @@ fn finish(
     let poles = problem.parameters.poles(&state.theta);
     let n_modes = poles.len();
     let contributions = contributions(problem, &poles, &e.coefficients);
+    // A mode's free parameters: its pole, and its residue's (a shape and a
+    // participation, or a free complex matrix).
+    let mode_parameters = 2 + if rank_one { 2 * (q + p) } else { pm * q * p };
     let mut modes: Vec<RefinedMode> = poles
         .iter()
         .enumerate()
@@ -519,7 +536,8 @@ fn finish(
                 residue,
                 frequency_std_hz,
                 damping_ratio_std,
-                contribution: contributions[r],
+                contribution: contributions[r].0,
+                significance: contributions[r].1 / (noise_variance * mode_parameters as f64),
                 start: state.ids[r],
             }
         })
@@ -543,6 +561,7 @@ fn finish(
         lower,
         upper,
         dropped,
+        added: Vec::new(),
         iterations: summary.iterations,
         converged: summary.converged,
         cost_before: summary.cost_before,
