@@ -87,6 +87,10 @@ pub struct RefineFitArgs {
     /// several modes, and the model has up to 2·min(outputs, inputs) states per mode.
     #[arg(long)]
     pub free_residues: bool,
+    /// Fit the start's modes only: do not look in the residual for modes the start
+    /// missed (by default their poles are added and the fit repeated).
+    #[arg(long)]
+    pub no_added_modes: bool,
     /// Levenberg–Marquardt iterations of the refinement at most (default 100).
     #[arg(long, value_name = "N")]
     pub max_iterations: Option<usize>,

@@ -20,7 +20,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let opts = options(a)?;
     if !a.refine && crate::refine::any_given(&a.refine_fit) {
         return crate::usage(
-            "--residuals, --reciprocal, --free-residues, --weighting and --max-iterations set the refinement: add --refine",
+            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement: add --refine",
         );
     }
     let refine_options = crate::refine::options(&a.refine_fit)?;
@@ -197,6 +197,10 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         params.insert(
             "rank_one".into(),
             serde_json::json!(refine_options.rank_one),
+        );
+        params.insert(
+            "added_modes".into(),
+            serde_json::json!(refine_options.add_missed),
         );
         params.insert(
             "weighting".into(),

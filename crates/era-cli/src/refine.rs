@@ -22,6 +22,7 @@ pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
     }
     o.reciprocal = fit.reciprocal;
     o.rank_one = !fit.free_residues;
+    o.add_missed = !fit.no_added_modes;
     o.weighting = match fit.weighting {
         Some(crate::args::WeightingArg::Uniform) => era::refine::Weighting::Uniform,
         Some(crate::args::WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
@@ -41,6 +42,7 @@ pub fn any_given(fit: &RefineFitArgs) -> bool {
     fit.residuals.is_some()
         || fit.reciprocal
         || fit.free_residues
+        || fit.no_added_modes
         || fit.max_iterations.is_some()
         || fit.weighting.is_some()
 }
@@ -110,7 +112,7 @@ pub fn summary(found: &Identification) -> String {
             (None, Some(_)) => "upper",
             (None, None) => "none",
         },
-        r.start_frequency_hz.len(),
+        r.start_modes(),
         f.modes.len(),
         f.iterations,
         if f.converged {
@@ -124,7 +126,7 @@ pub fn summary(found: &Identification) -> String {
         f.cost_after,
         found.timings.refine
     );
-    for line in r.dropped_lines() {
+    for line in r.added_line().into_iter().chain(r.dropped_lines()) {
         let _ = writeln!(s, "  {line}");
     }
     let _ = writeln!(

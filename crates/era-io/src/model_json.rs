@@ -9,7 +9,7 @@
 //! (size and path), `warnings`, and `timings_s` when timings were asked for.
 //!
 //! A refined model (`era identify --refine`, `era refine`) adds `refinement`
-//! (`iterations`, `converged`, `cost_before`, `cost_after`, `fit_before`, `fit_after`,
+//! (`iterations`, `converged`, `cost_before`, `cost_after`, `fit_before`, `fit_after`, `added_hz`,
 //! the residual terms, the dropped modes, `rank_one`) and, per mode, `frequency_std_hz` and
 //! `damping_ratio_std`. `frf_lines` records the lines of the FRF the model was fitted
 //! to, so that `era refine` can check a file against it.
@@ -275,6 +275,10 @@ pub struct RefinementJson {
     pub residual_states: usize,
     /// Start modes dropped: `"the mode at f Hz was dropped: why"`.
     pub dropped: Vec<String>,
+    /// Frequencies (Hz) of the poles added for modes the start missed, found in the
+    /// residual of the fit.
+    #[serde(default)]
+    pub added_hz: Vec<f64>,
     /// Whether each residue is a shape times a participation (two states per mode);
     /// false for free residues (`--free-residues`, or weights that vary by line).
     #[serde(default)]
@@ -295,11 +299,12 @@ impl RefinementJson {
             noise_variance: f.noise_variance.is_finite().then_some(f.noise_variance),
             model: if f.sample_time_s.is_some() { "z" } else { "s" }.into(),
             band: [f.band.0, f.band.1],
-            start_modes: r.start_frequency_hz.len(),
+            start_modes: r.start_modes(),
             lower_residual: f.lower.as_ref().map(rows),
             upper_residual: f.upper.as_ref().map(rows),
             residual_states: r.residual_states,
             dropped: r.dropped_lines(),
+            added_hz: r.added_hz(),
             rank_one: f.rank_one,
         }
     }

@@ -217,14 +217,18 @@ fn refinement_html(f: &era::identify::Identification) -> String {
     let mut h = format!(
         "<p id=\"refinement\">Refined model: poles, residues and residual terms fitted to the FRFs by maximum likelihood ({} model), starting from {} modes of ERA; {} kept. {} iterations, {}. Over the band, ‖G − Ĝ‖/‖G‖ went from {:.3e} to {:.3e}. The model, its FRFs and the table are the refined ones; ± is one standard deviation from the Gauss–Newton covariance at the optimum, with the noise variance taken from the residual.</p>\n",
         if fit.sample_time_s.is_some() { "z-domain, at the sample time" } else { "continuous" },
-        r.start_frequency_hz.len(),
+        r.start_modes(),
         fit.modes.len(),
         fit.iterations,
         if fit.converged { "converged" } else { "<span class=\"suspect\">not converged</span>" },
         fit.fit_before,
         fit.fit_after,
     );
-    let dropped = r.dropped_lines();
+    let dropped: Vec<String> = r
+        .added_line()
+        .into_iter()
+        .chain(r.dropped_lines())
+        .collect();
     if !dropped.is_empty() {
         h.push_str("<ul id=\"refinement-dropped\">");
         for d in dropped {
