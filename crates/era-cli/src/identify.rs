@@ -185,34 +185,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     }
     if a.refine {
         timings.insert("refine".into(), found.timings.refine);
-        params.insert("refine".into(), serde_json::json!(true));
-        params.insert(
-            "residuals".into(),
-            serde_json::json!(format!("{:?}", refine_options.residuals).to_lowercase()),
-        );
-        params.insert(
-            "reciprocal".into(),
-            serde_json::json!(refine_options.reciprocal),
-        );
-        params.insert(
-            "rank_one".into(),
-            serde_json::json!(refine_options.rank_one),
-        );
-        params.insert(
-            "added_modes".into(),
-            serde_json::json!(refine_options.add_missed),
-        );
-        params.insert(
-            "weighting".into(),
-            serde_json::json!(match refine_options.weighting {
-                era::refine::Weighting::Uniform => "uniform",
-                _ => "pair-noise",
-            }),
-        );
-        params.insert(
-            "max_iterations".into(),
-            serde_json::json!(refine_options.max_iterations),
-        );
+        era_io::model_json::refine_parameters(&refine_options, &mut params);
         params.insert(
             "model_states".into(),
             serde_json::json!(found.model.states()),

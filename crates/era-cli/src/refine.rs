@@ -261,6 +261,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         .max(1);
     human.print(&identification_summary(&found, states));
     let mut params = model.parameters.clone();
+    era_io::model_json::refine_parameters(&ropts, &mut params);
     params.insert("refined_from".into(), serde_json::json!(a.model));
     params.insert(
         "model_states".into(),

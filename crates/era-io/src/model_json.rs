@@ -339,6 +339,33 @@ pub fn modal_json(modal: &ModalParameters) -> (Vec<ModeJson>, Vec<RealPoleJson>)
     )
 }
 
+/// Records the refinement's settings in `params` (model.json's `parameters`), as
+/// `era identify --refine`, `era refine` and the Python package write them.
+pub fn refine_parameters(
+    o: &era::refine::RefineOptions,
+    params: &mut BTreeMap<String, serde_json::Value>,
+) {
+    use serde_json::json;
+    params.insert("refine".into(), json!(true));
+    params.insert(
+        "residuals".into(),
+        json!(format!("{:?}", o.residuals).to_lowercase()),
+    );
+    params.insert("reciprocal".into(), json!(o.reciprocal));
+    params.insert("rank_one".into(), json!(o.rank_one));
+    params.insert("added_modes".into(), json!(o.add_missed));
+    params.insert(
+        "weighting".into(),
+        json!(match o.weighting {
+            era::refine::Weighting::Uniform => "uniform",
+            era::refine::Weighting::PairNoise => "pair-noise",
+            era::refine::Weighting::Coherence(_) => "coherence",
+            era::refine::Weighting::InverseVariance(_) => "inverse-variance",
+        }),
+    );
+    params.insert("max_iterations".into(), json!(o.max_iterations));
+}
+
 /// Every parameter by its JSON name (docs/design.md §1 table): the `parameters`
 /// of `model.json`, written alike by the CLI and the Python package.
 pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {

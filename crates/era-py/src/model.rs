@@ -295,13 +295,7 @@ impl PyIdentification {
     fn to_json(&self) -> PyResult<String> {
         let mut params = parameters(&self.options);
         if let Some(r) = &self.refine {
-            params.insert("refine".into(), serde_json::json!(true));
-            params.insert(
-                "residuals".into(),
-                serde_json::json!(format!("{:?}", r.residuals).to_lowercase()),
-            );
-            params.insert("reciprocal".into(), serde_json::json!(r.reciprocal));
-            params.insert("max_iterations".into(), serde_json::json!(r.max_iterations));
+            era_io::model_json::refine_parameters(r, &mut params);
             params.insert(
                 "model_states".into(),
                 serde_json::json!(self.found.model.states()),

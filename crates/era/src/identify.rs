@@ -1284,8 +1284,12 @@ pub fn assess_model(
 ///   lower residual's integrator states are the model's real poles at `s = 0`.
 /// - **Judgement**: a mode is physical when it passes the hard criteria of
 ///   docs/design.md §10 with its refined frequency and damping, its share is at least
-///   the minimum and at most [`MAX_REFINED_SHARE`], and (when a scan ran) its start
-///   mode was physical.
+///   the minimum and at most [`MAX_REFINED_SHARE`], its significance is at least
+///   [`crate::refine::Refinement::significance_minimum`] (not judged when the weights
+///   vary by line), and (when a scan ran) its start mode was physical. A mode whose
+///   pole the refinement added for one the start missed has no start mode: the
+///   residual and its significance vouch for it, even where the stabilization scan had
+///   judged a pole there not physical.
 ///
 /// # Errors
 /// [`EraError::InvalidParameter`] when there is no mode to start from, and every error

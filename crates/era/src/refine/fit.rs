@@ -500,9 +500,20 @@ fn finish(
     let poles = problem.parameters.poles(&state.theta);
     let n_modes = poles.len();
     let contributions = contributions(problem, &poles, &e.coefficients);
-    // A mode's free parameters: its pole, and its residue's (a shape and a
-    // participation, or a free complex matrix).
-    let mode_parameters = 2 + if rank_one { 2 * (q + p) } else { pm * q * p };
+    // A mode's free parameters: its pole, and its residue's: a shape and a
+    // participation (`u vᵀ`, one complex scale fixed) or `ψψᵀ`; or a free matrix of `pm`
+    // reals per independent entry (the pairs `(i, j)` and `(j, i)` share one when
+    // reciprocal).
+    let entries = if problem.reciprocal {
+        q * (q + 1) / 2
+    } else {
+        q * p
+    };
+    let mode_parameters = 2 + match (rank_one, problem.reciprocal) {
+        (true, false) => 2 * (q + p) - 2,
+        (true, true) => 2 * q,
+        (false, _) => pm * entries,
+    };
     let mut modes: Vec<RefinedMode> = poles
         .iter()
         .enumerate()

@@ -124,8 +124,8 @@
 //! resonance-shaped residual, and by default ([`RefineOptions::add_missed`]) the fit
 //! looks for one: an F test of the residual against one candidate mode at each line
 //! (`scan` module). While a scan finds some, their poles join the fitted ones and the
-//! fit runs again (at most [`MISSED_ROUNDS`] times); a refit that does not lower the
-//! fit error is discarded. The added poles are [`Refinement::added`]. A pole added on
+//! fit runs again (at most [`MISSED_ROUNDS`] times); a refit that fails, does not lower
+//! the fit error or loses the rank-one stage is discarded. The added poles are [`Refinement::added`]. A pole added on
 //! noise ends with little weight: [`RefinedMode::significance`], its weighted energy
 //! over the noise variance per parameter, tells it (Schwarz's criterion,
 //! [`Refinement::significance_minimum`]), and the pipeline marks such a mode not
@@ -342,9 +342,10 @@ pub struct Refinement {
     /// Poles added to the caller's start poles for modes the start missed, found in
     /// the residual (module doc, "Missed modes"), in the order they were added.
     pub added: Vec<Complex64>,
-    /// Accepted Levenberg–Marquardt steps.
+    /// Accepted Levenberg–Marquardt steps (of every fit, when poles were added).
     pub iterations: usize,
-    /// Whether the cost stopped decreasing (rather than the iterations running out).
+    /// Whether the cost stopped decreasing (rather than the iterations running out), in
+    /// the last fit.
     pub converged: bool,
     /// Weighted cost `Σ‖W(y − ŷ)‖²` at the start poles, with the weights of
     /// [`Refinement::cost_after`]. When poles were added ([`Refinement::added`]) these
@@ -424,8 +425,16 @@ fn run(
             band: Some(result.band),
             ..options.clone()
         };
-        let mut next = run_once(frf, &poles, &again, progress, evaluate)?;
-        if next.fit_after.is_nan() || next.fit_after >= result.fit_after {
+        // A refit that fails (more poles than a narrow band can fit, a limit), that
+        // does not lower the error, or that lost the rank-one stage (too many
+        // parameters with the added poles) leaves the fit as it was.
+        let Ok(mut next) = run_once(frf, &poles, &again, progress, evaluate) else {
+            break;
+        };
+        if next.fit_after.is_nan()
+            || next.fit_after >= result.fit_after
+            || (result.rank_one && !next.rank_one)
+        {
             break;
         }
         // Indices into `poles` → indices into the caller's start poles and `added`.

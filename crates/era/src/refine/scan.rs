@@ -9,8 +9,8 @@
 //! # The test
 //!
 //! For a candidate pole `s_c` at each line `f_c` of the band (damping: the median of
-//! the fitted modes'), the residual `e_ij` of every pair over a window of `±3`
-//! half-power bandwidths (at least `±4` lines) is projected on the candidate's two real
+//! the fitted modes'), the residual `e_ij` of every pair over a window of `±3ζ f_c`
+//! (1.5 half-power bandwidths each side, at least 4 lines) is projected on the candidate's two real
 //! columns `g(s_c) + g(s̄_c)` and `j(g(s_c) − g(s̄_c))` (the model's own mode columns,
 //! [`super::model`]), each pair whitened by its residual's RMS over the band. The
 //! statistic is the F ratio of the explained to the unexplained residual per degree of
@@ -53,12 +53,10 @@ pub const MAX_ADDED: usize = 8;
 /// The chance that noise alone sets off a scan of the whole band.
 const FALSE_ALARM: f64 = 1e-3;
 
-/// An upper bound on the `1 − tail` quantile of `χ²_ν/ν`, the F ratio of noise alone
-/// when the window has many more observations than `ν`: from the Chernoff bound
-/// `P(χ²_ν ≥ νx) ≤ (x e^(1−x))^(ν/2)`, the `x > 1` where the bound equals `tail`
-/// (bisection). For `ν = 2` and a tail of 1e-6 it gives 17.7 where the exact value is
-/// 13.8; for `ν = 128`, 1.8.
-fn noise_quantile(nu: f64, tail: f64) -> f64 {
+/// `x > 1` with `P(χ²_ν/ν ≥ x) ≤ tail`, from the Chernoff bound
+/// `P(χ²_ν ≥ νx) ≤ (x e^(1−x))^(ν/2)` (bisection). For `ν = 2` and a tail of 1e-6 it
+/// gives 17.7 where the exact value is 13.8; for `ν = 128`, 1.8.
+fn chi2_upper(nu: f64, tail: f64) -> f64 {
     let target = tail.ln() / (0.5 * nu);
     let g = |x: f64| x.ln() + 1.0 - x - target;
     let (mut lo, mut hi) = (1.0, 2.0);
@@ -76,11 +74,35 @@ fn noise_quantile(nu: f64, tail: f64) -> f64 {
     hi
 }
 
+/// `c < 1` with `P(χ²_d/d ≤ c) ≤ tail`, from the lower Chernoff bound
+/// `P(χ²_d ≤ dc) ≤ (c e^(1−c))^(d/2)` (bisection).
+fn chi2_lower(d: f64, tail: f64) -> f64 {
+    let target = tail.ln() / (0.5 * d);
+    let g = |c: f64| c.ln() + 1.0 - c - target;
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    lo
+}
+
+/// An upper bound on the `1 − tail` quantile of `F(ν, d)`, the F ratio of noise alone:
+/// `P(F ≥ x/c) ≤ P(χ²_ν/ν ≥ x) + P(χ²_d/d ≤ c)`, each term bounded by `tail/2`.
+fn noise_quantile(nu: f64, d: f64, tail: f64) -> f64 {
+    chi2_upper(nu, 0.5 * tail) / chi2_lower(d, 0.5 * tail)
+}
+
 /// Candidates within this fraction of the largest F are returned; the rest wait for
 /// the next scan.
 const STRONGEST_FRACTION: f64 = 0.5;
 
-/// Half-width of the window, in half-power bandwidths `ζ f`.
+/// Half-width of the window in units of `ζ f` (half a half-power bandwidth): ±3ζf is
+/// ±1.5 bandwidths.
 const WINDOW_BANDWIDTHS: f64 = 3.0;
 
 /// Lines at least on each side of the candidate.
@@ -145,13 +167,14 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
         }
         (lo, hi)
     };
-    let scores: Vec<(f64, (usize, usize), Complex64)> = (0..lines)
+    let tail = FALSE_ALARM / lines as f64;
+    let scores: Vec<(f64, (usize, usize), Complex64, f64)> = (0..lines)
         .map(|k| {
             let (lo, hi) = window(k);
             let wc = 2.0 * PI * freq[k];
             let n = 2.0 * (hi - lo) as f64 * used as f64;
             if wc <= 0.0 || n <= 2.0 * nu {
-                return (0.0, (lo, hi), Complex64::new(0.0, 0.0));
+                return (0.0, (lo, hi), Complex64::new(0.0, 0.0), f64::INFINITY);
             }
             let s = Complex64::new(-zeta * wc, wc * (1.0 - zeta * zeta).sqrt());
             let columns: Vec<[Complex64; 2]> = (lo..hi)
@@ -171,7 +194,7 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
             }
             let det = g11 * g22 - g12 * g12;
             if det.is_nan() || det <= 1e-14 * g11 * g22 {
-                return (0.0, (lo, hi), s);
+                return (0.0, (lo, hi), s, f64::INFINITY);
             }
             let (mut explained, mut energy) = (0.0, 0.0);
             for pair in 0..pairs {
@@ -185,7 +208,8 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
                 explained += (g22 * t1 * t1 - 2.0 * g12 * t1 * t2 + g11 * t2 * t2) / det;
             }
             let rest = (energy - explained).max(1e-300);
-            ((explained / nu) / (rest / (n - nu)), (lo, hi), s)
+            let bar = F_MINIMUM.max(noise_quantile(nu, n - nu, tail));
+            ((explained / nu) / (rest / (n - nu)), (lo, hi), s, bar)
         })
         .collect();
     // Local maxima above the threshold, none within another's window.
@@ -196,11 +220,11 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
         .map(|s| s.0)
         .filter(|f| f.is_finite())
         .fold(0.0, f64::max);
-    let bar = F_MINIMUM
-        .max(noise_quantile(nu, FALSE_ALARM / lines as f64))
-        .max(top * STRONGEST_FRACTION);
     let mut order_by: Vec<usize> = (0..lines)
-        .filter(|&k| scores[k].0 >= bar && scores[k].0.is_finite())
+        .filter(|&k| {
+            let f = scores[k].0;
+            f.is_finite() && f >= scores[k].3 && f >= top * STRONGEST_FRACTION
+        })
         .collect();
     order_by.sort_by(|&x, &y| scores[y].0.total_cmp(&scores[x].0));
     let mut chosen: Vec<usize> = Vec::new();
@@ -234,17 +258,29 @@ mod tests {
 
     #[test]
     fn the_noise_quantile_bounds_the_exact_one() {
+        use super::{chi2_lower, chi2_upper};
         // χ²₂/2 is exponential: its 1 − p quantile is ln(1/p).
         for p in [1e-2_f64, 1e-4, 1e-6] {
             let exact = (1.0 / p).ln();
-            let bound = noise_quantile(2.0, p);
+            let bound = chi2_upper(2.0, p);
             assert!(
                 bound >= exact && bound <= 1.7 * exact,
                 "{p}: {bound} vs {exact}"
             );
+            // And its p quantile is −ln(1 − p) ≈ p; χ²₂/2 ≤ c has probability 1 − e^(−c).
+            let c = chi2_lower(2.0, p);
+            assert!(1.0 - (-c).exp() <= p && c > 0.1 * p, "{p}: {c}");
         }
         // Many degrees of freedom: close to 1 + z√(2/ν).
-        let q = noise_quantile(128.0, 1e-6);
+        let q = chi2_upper(128.0, 1e-6);
         assert!(q > 1.5 && q < 2.0, "{q}");
+        // F(2, 16): P(F > x) = (1 + x/8)^(−8) exactly; the bound must not be below
+        // the exact quantile.
+        let tail = 1e-6_f64;
+        let exact = 8.0 * (tail.powf(-1.0 / 8.0) - 1.0);
+        let bound = noise_quantile(2.0, 16.0, tail);
+        assert!(bound >= exact, "{bound} vs {exact}");
+        // The 8 × 8 case: far below the floor F_MINIMUM.
+        assert!(noise_quantile(128.0, 2.0 * 9.0 * 64.0 - 128.0, 1e-6) < 4.0);
     }
 }
