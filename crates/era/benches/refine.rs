@@ -5,6 +5,11 @@
 //! rank-one residues (the default) and with free ones (`--free-residues`). The naive reference (finite differences, a dense solve per pair) is timed
 //! on a 2×2, 4-mode set beside the fast path on the same set.
 //!
+//! The group `refine_dta_from_era_auto` starts where the pipeline does (`era identify
+//! --states auto --refine --time-domain continuous` with the thesis preprocessing):
+//! from the physical modes of the automatic order, refining the whole identification
+//! (`refine_identification`: the fit, its residual scan, the model and its FRF).
+//!
 //! `cargo bench -p era --bench refine`. Setup happens outside the timed closures.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -99,5 +104,48 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// From ERA's automatic order, as the CLI refines (setup: one `identify_auto` per set).
+fn bench_from_era(c: &mut Criterion) {
+    use era::identify::{
+        identify_auto, refine_identification, EraOptions, ModelDomain, ScanOptions,
+    };
+    let spec = ModalSpec::default();
+    let s = ModalStructure::random(&spec).unwrap();
+    let clean = s.frf(801, 0.025, Quantity::Acceleration).unwrap();
+    let noisy = add_noise(&clean, 0.05, spec.seed).unwrap();
+    let era_options = EraOptions {
+        domain: ModelDomain::Continuous,
+        ..EraOptions::thesis_dta()
+    };
+    let mut options = RefineOptions::default();
+    options.weighting = Weighting::PairNoise;
+    let mut g = c.benchmark_group("refine_dta_from_era_auto");
+    g.sample_size(10);
+    for (name, frf) in [
+        ("noise_free", &clean),
+        ("noise_5_percent_pair_noise", &noisy),
+    ] {
+        let found = identify_auto(
+            frf,
+            &era_options,
+            &ScanOptions::default(),
+            &mut |_| {},
+            &mut |_, _| {},
+        )
+        .unwrap();
+        g.bench_function(name, |b| {
+            b.iter_batched(
+                || found.clone(),
+                |f| {
+                    refine_identification(f, black_box(frf), &options, &mut |_| {}, &mut |_, _| {})
+                        .unwrap()
+                },
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_from_era);
 criterion_main!(benches);

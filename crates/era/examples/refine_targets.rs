@@ -13,7 +13,7 @@
 //! (default 1..=100), and the median of the fit's own predicted standard deviation.
 //!
 //! Environment: `PAIRNOISE=1` weights each pair by its estimated noise (the CLI's
-//! default, `--weighting pair-noise`); `FREE=1` keeps free residues (`--free-residues`); `NORES=1` fits without residual terms and
+//! default, `--weighting pair-noise`); `FREE=1` keeps free residues (`--free-residues`); `NOADD=1` does not look for missed modes (`--no-added-modes`); `NORES=1` fits without residual terms and
 //! `RECIP=1` with reciprocity (Table 5.2 only); `DEBUG=1` lists every refined mode of a
 //! DTA-like set with its start, truth and standard deviations.
 
@@ -123,6 +123,7 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             let era_fit = relative(&found.measured, &found.model_response, found.first_line);
             let clock = Instant::now();
             let mut ropts = RefineOptions::default();
+            ropts.add_missed = std::env::var("NOADD").is_err();
             if std::env::var("PAIRNOISE").is_ok() {
                 ropts.weighting = era::refine::Weighting::PairNoise;
             }
@@ -283,6 +284,7 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
         }
         let clock = Instant::now();
         let mut ropts = RefineOptions::default();
+        ropts.add_missed = std::env::var("NOADD").is_err();
         if std::env::var("NORES").is_ok() {
             ropts.residuals = era::refine::Residuals::None;
         }
