@@ -99,7 +99,7 @@ pub fn summary(found: &Identification) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "\nrefinement ({} model of the {} data, residuals {}): {} start modes, {} kept; {} iterations, {}; fit over the band {:.3e} -> {:.3e} (cost {:.3e} -> {:.3e}), {:.2} s",
+        "\nrefinement ({} model of the {} data, residuals {}): {} start modes, {} kept; {} iterations, {}; fit over the band {:.3e} -> {:.3e} (weighted cost: free residues at the start {:.3e}, the model {:.3e}), {:.2} s",
         if f.sample_time_s.is_some() {
             "z-domain"
         } else {

@@ -215,9 +215,13 @@ fn refinement_html(f: &era::identify::Identification) -> String {
     };
     let fit = &r.refinement;
     let mut h = format!(
-        "<p id=\"refinement\">Refined model: poles, residues and residual terms fitted to the FRFs by maximum likelihood ({} model), starting from {} modes of ERA; {} kept. {} iterations, {}. Over the band, ‖G − Ĝ‖/‖G‖ went from {:.3e} to {:.3e}. The model, its FRFs and the table are the refined ones; ± is one standard deviation from the Gauss–Newton covariance at the optimum, with the noise variance taken from the residual.</p>\n",
+        "<p id=\"refinement\">Refined model: poles, residues and residual terms fitted to the FRFs by maximum likelihood ({} model), starting from {} modes of ERA{}; {} kept. {} iterations, {}. Over the band, ‖G − Ĝ‖/‖G‖ went from {:.3e} to {:.3e}. The model, its FRFs and the table are the refined ones; ± is one standard deviation from the Gauss–Newton covariance at the optimum, with the noise variance taken from the residual.</p>\n",
         if fit.sample_time_s.is_some() { "z-domain, at the sample time" } else { "continuous" },
         r.start_modes(),
+        match fit.added.len() {
+            0 => String::new(),
+            k => format!(" and {k} pole(s) added for modes it missed (below)"),
+        },
         fit.modes.len(),
         fit.iterations,
         if fit.converged { "converged" } else { "<span class=\"suspect\">not converged</span>" },

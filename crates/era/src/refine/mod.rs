@@ -349,7 +349,10 @@ pub struct Refinement {
     pub converged: bool,
     /// Weighted cost `Σ‖W(y − ŷ)‖²` at the start poles, with the weights of
     /// [`Refinement::cost_after`]. When poles were added ([`Refinement::added`]) these
-    /// are the last fit's: the earlier fits' poles and the added ones.
+    /// are the last fit's: the earlier fits' poles and the added ones. It is the cost
+    /// with free residues: with rank-one residues ([`Refinement::rank_one`]) the cost
+    /// after can exceed it, the rank-one model having far fewer parameters; compare
+    /// [`Refinement::fit_before`] and [`Refinement::fit_after`] instead.
     pub cost_before: f64,
     /// Weighted cost at the end.
     pub cost_after: f64,
