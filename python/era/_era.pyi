@@ -164,6 +164,7 @@ def identify(
     reciprocal: bool = False,
     weighting: Literal["pair-noise", "uniform"] = "pair-noise",
     max_iterations: int = 100,
+    added_modes: bool = True,
     threads: Optional[int] = None,
 ) -> Identification: ...
 def friction_estimate(

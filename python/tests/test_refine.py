@@ -47,3 +47,22 @@ def test_refine_options_and_plain_identify_have_no_std(noisy_truth):
     assert len(refined.modes) == 4
     # The refined model's own FRF is what the fit compared: a better fit than ERA's.
     assert np.mean(refined.fit["relative_error"]) < np.mean(plain.fit["relative_error"])
+
+
+def test_modes_the_start_missed_are_added_as_the_cli_adds_them(noisy_truth, era_cli):
+    # Four states give ERA two of the four modes; the refinement finds the others in
+    # its residual, as `era identify --refine` does.
+    frf = era.read_frf(str(noisy_truth))
+    found = era.identify(frf, 4, refine=True)
+    done = era_cli("identify", noisy_truth, "--states", "4", "--refine", "--json", "--quiet")
+    cli = json.loads(done.stdout)
+    ours = np.array([m.eigenvalue for m in found.modes])
+    theirs = np.array([m["eigenvalue_re"] + 1j * m["eigenvalue_im"] for m in cli["modes"]])
+    assert ours.shape == theirs.shape == (4,)
+    assert np.max(np.abs(ours - theirs)) < 1e-10
+    assert all(m.physical for m in found.modes)
+    added = json.loads(found.to_json())["refinement"]["added_hz"]
+    assert len(added) == 2 and added == pytest.approx(cli["refinement"]["added_hz"])
+    only_start = era.identify(frf, 4, refine=True, added_modes=False)
+    assert len(only_start.modes) == 2
+    assert json.loads(only_start.to_json())["parameters"]["added_modes"] is False

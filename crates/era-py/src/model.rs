@@ -362,12 +362,14 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// terms by maximum likelihood, `era identify --refine`): `residuals` ('none', 'lower',
 /// 'upper', 'both'), `reciprocal`, `weighting` ('pair-noise', 'uniform') and
 /// `max_iterations` set it; the modes then carry `frequency_std_hz` and
-/// `damping_ratio_std`.
+/// `damping_ratio_std`. By default the refinement adds poles for modes the start
+/// missed, found in its residual; `added_modes=False` fits the start's modes only
+/// (`--no-added-modes`).
 ///
 /// `threads` sets the threads of this call (rayon's and faer's together); by default
 /// every core.
 #[pyfunction]
-#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), threads=None))]
+#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, threads=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
@@ -386,6 +388,7 @@ pub fn identify(
     reciprocal: bool,
     weighting: &str,
     max_iterations: Int,
+    added_modes: bool,
     threads: Option<Int>,
 ) -> PyResult<PyIdentification> {
     let threads = match threads {
@@ -420,6 +423,7 @@ pub fn identify(
         }
     };
     refine_options.reciprocal = reciprocal;
+    refine_options.add_missed = added_modes;
     let iterations = max_iterations.size("max_iterations")?;
     if iterations == 0 {
         return value_error("max_iterations 0: the refinement needs at least one iteration");
