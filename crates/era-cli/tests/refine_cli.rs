@@ -209,6 +209,60 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
     assert!(v["refinement"]["fit_after"].as_f64().unwrap() < 1e-8);
 }
 
+#[test]
+fn modes_the_start_missed_are_added_and_said() {
+    // The noisy truth model from four states: ERA has two of the four modes.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("truth.csv");
+    era()
+        .args([
+            "simulate",
+            "truth-model",
+            "--noise",
+            "0.15",
+            "--seed",
+            "3",
+            "--out",
+            s(&file),
+            "-q",
+        ])
+        .assert()
+        .success();
+    let run = |extra: &[&str]| {
+        let mut a = vec!["identify", s(&file), "--states", "4", "--refine", "--json"];
+        a.extend_from_slice(extra);
+        let out = era().args(&a).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (v, human) = run(&[]);
+    assert!(
+        human.contains("the residual showed 2 mode(s) the start missed"),
+        "{human}"
+    );
+    assert_eq!(v["refinement"]["start_modes"], 2);
+    assert_eq!(v["refinement"]["added_hz"].as_array().unwrap().len(), 2);
+    assert_eq!(v["parameters"]["added_modes"], true);
+    let truth = [1748.64, 5031.80, 7709.75, 9458.39];
+    let modes = v["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 4);
+    for (m, t) in modes.iter().zip(truth) {
+        let f = m["frequency_hz"].as_f64().unwrap();
+        assert!((f - t).abs() < 0.01 * t, "{f} vs {t}");
+        assert_eq!(m["physical"], true, "{m}");
+    }
+    let (v, human) = run(&["--no-added-modes"]);
+    assert!(!human.contains("start missed"), "{human}");
+    assert_eq!(v["modes"].as_array().unwrap().len(), 2);
+    assert_eq!(v["parameters"]["added_modes"], false);
+    assert!(v["refinement"]["added_hz"].as_array().unwrap().is_empty());
+}
+
 /// A small model.json and FRF set for the error cases.
 fn small_model(dir: &Path) -> (PathBuf, PathBuf) {
     let (file, _) = modal_set(
@@ -275,6 +329,7 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
         ),
         (&["--residuals", "lower"][..], "--refine"),
         (&["--max-iterations", "5"][..], "--refine"),
+        (&["--no-added-modes"][..], "--refine"),
     ] {
         let o = with(extra);
         o.assert_input_error();
