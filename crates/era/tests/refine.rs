@@ -186,8 +186,16 @@ fn truth_model_refined_from_the_thesis_era_poles() {
     // contains them exactly.
     let frf = truth_model_frf(None).unwrap();
     let era = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
-    let start: Vec<Complex64> = era.modal.modes.iter().map(|m| m.continuous_pole).collect();
+    let mut start: Vec<Complex64> = era.modal.modes.iter().map(|m| m.continuous_pole).collect();
+    // A repeated start pole is dropped, named by its frequency.
+    start.push(start[0]);
     let r = refine(&frf, &start, &truth_options(), &mut |_, _| {}).unwrap();
+    assert_eq!(r.dropped.len(), 1, "{:?}", r.dropped);
+    let expected = format!(
+        "a duplicate of the start pole at {:.6} Hz",
+        start[0].norm() / (2.0 * PI)
+    );
+    assert_eq!(r.dropped[0], (start.len() - 1, expected));
     assert_eq!(r.modes.len(), 4);
     for e in exact_truth_poles() {
         let d = r

@@ -106,7 +106,15 @@ fn start_poles(
             .iter()
             .position(|p| (p - s).norm() <= COALESCED * s.norm())
         {
-            dropped.push((k, format!("a duplicate of start pole {}", ids[other])));
+            // Named by frequency: after added poles (`Refinement::added`) the index
+            // of this round's pole list is not the caller's.
+            dropped.push((
+                k,
+                format!(
+                    "a duplicate of the start pole at {:.6} Hz",
+                    poles[other].norm() / (2.0 * PI)
+                ),
+            ));
             continue;
         }
         ids.push(k);
