@@ -126,7 +126,7 @@ pub fn summary(found: &Identification) -> String {
         f.cost_after,
         found.timings.refine
     );
-    for line in r.added_line().into_iter().chain(r.dropped_lines()) {
+    for line in r.start_lines() {
         let _ = writeln!(s, "  {line}");
     }
     let _ = writeln!(

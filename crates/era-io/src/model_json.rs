@@ -304,7 +304,7 @@ impl RefinementJson {
             upper_residual: f.upper.as_ref().map(rows),
             residual_states: r.residual_states,
             dropped: r.dropped_lines(),
-            added_hz: r.added_hz(),
+            added_hz: r.added_hz().to_vec(),
             rank_one: f.rank_one,
         }
     }

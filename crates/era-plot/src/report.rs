@@ -228,11 +228,7 @@ fn refinement_html(f: &era::identify::Identification) -> String {
         fit.fit_before,
         fit.fit_after,
     );
-    let dropped: Vec<String> = r
-        .added_line()
-        .into_iter()
-        .chain(r.dropped_lines())
-        .collect();
+    let dropped = r.start_lines();
     if !dropped.is_empty() {
         h.push_str("<ul id=\"refinement-dropped\">");
         for d in dropped {

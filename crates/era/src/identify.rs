@@ -310,26 +310,25 @@ impl Refined {
             .collect()
     }
 
-    /// Frequencies (Hz) of the poles the refinement added for modes the start missed.
-    pub fn added_hz(&self) -> Vec<f64> {
-        self.refinement
-            .added
-            .iter()
-            .map(|s| s.norm() / (2.0 * std::f64::consts::PI))
-            .collect()
+    /// Frequencies (Hz) of the poles the refinement added for modes the start missed
+    /// (the end of [`Refined::start_frequency_hz`]).
+    pub fn added_hz(&self) -> &[f64] {
+        &self.start_frequency_hz[self.start_modes()..]
     }
 
-    /// `"the residual showed …"`, when poles were added for modes the start missed.
-    pub fn added_line(&self) -> Option<String> {
+    /// What the refinement did to its start, a line each: `"the residual showed …"` when
+    /// poles were added for modes the start missed, then [`Refined::dropped_lines`].
+    pub fn start_lines(&self) -> Vec<String> {
         let added = self.added_hz();
-        (!added.is_empty()).then(|| {
+        let added_line = (!added.is_empty()).then(|| {
             let list: Vec<String> = added.iter().map(|f| format!("{f:.4}")).collect();
             format!(
                 "the residual showed {} mode(s) the start missed: poles added at {} Hz",
                 added.len(),
                 list.join(", ")
             )
-        })
+        });
+        added_line.into_iter().chain(self.dropped_lines()).collect()
     }
 }
 

@@ -43,6 +43,18 @@ fn perturbed_start(s: &ModalStructure, missing: usize) -> Vec<Complex64> {
     start
 }
 
+/// The refined mode nearest in frequency to `f_hz`.
+fn nearest(r: &Refinement, f_hz: f64) -> &era::refine::RefinedMode {
+    r.modes
+        .iter()
+        .min_by(|a, b| {
+            (a.frequency_hz - f_hz)
+                .abs()
+                .total_cmp(&(b.frequency_hz - f_hz).abs())
+        })
+        .unwrap()
+}
+
 /// Relative errors of the found frequencies and damping ratios against the nearest true
 /// mode, and how many true modes have a found mode within 1e-3 relative.
 fn errors(s: &ModalStructure, r: &Refinement) -> (Vec<f64>, Vec<f64>, usize) {
@@ -50,15 +62,7 @@ fn errors(s: &ModalStructure, r: &Refinement) -> (Vec<f64>, Vec<f64>, usize) {
     let mut ze = Vec::new();
     let mut found = 0;
     for (f, z) in s.frequencies_hz.iter().zip(&s.damping_ratios) {
-        let best = r
-            .modes
-            .iter()
-            .min_by(|a, b| {
-                (a.frequency_hz - f)
-                    .abs()
-                    .total_cmp(&(b.frequency_hz - f).abs())
-            })
-            .unwrap();
+        let best = nearest(r, *f);
         let e = (best.frequency_hz - f).abs() / f;
         if e < 1e-3 {
             found += 1;
@@ -276,15 +280,7 @@ fn modes_the_start_missed_are_found_in_the_residual() {
     assert!(!r.added.is_empty(), "nothing added");
     for &m in &missing {
         let f = s.frequencies_hz[m];
-        let best = r
-            .modes
-            .iter()
-            .min_by(|a, b| {
-                (a.frequency_hz - f)
-                    .abs()
-                    .total_cmp(&(b.frequency_hz - f).abs())
-            })
-            .unwrap();
+        let best = nearest(&r, f);
         assert!(
             (best.frequency_hz - f).abs() <= 1e-3 * f,
             "missed {f} Hz: nearest {} Hz, added {:?}",

@@ -449,22 +449,10 @@ fn run(
                 n_start + added_before + (k - kept)
             }
         };
-        for m in &mut next.modes {
-            m.start = origin(m.start);
-        }
-        let mut dropped = result.dropped.clone();
-        dropped.extend(
-            next.dropped
-                .iter()
-                .map(|(k, why)| (origin(*k), why.clone())),
-        );
-        dropped.sort_by_key(|d| d.0);
-        next.dropped = dropped;
+        // The costs stay those of one fit, with one set of weights: this one's.
+        continue_from(&mut next, &result, origin);
         next.added = result.added.clone();
         next.added.extend(missed.iter().map(|m| m.pole));
-        next.iterations += result.iterations;
-        // The costs stay those of one fit, with one set of weights: this one's.
-        next.fit_before = result.fit_before;
         result = next;
     }
     Ok(result)
@@ -520,19 +508,7 @@ fn run_once(
         return Ok(exact);
     }
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
-    let (a, b) = first.band;
-    let model = first.response(&frf.frequency_hz()[a..b], frf.quantity());
-    let per_pair: Vec<f64> = (0..q * p)
-        .map(|pair| {
-            let data = &frf.values()[pair * lines + a..pair * lines + b];
-            let fit = &model[pair * (b - a)..(pair + 1) * (b - a)];
-            data.iter()
-                .zip(fit)
-                .map(|(y, m)| (y - m).norm_sqr())
-                .sum::<f64>()
-                / (b - a) as f64
-        })
-        .collect();
+    let (_, per_pair) = first.residual(frf);
     let mean = per_pair.iter().sum::<f64>() / per_pair.len() as f64;
     let floor = 1e-12 * mean;
     let mut variance = vec![1.0; q * p * lines];
@@ -547,21 +523,28 @@ fn run_once(
     let poles: Vec<Complex64> = first.modes.iter().map(|m| m.pole).collect();
     let mut second = fit::run(frf, &poles, &weighted, progress, evaluate)?;
     // Indices into the first fit's modes → indices into the caller's start poles.
-    for m in &mut second.modes {
-        m.start = first.modes[m.start].start;
+    continue_from(&mut second, &first, |k| first.modes[k].start);
+    Ok(second)
+}
+
+/// `next`, a fit started from `earlier`'s poles (and maybe more), told in the caller's
+/// numbering: `origin(k)` is the caller's index of `next`'s start pole `k`, for its modes
+/// and its dropped poles, which join `earlier`'s; the iterations add up, and
+/// `fit_before` stays `earlier`'s, at the caller's start.
+fn continue_from(next: &mut Refinement, earlier: &Refinement, origin: impl Fn(usize) -> usize) {
+    for m in &mut next.modes {
+        m.start = origin(m.start);
     }
-    let mut dropped = first.dropped.clone();
+    let mut dropped = earlier.dropped.clone();
     dropped.extend(
-        second
-            .dropped
+        next.dropped
             .iter()
-            .map(|(k, why)| (first.modes[*k].start, why.clone())),
+            .map(|(k, why)| (origin(*k), why.clone())),
     );
     dropped.sort_by_key(|d| d.0);
-    second.dropped = dropped;
-    second.iterations += first.iterations;
-    second.fit_before = first.fit_before;
-    Ok(second)
+    next.dropped = dropped;
+    next.iterations += earlier.iterations;
+    next.fit_before = earlier.fit_before;
 }
 
 /// [`refine`] with a central-difference Jacobian and a dense solve per pair: the
@@ -583,6 +566,23 @@ pub fn refine_naive(
 pub const RESIDUE_RANK_TOLERANCE: f64 = 1e-12;
 
 impl Refinement {
+    /// `frf` minus the model over the band, `[pair][line]`, and each pair's mean square
+    /// of it.
+    pub(crate) fn residual(&self, frf: &FrfData) -> (Vec<Complex64>, Vec<f64>) {
+        let (a, b) = self.band;
+        let (lines, all) = (b - a, frf.lines());
+        let mut residual = self.response(&frf.frequency_hz()[a..b], frf.quantity());
+        let mut mean_square = Vec::with_capacity(self.outputs * self.inputs);
+        for (pair, e) in residual.chunks_mut(lines.max(1)).enumerate() {
+            let data = &frf.values()[pair * all + a..pair * all + b];
+            for (e, y) in e.iter_mut().zip(data) {
+                *e = y - *e;
+            }
+            mean_square.push(e.iter().map(|v| v.norm_sqr()).sum::<f64>() / lines as f64);
+        }
+        (residual, mean_square)
+    }
+
     /// The [`RefinedMode::significance`] a mode needs to be told from noise: a mode
     /// lowers the cost by about its weighted energy, and by Schwarz's criterion (BIC) a
     /// parameter must lower it by more than `σ̂² ln n`, `n` the real observations

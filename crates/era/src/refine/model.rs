@@ -115,10 +115,15 @@ pub(crate) fn partial_fraction(
 
 /// The mode's columns at one line: `Re R` multiplies `g(s) + g(s̄)`, `Im R` multiplies
 /// `j(g(s) − g(s̄))`, so that `R g(s) + R̄ g(s̄) = Re R·(…) + Im R·(…)`.
-fn mode_columns(s: Complex64, omega: f64, layout: &Layout) -> [Complex64; 2] {
+pub(crate) fn mode_columns(
+    s: Complex64,
+    omega: f64,
+    kappa: i32,
+    sample_time_s: Option<f64>,
+) -> [Complex64; 2] {
     let j = Complex64::new(0.0, 1.0);
-    let (g1, _) = partial_fraction(s, omega, layout.kappa, layout.sample_time_s);
-    let (g2, _) = partial_fraction(s.conj(), omega, layout.kappa, layout.sample_time_s);
+    let (g1, _) = partial_fraction(s, omega, kappa, sample_time_s);
+    let (g2, _) = partial_fraction(s.conj(), omega, kappa, sample_time_s);
     [g1 + g2, j * (g1 - g2)]
 }
 
@@ -177,7 +182,7 @@ pub(crate) fn basis(layout: &Layout, omega: &[f64], poles: &[Complex64]) -> Mat<
     let pm = layout.per_mode;
     for (r, &s) in poles.iter().enumerate() {
         for (k, &w) in omega.iter().enumerate() {
-            let c = mode_columns(s, w, layout);
+            let c = mode_columns(s, w, layout.kappa, layout.sample_time_s);
             for local in 0..pm {
                 let v = c[local + 2 - pm];
                 out[(k, r * pm + local)] = v.re;

@@ -35,7 +35,7 @@
 //!
 //! The projection is two columns per candidate; no crate does this particular scan.
 
-use super::model::{order, partial_fraction};
+use super::model::{mode_columns, order};
 use super::Refinement;
 use crate::frf::FrfData;
 use num_complex::Complex64;
@@ -125,19 +125,10 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
     let freq = &frf.frequency_hz()[a..b];
     let lines = b - a;
     let pairs = fit.outputs * fit.inputs;
-    let all = frf.lines();
-    let model = fit.response(freq, frf.quantity());
     // Whitened residual, pair by pair.
-    let mut residual = vec![Complex64::new(0.0, 0.0); pairs * lines];
+    let (mut residual, mean_square) = fit.residual(frf);
     let mut used = 0usize;
-    for pair in 0..pairs {
-        let data = &frf.values()[pair * all + a..pair * all + b];
-        let m = &model[pair * lines..(pair + 1) * lines];
-        let e = &mut residual[pair * lines..(pair + 1) * lines];
-        for ((e, y), m) in e.iter_mut().zip(data).zip(m) {
-            *e = y - m;
-        }
-        let power = e.iter().map(|v| v.norm_sqr()).sum::<f64>() / lines as f64;
+    for (e, &power) in residual.chunks_mut(lines).zip(&mean_square) {
         if power > 0.0 && power.is_finite() {
             let scale = 1.0 / power.sqrt();
             e.iter_mut().for_each(|v| *v *= scale);
@@ -153,7 +144,6 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
     zetas.sort_by(f64::total_cmp);
     let zeta = zetas[zetas.len() / 2].clamp(1e-3, 0.2);
     let kappa = order(fit.quantity);
-    let j = Complex64::new(0.0, 1.0);
     let nu = 2.0 * used as f64;
     let window = |k: usize| {
         let half = WINDOW_BANDWIDTHS * zeta * freq[k];
@@ -178,12 +168,7 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
             }
             let s = Complex64::new(-zeta * wc, wc * (1.0 - zeta * zeta).sqrt());
             let columns: Vec<[Complex64; 2]> = (lo..hi)
-                .map(|l| {
-                    let w = 2.0 * PI * freq[l];
-                    let g1 = partial_fraction(s, w, kappa, fit.sample_time_s).0;
-                    let g2 = partial_fraction(s.conj(), w, kappa, fit.sample_time_s).0;
-                    [g1 + g2, j * (g1 - g2)]
-                })
+                .map(|l| mode_columns(s, 2.0 * PI * freq[l], kappa, fit.sample_time_s))
                 .collect();
             let dot = |x: Complex64, y: Complex64| x.re * y.re + x.im * y.im;
             let (mut g11, mut g12, mut g22) = (0.0, 0.0, 0.0);
