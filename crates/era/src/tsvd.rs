@@ -1,6 +1,17 @@
 //! Truncated SVD from matrix products only: restarted block Golub–Kahan–Lanczos with
 //! full reorthogonalisation and a Rayleigh–Ritz step, stopped by a residual test.
 //!
+//! **The opening.** The first two passes are randomized subspace iteration (Halko,
+//! Martinsson & Tropp 2011, Alg. 4.4 and 5.1): `Q = orth(H Ω)`, `W = orth(Hᵀ Q)` finds the
+//! range, then `H W = Q R`, `R = X Σ Yᵀ` gives the Ritz triplets `(Q X, Σ, W Y)` and
+//! `Hᵀ Q` their residuals. Data with a clear gap past the order (exact Markov data of a
+//! finite-order system) stop there, at two Householder QRs and a `k × k` SVD a pass.
+//! Otherwise the pass's `W`, `Q`, `R` and `Hᵀ Q` are the first blocks `V_0`, `U_0`,
+//! `T_00` and `Hᵀ U_0` of the Krylov recurrence below, so none of its products is
+//! repeated. Where the memory budget allows only one block (depth 1, the largest
+//! cases), subspace iteration simply continues from `orth(Hᵀ Q)`: it then needs three
+//! tall blocks alive where the Krylov recurrence needs five.
+//!
 //! **Why Krylov.** Subspace iteration (Halko, Martinsson & Tropp 2011, Alg. 4.4) keeps
 //! only the last block `(HᵀH)^t H Ω`; its error in the `i`-th triplet falls as
 //! `(σ_(k+1)/σ_i)^(2t)` with `k` the block width. When the spectrum has no gap past the
@@ -46,7 +57,7 @@
 //! costs `O((s b)³)`. After `depth` passes (fewer when the basis would pass a memory
 //! budget) the iteration restarts from `orth(Hᵀ U X_b)`, the block subspace iteration
 //! would take, which the recurrence already holds: `Hᵀ U X_b = V S X_b + V_(j+1) L_j X_b`.
-//! With `depth = 1` this is exactly subspace iteration.
+//! (At depth 1 the opening's subspace iteration simply continues.)
 //!
 //! **Orthonormalisation.** Each block `P` (tall, `b` columns) is factored by CholeskyQR2
 //! (Yamamoto, Nakatsukasa, Yanagisawa & Fukaya 2015): `PᵀP = R₁ᵀR₁`, `Q₁ = P R₁⁻¹`, once
@@ -64,8 +75,10 @@
 use crate::error::{EraError, Result};
 use crate::hankel_op::LinearOperator;
 use crate::sim::Minstd;
+use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
-use faer::{Mat, MatMut, MatRef, Par, Side};
+use faer::{Accum, Mat, MatRef, Par, Side};
 
 /// Settings of [`truncated_svd`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -138,18 +151,36 @@ pub struct TsvdTimings {
 /// `m` right-hand sides in rows ran on one thread. `R` is well conditioned here
 /// ([`cholesky_factor`] refuses `min R_ii < 1e-6 · max R_ii` before CholeskyQR2 uses it),
 /// and the second CholeskyQR pass removes what the explicit inverse loses.
-fn solve_right_upper(mut x: MatMut<'_, f64>, lower: MatRef<'_, f64>) {
+fn solve_right_upper(x: MatRef<'_, f64>, lower: MatRef<'_, f64>) -> Mat<f64> {
     let b = lower.nrows();
     let mut inverse = Mat::<f64>::identity(b, b);
     solve_lower_triangular_in_place(lower, inverse.as_mut(), Par::Seq);
-    let product = &x * inverse.transpose();
-    x.copy_from(&product);
+    x * inverse.transpose()
+}
+
+/// The lower triangle of `xᵀx` (the upper is left zero): half the flops of the full
+/// product, and all that the lower Cholesky factor reads.
+fn gram_lower(x: MatRef<'_, f64>) -> Mat<f64> {
+    let b = x.ncols();
+    let mut g = Mat::<f64>::zeros(b, b);
+    triangular::matmul(
+        g.as_mut(),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        x.transpose(),
+        BlockStructure::Rectangular,
+        x,
+        BlockStructure::Rectangular,
+        1.0,
+        Par::rayon(0),
+    );
+    g
 }
 
 /// `R` (upper) with `xᵀx + shift·I = RᵀR`, or `None` when Cholesky fails or
 /// `min R_ii / max R_ii < min_ratio` (then `κ(x)` is at least the inverse of that).
 fn cholesky_factor(x: MatRef<'_, f64>, shift: f64, min_ratio: f64) -> Option<Mat<f64>> {
-    let mut g = x.transpose() * x;
+    let mut g = gram_lower(x);
     for i in 0..g.nrows() {
         g[(i, i)] += shift;
     }
@@ -179,7 +210,7 @@ fn block_qr(mut p: Mat<f64>) -> (Mat<f64>, Mat<f64>, bool) {
         if frob2 > 0.0 && frob2.is_finite() {
             if let Some(l) = cholesky_factor(p.as_ref(), shift, 0.0) {
                 original = Some(p.clone());
-                solve_right_upper(p.as_mut(), l.as_ref());
+                p = solve_right_upper(p.as_ref(), l.as_ref());
                 r_total = l.transpose().to_owned();
                 first = cholesky_factor(p.as_ref(), 0.0, CHOLQR2_RATIO);
             }
@@ -189,9 +220,9 @@ fn block_qr(mut p: Mat<f64>) -> (Mat<f64>, Mat<f64>, bool) {
         if original.is_none() {
             original = Some(p.clone());
         }
-        solve_right_upper(p.as_mut(), l1.as_ref());
+        p = solve_right_upper(p.as_ref(), l1.as_ref());
         if let Some(l2) = cholesky_factor(p.as_ref(), 0.0, CHOLQR2_RATIO) {
-            solve_right_upper(p.as_mut(), l2.as_ref());
+            p = solve_right_upper(p.as_ref(), l2.as_ref());
             let r = l2.transpose() * l1.transpose() * &r_total;
             return (p, r, false);
         }
@@ -212,7 +243,7 @@ fn extend_basis(basis: &[Mat<f64>], mut p: Mat<f64>) -> (Mat<f64>, Vec<Mat<f64>>
             let before = column_norms(x.as_ref());
             for (q, c) in basis.iter().zip(coefficients.iter_mut()) {
                 let step = q.transpose() * &*x;
-                *x -= q * &step;
+                matmul(x.as_mut(), Accum::Add, q, &step, -1.0, Par::rayon(0));
                 match scale {
                     None => *c += &step,
                     Some(r) => *c += &step * r,
@@ -292,22 +323,185 @@ pub fn truncated_svd(
         .min(limit / 2 / k)
         .max(1);
     let mut rng = Minstd::new(options.seed);
-    // Any full-rank random start finds the range (Halko et al. §4).
-    let start = Mat::from_fn(cols, k, |_, _| 2.0 * rng.uniform() - 1.0);
-    let mut v_blocks: Vec<Mat<f64>> = vec![block_qr(start).0];
-    let mut u_blocks: Vec<Mat<f64>> = Vec::new();
-    // T = Uᵀ H V and S = Vᵀ Hᵀ U, grown a block row and column a pass.
-    let mut t = Mat::<f64>::zeros(0, 0);
-    let mut s_mat = Mat::<f64>::zeros(0, 0);
-    let mut previous_tail: Option<Mat<f64>> = None;
-    let mut residual = f64::INFINITY;
     let mut timings = TsvdTimings::default();
-    let mut clock = std::time::Instant::now();
-    let mut lap = |slot: &mut f64| {
-        *slot += clock.elapsed().as_secs_f64();
-        clock = std::time::Instant::now();
+    let mut clock = Stopwatch::new();
+    // Pass 1 finds the range from a random start (any full-rank test matrix does;
+    // Halko et al. §4), pass 2 is one step of subspace iteration with the explicit
+    // residual. Data with a gap past the order (exact or nearly exact low rank) stop here.
+    let start = Mat::from_fn(cols, k, |_, _| 2.0 * rng.uniform() - 1.0);
+    let q = householder_q(op.apply(start.as_ref()));
+    drop(start);
+    clock.lap(&mut timings.products);
+    let back = op.apply_transpose(q.as_ref());
+    drop(q);
+    clock.lap(&mut timings.products);
+    let mut w = householder_q(back);
+    clock.lap(&mut timings.orthogonalisation);
+    let mut residual = f64::INFINITY;
+    let mut pass = 1;
+    while pass < options.max_iterations {
+        pass += 1;
+        let step = subspace_step(op, w, options.rank, depth > 1, &mut clock, &mut timings)?;
+        residual = step.residual;
+        if residual <= options.tolerance {
+            return Ok(TruncatedSvd {
+                u: step.u,
+                s: step.s,
+                v: step.v,
+                iterations: pass,
+                residual,
+                timings,
+            });
+        }
+        if let Some(seed) = step.seed {
+            // The pass's Q, R and Hᵀ Q are the Krylov recurrence's first block.
+            return krylov(op, seed, step.back, options, k, depth, pass, timings);
+        }
+        drop((step.u, step.v));
+        // Subspace iteration continues from orth(Hᵀ Q) (the span of Hᵀ U).
+        w = householder_q(step.back);
+        clock.lap(&mut timings.orthogonalisation);
+    }
+    Err(not_converged(options, residual))
+}
+
+/// Wall-clock laps into [`TsvdTimings`] slots.
+struct Stopwatch(std::time::Instant);
+
+impl Stopwatch {
+    fn new() -> Self {
+        Stopwatch(std::time::Instant::now())
+    }
+    /// Adds the time since the last lap to `slot`.
+    fn lap(&mut self, slot: &mut f64) {
+        *slot += self.0.elapsed().as_secs_f64();
+        self.0 = std::time::Instant::now();
+    }
+}
+
+fn not_converged(options: &TruncatedSvdOptions, residual: f64) -> EraError {
+    EraError::Numerical(format!(
+        "the truncated SVD did not converge in {} passes (residual {residual:.2e}, tolerance {:.0e}): use `svd dense`",
+        options.max_iterations, options.tolerance
+    ))
+}
+
+/// `Q` of faer's Householder QR: orthonormal whatever the rank of `x` (the completing
+/// columns of a rank-deficient `x` are arbitrary), at about half CholeskyQR2's flops.
+fn householder_q(x: Mat<f64>) -> Mat<f64> {
+    let qr = x.qr();
+    drop(x);
+    qr.compute_thin_Q()
+}
+
+/// One pass of subspace iteration from an orthonormal `w`: `H W = Q R`, `R = X Σ Yᵀ`,
+/// the Ritz triplets `(Q X, Σ, W Y)`, and `Hᵀ Q`, which gives the residuals and the next
+/// iterate. With `keep`, `W`, `Q` and `R` are kept to seed the Krylov iteration.
+struct SubspaceStep {
+    u: Mat<f64>,
+    s: Vec<f64>,
+    v: Mat<f64>,
+    /// `Hᵀ Q`.
+    back: Mat<f64>,
+    residual: f64,
+    seed: Option<Seed>,
+}
+
+/// The first Krylov block pair from a subspace-iteration pass: `V_0 = W`, `U_0 = Q`,
+/// `T_00 = R`, with `Hᵀ U_0` already formed.
+struct Seed {
+    v0: Mat<f64>,
+    u0: Mat<f64>,
+    t00: Mat<f64>,
+}
+
+fn subspace_step(
+    op: &dyn LinearOperator,
+    w: Mat<f64>,
+    rank: usize,
+    keep: bool,
+    clock: &mut Stopwatch,
+    timings: &mut TsvdTimings,
+) -> Result<SubspaceStep> {
+    // The product is gone once factored (memory limits the large cases).
+    let qr = op.apply(w.as_ref()).qr();
+    let (q, r) = (qr.compute_thin_Q(), qr.thin_R().to_owned());
+    drop(qr);
+    clock.lap(&mut timings.orthogonalisation);
+    let back = op.apply_transpose(q.as_ref());
+    clock.lap(&mut timings.products);
+    let small = r
+        .thin_svd()
+        .map_err(|e| EraError::Numerical(format!("small SVD: {e:?}")))?;
+    let s: Vec<f64> = (0..small.S().dim()).map(|i| small.S()[i]).collect();
+    let u = &q * small.U();
+    let v = &w * small.V();
+    let seed = if keep {
+        Some(Seed {
+            v0: w,
+            u0: q,
+            t00: r,
+        })
+    } else {
+        // At the large sizes that run subspace iteration, memory is what limits.
+        drop((w, q));
+        None
     };
-    for pass in 1..=options.max_iterations {
+    let s1 = s[0].max(f64::MIN_POSITIVE);
+    // ρ_i = ‖Hᵀ u_i − σ_i v_i‖ / σ₁ with Hᵀ u_i = Hᵀ Q x_i (H v_i = σ_i u_i holds by
+    // construction), a few columns at a time so that no further tall block is alive.
+    let mut residual = 0.0f64;
+    const CHUNK: usize = 32;
+    for first in (0..rank).step_by(CHUNK) {
+        let width = CHUNK.min(rank - first);
+        let mut gap = &back * small.U().subcols(first, width);
+        for c in 0..width {
+            let sigma = s[first + c];
+            gap.col_mut(c)
+                .iter_mut()
+                .zip(v.col(first + c).iter())
+                .for_each(|(g, vi)| *g -= sigma * vi);
+            residual = residual.max(gap.col(c).norm_l2() / s1);
+        }
+    }
+    clock.lap(&mut timings.rayleigh_ritz);
+    Ok(SubspaceStep {
+        u,
+        s,
+        v,
+        back,
+        residual,
+        seed,
+    })
+}
+
+/// The restarted block Golub–Kahan–Lanczos iteration of the module doc, from the
+/// orthonormal `v0` after `done` passes.
+#[allow(clippy::too_many_arguments)]
+fn krylov(
+    op: &dyn LinearOperator,
+    seed: Seed,
+    htu0: Mat<f64>,
+    options: &TruncatedSvdOptions,
+    k: usize,
+    depth: usize,
+    done: usize,
+    mut timings: TsvdTimings,
+) -> Result<TruncatedSvd> {
+    let mut clock = Stopwatch::new();
+    let mut v_blocks: Vec<Mat<f64>> = vec![seed.v0];
+    let mut u_blocks: Vec<Mat<f64>> = vec![seed.u0];
+    // T = Uᵀ H V and S = Vᵀ Hᵀ U, grown a block row and column a pass.
+    let mut t = seed.t00;
+    // The seed's right step: Hᵀ U_0 = V_0 S_00 + V_1 L_0.
+    let (v1, coefficients, tail) = extend_basis(&v_blocks, htu0);
+    let mut s_mat = coefficients.into_iter().next().expect("one block");
+    let mut previous_tail = Some(tail);
+    v_blocks.push(v1);
+    clock.lap(&mut timings.orthogonalisation);
+    let mut residual = f64::INFINITY;
+    let mut lap = |slot: &mut f64| clock.lap(slot);
+    for pass in done + 1..=options.max_iterations {
         let j = u_blocks.len();
         let width = (j + 1) * k;
         // Left: H V_j = Σ U_i T_ij + U_j T_jj.
@@ -407,10 +601,7 @@ pub fn truncated_svd(
             s_mat = Mat::zeros(0, 0);
         }
     }
-    Err(EraError::Numerical(format!(
-        "the truncated SVD did not converge in {} passes (residual {residual:.2e}, tolerance {:.0e}): use `svd dense`",
-        options.max_iterations, options.tolerance
-    )))
+    Err(not_converged(options, residual))
 }
 
 #[cfg(test)]
@@ -472,6 +663,33 @@ mod tests {
                 for i in j + 1..b {
                     assert!(r[(i, j)].abs() <= 1e-14 * p.norm_l2(), "R not triangular");
                 }
+            }
+        }
+    }
+
+    /// Exact rank below the block width: the opening's two passes of subspace iteration
+    /// already give the triplets to rounding, at any depth.
+    #[test]
+    fn exact_low_rank_stops_after_the_opening() {
+        let (m, n, r) = (90, 70, 6);
+        let mut rng = Minstd::new(4);
+        let q1 = block_qr(Mat::from_fn(m, r, |_, _| rng.normal())).0;
+        let q2 = block_qr(Mat::from_fn(n, r, |_, _| rng.normal())).0;
+        let d = Mat::from_fn(r, r, |i, j| if i == j { 3.0 / (1 + i) as f64 } else { 0.0 });
+        let a = &q1 * &d * q2.transpose();
+        for depth in [1, 4] {
+            let options = TruncatedSvdOptions {
+                depth,
+                ..TruncatedSvdOptions::new(r)
+            };
+            let t = truncated_svd(&a, &options).unwrap();
+            assert_eq!(t.iterations, 2, "depth {depth}");
+            for i in 0..r {
+                assert!(
+                    (t.s[i] - 3.0 / (1 + i) as f64).abs() < 1e-13,
+                    "{i}: {}",
+                    t.s[i]
+                );
             }
         }
     }
