@@ -123,6 +123,11 @@ pub struct RefineArgs {
     /// figures of the refined model (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write the model files in --out (model.json, fit.json, model.mat, modes.uff,
+    /// model_frf.uff) but no figures and no report.html: for batch runs, where the
+    /// figures take most of the time.
+    #[arg(long, requires = "out")]
+    pub no_figures: bool,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -528,6 +533,11 @@ pub struct IdentifyArgs {
     /// figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Write the model files in --out (model.json, fit.json, model.mat, modes.uff,
+    /// model_frf.uff) but no figures and no report.html: for batch runs, where the
+    /// figures take most of the time.
+    #[arg(long, requires = "out")]
+    pub no_figures: bool,
     #[command(flatten)]
     pub common: CommonArgs,
 }

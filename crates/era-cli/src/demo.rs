@@ -214,6 +214,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
                 &title,
                 &parameter_echo(&options),
                 options.states,
+                true,
                 &a.common,
             )?;
         }

@@ -214,6 +214,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             &title,
             &echo,
             states,
+            !a.no_figures,
             &a.common,
         )?;
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
@@ -229,9 +230,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     // Every output is in the staging folder: they all take their place now, or none.
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
         set.commit()?;
+        let figures = " (singular_values, grid, pairs/)";
         human.print(&format!(
-            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json, {0}/report.html and figures (singular_values, grid, pairs/)\n",
-            dir.display()
+            "\nwrote {}{}\n",
+            crate::output::written_list(dir, !a.no_figures),
+            if a.no_figures { "" } else { figures }
         ));
     }
     if a.common.json {

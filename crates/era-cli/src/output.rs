@@ -317,8 +317,8 @@ pub fn output_name<'a>(flag: &str, path: &'a Path) -> anyhow::Result<&'a std::ff
 /// Every output of one identification into the folder `sub` of `set` (`""` for its
 /// top): model.json, fit.json, model.mat,
 /// model_frf.uff (the model's FRFs on the measurement's lines, after the same
-/// integrations), modes.uff, the figures and report.html. All of them show
-/// `found.model`, refined or not, and use the compared data kept in `found`.
+/// integrations), modes.uff, and with `figures` the figures and report.html. All of them
+/// show `found.model`, refined or not, and use the compared data kept in `found`.
 #[allow(clippy::too_many_arguments)]
 pub fn write_identification(
     set: &mut OutputSet,
@@ -330,6 +330,7 @@ pub fn write_identification(
     title: &str,
     echo: &str,
     states: usize,
+    figures: bool,
     common: &crate::args::CommonArgs,
 ) -> anyhow::Result<()> {
     write_output(set, sub.join("model.json"), |p| Ok(model.write(p)?))?;
@@ -360,11 +361,27 @@ pub fn write_identification(
             found.processed.quantity(),
         )?)
     })?;
+    if !figures {
+        return Ok(());
+    }
     let q = found.measured.outputs() * found.measured.inputs();
     let bar = crate::progress::bar(common, q as u64, "figures");
     crate::figures::write_all(set, sub, title, echo, found, source, states, &bar)?;
     bar.finish_and_clear();
     Ok(())
+}
+
+/// What `write_identification` wrote, for the closing line.
+pub fn written_list(dir: &Path, figures: bool) -> String {
+    let files = format!(
+        "{0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json",
+        dir.display()
+    );
+    if figures {
+        format!("{files}, {}/report.html and figures", dir.display())
+    } else {
+        format!("{files} (no figures)")
+    }
 }
 
 /// Per-pair relative fit error as an outputs × inputs grid (up to 64 pairs).

@@ -284,14 +284,15 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
             &title,
             &format!("refined from {}\n", a.model.display()),
             states,
+            !a.no_figures,
             &a.common,
         )?;
     }
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
         set.commit()?;
         human.print(&format!(
-            "\nwrote {0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json, {0}/report.html and figures\n",
-            dir.display()
+            "\nwrote {}\n",
+            crate::output::written_list(dir, !a.no_figures)
         ));
     }
     if a.common.json {

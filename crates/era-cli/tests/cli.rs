@@ -911,3 +911,83 @@ fn threads_sets_the_run_and_refuses_absurd_counts() {
         );
     }
 }
+
+/// `--no-figures` (identify and refine) writes the model files and nothing else, and
+/// needs `--out`.
+#[test]
+fn no_figures_writes_the_model_files_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    let frf = frf.to_str().unwrap();
+    let model_files = [
+        "model.json",
+        "fit.json",
+        "model.mat",
+        "modes.uff",
+        "model_frf.uff",
+    ];
+    let out = dir.path().join("bare");
+    let done = era()
+        .args([
+            "identify",
+            frf,
+            "--states",
+            "8",
+            "-q",
+            "--no-figures",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let mut written: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    let mut expected: Vec<String> = model_files.iter().map(|f| f.to_string()).collect();
+    expected.sort();
+    assert_eq!(written, expected);
+    // The same run with figures adds the report and the figures, nothing else changes.
+    let full = dir.path().join("full");
+    let done = era()
+        .args(["identify", frf, "--states", "8", "-q", "--out"])
+        .arg(&full)
+        .output()
+        .unwrap();
+    assert!(done.status.success());
+    assert!(full.join("report.html").is_file() && full.join("grid.png").is_file());
+    let a: Value = serde_json::from_slice(&std::fs::read(out.join("model.json")).unwrap()).unwrap();
+    let b: Value =
+        serde_json::from_slice(&std::fs::read(full.join("model.json")).unwrap()).unwrap();
+    assert_eq!(a["a"], b["a"]);
+    // refine as well
+    let refined = dir.path().join("refined");
+    let model = out.join("model.json");
+    let done = era()
+        .args([
+            "refine",
+            model.to_str().unwrap(),
+            frf,
+            "-q",
+            "--no-figures",
+            "--out",
+        ])
+        .arg(&refined)
+        .output()
+        .unwrap();
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    assert!(refined.join("model.json").is_file());
+    assert!(!refined.join("report.html").exists());
+    // Without --out there is nothing to leave figures out of.
+    expect_input_error(&["identify", frf, "--states", "8", "--no-figures"], "--out");
+}
