@@ -6,11 +6,11 @@
 //! range, then `H W = Q R`, `R = X Σ Yᵀ` gives the Ritz triplets `(Q X, Σ, W Y)` and
 //! `Hᵀ Q` their residuals. Data with a clear gap past the order (exact Markov data of a
 //! finite-order system) stop there, at two Householder QRs and a `k × k` SVD a pass.
-//! Otherwise the pass's `W`, `Q`, `R` and `Hᵀ Q` are the first blocks `V_0`, `U_0`,
-//! `T_00` and `Hᵀ U_0` of the Krylov recurrence below, so none of its products is
-//! repeated. Where the memory budget allows only one block (depth 1, the largest
-//! cases), subspace iteration simply continues from `orth(Hᵀ Q)`: it then needs three
-//! tall blocks alive where the Krylov recurrence needs five.
+//! Otherwise the pass's Ritz vectors `u = Q X` and `v = W Y`, with `Σ` and `Hᵀ u`, are
+//! the first blocks `U_0`, `V_0`, `T_00` (diagonal) and `Hᵀ U_0` of the Krylov recurrence
+//! below, so none of its products is repeated. Where the memory budget allows only one
+//! block (depth 1, the largest cases), subspace iteration simply continues from
+//! `orth(Hᵀ u)`, with at most three tall blocks alive at once.
 //!
 //! **Why Krylov.** Subspace iteration (Halko, Martinsson & Tropp 2011, Alg. 4.4) keeps
 //! only the last block `(HᵀH)^t H Ω`; its error in the `i`-th triplet falls as
@@ -329,9 +329,10 @@ pub fn truncated_svd(
     // Halko et al. §4), pass 2 is one step of subspace iteration with the explicit
     // residual. Data with a gap past the order (exact or nearly exact low rank) stop here.
     let start = Mat::from_fn(cols, k, |_, _| 2.0 * rng.uniform() - 1.0);
-    let q = householder_q(op.apply(start.as_ref()));
+    let range = op.apply(start.as_ref());
     drop(start);
     clock.lap(&mut timings.products);
+    let q = householder_q(range);
     let back = op.apply_transpose(q.as_ref());
     drop(q);
     clock.lap(&mut timings.products);
@@ -341,7 +342,7 @@ pub fn truncated_svd(
     let mut pass = 1;
     while pass < options.max_iterations {
         pass += 1;
-        let step = subspace_step(op, w, options.rank, depth > 1, &mut clock, &mut timings)?;
+        let step = subspace_step(op, w, options.rank, &mut clock, &mut timings)?;
         residual = step.residual;
         if residual <= options.tolerance {
             return Ok(TruncatedSvd {
@@ -353,12 +354,13 @@ pub fn truncated_svd(
                 timings,
             });
         }
-        if let Some(seed) = step.seed {
-            // The pass's Q, R and Hᵀ Q are the Krylov recurrence's first block.
-            return krylov(op, seed, step.back, options, k, depth, pass, timings);
+        if depth > 1 {
+            // The pass's Ritz vectors are the Krylov recurrence's first blocks:
+            // U_0 = u, V_0 = v, T_00 = Σ, and Hᵀ U_0 is formed.
+            return krylov(op, step, options, k, depth, pass, timings);
         }
         drop((step.u, step.v));
-        // Subspace iteration continues from orth(Hᵀ Q) (the span of Hᵀ U).
+        // Subspace iteration continues from orth(Hᵀ u).
         w = householder_q(step.back);
         clock.lap(&mut timings.orthogonalisation);
     }
@@ -395,75 +397,54 @@ fn householder_q(x: Mat<f64>) -> Mat<f64> {
 }
 
 /// One pass of subspace iteration from an orthonormal `w`: `H W = Q R`, `R = X Σ Yᵀ`,
-/// the Ritz triplets `(Q X, Σ, W Y)`, and `Hᵀ Q`, which gives the residuals and the next
-/// iterate. With `keep`, `W`, `Q` and `R` are kept to seed the Krylov iteration.
+/// the Ritz triplets `(u = Q X, Σ, v = W Y)`, and `Hᵀ u`, which gives the residuals and
+/// the next iterate. At most three tall blocks are alive at once, as memory limits the
+/// large cases.
 struct SubspaceStep {
     u: Mat<f64>,
     s: Vec<f64>,
     v: Mat<f64>,
-    /// `Hᵀ Q`.
+    /// `Hᵀ u`.
     back: Mat<f64>,
     residual: f64,
-    seed: Option<Seed>,
-}
-
-/// The first Krylov block pair from a subspace-iteration pass: `V_0 = W`, `U_0 = Q`,
-/// `T_00 = R`, with `Hᵀ U_0` already formed.
-struct Seed {
-    v0: Mat<f64>,
-    u0: Mat<f64>,
-    t00: Mat<f64>,
 }
 
 fn subspace_step(
     op: &dyn LinearOperator,
     w: Mat<f64>,
     rank: usize,
-    keep: bool,
     clock: &mut Stopwatch,
     timings: &mut TsvdTimings,
 ) -> Result<SubspaceStep> {
-    // The product is gone once factored (memory limits the large cases).
+    // The product is gone once factored.
     let qr = op.apply(w.as_ref()).qr();
     let (q, r) = (qr.compute_thin_Q(), qr.thin_R().to_owned());
     drop(qr);
-    clock.lap(&mut timings.orthogonalisation);
-    let back = op.apply_transpose(q.as_ref());
     clock.lap(&mut timings.products);
     let small = r
         .thin_svd()
         .map_err(|e| EraError::Numerical(format!("small SVD: {e:?}")))?;
     let s: Vec<f64> = (0..small.S().dim()).map(|i| small.S()[i]).collect();
     let u = &q * small.U();
+    drop(q);
     let v = &w * small.V();
-    let seed = if keep {
-        Some(Seed {
-            v0: w,
-            u0: q,
-            t00: r,
-        })
-    } else {
-        // At the large sizes that run subspace iteration, memory is what limits.
-        drop((w, q));
-        None
-    };
+    drop(w);
+    clock.lap(&mut timings.rayleigh_ritz);
+    let back = op.apply_transpose(u.as_ref());
+    clock.lap(&mut timings.products);
+    // ρ_i = ‖Hᵀ u_i − σ_i v_i‖ / σ₁ (H v_i = σ_i u_i holds by construction).
     let s1 = s[0].max(f64::MIN_POSITIVE);
-    // ρ_i = ‖Hᵀ u_i − σ_i v_i‖ / σ₁ with Hᵀ u_i = Hᵀ Q x_i (H v_i = σ_i u_i holds by
-    // construction), a few columns at a time so that no further tall block is alive.
-    let mut residual = 0.0f64;
-    const CHUNK: usize = 32;
-    for first in (0..rank).step_by(CHUNK) {
-        let width = CHUNK.min(rank - first);
-        let mut gap = &back * small.U().subcols(first, width);
-        for c in 0..width {
-            let sigma = s[first + c];
-            gap.col_mut(c)
-                .iter_mut()
-                .zip(v.col(first + c).iter())
-                .for_each(|(g, vi)| *g -= sigma * vi);
-            residual = residual.max(gap.col(c).norm_l2() / s1);
-        }
-    }
+    let residual = (0..rank)
+        .map(|i| {
+            let gap: f64 = back
+                .col(i)
+                .iter()
+                .zip(v.col(i).iter())
+                .map(|(z, vi)| (z - s[i] * vi).powi(2))
+                .sum();
+            gap.sqrt() / s1
+        })
+        .fold(0.0, f64::max);
     clock.lap(&mut timings.rayleigh_ritz);
     Ok(SubspaceStep {
         u,
@@ -471,7 +452,6 @@ fn subspace_step(
         v,
         back,
         residual,
-        seed,
     })
 }
 
@@ -480,8 +460,7 @@ fn subspace_step(
 #[allow(clippy::too_many_arguments)]
 fn krylov(
     op: &dyn LinearOperator,
-    seed: Seed,
-    htu0: Mat<f64>,
+    seed: SubspaceStep,
     options: &TruncatedSvdOptions,
     k: usize,
     depth: usize,
@@ -489,12 +468,12 @@ fn krylov(
     mut timings: TsvdTimings,
 ) -> Result<TruncatedSvd> {
     let mut clock = Stopwatch::new();
-    let mut v_blocks: Vec<Mat<f64>> = vec![seed.v0];
-    let mut u_blocks: Vec<Mat<f64>> = vec![seed.u0];
+    let mut v_blocks: Vec<Mat<f64>> = vec![seed.v];
+    let mut u_blocks: Vec<Mat<f64>> = vec![seed.u];
     // T = Uᵀ H V and S = Vᵀ Hᵀ U, grown a block row and column a pass.
-    let mut t = seed.t00;
+    let mut t = Mat::from_fn(k, k, |i, j| if i == j { seed.s[i] } else { 0.0 });
     // The seed's right step: Hᵀ U_0 = V_0 S_00 + V_1 L_0.
-    let (v1, coefficients, tail) = extend_basis(&v_blocks, htu0);
+    let (v1, coefficients, tail) = extend_basis(&v_blocks, seed.back);
     let mut s_mat = coefficients.into_iter().next().expect("one block");
     let mut previous_tail = Some(tail);
     v_blocks.push(v1);
