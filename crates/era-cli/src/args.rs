@@ -125,7 +125,8 @@ pub struct RefineArgs {
     pub out: Option<PathBuf>,
     /// Write the model files in --out (model.json, fit.json, model.mat, modes.uff,
     /// model_frf.uff) but no figures and no report.html: for batch runs, where the
-    /// figures take most of the time.
+    /// figures take most of the time. A report and figures that an earlier run left in
+    /// the folder stay as they were (the run says so).
     #[arg(long, requires = "out")]
     pub no_figures: bool,
     #[command(flatten)]
@@ -535,7 +536,8 @@ pub struct IdentifyArgs {
     pub out: Option<PathBuf>,
     /// Write the model files in --out (model.json, fit.json, model.mat, modes.uff,
     /// model_frf.uff) but no figures and no report.html: for batch runs, where the
-    /// figures take most of the time.
+    /// figures take most of the time. A report and figures that an earlier run left in
+    /// the folder stay as they were (the run says so).
     #[arg(long, requires = "out")]
     pub no_figures: bool,
     #[command(flatten)]

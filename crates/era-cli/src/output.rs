@@ -379,6 +379,11 @@ pub fn written_list(dir: &Path, figures: bool) -> String {
     );
     if figures {
         format!("{files}, {}/report.html and figures", dir.display())
+    } else if dir.join("report.html").exists() {
+        format!(
+            "{files} (no figures; {}/report.html and the figures are an earlier run's)",
+            dir.display()
+        )
     } else {
         format!("{files} (no figures)")
     }

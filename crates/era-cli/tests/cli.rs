@@ -988,6 +988,16 @@ fn no_figures_writes_the_model_files_only() {
     );
     assert!(refined.join("model.json").is_file());
     assert!(!refined.join("report.html").exists());
+    // Into the folder with figures: the earlier report stays, and the run says whose it is.
+    let done = era()
+        .args(["identify", frf, "--states", "8", "--no-figures", "--out"])
+        .arg(&full)
+        .output()
+        .unwrap();
+    assert!(done.status.success());
+    let said =
+        String::from_utf8_lossy(&done.stderr).into_owned() + &String::from_utf8_lossy(&done.stdout);
+    assert!(said.contains("earlier run"), "{said}");
     // Without --out there is nothing to leave figures out of.
     expect_input_error(&["identify", frf, "--states", "8", "--no-figures"], "--out");
 }

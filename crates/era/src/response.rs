@@ -463,8 +463,9 @@ fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
 /// `20 log10(|b| / |a|)`, or `None` where either is zero. From the squared magnitudes (no
 /// `hypot`, one `log10`) unless they under- or overflow, then from the magnitudes.
 fn level_db(a: Complex64, b: Complex64) -> Option<f64> {
-    let ratio = b.norm_sqr() / a.norm_sqr();
-    if ratio.is_normal() {
+    let (a2, b2) = (a.norm_sqr(), b.norm_sqr());
+    let ratio = b2 / a2;
+    if a2.is_normal() && b2.is_normal() && ratio.is_normal() {
         return Some(10.0 * ratio.log10());
     }
     let (na, nb) = (a.norm(), b.norm());
@@ -592,6 +593,12 @@ mod tests {
         assert!(close(level_db(c(1e-200, 0.0), c(0.0, 1e-199)), 20.0));
         assert!(close(level_db(c(1e200, 0.0), c(1e180, 0.0)), -400.0));
         assert!(close(level_db(c(1e-160, 0.0), c(1e160, 0.0)), 6400.0));
+        // Subnormal squares whose ratio is normal: from the magnitudes, not the squares.
+        let (a, b) = (1.234567e-160, 1.1e-161);
+        assert!(close(
+            level_db(c(a, 0.0), c(b, 0.0)),
+            20.0 * (b / a).log10()
+        ));
         assert_eq!(level_db(c(0.0, 0.0), c(1.0, 0.0)), None);
         assert_eq!(level_db(c(1.0, 0.0), c(0.0, 0.0)), None);
     }

@@ -4,8 +4,8 @@
 //! **The opening.** The first two passes are randomized subspace iteration (Halko,
 //! Martinsson & Tropp 2011, Alg. 4.4 and 5.1): `Q = orth(H Ω)`, `W = orth(Hᵀ Q)` finds the
 //! range, then `H W = Q R`, `R = X Σ Yᵀ` gives the Ritz triplets `(Q X, Σ, W Y)` and
-//! `Hᵀ Q` their residuals. Data with a clear gap past the order (exact Markov data of a
-//! finite-order system) stop there, at two Householder QRs and a `k × k` SVD a pass.
+//! `Hᵀ Q X` their residuals. Data with a clear gap past the order (exact Markov data of a
+//! finite-order system) stop there, at three Householder QRs and a `k × k` SVD in all.
 //! Otherwise the pass's Ritz vectors `u = Q X` and `v = W Y`, with `Σ` and `Hᵀ u`, are
 //! the first blocks `U_0`, `V_0`, `T_00` (diagonal) and `Hᵀ U_0` of the Krylov recurrence
 //! below, so none of its products is repeated. Where the memory budget allows only one
@@ -54,8 +54,8 @@
 //! has its singular value correct to `ρ²σ₁²/gap` and its vectors to `ρσ₁/gap`.
 //!
 //! **Restarts.** The basis grows by `b` columns a pass on each side, and the small SVD
-//! costs `O((s b)³)`. After `depth` passes (fewer when the basis would pass a memory
-//! budget) the iteration restarts from `orth(Hᵀ U X_b)`, the block subspace iteration
+//! costs `O((s b)³)`. Once the basis holds `depth` blocks (fewer when it would pass a
+//! memory budget; the first cycle counts the opening's block) the iteration restarts from `orth(Hᵀ U X_b)`, the block subspace iteration
 //! would take, which the recurrence already holds: `Hᵀ U X_b = V S X_b + V_(j+1) L_j X_b`.
 //! (At depth 1 the opening's subspace iteration simply continues.)
 //!
@@ -89,7 +89,8 @@ pub struct TruncatedSvdOptions {
     pub oversample: usize,
     /// Stop when every wanted residual `ρ_i ≤ tolerance` (relative to `σ₁`).
     pub tolerance: f64,
-    /// Give up after this many passes.
+    /// Give up after this many passes. The range-finding pass always runs, and the first
+    /// residual is measured at pass 2, so fewer than 2 always fails.
     pub max_iterations: usize,
     /// Seed of the random start ([`Minstd`]).
     pub seed: u64,
@@ -146,7 +147,7 @@ pub struct TsvdTimings {
     pub rayleigh_ritz: f64,
 }
 
-/// `x ← x R⁻¹` for upper-triangular `R = Lᵀ`, as `x · (L⁻¹)ᵀ`: `L⁻¹` is `b × b`, and
+/// `x R⁻¹` for upper-triangular `R = Lᵀ`, as `x · (L⁻¹)ᵀ`: `L⁻¹` is `b × b`, and
 /// the product with the tall `x` is one parallel GEMM, where a triangular solve with
 /// `m` right-hand sides in rows ran on one thread. `R` is well conditioned here
 /// ([`cholesky_factor`] refuses `min R_ii < 1e-6 · max R_ii` before CholeskyQR2 uses it),
@@ -172,7 +173,7 @@ fn gram_lower(x: MatRef<'_, f64>) -> Mat<f64> {
         x,
         BlockStructure::Rectangular,
         1.0,
-        Par::rayon(0),
+        faer::get_global_parallelism(),
     );
     g
 }
@@ -243,7 +244,14 @@ fn extend_basis(basis: &[Mat<f64>], mut p: Mat<f64>) -> (Mat<f64>, Vec<Mat<f64>>
             let before = column_norms(x.as_ref());
             for (q, c) in basis.iter().zip(coefficients.iter_mut()) {
                 let step = q.transpose() * &*x;
-                matmul(x.as_mut(), Accum::Add, q, &step, -1.0, Par::rayon(0));
+                matmul(
+                    x.as_mut(),
+                    Accum::Add,
+                    q,
+                    &step,
+                    -1.0,
+                    faer::get_global_parallelism(),
+                );
                 match scale {
                     None => *c += &step,
                     Some(r) => *c += &step * r,
@@ -319,7 +327,8 @@ pub fn truncated_svd(
         .min(BASIS_BUDGET_BYTES / block_bytes.max(1))
         // A basis wider than half the smaller side costs as much dense work (Gram–Schmidt,
         // the small SVD) as the dense SVD itself: the order scan's 306 + 64 columns at
-        // 1592² run at depth 2 (17 passes, 5.1 s of CPU) rather than 4 (13 passes, 13 s).
+        // 1592² ran at depth 2 (17 passes, 5.1 s of CPU) rather than 4 (13 passes, 13 s),
+        // measured before the subspace-iteration opening.
         .min(limit / 2 / k)
         .max(1);
     let mut rng = Minstd::new(options.seed);
@@ -353,6 +362,9 @@ pub fn truncated_svd(
                 residual,
                 timings,
             });
+        }
+        if pass == options.max_iterations {
+            break;
         }
         if depth > 1 {
             // The pass's Ritz vectors are the Krylov recurrence's first blocks:
@@ -396,10 +408,7 @@ fn householder_q(x: Mat<f64>) -> Mat<f64> {
     qr.compute_thin_Q()
 }
 
-/// One pass of subspace iteration from an orthonormal `w`: `H W = Q R`, `R = X Σ Yᵀ`,
-/// the Ritz triplets `(u = Q X, Σ, v = W Y)`, and `Hᵀ u`, which gives the residuals and
-/// the next iterate. At most three tall blocks are alive at once, as memory limits the
-/// large cases.
+/// The Ritz triplets of one pass of subspace iteration, `Hᵀ u` and the residual.
 struct SubspaceStep {
     u: Mat<f64>,
     s: Vec<f64>,
@@ -409,6 +418,10 @@ struct SubspaceStep {
     residual: f64,
 }
 
+/// One pass of subspace iteration from an orthonormal `w`: `H W = Q R`, `R = X Σ Yᵀ`,
+/// the Ritz triplets `(u = Q X, Σ, v = W Y)`, and `Hᵀ u`, which gives the residuals and
+/// the next iterate. At most three tall blocks are alive at once, as memory limits the
+/// large cases.
 fn subspace_step(
     op: &dyn LinearOperator,
     w: Mat<f64>,
@@ -444,7 +457,7 @@ fn subspace_step(
                 .sum();
             gap.sqrt() / s1
         })
-        .fold(0.0, f64::max);
+        .fold(0.0, worst);
     clock.lap(&mut timings.rayleigh_ritz);
     Ok(SubspaceStep {
         u,
@@ -455,9 +468,17 @@ fn subspace_step(
     })
 }
 
-/// The restarted block Golub–Kahan–Lanczos iteration of the module doc, from the
-/// orthonormal `v0` after `done` passes.
-#[allow(clippy::too_many_arguments)]
+/// The largest residual so far, NaN counting as not converged (`f64::max` would drop it).
+fn worst(so_far: f64, residual: f64) -> f64 {
+    if residual.is_nan() {
+        f64::INFINITY
+    } else {
+        so_far.max(residual)
+    }
+}
+
+/// The restarted block Golub–Kahan–Lanczos iteration of the module doc, seeded with the
+/// opening's last pass (its Ritz triplets and `Hᵀ u`), after `done` passes.
 fn krylov(
     op: &dyn LinearOperator,
     seed: SubspaceStep,
@@ -471,6 +492,7 @@ fn krylov(
     let mut v_blocks: Vec<Mat<f64>> = vec![seed.v];
     let mut u_blocks: Vec<Mat<f64>> = vec![seed.u];
     // T = Uᵀ H V and S = Vᵀ Hᵀ U, grown a block row and column a pass.
+    let seed_residual = seed.residual;
     let mut t = Mat::from_fn(k, k, |i, j| if i == j { seed.s[i] } else { 0.0 });
     // The seed's right step: Hᵀ U_0 = V_0 S_00 + V_1 L_0.
     let (v1, coefficients, tail) = extend_basis(&v_blocks, seed.back);
@@ -478,7 +500,7 @@ fn krylov(
     let mut previous_tail = Some(tail);
     v_blocks.push(v1);
     clock.lap(&mut timings.orthogonalisation);
-    let mut residual = f64::INFINITY;
+    let mut residual = seed_residual;
     let mut lap = |slot: &mut f64| clock.lap(slot);
     for pass in done + 1..=options.max_iterations {
         let j = u_blocks.len();
@@ -547,7 +569,7 @@ fn krylov(
                 let b = outer.col(i).norm_l2();
                 (a * a + b * b).sqrt() / s1
             })
-            .fold(0.0, f64::max);
+            .fold(0.0, worst);
         if residual <= options.tolerance {
             let keep = k.min(width);
             let u = combine(&u_blocks, x.subcols(0, keep));
@@ -663,6 +685,12 @@ mod tests {
             };
             let t = truncated_svd(&a, &options).unwrap();
             assert_eq!(t.iterations, 2, "depth {depth}");
+            // Two passes are the fewest that measure a residual.
+            let one = TruncatedSvdOptions {
+                max_iterations: 1,
+                ..options
+            };
+            assert!(truncated_svd(&a, &one).is_err());
             for i in 0..r {
                 assert!(
                     (t.s[i] - 3.0 / (1 + i) as f64).abs() < 1e-13,
@@ -714,6 +742,16 @@ mod tests {
                 assert!(r.sqrt() < 1e-11, "{i}: {}", r.sqrt());
             }
         }
+        // Out of passes right after the opening: the error gives the residual it reached.
+        let short = TruncatedSvdOptions {
+            max_iterations: 2,
+            ..deep
+        };
+        let message = truncated_svd(&a, &short).unwrap_err().to_string();
+        assert!(
+            message.contains("2 passes") && !message.contains("inf"),
+            "{message}"
+        );
         // A slowly decaying spectrum is where the Krylov space pays.
         assert!(
             s4.iterations < s1.iterations,
