@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{era, expect_input_error};
+use common::{era, expect_input_error, s};
 use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -918,7 +918,15 @@ fn threads_sets_the_run_and_refuses_absurd_counts() {
 fn no_figures_writes_the_model_files_only() {
     let dir = tempfile::tempdir().unwrap();
     let frf = simulated_truth(dir.path());
-    let frf = frf.to_str().unwrap();
+    let frf = s(&frf);
+    // Runs era, expects success, returns what it printed (stdout and stderr).
+    let ok = |args: &[&str]| {
+        let out = era().args(args).output().unwrap();
+        let said = String::from_utf8_lossy(&out.stderr).into_owned()
+            + &String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{args:?}: {said}");
+        said
+    };
     let model_files = [
         "model.json",
         "fit.json",
@@ -927,24 +935,16 @@ fn no_figures_writes_the_model_files_only() {
         "model_frf.uff",
     ];
     let out = dir.path().join("bare");
-    let done = era()
-        .args([
-            "identify",
-            frf,
-            "--states",
-            "8",
-            "-q",
-            "--no-figures",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        done.status.success(),
-        "{}",
-        String::from_utf8_lossy(&done.stderr)
-    );
+    ok(&[
+        "identify",
+        frf,
+        "--states",
+        "8",
+        "-q",
+        "--no-figures",
+        "--out",
+        s(&out),
+    ]);
     let mut written: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -955,12 +955,7 @@ fn no_figures_writes_the_model_files_only() {
     assert_eq!(written, expected);
     // The same run with figures adds the report and the figures, nothing else changes.
     let full = dir.path().join("full");
-    let done = era()
-        .args(["identify", frf, "--states", "8", "-q", "--out"])
-        .arg(&full)
-        .output()
-        .unwrap();
-    assert!(done.status.success());
+    ok(&["identify", frf, "--states", "8", "-q", "--out", s(&full)]);
     assert!(full.join("report.html").is_file() && full.join("grid.png").is_file());
     let a: Value = serde_json::from_slice(&std::fs::read(out.join("model.json")).unwrap()).unwrap();
     let b: Value =
@@ -969,34 +964,27 @@ fn no_figures_writes_the_model_files_only() {
     // refine as well
     let refined = dir.path().join("refined");
     let model = out.join("model.json");
-    let done = era()
-        .args([
-            "refine",
-            model.to_str().unwrap(),
-            frf,
-            "-q",
-            "--no-figures",
-            "--out",
-        ])
-        .arg(&refined)
-        .output()
-        .unwrap();
-    assert!(
-        done.status.success(),
-        "{}",
-        String::from_utf8_lossy(&done.stderr)
-    );
+    ok(&[
+        "refine",
+        s(&model),
+        frf,
+        "-q",
+        "--no-figures",
+        "--out",
+        s(&refined),
+    ]);
     assert!(refined.join("model.json").is_file());
     assert!(!refined.join("report.html").exists());
     // Into the folder with figures: the earlier report stays, and the run says whose it is.
-    let done = era()
-        .args(["identify", frf, "--states", "8", "--no-figures", "--out"])
-        .arg(&full)
-        .output()
-        .unwrap();
-    assert!(done.status.success());
-    let said =
-        String::from_utf8_lossy(&done.stderr).into_owned() + &String::from_utf8_lossy(&done.stdout);
+    let said = ok(&[
+        "identify",
+        frf,
+        "--states",
+        "8",
+        "--no-figures",
+        "--out",
+        s(&full),
+    ]);
     assert!(said.contains("earlier run"), "{said}");
     // Without --out there is nothing to leave figures out of.
     expect_input_error(&["identify", frf, "--states", "8", "--no-figures"], "--out");
