@@ -402,6 +402,198 @@ fn dense_normal(
         )
 }
 
+/// Output `i`'s part of [`Blocks`]: the sums of [`output_entries`], arranged as products
+/// with the 2 × 2 blocks of each mode so that the inner loops run down columns. Per pair
+/// `(i, j)` with `R_r = u_r v_r`, `Bv` (`Bu`) is the block-diagonal map from `(Re u, Im u)`
+/// (`(Re v, Im v)`) to `(Re R, Im R)`, and `P` maps each pole parameter to its two
+/// derivative columns with `(Re R, Im R)`:
+/// `N_uu = Bvᵀ H Bv`, `N_uv = Bvᵀ H Bu`, `N_vv = Buᵀ H Bu`, `N_θθ = Pᵀ M P`,
+/// `N_θu = Pᵀ E Bv`, `N_θv = Pᵀ E Bu`, and the residual terms' rows of `H` and `E`.
+#[allow(clippy::too_many_arguments)]
+fn add_output_blocks(
+    grams: &Grams,
+    x: &Parameters,
+    ix: &Indices,
+    part: &Partition,
+    weights: &[f64],
+    i: usize,
+    (nzz, gz): (&mut Mat<f64>, &mut [f64]),
+    (nii, niz, gi): (&mut Mat<f64>, &mut Mat<f64>, &mut [f64]),
+) {
+    let (n, p, n_res) = (ix.n, ix.p, ix.n_res);
+    let m2 = 2 * n;
+    let Grams {
+        h,
+        e,
+        m,
+        phi_r,
+        d_r,
+    } = grams;
+    let slot = |f: Option<usize>| f.map(|f| part.slot[f]);
+    let local = |f: Option<usize>| match slot(f) {
+        Some(Slot::Local(a)) => a,
+        _ => unreachable!("an output's shapes and residual terms are its own"),
+    };
+    let shared = |f: Option<usize>| match slot(f) {
+        Some(Slot::Shared(a)) => Some(a),
+        _ => None,
+    };
+    let theta_z: Vec<usize> = (0..m2)
+        .map(|t| shared(Some(t)).expect("the poles are shared"))
+        .collect();
+    let u_local: Vec<usize> = (0..m2)
+        .map(|k| local(ix.reduced[ix.u(i, k / 2, k % 2)]))
+        .collect();
+    // The 2 × 2 map of a complex factor c: (Re w, Im w) ↦ (Re cw, Im cw), as [row][col].
+    let map = |c: Complex64| [[c.re, -c.im], [c.im, c.re]];
+    let mut yv = Mat::<f64>::zeros(m2, m2);
+    let mut yu = Mat::<f64>::zeros(m2, m2);
+    let mut q = Mat::<f64>::zeros(2 * m2, m2);
+    let mut pe = Mat::<f64>::zeros(m2, h.ncols());
+    for j in 0..p {
+        let pair = i * p + j;
+        let w = weights[pair] * weights[pair];
+        let bv: Vec<[[f64; 2]; 2]> = (0..n).map(|r| map(x.v[j * n + r])).collect();
+        let bu: Vec<[[f64; 2]; 2]> = (0..n).map(|r| map(x.u[i * n + r])).collect();
+        let z: Vec<Complex64> = (0..n).map(|r| x.u[i * n + r] * x.v[j * n + r]).collect();
+        let v_z: Vec<Option<usize>> = (0..m2)
+            .map(|k| shared(ix.reduced[ix.v(j, k / 2, k % 2)]))
+            .collect();
+        let k_local: Vec<usize> = (0..n_res)
+            .map(|res| local(ix.reduced[ix.k(pair, res)]))
+            .collect();
+        // Y = H Bv and H Bu over the modes' columns.
+        for r in 0..n {
+            let (h0, h1) = (
+                &h.col_as_slice(2 * r)[..m2],
+                &h.col_as_slice(2 * r + 1)[..m2],
+            );
+            for c in 0..2 {
+                for (y, b) in [(&mut yv, &bv), (&mut yu, &bu)] {
+                    let (a0, a1) = (b[r][0][c], b[r][1][c]);
+                    for (out, (x0, x1)) in y
+                        .col_as_slice_mut(2 * r + c)
+                        .iter_mut()
+                        .zip(h0.iter().zip(h1))
+                    {
+                        *out = x0 * a0 + x1 * a1;
+                    }
+                }
+            }
+        }
+        left(&bv, &yv, |row, col, val| {
+            nii[(u_local[row], u_local[col])] += w * val
+        });
+        left(&bv, &yu, |row, col, val| {
+            if let Some(c) = v_z[col] {
+                niz[(u_local[row], c)] += w * val;
+            }
+        });
+        left(&bu, &yu, |row, col, val| {
+            if let (Some(a), Some(c)) = (v_z[row], v_z[col]) {
+                nzz[(a, c)] += w * val;
+            }
+        });
+        // The residual terms: their columns of H against the shapes, and each other.
+        for (res, &kl) in k_local.iter().enumerate() {
+            let hk = &h.col_as_slice(m2 + res)[..m2];
+            for r in 0..n {
+                for a in 0..2 {
+                    let (row, (gv, gu)) = (
+                        2 * r + a,
+                        (
+                            bv[r][0][a] * hk[2 * r] + bv[r][1][a] * hk[2 * r + 1],
+                            bu[r][0][a] * hk[2 * r] + bu[r][1][a] * hk[2 * r + 1],
+                        ),
+                    );
+                    nii[(u_local[row], kl)] += w * gv;
+                    nii[(kl, u_local[row])] += w * gv;
+                    if let Some(c) = v_z[row] {
+                        niz[(kl, c)] += w * gu;
+                    }
+                }
+            }
+            for (res2, &kl2) in k_local.iter().enumerate() {
+                nii[(kl, kl2)] += w * h[(m2 + res, m2 + res2)];
+            }
+            gi[kl] += w * phi_r[(m2 + res, pair)];
+        }
+        // The poles: Q = M P, then Pᵀ Q; Pᵀ E, then (Pᵀ E) Bv and (Pᵀ E) Bu.
+        for k in 0..m2 {
+            let zk = z[k / 2];
+            let (m0, m1) = (m.col_as_slice(2 * k), m.col_as_slice(2 * k + 1));
+            for (out, (x0, x1)) in q.col_as_slice_mut(k).iter_mut().zip(m0.iter().zip(m1)) {
+                *out = x0 * zk.re + x1 * zk.im;
+            }
+        }
+        for col in 0..pe.ncols() {
+            let ec = e.col_as_slice(col);
+            let out = pe.col_as_slice_mut(col);
+            for k in 0..m2 {
+                let zk = z[k / 2];
+                out[k] = zk.re * ec[2 * k] + zk.im * ec[2 * k + 1];
+            }
+        }
+        for kc in 0..m2 {
+            let qc = q.col_as_slice(kc);
+            for k in 0..m2 {
+                let zk = z[k / 2];
+                nzz[(theta_z[k], theta_z[kc])] += w * (zk.re * qc[2 * k] + zk.im * qc[2 * k + 1]);
+            }
+        }
+        for r in 0..n {
+            let (p0, p1) = (pe.col_as_slice(2 * r), pe.col_as_slice(2 * r + 1));
+            for c in 0..2 {
+                let col = 2 * r + c;
+                let ul = u_local[col];
+                for k in 0..m2 {
+                    let tz = theta_z[k];
+                    niz[(ul, tz)] += w * (p0[k] * bv[r][0][c] + p1[k] * bv[r][1][c]);
+                    if let Some(vz) = v_z[col] {
+                        let val = w * (p0[k] * bu[r][0][c] + p1[k] * bu[r][1][c]);
+                        nzz[(tz, vz)] += val;
+                        nzz[(vz, tz)] += val;
+                    }
+                }
+            }
+        }
+        for (res, &kl) in k_local.iter().enumerate() {
+            let pc = pe.col_as_slice(m2 + res);
+            for k in 0..m2 {
+                niz[(kl, theta_z[k])] += w * pc[k];
+            }
+        }
+        // The gradient.
+        for r in 0..n {
+            for a in 0..2 {
+                let row = 2 * r + a;
+                let (f0, f1) = (phi_r[(2 * r, pair)], phi_r[(2 * r + 1, pair)]);
+                gi[u_local[row]] += w * (bv[r][0][a] * f0 + bv[r][1][a] * f1);
+                if let Some(c) = v_z[row] {
+                    gz[c] += w * (bu[r][0][a] * f0 + bu[r][1][a] * f1);
+                }
+            }
+        }
+        for k in 0..m2 {
+            let zk = z[k / 2];
+            gz[theta_z[k]] += w * (zk.re * d_r[(2 * k, pair)] + zk.im * d_r[(2 * k + 1, pair)]);
+        }
+    }
+}
+
+/// `Bᵀ Y` for `B` block-diagonal with the 2 × 2 blocks `b`: entry `(2r + a, col)` goes
+/// to `put(2r + a, col, value)`.
+fn left(b: &[[[f64; 2]; 2]], y: &Mat<f64>, mut put: impl FnMut(usize, usize, f64)) {
+    for col in 0..y.ncols() {
+        let yc = y.col_as_slice(col);
+        for (r, br) in b.iter().enumerate() {
+            for (a, (b0, b1)) in br[0].iter().zip(&br[1]).enumerate() {
+                put(2 * r + a, col, b0 * yc[2 * r] + b1 * yc[2 * r + 1]);
+            }
+        }
+    }
+}
+
 /// Where a free parameter sits in [`Blocks`].
 #[derive(Clone, Copy)]
 enum Slot {
@@ -506,35 +698,15 @@ impl Blocks {
             let mut nii = Mat::<f64>::zeros(m, m);
             let mut niz = Mat::<f64>::zeros(m, nz);
             let mut gi = vec![0.0; m];
-            output_entries(
+            add_output_blocks(
                 &grams,
                 x,
                 ix,
+                part,
                 weights,
                 i,
-                &mut |f, g, v, mirrored| match (part.slot[f], part.slot[g]) {
-                    (Slot::Shared(a), Slot::Shared(b)) => {
-                        nzz[(a, b)] += v;
-                        if mirrored {
-                            nzz[(b, a)] += v;
-                        }
-                    }
-                    (Slot::Local(a), Slot::Local(b)) => {
-                        nii[(a, b)] += v;
-                        if mirrored {
-                            nii[(b, a)] += v;
-                        }
-                    }
-                    // A mixed couple is never on the diagonal: it is always mirrored,
-                    // and `N_zi = N_izᵀ` is not kept.
-                    (Slot::Local(a), Slot::Shared(b)) | (Slot::Shared(b), Slot::Local(a)) => {
-                        niz[(a, b)] += v;
-                    }
-                },
-                &mut |f, v| match part.slot[f] {
-                    Slot::Shared(a) => gz[a] += v,
-                    Slot::Local(a) => gi[a] += v,
-                },
+                (&mut nzz, &mut gz),
+                (&mut nii, &mut niz, &mut gi),
             );
             own.push((i, (nii, niz, gi)));
             (nzz, gz, own)
