@@ -22,6 +22,9 @@ pub(crate) struct Evaluation {
     pub jtr: Vec<f64>,
     /// Linear coefficients, `columns × pairs`.
     pub coefficients: Mat<f64>,
+    /// What a cost-only evaluation of the fast path keeps for the Jacobian at the same
+    /// point ([`Need::JacobianAfter`]).
+    pub kept: Option<super::varpro::Kept>,
 }
 
 /// An evaluation, or the column of the basis that is a combination of the others.
@@ -30,9 +33,21 @@ pub(crate) enum Outcome {
     Deficient { column: usize, mode: Option<usize> },
 }
 
-/// `evaluate(problem, θ, jacobian)`: with `jacobian` false only the cost and the
-/// coefficients (`jtj` and `jtr` empty), for trial steps that may be rejected.
-pub(crate) type Evaluator = fn(&Problem, &[f64], bool) -> Result<Outcome>;
+/// What an evaluation must give.
+#[derive(Clone, Copy)]
+pub(crate) enum Need<'a> {
+    /// The cost and the coefficients only (`jtj` and `jtr` empty): a trial step that
+    /// may be rejected.
+    Cost,
+    /// Everything.
+    Jacobian,
+    /// Everything, at the point of this cost-only evaluation: the fast path starts from
+    /// the factorisations it kept, so an accepted trial costs no second QR.
+    JacobianAfter(&'a Evaluation),
+}
+
+/// `evaluate(problem, θ, need)`.
+pub(crate) type Evaluator = fn(&Problem, &[f64], Need<'_>) -> Result<Outcome>;
 
 /// A mode whose share of the band's FRF norm falls below this has collapsed.
 pub const MIN_CONTRIBUTION: f64 = 1e-10;
@@ -170,7 +185,7 @@ pub(crate) fn run(
         }
         normalise(&mut trial);
         let outcome = if trial.iter().all(|t| t.is_finite()) {
-            Some(evaluate(&problem, &trial, false)?)
+            Some(evaluate(&problem, &trial, Need::Cost)?)
         } else {
             None
         };
@@ -180,7 +195,7 @@ pub(crate) fn run(
                 let relative = decrease / current.cost;
                 state.theta = trial;
                 // The trial was evaluated without its Jacobian; the accepted point needs it.
-                current = match evaluate(&problem, &state.theta, true)? {
+                current = match evaluate(&problem, &state.theta, Need::JacobianAfter(&next))? {
                     Outcome::Ready(e) => e,
                     Outcome::Deficient { .. } => {
                         return Err(EraError::Numerical(
@@ -351,7 +366,7 @@ fn settle(
                 ),
             ));
         }
-        match evaluate(problem, &state.theta, true)? {
+        match evaluate(problem, &state.theta, Need::Jacobian)? {
             Outcome::Ready(e) => return settle_ready(problem, state, e, evaluate, dropped),
             Outcome::Deficient { mode: Some(m), .. } => {
                 let s = problem.parameters.pole(&state.theta, m);

@@ -3,7 +3,7 @@
 //! the Jacobian by central differences of `r` (so the full Golub–Pereyra Jacobian, not
 //! Kaufman's). Slow, simple, and a check of every index in [`super::varpro`].
 
-use super::fit::{Evaluation, Outcome};
+use super::fit::{Evaluation, Need, Outcome};
 use super::model::{basis, Problem};
 use super::varpro::DEFICIENT_COLUMN;
 use crate::error::Result;
@@ -52,7 +52,8 @@ fn residual(problem: &Problem, theta: &[f64]) -> Result<Projected> {
 }
 
 /// Cost, finite-difference normal matrix, gradient and coefficients at `theta`.
-pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Result<Outcome> {
+pub(crate) fn evaluate(problem: &Problem, theta: &[f64], need: Need<'_>) -> Result<Outcome> {
+    let jacobian = !matches!(need, Need::Cost);
     let (r0, coefficients) = match residual(problem, theta)? {
         Ok(x) => x,
         Err(outcome) => return Ok(outcome),
@@ -89,5 +90,6 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Resu
         jtj,
         jtr: (0..n_par).map(|k| jtr_m[(k, 0)]).collect(),
         coefficients,
+        kept: None,
     }))
 }

@@ -15,7 +15,7 @@
 //! so an iteration of the 8 × 8, 40-mode, 801-line set costs a QR of a 1602 × 82 matrix
 //! and a few products of that size, not the 102 528 × 80 Jacobian.
 
-use super::fit::{Evaluation, Outcome};
+use super::fit::{Evaluation, Need, Outcome};
 use super::model::{basis, basis_derivatives, Problem};
 use crate::error::Result;
 use faer::linalg::matmul::matmul;
@@ -78,118 +78,216 @@ fn at_b(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     out
 }
 
-/// Cost, Kaufman normal matrix, gradient and coefficients at `theta`; with `jacobian`
-/// false only the cost and the coefficients.
+/// What a cost-only evaluation keeps so that the Jacobian at the same point needs no
+/// second basis and QR: the point, and per block `Q`, `Θ` and the residual `P⊥Y`.
+pub(crate) struct Kept {
+    theta: Vec<f64>,
+    blocks: Vec<Factored>,
+}
+
+/// One block's thin `Q`, coefficients `Θ = R⁻¹QᵀY` and residual `P⊥Y`.
+struct Factored {
+    q: Mat<f64>,
+    theta: Mat<f64>,
+    residual: Mat<f64>,
+}
+
+/// Most bytes of factors a cost-only evaluation keeps (8 × 8, 801 lines, 40 modes and one
+/// shared basis: about 2 MB; with a basis per pair, 64 of those). Beyond, the accepted
+/// point is factored again.
+const KEEP_BYTES: usize = 256 << 20;
+
+/// A column of the basis that is a combination of the others ([`Outcome::Deficient`]).
+struct Deficient {
+    column: usize,
+    mode: Option<usize>,
+}
+
+/// `block`'s part of the basis `phi` factored: its cost, its factors, and its units'
+/// coefficients written into `coefficients`; or the first deficient column.
+fn factor_block(
+    problem: &Problem,
+    block: &super::model::Block,
+    phi: &Mat<f64>,
+    modes: usize,
+    coefficients: &mut Mat<f64>,
+) -> std::result::Result<(f64, Factored), Deficient> {
+    let pm = problem.layout.per_mode;
+    let n_col = phi.ncols();
+    let phi_b = block.stack(phi);
+    let norms: Vec<f64> = (0..n_col).map(|c| phi_b.col(c).norm_l2()).collect();
+    let (q, r) = thin_qr(phi_b);
+    for (c, &norm) in norms.iter().enumerate() {
+        let diagonal = r[(c, c)].abs();
+        if diagonal.is_nan() || diagonal <= DEFICIENT_COLUMN * norm {
+            return Err(Deficient {
+                column: c,
+                mode: (c < modes * pm).then_some(c / pm),
+            });
+        }
+    }
+    let qty = at_b(q.as_ref(), block.rhs.as_ref());
+    let mut theta_b = qty.clone();
+    r.solve_upper_triangular_in_place(&mut theta_b);
+    let mut residual = block.rhs.clone();
+    matmul(
+        residual.as_mut(),
+        Accum::Add,
+        q.as_ref(),
+        qty.as_ref(),
+        -1.0,
+        Par::Seq,
+    );
+    let cost = residual.squared_norm_l2() + block.cost_offset;
+    for (u, unit) in block.units.iter().enumerate() {
+        let scale = block.unit_scale(u);
+        for &pair in unit {
+            for c in 0..n_col {
+                coefficients[(c, pair)] = theta_b[(c, u)] / scale;
+            }
+        }
+    }
+    Ok((
+        cost,
+        Factored {
+            q,
+            theta: theta_b,
+            residual,
+        },
+    ))
+}
+
+/// Block `f`'s part of the Kaufman normal matrix and gradient, added to `jtj` and `jtr`;
+/// `deriv` the basis derivatives at the same point.
+fn add_jacobian(
+    problem: &Problem,
+    block: &super::model::Block,
+    f: &Factored,
+    deriv: &Mat<f64>,
+    jtj: &mut Mat<f64>,
+    jtr: &mut [f64],
+) {
+    let pm = problem.layout.per_mode;
+    let n_par = jtr.len();
+    let n_col = f.theta.nrows();
+    let mut e = block.stack(deriv);
+    let x = at_b(f.q.as_ref(), e.as_ref());
+    // E = P⊥D, formed: DᵀD − XᵀX would cancel as the fit converges.
+    matmul(
+        e.as_mut(),
+        Accum::Add,
+        f.q.as_ref(),
+        x.as_ref(),
+        -1.0,
+        Par::Seq,
+    );
+    let (g, dtr) = rayon::join(
+        || at_b(e.as_ref(), e.as_ref()),
+        || at_b(e.as_ref(), f.residual.as_ref()),
+    );
+    let theta_b = &f.theta;
+    let mut z = Mat::<f64>::zeros(dtr.nrows(), theta_b.nrows());
+    matmul(
+        z.as_mut(),
+        Accum::Replace,
+        dtr.as_ref(),
+        theta_b.transpose(),
+        1.0,
+        Par::Seq,
+    );
+    let mut t = Mat::<f64>::zeros(n_col, n_col);
+    matmul(
+        t.as_mut(),
+        Accum::Replace,
+        theta_b.as_ref(),
+        theta_b.transpose(),
+        1.0,
+        Par::Seq,
+    );
+    for k in 0..n_par {
+        let mode_k = k / 2;
+        for c in 0..pm {
+            let dk = k * pm + c;
+            let col_k = mode_k * pm + c;
+            jtr[k] -= z[(dk, col_k)];
+            for l in 0..n_par {
+                let mode_l = l / 2;
+                for c2 in 0..pm {
+                    let dl = l * pm + c2;
+                    jtj[(k, l)] += g[(dk, dl)] * t[(col_k, mode_l * pm + c2)];
+                }
+            }
+        }
+    }
+}
+
+/// Cost, Kaufman normal matrix, gradient and coefficients at `theta`; with
+/// [`Need::Cost`] only the cost and the coefficients, and the factors are kept (up to
+/// [`KEEP_BYTES`]) for an accepted trial's [`Need::JacobianAfter`].
 ///
 /// The products run on the calling thread, side by side under `rayon::join`: at this
 /// size (1602 × 82 for the 8 × 8 set) splitting each product across threads costs more
 /// in synchronisation than it saves. `E = D − Q(QᵀD)` is formed: `DᵀD − (QᵀD)ᵀ(QᵀD)`
 /// would cancel as the fit converges.
-pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Result<Outcome> {
+pub(crate) fn evaluate(problem: &Problem, theta: &[f64], need: Need<'_>) -> Result<Outcome> {
     let poles = problem.parameters.poles(theta);
     let layout = &problem.layout;
-    let pm = layout.per_mode;
     let n_par = theta.len();
     let n_col = layout.columns(poles.len());
+    let pairs = problem.outputs * problem.inputs;
+    let kept = match need {
+        Need::JacobianAfter(e) => e
+            .kept
+            .as_ref()
+            .filter(|k| k.theta == theta)
+            .map(|k| (e, &k.blocks)),
+        _ => None,
+    };
+    if let Some((e, blocks)) = kept {
+        let deriv = basis_derivatives(layout, problem.parameters, &problem.omega, &poles);
+        let mut jtj = Mat::<f64>::zeros(n_par, n_par);
+        let mut jtr = vec![0.0; n_par];
+        for (block, f) in problem.blocks.iter().zip(blocks) {
+            add_jacobian(problem, block, f, &deriv, &mut jtj, &mut jtr);
+        }
+        return Ok(Outcome::Ready(Evaluation {
+            cost: e.cost,
+            jtj,
+            jtr,
+            coefficients: e.coefficients.clone(),
+            kept: None,
+        }));
+    }
+    let jacobian = !matches!(need, Need::Cost);
+    let keep = !jacobian
+        && problem
+            .blocks
+            .iter()
+            .map(|b| 8 * (b.rhs.nrows() * (n_col + 2 * b.rhs.ncols()) + n_col * b.rhs.ncols()))
+            .sum::<usize>()
+            <= KEEP_BYTES;
     let (phi, deriv) = rayon::join(
         || basis(layout, &problem.omega, &poles),
         || jacobian.then(|| basis_derivatives(layout, problem.parameters, &problem.omega, &poles)),
     );
-    let n_jac = if jacobian { n_par } else { 0 };
-    let mut jtj = Mat::<f64>::zeros(n_jac, n_jac);
-    let mut jtr = vec![0.0; n_jac];
+    let mut jtj = Mat::<f64>::zeros(
+        if jacobian { n_par } else { 0 },
+        if jacobian { n_par } else { 0 },
+    );
+    let mut jtr = vec![0.0; if jacobian { n_par } else { 0 }];
     let mut cost = 0.0;
-    let pairs = problem.outputs * problem.inputs;
     let mut coefficients = Mat::<f64>::zeros(n_col, pairs);
+    let mut factors = Vec::new();
     for block in &problem.blocks {
-        let phi_b = block.stack(&phi);
-        let mut norms = vec![0.0; n_col];
-        for (c, norm) in norms.iter_mut().enumerate() {
-            *norm = phi_b.col(c).norm_l2();
-        }
-        let d_b = deriv.as_ref().map(|d| block.stack(d));
-        let (q, r) = thin_qr(phi_b);
-        for (c, &norm) in norms.iter().enumerate() {
-            let diagonal = r[(c, c)].abs();
-            if diagonal.is_nan() || diagonal <= DEFICIENT_COLUMN * norm {
-                return Ok(Outcome::Deficient {
-                    column: c,
-                    mode: (c < poles.len() * pm).then_some(c / pm),
-                });
-            }
-        }
-        let (qty, x) = rayon::join(
-            || at_b(q.as_ref(), block.rhs.as_ref()),
-            || d_b.as_ref().map(|d| at_b(q.as_ref(), d.as_ref())),
-        );
-        let mut theta_b = qty.clone();
-        r.solve_upper_triangular_in_place(&mut theta_b);
-        let mut res = block.rhs.clone();
-        matmul(
-            res.as_mut(),
-            Accum::Add,
-            q.as_ref(),
-            qty.as_ref(),
-            -1.0,
-            Par::Seq,
-        );
-        cost += res.squared_norm_l2() + block.cost_offset;
-        for (u, unit) in block.units.iter().enumerate() {
-            let scale = block.unit_scale(u);
-            for &pair in unit {
-                for c in 0..n_col {
-                    coefficients[(c, pair)] = theta_b[(c, u)] / scale;
-                }
-            }
-        }
-        let (Some(mut e), Some(x)) = (d_b, x) else {
-            continue;
+        let (cost_b, f) = match factor_block(problem, block, &phi, poles.len(), &mut coefficients) {
+            Ok(x) => x,
+            Err(Deficient { column, mode }) => return Ok(Outcome::Deficient { column, mode }),
         };
-        // E = P⊥D, formed: DᵀD − XᵀX would cancel as the fit converges.
-        matmul(
-            e.as_mut(),
-            Accum::Add,
-            q.as_ref(),
-            x.as_ref(),
-            -1.0,
-            Par::Seq,
-        );
-        let (g, dtr) = rayon::join(
-            || at_b(e.as_ref(), e.as_ref()),
-            || at_b(e.as_ref(), res.as_ref()),
-        );
-        let mut z = Mat::<f64>::zeros(dtr.nrows(), theta_b.nrows());
-        matmul(
-            z.as_mut(),
-            Accum::Replace,
-            dtr.as_ref(),
-            theta_b.transpose(),
-            1.0,
-            Par::Seq,
-        );
-        let mut t = Mat::<f64>::zeros(n_col, n_col);
-        matmul(
-            t.as_mut(),
-            Accum::Replace,
-            theta_b.as_ref(),
-            theta_b.transpose(),
-            1.0,
-            Par::Seq,
-        );
-        for k in 0..n_par {
-            let mode_k = k / 2;
-            for c in 0..pm {
-                let dk = k * pm + c;
-                let col_k = mode_k * pm + c;
-                jtr[k] -= z[(dk, col_k)];
-                for l in 0..n_par {
-                    let mode_l = l / 2;
-                    for c2 in 0..pm {
-                        let dl = l * pm + c2;
-                        jtj[(k, l)] += g[(dk, dl)] * t[(col_k, mode_l * pm + c2)];
-                    }
-                }
-            }
+        cost += cost_b;
+        if let Some(deriv) = &deriv {
+            add_jacobian(problem, block, &f, deriv, &mut jtj, &mut jtr);
+        } else if keep {
+            factors.push(f);
         }
     }
     Ok(Outcome::Ready(Evaluation {
@@ -197,5 +295,69 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64], jacobian: bool) -> Resu
         jtj,
         jtr,
         coefficients,
+        kept: keep.then(|| Kept {
+            theta: theta.to_vec(),
+            blocks: factors,
+        }),
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::refine::{RefineOptions, Residuals};
+    use crate::sim::{add_noise, ModalSpec, ModalStructure};
+    use crate::Quantity;
+    use num_complex::Complex64;
+
+    fn ready(outcome: Outcome) -> Evaluation {
+        match outcome {
+            Outcome::Ready(e) => e,
+            Outcome::Deficient { column, .. } => panic!("deficient column {column}"),
+        }
+    }
+
+    #[test]
+    fn an_accepted_trial_gives_the_jacobian_from_its_kept_factors() {
+        let spec = ModalSpec {
+            fmin_hz: 2.0,
+            fmax_hz: 9.0,
+            ..ModalSpec::new(2, 3, 4)
+        };
+        let s = ModalStructure::random(&spec).unwrap();
+        let frf = add_noise(&s.frf(301, 0.025, Quantity::Velocity).unwrap(), 0.05, 5).unwrap();
+        let options = RefineOptions {
+            residuals: Residuals::Both,
+            ..RefineOptions::default()
+        };
+        let problem = Problem::new(&frf, &options).unwrap();
+        let poles: Vec<Complex64> = s
+            .frequencies_hz
+            .iter()
+            .zip(&s.damping_ratios)
+            .map(|(f, z)| {
+                let w = 2.0 * std::f64::consts::PI * f * 1.001;
+                Complex64::new(-z * w, w)
+            })
+            .collect();
+        let theta = problem.parameters.theta(&poles);
+        let trial = ready(evaluate(&problem, &theta, Need::Cost).unwrap());
+        assert!(trial.kept.is_some());
+        assert_eq!(trial.jtj.nrows(), 0);
+        let after = ready(evaluate(&problem, &theta, Need::JacobianAfter(&trial)).unwrap());
+        let fresh = ready(evaluate(&problem, &theta, Need::Jacobian).unwrap());
+        // The same operations on the same factors: equal to the last bit.
+        assert_eq!(after.cost, fresh.cost);
+        assert_eq!(after.jtr, fresh.jtr);
+        assert_eq!(after.jtj, fresh.jtj);
+        assert_eq!(after.coefficients, fresh.coefficients);
+        assert!(fresh.jtj.nrows() == theta.len() && fresh.jtr.iter().any(|g| *g != 0.0));
+        // Factors kept at another point are not used.
+        let mut moved = theta.clone();
+        moved[1] *= 1.0 + 1e-3;
+        let elsewhere = ready(evaluate(&problem, &moved, Need::JacobianAfter(&trial)).unwrap());
+        let at_moved = ready(evaluate(&problem, &moved, Need::Jacobian).unwrap());
+        assert_eq!(elsewhere.jtj, at_moved.jtj);
+        assert_ne!(elsewhere.jtj, fresh.jtj);
+    }
 }
