@@ -166,6 +166,13 @@ pub(crate) fn run(
     let mut lambda = 1e-3;
     let mut iterations = 0;
     let mut converged = false;
+    // Where the rank-one stage follows, the free fit is only its start: that stage moves
+    // every pole again, to its own tolerance.
+    let free_tolerance = if problem.rank_one_follows() {
+        options.tolerance.max(super::START_TOLERANCE)
+    } else {
+        options.tolerance
+    };
     while iterations < options.max_iterations {
         if current.cost <= EXACT_FIT * weighted_norm2 {
             converged = true;
@@ -219,7 +226,7 @@ pub(crate) fn run(
                 let noise_unit = problem
                     .degrees_of_freedom(state.theta.len())
                     .map_or(0.0, |dof| current.cost / dof as f64);
-                if relative <= options.tolerance || decrease <= STATISTICAL_STOP * noise_unit {
+                if relative <= free_tolerance || decrease <= STATISTICAL_STOP * noise_unit {
                     converged = true;
                     break;
                 }

@@ -396,8 +396,9 @@ pub fn refine(
     run(frf, start_poles, options, progress, varpro::evaluate)
 }
 
-/// The relative decrease that ends the uniform first pass of [`Weighting::PairNoise`].
-const FIRST_PASS_TOLERANCE: f64 = 1e-4;
+/// The relative decrease that ends a fit that is only the start of another: the uniform
+/// first pass of [`Weighting::PairNoise`], and the free fit before the rank-one stage.
+const START_TOLERANCE: f64 = 1e-4;
 
 /// Rounds of the scan for missed modes and a refit, at most.
 pub const MISSED_ROUNDS: usize = 6;
@@ -474,7 +475,7 @@ fn run_once(
     // rank-one stage runs once, after the weighted pass).
     let uniform = RefineOptions {
         weighting: Weighting::Uniform,
-        tolerance: options.tolerance.max(FIRST_PASS_TOLERANCE),
+        tolerance: options.tolerance.max(START_TOLERANCE),
         rank_one: false,
         ..options.clone()
     };
