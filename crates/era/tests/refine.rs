@@ -327,3 +327,39 @@ fn noise_alone_adds_no_mode_and_every_true_mode_is_significant() {
         );
     }
 }
+
+/// Where the rank-one stage steps aside (too many joint parameters: 40 outputs, 1 input
+/// and 50 modes give 4140), the free fit is the result and runs to the caller's
+/// tolerance, exactly as with `rank_one = false`; it does not stop at the looser
+/// tolerance of a fit that only starts the joint stage.
+#[test]
+fn a_free_fit_the_rank_one_stage_steps_aside_from_runs_to_the_tolerance() {
+    let spec = ModalSpec {
+        fmin_hz: 1.0,
+        fmax_hz: 9.0,
+        collocated: false,
+        ..ModalSpec::new(40, 1, 50)
+    };
+    let s = ModalStructure::random(&spec).unwrap();
+    let frf = add_noise(&s.frf(401, 0.025, Quantity::Acceleration).unwrap(), 0.05, 7).unwrap();
+    let start: Vec<Complex64> = s
+        .frequencies_hz
+        .iter()
+        .zip(&s.damping_ratios)
+        .enumerate()
+        .map(|(r, (f, z))| {
+            let sign = if r % 2 == 0 { 1.0 } else { -1.0 };
+            pole(f * (1.0 + 0.002 * sign), z * (1.0 - 0.2 * sign))
+        })
+        .collect();
+    let mut options = RefineOptions::default();
+    options.weighting = era::refine::Weighting::Uniform;
+    options.tolerance = 1e-8;
+    options.add_missed = false;
+    let stepped_aside = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    assert!(!stepped_aside.rank_one);
+    options.rank_one = false;
+    let free = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    assert_eq!(stepped_aside.iterations, free.iterations);
+    assert_eq!(stepped_aside.cost_after, free.cost_after);
+}

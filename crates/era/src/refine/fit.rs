@@ -168,7 +168,7 @@ pub(crate) fn run(
     let mut converged = false;
     // Where the rank-one stage follows, the free fit is only its start: that stage moves
     // every pole again, to its own tolerance.
-    let free_tolerance = if problem.rank_one_follows() {
+    let free_tolerance = if super::rank_one::will_run(&problem, state.ids.len()) {
         options.tolerance.max(super::START_TOLERANCE)
     } else {
         options.tolerance
@@ -211,6 +211,8 @@ pub(crate) fn run(
                         ))
                     }
                 };
+                // The trial's kept factors are spent.
+                drop(next);
                 iterations += 1;
                 lambda = (lambda / 5.0).max(1e-15);
                 let before_checks = state.ids.len();

@@ -96,6 +96,8 @@
 //! The weighted pass of [`Weighting::PairNoise`] fits with one weight per pair, so every
 //! pair still shares one basis and one QR (see `model::Block::scales`); its uniform first
 //! pass stops at a relative decrease of 1e-4, since it only has to estimate the noise.
+//! So does the free fit when the rank-one stage follows and will run: it is only that
+//! stage's start, and the joint fit moves every pole again to the caller's tolerance.
 //!
 //! ## Rank-one residues
 //!
@@ -110,7 +112,7 @@
 //! (`rank_one` module). On the DTA-like 8 × 8 set with 5 % noise
 //! (`cargo run --release -p era --example refine_targets`, seeds 11–18) it has about half
 //! the free fit's median damping error. The model then has two states per mode. Its
-//! cost: the joint normal matrix is over every parameter (1424 for 8 × 8 and 40 modes;
+//! cost: the joint normal matrix is over every parameter (1344 for 8 × 8 and 40 modes;
 //! 640 once each output's shapes are eliminated), so it takes two to four times the
 //! free fit's time. It needs weights constant over the band per pair, complex modes and
 //! at most `rank_one::MAX_PARAMETERS` (4000) parameters; otherwise the residues stay
@@ -258,7 +260,9 @@ pub struct RefineOptions {
     pub max_iterations: usize,
     /// Converged when an accepted step lowers the cost by less than this fraction
     /// (default 1e-6: with noise, smaller decreases only move the parameters that the
-    /// data does not determine).
+    /// data does not determine). A free fit that only starts another (the uniform pass
+    /// of [`Weighting::PairNoise`], the free fit before the rank-one stage) stops at
+    /// 1e-4 or this, whichever is larger.
     pub tolerance: f64,
     /// Lines fitted, `first..end` (0-based, end exclusive); default every line above 0 Hz.
     pub band: Option<(usize, usize)>,

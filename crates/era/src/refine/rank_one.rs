@@ -30,7 +30,8 @@
 //! `N_zz` over the poles and participations `z`, and per output `N_ii` and `N_iz`. The
 //! outputs are eliminated by one Schur complement, `S = N_zz − N_Izᵀ N_II⁻¹ N_Iz`
 //! ([`Reduced`]), and each trial step is one Cholesky factorisation of `S`. On 8 × 8 with
-//! 40 modes that is 680 unknowns where `N` has 1424, and no 1424² matrix is formed. A
+//! 40 modes and one residual term that is 640 unknowns where `N` has 1344, and no 1344²
+//! matrix is formed. A
 //! reciprocal fit (`v = u`) has no parameter of one output only; its `N` stays dense.
 //!
 //! The scale of `u_r` against `v_r` is free (`u c, v/c` give the same residue): one entry
@@ -55,6 +56,26 @@ use num_complex::Complex64;
 /// fit's normal matrix is dense (4000² values are 128 MB, one per thread while it is
 /// assembled); the others hold `N_zz`, about half the parameters squared, per thread.
 pub(crate) const MAX_PARAMETERS: usize = 4000;
+
+/// The joint fit's free parameters with `modes` modes: the poles, the shapes, the
+/// participations less one held entry per mode (or none, shared with the shapes, when
+/// reciprocal) and the residual terms (one per unordered pair when reciprocal).
+fn parameters(problem: &Problem, modes: usize) -> usize {
+    let (q, p) = (problem.outputs, problem.inputs);
+    let n_res = problem.layout.residuals.len();
+    let shared = if problem.reciprocal {
+        (0..q).map(|i| p.saturating_sub(i)).sum::<usize>() * n_res
+    } else {
+        2 * modes * (p - 1) + q * p * n_res
+    };
+    2 * modes + 2 * modes * q + shared
+}
+
+/// Whether the rank-one stage will run after a free fit with `modes` modes (it steps
+/// aside beyond [`MAX_PARAMETERS`]; dropped modes only make it smaller).
+pub(crate) fn will_run(problem: &Problem, modes: usize) -> bool {
+    problem.rank_one_follows() && parameters(problem, modes) <= MAX_PARAMETERS
+}
 
 /// The result of the joint fit.
 pub(crate) struct Joint {
@@ -448,7 +469,7 @@ fn add_output_blocks(
     let map = |c: Complex64| [[c.re, -c.im], [c.im, c.re]];
     let mut yv = Mat::<f64>::zeros(m2, m2);
     let mut yu = Mat::<f64>::zeros(m2, m2);
-    let mut q = Mat::<f64>::zeros(2 * m2, m2);
+    let mut mp = Mat::<f64>::zeros(2 * m2, m2);
     let mut pe = Mat::<f64>::zeros(m2, h.ncols());
     for j in 0..p {
         let pair = i * p + j;
@@ -518,11 +539,11 @@ fn add_output_blocks(
             }
             gi[kl] += w * phi_r[(m2 + res, pair)];
         }
-        // The poles: Q = M P, then Pᵀ Q; Pᵀ E, then (Pᵀ E) Bv and (Pᵀ E) Bu.
+        // The poles: `mp = M P`, then `Pᵀ mp`; `pe = Pᵀ E`, then `pe Bv` and `pe Bu`.
         for k in 0..m2 {
             let zk = z[k / 2];
             let (m0, m1) = (m.col_as_slice(2 * k), m.col_as_slice(2 * k + 1));
-            for (out, (x0, x1)) in q.col_as_slice_mut(k).iter_mut().zip(m0.iter().zip(m1)) {
+            for (out, (x0, x1)) in mp.col_as_slice_mut(k).iter_mut().zip(m0.iter().zip(m1)) {
                 *out = x0 * zk.re + x1 * zk.im;
             }
         }
@@ -535,7 +556,7 @@ fn add_output_blocks(
             }
         }
         for kc in 0..m2 {
-            let qc = q.col_as_slice(kc);
+            let qc = mp.col_as_slice(kc);
             for k in 0..m2 {
                 let zk = z[k / 2];
                 nzz[(theta_z[k], theta_z[kc])] += w * (zk.re * qc[2 * k] + zk.im * qc[2 * k + 1]);
@@ -666,7 +687,8 @@ impl Partition {
 
 /// The normal equations of a non-reciprocal fit by blocks: `N_zz` over the shared
 /// parameters, and per output `N_ii` and `N_iz`. Nothing else of `N` is nonzero, so
-/// the dense `free²` matrix (1424² on 8 × 8 with 40 modes) is never formed.
+/// the dense `free²` matrix (1344² on 8 × 8 with 40 modes and one residual term) is
+/// never formed.
 struct Blocks {
     nzz: Mat<f64>,
     gz: Vec<f64>,
@@ -801,7 +823,6 @@ enum Normal {
 }
 
 impl Normal {
-    #[allow(clippy::too_many_arguments)]
     fn new(
         problem: &Problem,
         x: &Parameters,
@@ -849,7 +870,7 @@ impl Normal {
 /// and residual terms of output `i` couple only with `z`, so `N_ii` is one small block
 /// per output; `S` is formed once per accepted point (one GEMM over the stacked
 /// `N_Iz`), and each trial `λ` costs one Cholesky factorisation of `S` (640 unknowns for
-/// 8 × 8 and 40 modes, against 1424).
+/// 8 × 8 and 40 modes, against 1344).
 struct Reduced {
     s: Mat<f64>,
     g: Vec<f64>,
@@ -1161,6 +1182,7 @@ pub(crate) fn fit(
         })
         .collect();
     let ix = Indices::new(n, q, p, n_res, problem.reciprocal, &fixed);
+    debug_assert_eq!(ix.free, parameters(problem, n));
     if ix.free > MAX_PARAMETERS {
         return Ok(None);
     }
@@ -1200,8 +1222,9 @@ pub(crate) fn fit(
                 reduced = Reduced::new(blocks, part);
             }
         }
-        let step = match (&reduced, part) {
-            (Some(r), Some(part)) => r.step(part, ix.free, lambda),
+        let step = match (&reduced, &normal, part) {
+            (Some(r), _, Some(part)) => r.step(part, ix.free, lambda),
+            (_, Normal::Dense(n, g), _) => damped_step(n, g, lambda),
             _ => {
                 let (n, g) = normal.dense(part, ix.free);
                 damped_step(&n, &g, lambda)
@@ -1289,9 +1312,10 @@ pub(crate) fn fit(
             (Normal::Blocks(blocks), Some(part)) => Reduced::new(blocks, part),
             _ => None,
         });
-        match reduced {
-            Some(r) => poles_block(&r.s),
-            None => poles_block(&normal.dense(part, ix.free).0),
+        match (reduced, &normal) {
+            (Some(r), _) => poles_block(&r.s),
+            (None, Normal::Dense(n, _)) => poles_block(n),
+            (None, Normal::Blocks(_)) => poles_block(&normal.dense(part, ix.free).0),
         }
     });
     let covariance = covariance
@@ -1314,10 +1338,15 @@ mod tests {
     use crate::sim::{add_noise, ModalSpec, ModalStructure};
     use crate::Quantity;
 
-    /// A noisy 3 × 4 set with 5 modes and a residual term, at parameters off the optimum
-    /// (so the residual and every block are far from zero).
-    fn case(reciprocal: bool) -> (Problem, Parameters, Indices, Mat<f64>, Mat<f64>, Vec<f64>) {
-        let (q, p) = if reciprocal { (3, 3) } else { (3, 4) };
+    /// A noisy `q × p` set with 5 modes (`quantity` and `residuals` set how many
+    /// residual terms), at parameters off the optimum (so the residual and every block
+    /// are far from zero); participation `r % p` is held.
+    fn case(
+        (q, p): (usize, usize),
+        quantity: Quantity,
+        residuals: Residuals,
+        reciprocal: bool,
+    ) -> (Problem, Parameters, Indices, Mat<f64>, Mat<f64>, Vec<f64>) {
         let spec = ModalSpec {
             fmin_hz: 2.0,
             fmax_hz: 9.0,
@@ -1325,9 +1354,9 @@ mod tests {
             ..ModalSpec::new(q, p, 5)
         };
         let s = ModalStructure::random(&spec).unwrap();
-        let frf = add_noise(&s.frf(301, 0.025, Quantity::Acceleration).unwrap(), 0.05, 3).unwrap();
+        let frf = add_noise(&s.frf(301, 0.025, quantity).unwrap(), 0.05, 3).unwrap();
         let options = RefineOptions {
-            residuals: Residuals::Upper,
+            residuals,
             reciprocal,
             ..RefineOptions::default()
         };
@@ -1351,14 +1380,17 @@ mod tests {
         } else {
             (0..p * n).map(|k| wave(k + 1, 1.3)).collect()
         };
+        let n_res = problem.layout.residuals.len();
         let x = Parameters {
             theta,
             u,
             v,
-            k: (0..q * p).map(|k| 0.01 * k as f64).collect(),
+            k: (0..q * p * n_res).map(|k| 0.01 * k as f64).collect(),
         };
         let fixed: Vec<usize> = (0..n).map(|r| r % p).collect();
-        let ix = Indices::new(n, q, p, 1, reciprocal, &fixed);
+        let ix = Indices::new(n, q, p, n_res, reciprocal, &fixed);
+        // The count the free fit decides its tolerance by.
+        assert_eq!(parameters(&problem, n), ix.free);
         let phi = basis_at(&problem, &x.theta);
         let y = stacked_data(&problem);
         let weights: Vec<f64> = (0..q * p).map(|k| 1.0 + 0.1 * k as f64).collect();
@@ -1375,7 +1407,38 @@ mod tests {
 
     #[test]
     fn blocks_hold_the_dense_normal_equations_and_the_same_step() {
-        let (problem, x, ix, phi, residual, weights) = case(false);
+        use Quantity::{Acceleration, Displacement, Velocity};
+        // No residual term, one (acceleration: both are one constant), two; one output,
+        // one input, both.
+        for (shape, quantity, residuals) in [
+            ((3, 4), Acceleration, Residuals::Upper),
+            ((3, 4), Velocity, Residuals::None),
+            ((2, 3), Velocity, Residuals::Both),
+            ((1, 3), Displacement, Residuals::Both),
+            ((4, 1), Acceleration, Residuals::Both),
+            ((1, 1), Velocity, Residuals::Lower),
+        ] {
+            blocks_agree(case(shape, quantity, residuals, false));
+        }
+    }
+
+    #[test]
+    fn the_parameter_count_matches_the_reciprocal_layout() {
+        for residuals in [Residuals::None, Residuals::Both] {
+            case((3, 3), Quantity::Velocity, residuals, true);
+        }
+    }
+
+    fn blocks_agree(
+        (problem, x, ix, phi, residual, weights): (
+            Problem,
+            Parameters,
+            Indices,
+            Mat<f64>,
+            Mat<f64>,
+            Vec<f64>,
+        ),
+    ) {
         let (normal, gradient) = dense_normal(&problem, &x, &ix, &phi, &residual, &weights);
         let part = Partition::new(&ix);
         let blocks = Blocks::new(&problem, &x, &ix, &part, &phi, &residual, &weights);
