@@ -57,18 +57,18 @@ use num_complex::Complex64;
 /// assembled); the others hold `N_zz`, about half the parameters squared, per thread.
 pub(crate) const MAX_PARAMETERS: usize = 4000;
 
-/// The joint fit's free parameters with `modes` modes: the poles, the shapes, the
-/// participations less one held entry per mode (or none, shared with the shapes, when
-/// reciprocal) and the residual terms (one per unordered pair when reciprocal).
+/// The joint fit's free parameters with `modes` modes, counted by the layout itself
+/// (which participation entry is held does not change the count).
 fn parameters(problem: &Problem, modes: usize) -> usize {
-    let (q, p) = (problem.outputs, problem.inputs);
-    let n_res = problem.layout.residuals.len();
-    let shared = if problem.reciprocal {
-        (0..q).map(|i| p.saturating_sub(i)).sum::<usize>() * n_res
-    } else {
-        2 * modes * (p - 1) + q * p * n_res
-    };
-    2 * modes + 2 * modes * q + shared
+    Indices::new(
+        modes,
+        problem.outputs,
+        problem.inputs,
+        problem.layout.residuals.len(),
+        problem.reciprocal,
+        &vec![0; modes],
+    )
+    .free
 }
 
 /// Whether the rank-one stage will run after a free fit with `modes` modes (it steps
@@ -269,19 +269,25 @@ impl Grams {
     }
 }
 
-/// Output `i`'s part of `N = JᵀWJ` and `g = JᵀWr`, entry by entry:
-/// `entry(f, g, value, mirrored)` adds `value` at `(f, g)` of `N` and, when `mirrored`,
-/// at `(g, f)` too (each unordered couple of entries is visited once);
-/// `gradient(f, value)` adds to `g`.
+/// Output `i`'s part of `N = JᵀWJ` and `g = JᵀWr`, added entry by entry to `normal`
+/// and `g` (each unordered couple of entries is visited once and written on both sides
+/// of the diagonal).
 fn output_entries(
     grams: &Grams,
     x: &Parameters,
     ix: &Indices,
     weights: &[f64],
     i: usize,
-    entry: &mut impl FnMut(usize, usize, f64, bool),
-    gradient: &mut impl FnMut(usize, f64),
+    normal: &mut Mat<f64>,
+    g: &mut [f64],
 ) {
+    let mut entry = |f: usize, other: usize, value: f64, mirrored: bool| {
+        normal[(f, other)] += value;
+        if mirrored {
+            normal[(other, f)] += value;
+        }
+    };
+    let mut gradient = |f: usize, value: f64| g[f] += value;
     let (n, p, n_res) = (ix.n, ix.p, ix.n_res);
     let Grams {
         h,
@@ -385,20 +391,7 @@ fn dense_normal(
     let grams = Grams::new(problem, x, phi, residual);
     let free = ix.free;
     let add_output = |(mut normal, mut gradient): (Mat<f64>, Vec<f64>), i: usize| {
-        output_entries(
-            &grams,
-            x,
-            ix,
-            weights,
-            i,
-            &mut |f, g, v, mirrored| {
-                normal[(f, g)] += v;
-                if mirrored {
-                    normal[(g, f)] += v;
-                }
-            },
-            &mut |f, v| gradient[f] += v,
-        );
+        output_entries(&grams, x, ix, weights, i, &mut normal, &mut gradient);
         (normal, gradient)
     };
     use rayon::prelude::*;
@@ -689,7 +682,8 @@ impl Partition {
 /// parameters, and per output `N_ii` and `N_iz`. Nothing else of `N` is nonzero, so
 /// the dense `free²` matrix (1344² on 8 × 8 with 40 modes and one residual term) is
 /// never formed.
-struct Blocks {
+struct Blocks<'a> {
+    part: &'a Partition,
     nzz: Mat<f64>,
     gz: Vec<f64>,
     nii: Vec<Mat<f64>>,
@@ -699,12 +693,12 @@ struct Blocks {
     gi: Vec<f64>,
 }
 
-impl Blocks {
+impl<'a> Blocks<'a> {
     fn new(
         problem: &Problem,
         x: &Parameters,
         ix: &Indices,
-        part: &Partition,
+        part: &'a Partition,
         phi: &Mat<f64>,
         residual: &Mat<f64>,
         weights: &[f64],
@@ -760,6 +754,7 @@ impl Blocks {
             nii.push(block);
         }
         Blocks {
+            part,
             nzz,
             gz,
             nii,
@@ -769,7 +764,8 @@ impl Blocks {
     }
 
     /// `δᵀg` and `δᵀNδ` for a full step `δ`.
-    fn gradient_and_curvature(&self, part: &Partition, step: &[f64]) -> (f64, f64) {
+    fn gradient_and_curvature(&self, step: &[f64]) -> (f64, f64) {
+        let part = self.part;
         let dz = Mat::from_fn(part.z.len(), 1, |k, _| step[part.z[k]]);
         let mut dg: f64 = (0..part.z.len()).map(|k| dz[(k, 0)] * self.gz[k]).sum();
         let nzz_dz = &self.nzz * &dz;
@@ -791,7 +787,9 @@ impl Blocks {
     }
 
     /// The dense `(N, g)`, for the rare fit where an output's block is singular.
-    fn dense(&self, part: &Partition, free: usize) -> (Mat<f64>, Vec<f64>) {
+    fn dense(&self) -> (Mat<f64>, Vec<f64>) {
+        let part = self.part;
+        let free = part.slot.len();
         let mut normal = Mat::<f64>::zeros(free, free);
         let mut gradient = vec![0.0; free];
         for (a, &fa) in part.z.iter().enumerate() {
@@ -817,17 +815,18 @@ impl Blocks {
 }
 
 /// The normal equations at the current point.
-enum Normal {
+enum Normal<'a> {
     Dense(Mat<f64>, Vec<f64>),
-    Blocks(Blocks),
+    Blocks(Blocks<'a>),
 }
 
-impl Normal {
+impl<'a> Normal<'a> {
+    /// By blocks when there is a partition, dense otherwise.
     fn new(
         problem: &Problem,
         x: &Parameters,
         ix: &Indices,
-        part: Option<&Partition>,
+        part: Option<&'a Partition>,
         phi: &Mat<f64>,
         residual: &Mat<f64>,
         weights: &[f64],
@@ -842,25 +841,27 @@ impl Normal {
     }
 
     /// `δᵀg` and `δᵀNδ`.
-    fn gradient_and_curvature(&self, part: Option<&Partition>, step: &[f64]) -> (f64, f64) {
-        match (self, part) {
-            (Normal::Blocks(b), Some(part)) => b.gradient_and_curvature(part, step),
-            (Normal::Dense(normal, gradient), _) => {
+    fn gradient_and_curvature(&self, step: &[f64]) -> (f64, f64) {
+        match self {
+            Normal::Blocks(b) => b.gradient_and_curvature(step),
+            Normal::Dense(normal, gradient) => {
                 let d = Mat::from_fn(step.len(), 1, |k, _| step[k]);
                 let nd = normal * &d;
                 let dg = step.iter().zip(gradient).map(|(a, b)| a * b).sum();
                 (dg, (0..step.len()).map(|k| step[k] * nd[(k, 0)]).sum())
             }
-            (Normal::Blocks(_), None) => unreachable!("blocks are built from a partition"),
         }
     }
 
-    /// The dense `(N, g)`.
-    fn dense(&self, part: Option<&Partition>, free: usize) -> (Mat<f64>, Vec<f64>) {
-        match (self, part) {
-            (Normal::Dense(normal, gradient), _) => (normal.clone(), gradient.clone()),
-            (Normal::Blocks(b), Some(part)) => b.dense(part, free),
-            (Normal::Blocks(_), None) => unreachable!("blocks are built from a partition"),
+    /// `(N + λ diag N) δ = g` solved densely (a reciprocal fit, or blocks that could not
+    /// be reduced).
+    fn dense_step(&self, lambda: f64) -> Option<Vec<f64>> {
+        match self {
+            Normal::Dense(normal, gradient) => damped_step(normal, gradient, lambda),
+            Normal::Blocks(b) => {
+                let (normal, gradient) = b.dense();
+                damped_step(&normal, &gradient, lambda)
+            }
         }
     }
 }
@@ -871,7 +872,8 @@ impl Normal {
 /// per output; `S` is formed once per accepted point (one GEMM over the stacked
 /// `N_Iz`), and each trial `λ` costs one Cholesky factorisation of `S` (640 unknowns for
 /// 8 × 8 and 40 modes, against 1344).
-struct Reduced {
+struct Reduced<'a> {
+    part: &'a Partition,
     s: Mat<f64>,
     g: Vec<f64>,
     /// Stacked like `N_Iz`: `N_ii⁻¹ N_iz` and `N_ii⁻¹ g_i`.
@@ -879,9 +881,10 @@ struct Reduced {
     xg: Vec<f64>,
 }
 
-impl Reduced {
-    fn new(blocks: &Blocks, part: &Partition) -> Option<Self> {
+impl<'a> Reduced<'a> {
+    fn new(blocks: &Blocks<'a>) -> Option<Self> {
         use rayon::prelude::*;
+        let part = blocks.part;
         let nz = part.z.len();
         // Each output's `N_ii⁻¹ [N_iz, g_i]` on its own thread.
         let solved: Vec<Mat<f64>> = blocks
@@ -940,14 +943,15 @@ impl Reduced {
         }
         let correction = blocks.niz.transpose() * Mat::from_fn(local, 1, |k, _| xg[k]);
         let g = (0..nz).map(|k| blocks.gz[k] - correction[(k, 0)]).collect();
-        Some(Reduced { s, g, x, xg })
+        Some(Reduced { part, s, g, x, xg })
     }
 
     /// The full step for `(S + λ diag S) δz = g'`, the eliminated part by
     /// back-substitution.
-    fn step(&self, part: &Partition, free: usize, lambda: f64) -> Option<Vec<f64>> {
+    fn step(&self, lambda: f64) -> Option<Vec<f64>> {
+        let part = self.part;
         let dz = damped_step(&self.s, &self.g, lambda)?;
-        let mut full = vec![0.0; free];
+        let mut full = vec![0.0; part.slot.len()];
         for (k, &f) in part.z.iter().enumerate() {
             full[f] = dz[k];
         }
@@ -1218,17 +1222,13 @@ pub(crate) fn fit(
             break;
         }
         if reduced.is_none() {
-            if let (Normal::Blocks(blocks), Some(part)) = (&normal, part) {
-                reduced = Reduced::new(blocks, part);
+            if let Normal::Blocks(blocks) = &normal {
+                reduced = Reduced::new(blocks);
             }
         }
-        let step = match (&reduced, &normal, part) {
-            (Some(r), _, Some(part)) => r.step(part, ix.free, lambda),
-            (_, Normal::Dense(n, g), _) => damped_step(n, g, lambda),
-            _ => {
-                let (n, g) = normal.dense(part, ix.free);
-                damped_step(&n, &g, lambda)
-            }
+        let step = match &reduced {
+            Some(r) => r.step(lambda),
+            None => normal.dense_step(lambda),
         };
         let Some(step) = step else {
             lambda *= 4.0;
@@ -1240,7 +1240,7 @@ pub(crate) fn fit(
         let (mut trial, factor) = apply(&x, &ix, &step, log_damping);
         // The linear model's decrease, `2fδᵀg − f²δᵀNδ`.
         let predicted = {
-            let (dg, dnd) = normal.gradient_and_curvature(part, &step);
+            let (dg, dnd) = normal.gradient_and_curvature(&step);
             2.0 * factor * dg - factor * factor * dnd
         };
         // The step's poles and participations, with the shapes that fit them best
@@ -1308,14 +1308,14 @@ pub(crate) fn fit(
             };
             Mat::from_fn(2 * n, 2 * n, |a, b| noise_variance * x[(a, b)])
         };
-        let reduced = reduced.or_else(|| match (&normal, part) {
-            (Normal::Blocks(blocks), Some(part)) => Reduced::new(blocks, part),
-            _ => None,
+        let reduced = reduced.or_else(|| match &normal {
+            Normal::Blocks(blocks) => Reduced::new(blocks),
+            Normal::Dense(..) => None,
         });
         match (reduced, &normal) {
             (Some(r), _) => poles_block(&r.s),
             (None, Normal::Dense(n, _)) => poles_block(n),
-            (None, Normal::Blocks(_)) => poles_block(&normal.dense(part, ix.free).0),
+            (None, Normal::Blocks(b)) => poles_block(&b.dense().0),
         }
     });
     let covariance = covariance
@@ -1443,7 +1443,7 @@ mod tests {
         let part = Partition::new(&ix);
         let blocks = Blocks::new(&problem, &x, &ix, &part, &phi, &residual, &weights);
         // Every entry of N and g, including the zeros between outputs.
-        let (rebuilt, g) = blocks.dense(&part, ix.free);
+        let (rebuilt, g) = blocks.dense();
         let scale = largest(&normal);
         assert!(largest(&(&rebuilt - &normal)) <= 1e-13 * scale);
         let g_scale = gradient.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -1453,8 +1453,8 @@ mod tests {
         // δᵀg and δᵀNδ of an arbitrary step.
         let step: Vec<f64> = (0..ix.free).map(|k| (0.37 * k as f64).sin()).collect();
         let dense = Normal::Dense(normal.clone(), gradient.clone());
-        let (dg, dnd) = dense.gradient_and_curvature(None, &step);
-        let (bg, bnd) = Normal::Blocks(blocks).gradient_and_curvature(Some(&part), &step);
+        let (dg, dnd) = dense.gradient_and_curvature(&step);
+        let (bg, bnd) = Normal::Blocks(blocks).gradient_and_curvature(&step);
         assert!((dg - bg).abs() <= 1e-12 * dg.abs().max(1.0));
         assert!((dnd - bnd).abs() <= 1e-12 * dnd.abs());
         // Without damping, eliminating the shapes gives the dense solution.
@@ -1463,8 +1463,8 @@ mod tests {
         else {
             unreachable!()
         };
-        let reduced = Reduced::new(&blocks, &part).unwrap();
-        let by_blocks = reduced.step(&part, ix.free, 0.0).unwrap();
+        let reduced = Reduced::new(&blocks).unwrap();
+        let by_blocks = reduced.step(0.0).unwrap();
         // The step solves N δ = g: its residual is at rounding level against ‖g‖.
         let d = Mat::from_fn(ix.free, 1, |k, _| by_blocks[k]);
         let nd = &normal * &d;

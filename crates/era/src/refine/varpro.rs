@@ -270,11 +270,9 @@ pub(crate) fn evaluate(problem: &Problem, theta: &[f64], need: Need<'_>) -> Resu
         || basis(layout, &problem.omega, &poles),
         || jacobian.then(|| basis_derivatives(layout, problem.parameters, &problem.omega, &poles)),
     );
-    let mut jtj = Mat::<f64>::zeros(
-        if jacobian { n_par } else { 0 },
-        if jacobian { n_par } else { 0 },
-    );
-    let mut jtr = vec![0.0; if jacobian { n_par } else { 0 }];
+    let n_jac = if jacobian { n_par } else { 0 };
+    let mut jtj = Mat::<f64>::zeros(n_jac, n_jac);
+    let mut jtr = vec![0.0; n_jac];
     let mut cost = 0.0;
     let mut coefficients = Mat::<f64>::zeros(n_col, pairs);
     let mut factors = Vec::new();
