@@ -138,10 +138,21 @@ fn start_poles(
     Ok((ids, poles))
 }
 
-/// Runs the fit with `evaluate` (fast or naive).
+/// A mode of an earlier rank-one fit: its pole and residue.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Warm<'a> {
+    pub pole: Complex64,
+    pub residue: &'a [Complex64],
+}
+
+/// Runs the fit with `evaluate` (fast or naive). `warm[k]`, where given, is start pole
+/// `k` as an earlier rank-one fit left it: the rank-one stage starts that mode from
+/// there rather than from this fit's free one (which moved its pole to suit a free
+/// residue).
 pub(crate) fn run(
     frf: &FrfData,
     start: &[Complex64],
+    warm: &[Option<Warm>],
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
     evaluate: Evaluator,
@@ -262,6 +273,7 @@ pub(crate) fn run(
         state,
         current,
         dropped,
+        warm,
         Summary {
             iterations,
             converged,
@@ -496,16 +508,33 @@ fn finish(
     mut state: State,
     mut e: Evaluation,
     dropped: Vec<(usize, String)>,
+    warm: &[Option<Warm>],
     mut summary: Summary,
 ) -> Result<Refinement> {
     let (q, p) = (problem.outputs, problem.inputs);
     let layout = &problem.layout;
     let pm = layout.per_mode;
     let joint = if problem.rank_one_follows() {
+        let warm: Vec<Option<Warm>> = state
+            .ids
+            .iter()
+            .map(|&k| warm.get(k).copied().flatten())
+            .collect();
+        let mut poles = problem.parameters.poles(&state.theta);
+        for (s, w) in poles.iter_mut().zip(&warm) {
+            if let Some(w) = w {
+                *s = w.pole;
+            }
+        }
+        let theta = problem.parameters.theta(&poles);
         super::rank_one::fit(
             problem,
-            &state.theta,
+            &theta,
             &e.coefficients,
+            &warm
+                .iter()
+                .map(|w| w.map(|w| w.residue))
+                .collect::<Vec<_>>(),
             summary.max_iterations,
             summary.tolerance,
         )?

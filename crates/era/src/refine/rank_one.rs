@@ -1105,17 +1105,28 @@ fn solve_linear(
 }
 
 /// The start: the free fit's poles and residual terms, each residue's leading singular
-/// pair (`ψ = u √(uᴴv/uᴴu)` when reciprocal).
-fn start(problem: &Problem, theta: &[f64], free: &Mat<f64>) -> Result<Parameters> {
+/// pair (`ψ = u √(uᴴv/uᴴu)` when reciprocal). A mode with a `warm` residue (an earlier
+/// rank-one fit's) takes its pair from that one instead.
+fn start(
+    problem: &Problem,
+    theta: &[f64],
+    free: &Mat<f64>,
+    warm: &[Option<&[Complex64]>],
+) -> Result<Parameters> {
     let (q, p) = (problem.outputs, problem.inputs);
     let n = theta.len() / 2;
     let n_res = problem.layout.residuals.len();
     let mut u = vec![Complex64::new(0.0, 0.0); q * n];
     let mut v = vec![Complex64::new(0.0, 0.0); p * n];
     for r in 0..n {
-        let residue = Mat::from_fn(q, p, |i, j| {
-            faer::c64::new(free[(2 * r, i * p + j)], free[(2 * r + 1, i * p + j)])
-        });
+        let residue = match warm.get(r).copied().flatten().filter(|w| w.len() == q * p) {
+            Some(w) => Mat::from_fn(q, p, |i, j| {
+                faer::c64::new(w[i * p + j].re, w[i * p + j].im)
+            }),
+            None => Mat::from_fn(q, p, |i, j| {
+                faer::c64::new(free[(2 * r, i * p + j)], free[(2 * r + 1, i * p + j)])
+            }),
+        };
         let svd = residue
             .thin_svd()
             .map_err(|e| EraError::Numerical(format!("SVD of a residue: {e:?}")))?;
@@ -1163,6 +1174,7 @@ pub(crate) fn fit(
     problem: &Problem,
     theta: &[f64],
     free: &Mat<f64>,
+    warm: &[Option<&[Complex64]>],
     max_iterations: usize,
     tolerance: f64,
 ) -> Result<Option<Joint>> {
@@ -1176,7 +1188,7 @@ pub(crate) fn fit(
     let (q, p) = (problem.outputs, problem.inputs);
     let n = theta.len() / 2;
     let n_res = problem.layout.residuals.len();
-    let mut x = start(problem, theta, free)?;
+    let mut x = start(problem, theta, free, warm)?;
     // Hold each participation's largest entry (the scale between u and v is free).
     let fixed: Vec<usize> = (0..n)
         .map(|r| {

@@ -25,9 +25,12 @@
 //! varies over the band does not set it off); an unfitted resonance gives tens to
 //! thousands. The bar is [`F_MINIMUM`], or for few pairs the F ratio that noise alone
 //! exceeds anywhere in the band with a chance of 1e-3, whichever is higher. Candidates
-//! above it and above half the largest F that are the largest within their window are
-//! returned, largest first, at most [`MAX_ADDED`]: an unfitted resonance also bends the
-//! fit of its neighbours, and their lesser peaks go once it is fitted.
+//! above it and above half the largest F are returned, largest first, at most
+//! [`MAX_ADDED`], each only if its window does not overlap a stronger one's: an
+//! unfitted resonance also bends the fit of its neighbours, and their lesser peaks,
+//! within a window or two of it, go once it is fitted (a pole added on such a peak
+//! costs the refit dozens of iterations, wandering as a weak spurious mode); a real
+//! one that close is found by the next scan.
 //!
 //! An exact fit (`fit_after` below 1e-9) has no residual to read and returns nothing.
 //!
@@ -197,7 +200,7 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
             ((explained / nu) / (rest / (n - nu)), (lo, hi), s, bar)
         })
         .collect();
-    // Local maxima above the threshold, none within another's window.
+    // Local maxima above the threshold, no two with overlapping windows.
     // Only the strongest: an unfitted resonance also bends the fit of its neighbours,
     // whose residuals, lesser peaks, go once it is fitted.
     let top = scores
@@ -216,10 +219,8 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
     for k in order_by {
         let (lo, hi) = scores[k].1;
         if chosen.iter().any(|&c| {
-            (lo..hi).contains(&c) || {
-                let (clo, chi) = scores[c].1;
-                (clo..chi).contains(&k)
-            }
+            let (clo, chi) = scores[c].1;
+            lo < chi && clo < hi
         }) {
             continue;
         }
