@@ -98,11 +98,16 @@ fn thesis_factorization_refuses_orders_above_what_it_kept() {
     assert_eq!(f.realize(30, DirectTerm::Zero).unwrap().model.states(), 30);
 }
 
-/// A random well-conditioned similarity transform of size n.
+/// A random well-conditioned similarity transform of size n: `2I + E` with `E`'s
+/// entries of standard deviation `0.6/√n`, so that `‖E‖₂ ≈ 1.2` and the condition
+/// number stays near 4 (entries of 0.3 at n = 30 gave `‖E‖₂ ≈ 3.3 > 2`: seed 6855
+/// drew a transform that made one eigenvector's condition number 1600, and its MPC
+/// moved by 2e-7 through rounding alone).
 fn transform(n: usize, seed: u64) -> Mat<f64> {
     let mut rng = Minstd::new(seed);
+    let scale = 0.6 / (n as f64).sqrt();
     Mat::from_fn(n, n, |i, j| {
-        (if i == j { 2.0 } else { 0.0 }) + 0.3 * rng.normal()
+        (if i == j { 2.0 } else { 0.0 }) + scale * rng.normal()
     })
 }
 
