@@ -148,11 +148,14 @@ pub(crate) struct Warm<'a> {
 /// Runs the fit with `evaluate` (fast or naive). `warm[k]`, where given, is start pole
 /// `k` as an earlier rank-one fit left it: the rank-one stage starts that mode from
 /// there rather than from this fit's free one (which moved its pole to suit a free
-/// residue).
+/// residue). `placed` says that the start poles are a free fit's to the same data (with
+/// other weights): where the rank-one stage follows, which moves every pole again, the
+/// free stage then takes no step.
 pub(crate) fn run(
     frf: &FrfData,
     start: &[Complex64],
     warm: &[Option<Warm>],
+    placed: bool,
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
     evaluate: Evaluator,
@@ -179,12 +182,19 @@ pub(crate) fn run(
     let mut converged = false;
     // Where the rank-one stage follows, the free fit is only its start: that stage moves
     // every pole again, to its own tolerance.
-    let free_tolerance = if super::rank_one::will_run(&problem, state.ids.len()) {
+    let rank_one_follows = super::rank_one::will_run(&problem, state.ids.len());
+    let free_tolerance = if rank_one_follows {
         options.tolerance.max(super::START_TOLERANCE)
     } else {
         options.tolerance
     };
-    while iterations < options.max_iterations {
+    let free_iterations = if placed && rank_one_follows {
+        converged = true;
+        0
+    } else {
+        options.max_iterations
+    };
+    while iterations < free_iterations {
         if current.cost <= EXACT_FIT * weighted_norm2 {
             converged = true;
             break;

@@ -66,7 +66,10 @@
 //! variance `σ²_ij` per pair is `Σ_ij ‖y_ij − ŷ_ij‖²/σ²_ij`; uniform weights waste the
 //! quiet pairs. [`Weighting::PairNoise`] estimates `σ²_ij` from the residual of a uniform
 //! fit (`‖y_ij − ŷ_ij‖²/L`, floored at 1e-12 of the mean) and refits with `1/σ²_ij`
-//! from the first fit's poles (one step of iteratively reweighted least squares). An
+//! from the first fit's poles (one step of iteratively reweighted least squares). With
+//! rank-one residues the refit's free stage takes no step: the rank-one stage moves
+//! every pole again, with the weights (on the DTA-like sets at 5 % noise, seeds 1–16,
+//! this took the refinement from 12.2 s to 11.1 s in all, the modes found unchanged). An
 //! exact fit (`fit_after` below 1e-9) has no noise to weight by and is returned as it
 //! is. The costs reported are of the second pass's weights; `fit_before` is the
 //! unweighted fit at the start poles, as always. On the truth model with 15 % noise this
@@ -488,7 +491,7 @@ fn run_once(
     evaluate: fit::Evaluator,
 ) -> Result<Refinement> {
     if options.weighting != Weighting::PairNoise {
-        return fit::run(frf, start_poles, warm, options, progress, evaluate);
+        return fit::run(frf, start_poles, warm, false, options, progress, evaluate);
     }
     // The first fit only has to be good enough to estimate each pair's noise, which
     // small moves of the poles hardly change: a looser tolerance, and free residues (the
@@ -499,7 +502,7 @@ fn run_once(
         rank_one: false,
         ..options.clone()
     };
-    let first = fit::run(frf, start_poles, &[], &uniform, progress, evaluate)?;
+    let first = fit::run(frf, start_poles, &[], false, &uniform, progress, evaluate)?;
     // `warm` told in the first fit's numbering.
     let warm: Vec<Option<fit::Warm>> = first
         .modes
@@ -517,6 +520,7 @@ fn run_once(
             frf,
             &poles,
             &warm,
+            false,
             &RefineOptions {
                 band: Some(first.band),
                 rank_one: true,
@@ -541,7 +545,9 @@ fn run_once(
         ..options.clone()
     };
     let poles: Vec<Complex64> = first.modes.iter().map(|m| m.pole).collect();
-    let mut second = fit::run(frf, &poles, &warm, &weighted, progress, evaluate)?;
+    // The uniform fit placed the poles; the rank-one stage (where it runs) moves them
+    // for the weights.
+    let mut second = fit::run(frf, &poles, &warm, true, &weighted, progress, evaluate)?;
     // Indices into the first fit's modes → indices into the caller's start poles.
     continue_from(&mut second, &first, |k| first.modes[k].start);
     Ok(second)

@@ -1435,6 +1435,51 @@ mod tests {
     }
 
     #[test]
+    fn a_warm_mode_starts_from_its_own_residue_and_the_others_from_the_free_ones() {
+        for reciprocal in [false, true] {
+            let (problem, x, ix, ..) =
+                case((3, 3), Quantity::Velocity, Residuals::Both, reciprocal);
+            let (n, q, p) = (ix.n, ix.q, ix.p);
+            let n_res = ix.n_res;
+            // Free coefficients: mode r's residue a fixed non-rank-one matrix.
+            let free = Mat::from_fn(2 * n + n_res, q * p, |row, pair| {
+                (0.3 + row as f64).sin() * (1.1 + pair as f64).cos()
+            });
+            // Mode 1 warm: the rank-one (and, when reciprocal, symmetric) residue u vᵀ.
+            let warm_residue: Vec<Complex64> = (0..q * p)
+                .map(|pair| x.u[(pair / p) * n + 1] * x.v[(pair % p) * n + 1])
+                .collect();
+            let mut warm = vec![None; n];
+            warm[1] = Some(warm_residue.as_slice());
+            let started = start(&problem, &x.theta, &free, &warm).unwrap();
+            let product = |y: &Parameters, r: usize, pair: usize| {
+                y.u[(pair / p) * n + r] * y.v[(pair % p) * n + r]
+            };
+            for pair in 0..q * p {
+                let d = product(&started, 1, pair) - warm_residue[pair];
+                assert!(
+                    d.norm() <= 1e-12 * warm_residue[pair].norm().max(1.0),
+                    "{reciprocal} {pair}"
+                );
+            }
+            // Every other mode: the leading singular pair of its free residue, as with
+            // no warm mode at all.
+            let cold = start(&problem, &x.theta, &free, &vec![None; n]).unwrap();
+            for r in (0..n).filter(|&r| r != 1) {
+                for pair in 0..q * p {
+                    let d = product(&started, r, pair) - product(&cold, r, pair);
+                    assert!(d.norm() <= 1e-12, "{reciprocal} mode {r} pair {pair}");
+                }
+            }
+            // And the warm residue's product is not the free one's.
+            let free_one = Complex64::new(free[(2, 0)], free[(3, 0)]);
+            assert!(
+                (product(&cold, 1, 0) - product(&started, 1, 0)).norm() > 1e-3 * free_one.norm()
+            );
+        }
+    }
+
+    #[test]
     fn the_parameter_count_matches_the_reciprocal_layout() {
         for residuals in [Residuals::None, Residuals::Both] {
             case((3, 3), Quantity::Velocity, residuals, true);
