@@ -1455,12 +1455,9 @@ mod tests {
             let product = |y: &Parameters, r: usize, pair: usize| {
                 y.u[(pair / p) * n + r] * y.v[(pair % p) * n + r]
             };
-            for pair in 0..q * p {
-                let d = product(&started, 1, pair) - warm_residue[pair];
-                assert!(
-                    d.norm() <= 1e-12 * warm_residue[pair].norm().max(1.0),
-                    "{reciprocal} {pair}"
-                );
+            for (pair, w) in warm_residue.iter().enumerate() {
+                let d = product(&started, 1, pair) - w;
+                assert!(d.norm() <= 1e-12 * w.norm().max(1.0), "{reciprocal} {pair}");
             }
             // Every other mode: the leading singular pair of its free residue, as with
             // no warm mode at all.
