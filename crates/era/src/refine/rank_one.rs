@@ -1165,8 +1165,10 @@ fn start(
     })
 }
 
-/// Fits the rank-one model from the free fit at `theta` with coefficients `free`, or
-/// `None` when the problem does not allow it (weights varying by line, real modes).
+/// Fits the rank-one model from the poles `theta` (the free fit's, or a warm mode's
+/// earlier rank-one pole) and the residues of the free fit's coefficients `free` (or a
+/// warm mode's `warm` residue), or `None` when the problem does not allow it (weights
+/// varying by line, real modes).
 ///
 /// # Errors
 /// [`EraError::Numerical`] when an SVD of a start residue fails.
