@@ -877,3 +877,91 @@ impl Refinement {
         Ok(StateSpace::new(a, b, c, d, TimeDomain::Continuous))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{add_noise, ModalSpec, ModalStructure};
+
+    /// A refit handed an earlier rank-one fit's modes as warm starts, in reverse order
+    /// after a start pole it drops, from start poles a little off theirs, starts each
+    /// mode from its own entry. With no iteration allowed, every mode ends exactly on
+    /// the warm pole of the start it names, through the uniform pass (which sorts and
+    /// renumbers the modes) and the weighted rank-one stage; without the entries, on
+    /// its start pole.
+    #[test]
+    fn warm_modes_reach_the_refit_under_their_own_numbers() {
+        let spec = ModalSpec {
+            fmin_hz: 2.0,
+            fmax_hz: 9.0,
+            ..ModalSpec::new(3, 4, 6)
+        };
+        let s = ModalStructure::random(&spec).unwrap();
+        let frf = add_noise(&s.frf(401, 0.025, Quantity::Velocity).unwrap(), 0.05, 5).unwrap();
+        let options = RefineOptions {
+            weighting: Weighting::PairNoise,
+            add_missed: false,
+            ..RefineOptions::default()
+        };
+        let start: Vec<Complex64> = s
+            .frequencies_hz
+            .iter()
+            .zip(&s.damping_ratios)
+            .map(|(f, z)| {
+                let w = 2.0 * PI * f * 1.002;
+                Complex64::new(-z * w, w)
+            })
+            .collect();
+        let first = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+        assert!(first.rank_one);
+        assert_eq!(first.modes.len(), 6);
+        // Start k ≥ 1 is mode 6 − k of the first fit, 0.1 % off in frequency.
+        let mut poles = vec![Complex64::new(-3.0, 0.0)];
+        let mut warm = vec![None];
+        for m in first.modes.iter().rev() {
+            poles.push(Complex64::new(m.pole.re, m.pole.im * 1.001));
+            warm.push(Some(fit::Warm {
+                pole: m.pole,
+                residue: &m.residue,
+            }));
+        }
+        let again = RefineOptions {
+            band: Some(first.band),
+            max_iterations: 0,
+            ..options.clone()
+        };
+        let refit = run_once(
+            &frf,
+            &poles,
+            &warm,
+            &again,
+            &mut |_, _| {},
+            varpro::evaluate,
+        )
+        .unwrap();
+        assert!(refit.rank_one);
+        assert_eq!(refit.dropped.len(), 1);
+        assert_eq!(refit.dropped[0].0, 0);
+        let mut starts: Vec<usize> = refit.modes.iter().map(|m| m.start).collect();
+        starts.sort_unstable();
+        assert_eq!(starts, (1..=6).collect::<Vec<_>>());
+        for m in &refit.modes {
+            let want = first.modes[6 - m.start].pole;
+            assert!(
+                (m.pole - want).norm() <= 1e-13 * want.norm(),
+                "start {}",
+                m.start
+            );
+        }
+        // Without the warm entries the same refit stays on its start poles.
+        let cold = run_once(&frf, &poles, &[], &again, &mut |_, _| {}, varpro::evaluate).unwrap();
+        for m in &cold.modes {
+            let want = poles[m.start];
+            assert!(
+                (m.pole - want).norm() <= 1e-13 * want.norm(),
+                "start {}",
+                m.start
+            );
+        }
+    }
+}
