@@ -903,15 +903,7 @@ mod tests {
             add_missed: false,
             ..RefineOptions::default()
         };
-        let start: Vec<Complex64> = s
-            .frequencies_hz
-            .iter()
-            .zip(&s.damping_ratios)
-            .map(|(f, z)| {
-                let w = 2.0 * PI * f * 1.002;
-                Complex64::new(-z * w, w)
-            })
-            .collect();
+        let start: Vec<Complex64> = s.poles().iter().map(|s| 1.002 * s).collect();
         let first = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
         assert!(first.rank_one);
         assert_eq!(first.modes.len(), 6);

@@ -1376,13 +1376,9 @@ mod tests {
         };
         let problem = Problem::new(&frf, &options).unwrap();
         let poles: Vec<Complex64> = s
-            .frequencies_hz
+            .poles()
             .iter()
-            .zip(&s.damping_ratios)
-            .map(|(f, z)| {
-                let w = 2.0 * std::f64::consts::PI * f * 1.002;
-                Complex64::new(-1.1 * z * w, w)
-            })
+            .map(|s| Complex64::new(1.1 * 1.002 * s.re, 1.002 * s.im))
             .collect();
         let theta = problem.parameters.theta(&poles);
         let n = poles.len();

@@ -329,15 +329,7 @@ mod tests {
             ..RefineOptions::default()
         };
         let problem = Problem::new(&frf, &options).unwrap();
-        let poles: Vec<Complex64> = s
-            .frequencies_hz
-            .iter()
-            .zip(&s.damping_ratios)
-            .map(|(f, z)| {
-                let w = 2.0 * std::f64::consts::PI * f * 1.001;
-                Complex64::new(-z * w, w)
-            })
-            .collect();
+        let poles: Vec<Complex64> = s.poles().iter().map(|s| 1.001 * s).collect();
         let theta = problem.parameters.theta(&poles);
         let trial = ready(evaluate(&problem, &theta, Need::Cost).unwrap());
         assert!(trial.kept.is_some());
