@@ -6,9 +6,10 @@
 //! `cargo run --release -p era --example cost_model [-- REPEATS]` (default 3, medians).
 //!
 //! **The floor** of a run is what its truncated SVD cannot avoid: the FFT Hankel
-//! products alone (one `H·X` and one `Hᵀ·Y` of `b = n + oversample` columns per pass,
-//! [`era::hankel_op::HankelOperator`]) at the pass count the run used, timed here on
-//! their own. `total / floor` is then what orthogonalisation, the small SVDs, the
+//! products alone ([`era::hankel_op::HankelOperator`]), one `H·X` and one `Hᵀ·Y` with as
+//! many columns as the run's passes multiplied in all (`TruncatedSvd::columns`: a narrow
+//! block a pass in the unrestarted phase, `n + oversample` in the restarted one), timed
+//! here on their own. `total / floor` is then what orthogonalisation, the small SVDs, the
 //! restarts and the products of the realization (§1.9) add.
 //!
 //! Data: [`era::sim::lightly_damped_markov`] (lightly damped modes, seed 7, `n/2` modes
@@ -83,22 +84,22 @@ fn measure(label: String, markov: &MarkovSequence, m: usize, n: usize, repeats: 
         times.push(clock.elapsed().as_secs_f64());
         passes = r.svd_iterations.unwrap_or(0);
     }
-    // The floor: `passes` products each way with a block as wide as the SVD's.
+    // The floor: the products each way of as many columns as the SVD multiplied.
     let op = HankelOperator::new(markov, shape).expect("shape fits");
     let svd = era::tsvd::truncated_svd(&op, &TruncatedSvdOptions::new(n)).expect("converges");
+    assert_eq!(svd.iterations, passes, "the same SVD as the run's");
     let t = svd.timings;
-    let b = n + TruncatedSvdOptions::new(n).oversample;
-    let x = Mat::from_fn(op.ncols(), b, |i, j| {
+    let x = Mat::from_fn(op.ncols(), svd.columns, |i, j| {
         ((i * 31 + j * 17) % 101) as f64 - 50.0
     });
-    let y = Mat::from_fn(op.nrows(), b, |i, j| ((i * 29 + j * 13) % 97) as f64 - 48.0);
+    let y = Mat::from_fn(op.nrows(), svd.columns, |i, j| {
+        ((i * 29 + j * 13) % 97) as f64 - 48.0
+    });
     let mut floors = Vec::new();
     for _ in 0..repeats {
         let clock = Instant::now();
-        for _ in 0..passes.max(1) {
-            std::hint::black_box(op.apply(x.as_ref()));
-            std::hint::black_box(op.apply_transpose(y.as_ref()));
-        }
+        std::hint::black_box(op.apply(x.as_ref()));
+        std::hint::black_box(op.apply_transpose(y.as_ref()));
         floors.push(clock.elapsed().as_secs_f64());
     }
     Row {
