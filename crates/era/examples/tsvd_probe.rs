@@ -1,5 +1,7 @@
-//! Probe of the truncated SVD at the thesis DTA size: passes and time for block widths and
-//! Krylov depths, noise-free and noisy (`cargo run --release -p era --example tsvd_probe`).
+//! Probe of the truncated SVD at the thesis DTA size: passes and time of the defaults
+//! (the unrestarted phase first), and of the restarted iteration alone for block widths
+//! and Krylov depths, noise-free and noisy
+//! (`cargo run --release -p era --example tsvd_probe [DEPTH...]`).
 
 use era::hankel::ThesisHankel;
 use era::hankel_op::HankelOperator;
@@ -57,29 +59,34 @@ fn main() {
         let shapes = ThesisHankel::new(80, 5).unwrap();
         let op = HankelOperator::new(&markov, shapes.h0).unwrap();
         // Subspace iteration is the library's truncated SVD at depth 1.
-        for (label, depth) in [
-            ("subspace iteration (depth 1)", 1),
+        let defaults = TruncatedSvdOptions::new(rank);
+        for (label, depth, block) in [
+            ("subspace iteration (depth 1)", 1, 0),
+            ("restarted block Krylov      ", defaults.depth, 0),
             (
-                "block Krylov (defaults)     ",
-                TruncatedSvdOptions::new(rank).depth,
+                "defaults (unrestarted first)",
+                defaults.depth,
+                defaults.block,
             ),
         ] {
             let options = TruncatedSvdOptions {
                 depth,
-                ..TruncatedSvdOptions::new(rank)
+                block,
+                ..defaults
             };
             let clock = Instant::now();
             let cpu = cpu_seconds();
-            let mut passes = 0;
+            let (mut passes, mut columns) = (0, 0);
             for _ in 0..5 {
-                passes = truncated_svd(&op, &options).unwrap().iterations;
+                let svd = truncated_svd(&op, &options).unwrap();
+                (passes, columns) = (svd.iterations, svd.columns);
             }
             let (ms, cpu_ms) = (
                 clock.elapsed().as_secs_f64() * 200.0,
                 (cpu_seconds() - cpu) * 200.0,
             );
             println!(
-                "noise {noise:.2} {label}: {passes:2} passes {ms:7.1} ms wall {cpu_ms:7.1} ms cpu"
+                "noise {noise:.2} {label}: {passes:2} passes, {columns:4} columns {ms:7.1} ms wall {cpu_ms:7.1} ms cpu"
             );
         }
         for depth in [1, 2, 3, 4, 6] {
@@ -87,9 +94,11 @@ fn main() {
                 if !args.is_empty() && !(args.contains(&depth)) {
                     continue;
                 }
+                // The restarted iteration alone, at this depth and block width.
                 let options = TruncatedSvdOptions {
                     depth,
                     oversample,
+                    block: 0,
                     ..TruncatedSvdOptions::new(rank)
                 };
                 let clock = Instant::now();
