@@ -18,14 +18,15 @@
 //! (between one block and half the basis further on). The phase hands its best `k` Ritz
 //! triplets, with `Hᵀ u` (no product needed), to the restarted iteration when the basis
 //! would outgrow its room (the memory budget, or half the smaller side) or the residual
-//! stalls at the products' rounding floor. It runs only with room for `2k` columns:
-//! where there is less, data with a gap past the rank (exact low-rank data) are served
-//! better by the restarted iteration's opening, which settles them in two passes of `k`
-//! columns. A block Krylov space finds at most `b` copies
+//! stalls at the products' rounding floor. It runs first only with room for `2k`
+//! columns: where there is less, data with a gap past the rank (exact low-rank data) are
+//! served better by the restarted iteration's opening, which settles them in two passes
+//! of `k` columns, and the phase runs after the opening only when that has not. A block Krylov space finds at most `b` copies
 //! of a repeated singular value, hence the floor `b ≥ 8`.
 //!
-//! **The opening** of the restarted iteration, when it runs alone (no room for `2k`
-//! columns, or `block = 0`). The first two passes are randomized subspace iteration (Halko,
+//! **The opening** of the restarted iteration. It runs first where the unrestarted phase
+//! has room for fewer than `2k` columns (or `block = 0`); where it does not settle the
+//! data and the phase has room for `k + b`, the phase runs next, from a fresh start. The first two passes are randomized subspace iteration (Halko,
 //! Martinsson & Tropp 2011, Alg. 4.4 and 5.1): `Q = orth(H Ω)`, `W = orth(Hᵀ Q)` finds the
 //! range, then `H W = Q R`, `R = X Σ Yᵀ` gives the Ritz triplets `(Q X, Σ, W Y)` and
 //! `Hᵀ Q X` their residuals. Data with a clear gap past the order (exact Markov data of a
@@ -369,45 +370,49 @@ pub fn truncated_svd(
     let mut timings = TsvdTimings::default();
     let block = options.block.min(limit);
     let deep_width = deep_width(rows, cols, block);
-    // Passes of the unrestarted phase, and the columns they multiplied.
-    let mut first_phase = (0, 0);
-    // The phase needs room: noisy data converge at 2–3 × rank columns. Where it has
-    // less, data with a gap past the rank (exact low-rank data: the 8000², 400-state case
-    // took 2.6 s in the phase and its hand-over, 1.2 s in the opening's 2 passes) are
-    // better served by the opening.
-    let (mut step, mut pass) = if block > 0 && deep_width >= 2 * k {
-        match deep_krylov(op, options, k, block, deep_width, &mut rng, &mut timings)? {
-            Deep::Converged(svd) => return Ok(svd),
-            Deep::Exhausted { step, passes } => {
-                first_phase = (passes, passes * block);
-                (step, passes)
+    // Passes and columns before the restarted iteration's current run.
+    let mut before = (0, 0);
+    // The phase needs room: noisy data converge at 2–3 × rank columns. Where it has less,
+    // data with a gap past the rank (exact low-rank data: the 8000², 400-state case took
+    // 2.6 s in the phase and its hand-over, 1.2 s in the opening's 2 passes) are served by
+    // the opening, and the phase runs only if the opening has not converged.
+    let room = block > 0 && deep_width >= k + block;
+    let mut opened = None;
+    if !(room && deep_width >= 2 * k) {
+        let step = opening(op, k, options, &mut rng, &mut timings)?;
+        if step.residual <= options.tolerance || !room {
+            opened = Some((step, 2));
+        } else {
+            before = (2, 2 * k);
+        }
+    }
+    let (mut step, mut pass) = match opened {
+        Some(opened) => opened,
+        None => {
+            let budget = options.max_iterations.saturating_sub(before.0);
+            match deep_krylov(
+                op,
+                options,
+                budget,
+                k,
+                block,
+                deep_width,
+                &mut rng,
+                &mut timings,
+            )? {
+                Deep::Converged(mut svd) => {
+                    svd.iterations += before.0;
+                    svd.columns += before.1;
+                    return Ok(svd);
+                }
+                Deep::Exhausted { step, passes } => {
+                    before = (before.0 + passes, before.1 + passes * block);
+                    (step, before.0)
+                }
             }
         }
-    } else {
-        let mut clock = Stopwatch::new();
-        // Pass 1 finds the range from a random start (any full-rank test matrix does;
-        // Halko et al. §4), pass 2 is one step of subspace iteration with the explicit
-        // residual. Data with a gap past the order (exact or nearly exact low rank) stop
-        // here.
-        let start = Mat::from_fn(cols, k, |_, _| 2.0 * rng.uniform() - 1.0);
-        let range = op.apply(start.as_ref());
-        drop(start);
-        clock.lap(&mut timings.products);
-        let q = householder_q(range);
-        let back = op.apply_transpose(q.as_ref());
-        drop(q);
-        clock.lap(&mut timings.products);
-        let w = householder_q(back);
-        clock.lap(&mut timings.orthogonalisation);
-        if options.max_iterations < 2 {
-            return Err(not_converged(options, f64::INFINITY));
-        }
-        (
-            subspace_step(op, w, options.rank, &mut clock, &mut timings)?,
-            2,
-        )
     };
-    let columns = |passes: usize| first_phase.1 + (passes - first_phase.0) * k;
+    let columns = |passes: usize| before.1 + (passes - before.0) * k;
     loop {
         if step.residual <= options.tolerance {
             return Ok(TruncatedSvd {
@@ -438,6 +443,34 @@ pub fn truncated_svd(
         pass += 1;
         step = subspace_step(op, w, options.rank, &mut clock, &mut timings)?;
     }
+}
+
+/// The restarted iteration's opening: pass 1 finds the range from a random start (any
+/// full-rank test matrix does; Halko et al. §4), pass 2 is one step of subspace
+/// iteration with the explicit residual. Data with a gap past the order (exact or nearly
+/// exact low rank) stop here.
+fn opening(
+    op: &dyn LinearOperator,
+    k: usize,
+    options: &TruncatedSvdOptions,
+    rng: &mut Minstd,
+    timings: &mut TsvdTimings,
+) -> Result<SubspaceStep> {
+    let mut clock = Stopwatch::new();
+    let start = Mat::from_fn(op.ncols(), k, |_, _| 2.0 * rng.uniform() - 1.0);
+    let range = op.apply(start.as_ref());
+    drop(start);
+    clock.lap(&mut timings.products);
+    let q = householder_q(range);
+    let back = op.apply_transpose(q.as_ref());
+    drop(q);
+    clock.lap(&mut timings.products);
+    let w = householder_q(back);
+    clock.lap(&mut timings.orthogonalisation);
+    if options.max_iterations < 2 {
+        return Err(not_converged(options, f64::INFINITY));
+    }
+    subspace_step(op, w, options.rank, &mut clock, timings)
 }
 
 /// Wall-clock laps into [`TsvdTimings`] slots.
@@ -702,9 +735,11 @@ enum Deep {
 /// reorthogonalisation against one growing basis (one GEMM a sweep) and the
 /// Rayleigh–Ritz step only at checkpoints. The next checkpoint is where the residual's
 /// geometric decrease over the last two predicts convergence (within `W + b … 3W/2`).
+#[allow(clippy::too_many_arguments)]
 fn deep_krylov(
     op: &dyn LinearOperator,
     options: &TruncatedSvdOptions,
+    max_passes: usize,
     k: usize,
     b: usize,
     max_width: usize,
@@ -761,7 +796,7 @@ fn deep_krylov(
         s_mat.as_mut().submatrix_mut(vw, w, b, b).copy_from(&l);
         clock.lap(&mut timings.orthogonalisation);
         let w = w + b;
-        let out_of_room = w + b > max_width || pass >= options.max_iterations;
+        let out_of_room = w + b > max_width || pass >= max_passes;
         if w < next_check && !out_of_room {
             continue;
         }
@@ -1109,11 +1144,19 @@ mod tests {
         // in passes of k = 16 columns.
         assert!(t.iterations > 5, "{} passes", t.iterations);
         assert_eq!(t.columns, 5 * 8 + (t.iterations - 5) * 16);
-        // With less room (24 columns, under 2k) the phase does not run at all.
+        // With less room (24 columns, under 2k) the opening goes first: exact low-rank
+        // data stop there, after 2 passes of k columns; the others go on to the phase
+        // (3 blocks after its start fill the room) and then to the restarted iteration.
         assert_eq!(deep_width(m - 2, n - 2, options.block), 24);
-        let alone = with_singular_values(m - 2, n - 2, &d[..n - 2], 5);
-        let t = truncated_svd(&alone, &options).unwrap();
-        assert_eq!(t.columns, t.iterations * 16);
+        let exact = with_singular_values(m - 2, n - 2, &d[..rank], 5);
+        let t = truncated_svd(&exact, &options).unwrap();
+        assert_eq!((t.iterations, t.columns), (2, 32));
+        let slow = with_singular_values(m - 2, n - 2, &d[..n - 2], 5);
+        let t = truncated_svd(&slow, &options).unwrap();
+        let (value, vector) = triplet_errors(&slow, &t, &d, rank);
+        assert!(value < 1e-12 && vector < 1e-11, "{value:e} {vector:e}");
+        assert!(t.iterations > 6, "{} passes", t.iterations);
+        assert_eq!(t.columns, 2 * 16 + 4 * 8 + (t.iterations - 6) * 16);
         // Out of passes inside the phase: an error, not a panic.
         let short = TruncatedSvdOptions {
             max_iterations: 2,
