@@ -16,7 +16,7 @@ Thesis names (Woods 1994, Appendix J) beside ours: ``states`` = ns, ``hankel_fac
 (ford, Hzbreak), ``time_domain`` = cord.
 
 Errors: bad values and malformed files raise ``ValueError`` with the CLI's message, a
-missing file ``FileNotFoundError``, an unreadable one ``OSError``; a value of the wrong
+missing file ``FileNotFoundError``, a folder ``IsADirectoryError``, an unreadable one ``OSError``; a value of the wrong
 type ``TypeError``. Heavy calls release the GIL, so threads identify in parallel.
 """
 

@@ -46,8 +46,10 @@ def test_frfdata_values_are_validated_like_a_file():
         era.FrfData([0, 2, 5, 6, 8], np.ones((1, 1, 5)))
     with pytest.raises(ValueError, match="need at least 2 frequency lines, got 1"):
         era.FrfData([0.0], np.ones((1, 1, 1)))
-    with pytest.raises(ValueError, match="non-finite value in frequency"):
+    with pytest.raises(ValueError, match=r"^non-finite value in frequency at line 1$"):
         era.FrfData([0, np.inf], np.ones((1, 1, 2)))
+    with pytest.raises(ValueError, match=r"^frequencies must increase from 0 Hz: line 1 is -12.5 Hz$"):
+        era.FrfData([0, -12.5, -25], np.ones((1, 1, 3)))
     with pytest.raises(ValueError, match=r"values: expected 3 dimensions \(outputs, inputs, lines\), got shape \(2, 5\)"):
         era.FrfData(f, np.ones((2, 5)))
     with pytest.raises(ValueError, match="frequency_hz: expected 1 dimensions"):
@@ -66,7 +68,7 @@ def test_frfdata_values_are_validated_like_a_file():
 
 @pytest.mark.parametrize("kwargs,message", [
     (dict(states=0), "states 0: the model needs at least one state"),
-    (dict(states=-3), "states -3: must be 0 or more"),
+    (dict(states=-3), "states -3: cannot be negative"),
     (dict(states="eight"), "states 'eight': expected a number of states"),
     (dict(states=8, hankel_factor=0), "hankel_factor 0: must be at least 1"),
     (dict(states=10**30), "states: more than 1.8e19 states asked for, the limit is 20000 (set ERA_MAX_STATES to raise it)"),
@@ -83,6 +85,8 @@ def test_frfdata_values_are_validated_like_a_file():
     (dict(states=8, refine=True, weighting="loud"), "weighting 'loud': expected"),
     (dict(states=8, refine=True, max_iterations=0), "max_iterations 0: the refinement needs at least one iteration"),
     (dict(states=8, hankel_factor=400), "the Hankel matrix needs"),
+    (dict(states=8, zero_lines=10**6), "invalid parameter zero_lines = 1000000: the data has only"),
+    (dict(states=8, pad_to=5), "invalid parameter pad_to = 5: padding to 6 lines would truncate"),
     (dict(states=8, integrations=3), "integrat"),
 ])
 def test_identify_refuses_bad_parameters(truth, kwargs, message):
@@ -175,14 +179,14 @@ def test_mat_frequency_variable(tmp_path, truth, era_cli):
 
 
 def test_folder_and_wrong_format(tmp_path):
-    with pytest.raises((ValueError, OSError)) as caught:
+    with pytest.raises(IsADirectoryError, match="is a folder, not a file: name a file inside it") as caught:
         era.read_frf(tmp_path)
     assert str(tmp_path) in str(caught.value)
     named = tmp_path / "fake.uff"
     named.write_text("frequency_hz,H1_1_re,H1_1_im\n")
     with pytest.raises(ValueError, match="the name says UFF but the content does not start like one"):
         era.read_frf(named)
-    with pytest.raises(ValueError, match="outputs -1: must be 0 or more"):
+    with pytest.raises(ValueError, match="outputs -1: cannot be negative"):
         era.read_frf(named, outputs=-1)
     with pytest.raises(ValueError, match="quantity 'jerk'"):
         era.read_frf(named, quantity="jerk")
@@ -234,13 +238,13 @@ def record():
     (dict(detrend="cubic"), "detrend 'cubic': expected 'none', 'mean' or 'linear'"),
     (dict(quantity="force"), "quantity 'force'"),
     (dict(sample_rate_hz=-1.0), "sample_rate_hz -1: must be a positive number of samples per second"),
-    (dict(frame=-2), "frame -2: must be 0 or more"),
+    (dict(frame=-2), "frame -2: cannot be negative"),
     (dict(frame=0), "frame"),
     (dict(frame=10**6), "frame"),
     (dict(overlap=1.0), "overlap"),
     (dict(inputs=[5]), "inputs: channel 5 is out of range: data has 2 channels (0-based, axis 0)"),
     (dict(outputs=[]), "outputs: give at least one channel"),
-    (dict(inputs=[-1]), "inputs -1: must be 0 or more"),
+    (dict(inputs=[-1]), "inputs -1: cannot be negative"),
 ])
 def test_estimate_frf_refuses_bad_parameters(record, kwargs, message):
     args = dict(sample_rate_hz=100.0, inputs=[0], outputs=[1], frame=256)
@@ -285,9 +289,9 @@ def test_simulate_truth_model_errors(tmp_path, era_cli):
     with pytest.raises(ValueError) as caught:
         era.simulate_truth_model(noise=2000)
     assert str(caught.value) == expected
-    with pytest.raises(ValueError, match="seed -1: must be 0 or more"):
+    with pytest.raises(ValueError, match="seed -1: cannot be negative"):
         era.simulate_truth_model(seed=-1)
-    with pytest.raises(ValueError, match="modes -1: must be 0 or more"):
+    with pytest.raises(ValueError, match="modes -1: cannot be negative"):
         era.simulate_modal(modes=-1)
 
 
@@ -312,3 +316,15 @@ def test_friction_errors(era_cli, tmp_path):
     backwards[50] = backwards[49]
     with pytest.raises(ValueError):
         era.friction.estimate(backwards, v, 1.0)
+
+
+def test_signatures_show_the_defaults():
+    # help() and editors read these: the real defaults, not "..." placeholders.
+    import inspect
+
+    identify = inspect.signature(era.identify).parameters
+    assert identify["hankel_factor"].default == 5
+    assert identify["time_domain"].default == "discrete"
+    assert identify["refine"].default is False
+    assert inspect.signature(era.simulate_modal).parameters["modes"].default == 40
+    assert inspect.signature(era.simulate_truth_model).parameters["seed"].default == 1

@@ -82,6 +82,19 @@ pub fn read_input(path: &Path) -> Result<InputBytes, IoError> {
     read_input_limited(path, INPUT_BYTES)
 }
 
+/// A folder given where a file is read: an operating-system refusal
+/// ([`std::io::ErrorKind::IsADirectory`], so that Python raises `IsADirectoryError`), in
+/// words that say what to do.
+fn is_a_folder(path: &Path) -> IoError {
+    IoError::io(
+        path,
+        std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "is a folder, not a file: name a file inside it",
+        ),
+    )
+}
+
 /// [`read_input`] with another limit on streamed input (for tests and callers that
 /// know better).
 ///
@@ -89,20 +102,12 @@ pub fn read_input(path: &Path) -> Result<InputBytes, IoError> {
 /// As [`read_input`].
 pub fn read_input_limited(path: &Path, limit: Limit) -> Result<InputBytes, IoError> {
     if path.is_dir() {
-        return Err(IoError::format(
-            path,
-            "",
-            "is a folder, not a file: name a file inside it",
-        ));
+        return Err(is_a_folder(path));
     }
     let file = open(path).map_err(|e| IoError::io(path, e))?;
     let meta = file.metadata().map_err(|e| IoError::io(path, e))?;
     if meta.is_dir() {
-        return Err(IoError::format(
-            path,
-            "",
-            "is a folder, not a file: name a file inside it",
-        ));
+        return Err(is_a_folder(path));
     }
     if meta.is_file() {
         if meta.len() == 0 {

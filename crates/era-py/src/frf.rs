@@ -382,7 +382,7 @@ pub fn estimate_frf<'py>(
 /// 0 … 12.8 kHz, with `noise` (a fraction of each FRF's RMS, e.g. 0.15) of seeded
 /// complex Gaussian noise when given.
 #[pyfunction]
-#[pyo3(signature = (noise=None, seed=Int(1)))]
+#[pyo3(signature = (noise=None, seed=Int(1)), text_signature = "(noise=None, seed=1)")]
 pub fn simulate_truth_model(py: Python<'_>, noise: Option<f64>, seed: Int) -> PyResult<PyFrfData> {
     let seed = seed.count("seed")?;
     if let Some(n) = noise {
@@ -397,7 +397,10 @@ pub fn simulate_truth_model(py: Python<'_>, noise: Option<f64>, seed: Int) -> Py
 /// `era simulate modal`: `modes` modes between `fmin` and `fmax` Hz, damping ratios
 /// drawn in `damping = (min, max)`, FRFs on `lines` lines at `df` Hz.
 #[pyfunction]
-#[pyo3(signature = (outputs=Int(8), inputs=Int(8), modes=Int(40), fmin=0.5, fmax=14.0, damping=(0.005, 0.02), lines=Int(801), df=0.025, quantity="acceleration", collocated=false, noise=0.0, seed=Int(1)))]
+#[pyo3(
+    signature = (outputs=Int(8), inputs=Int(8), modes=Int(40), fmin=0.5, fmax=14.0, damping=(0.005, 0.02), lines=Int(801), df=0.025, quantity="acceleration", collocated=false, noise=0.0, seed=Int(1)),
+    text_signature = "(outputs=8, inputs=8, modes=40, fmin=0.5, fmax=14.0, damping=(0.005, 0.02), lines=801, df=0.025, quantity='acceleration', collocated=False, noise=0.0, seed=1)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_modal(
     py: Python<'_>,

@@ -13,7 +13,8 @@
 //! ## Errors
 //! A refused value or file is a Python exception carrying the CLI's message: input errors
 //! of the core ([`era::EraError::is_input_error`]) and malformed files are `ValueError`;
-//! a missing file `FileNotFoundError`, an unreadable one `PermissionError` or `OSError`;
+//! a missing file `FileNotFoundError`, a folder `IsADirectoryError`, an unreadable file
+//! `PermissionError` or `OSError`;
 //! a numerical failure `RuntimeError`. A panic never crosses into Python as pyo3's
 //! `PanicException`: `guarded` turns one into a `RuntimeError` naming it an internal
 //! error.
@@ -31,7 +32,8 @@
 
 use numpy::{Element, PyArray, PyArray1};
 use pyo3::exceptions::{
-    PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
+    PyFileNotFoundError, PyIsADirectoryError, PyOSError, PyPermissionError, PyRuntimeError,
+    PyValueError,
 };
 use pyo3::prelude::*;
 
@@ -42,8 +44,20 @@ mod model;
 /// An error of the core as a Python exception: `ValueError` for the caller's data or
 /// parameters, `RuntimeError` for a numerical failure.
 pub(crate) fn era_error(e: era::EraError) -> PyErr {
+    // A refused parameter is named as the CLI's flag (`pad-to`); here it is the keyword.
+    let text = match &e {
+        era::EraError::InvalidParameter {
+            name,
+            value,
+            reason,
+        } => format!(
+            "invalid parameter {} = {value}: {reason}",
+            era::params::Naming::Keyword.name(&name.replace('-', "_"))
+        ),
+        _ => e.to_string(),
+    };
     // Core messages quote options by field name; here they are keywords.
-    let message = era::params::render(era::params::Naming::Keyword, &e.to_string());
+    let message = era::params::render(era::params::Naming::Keyword, &text);
     if e.is_input_error() {
         PyValueError::new_err(message)
     } else {
@@ -60,6 +74,7 @@ pub(crate) fn io_error(e: era_io::IoError) -> PyErr {
         era_io::IoError::Io { error, .. } => match error.kind() {
             std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
             std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+            std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
             _ => PyOSError::new_err(message),
         },
         _ => PyValueError::new_err(message),
@@ -127,7 +142,7 @@ impl Int {
             } else {
                 self.0.to_string()
             };
-            return value_error(format!("{name} {shown}: must be 0 or more"));
+            return value_error(format!("{name} {shown}: cannot be negative"));
         }
         Ok(u64::try_from(self.0).unwrap_or(u64::MAX))
     }

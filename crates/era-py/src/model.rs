@@ -369,7 +369,10 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// `threads` sets the threads of this call (rayon's and faer's together); by default
 /// every core.
 #[pyfunction]
-#[pyo3(signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, threads=None))]
+#[pyo3(
+    signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, threads=None),
+    text_signature = "(frf, states, hankel_factor=5, integrations=0, zero_lines=0, pad_to=0, lowpass=None, time_domain='discrete', direct_term='zero', svd='auto', refine=False, residuals='both', reciprocal=False, weighting='pair-noise', max_iterations=100, added_modes=True, threads=None)"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,

@@ -31,21 +31,20 @@ pub enum EraError {
         first_hz: f64,
     },
     /// Frequencies are not uniformly spaced.
-    #[error(
-        "frequencies are not uniformly spaced: line {line} is {found_hz} Hz, expected {expected_hz} Hz (spacing {spacing_hz} Hz)"
-    )]
+    #[error("{}", non_uniform_message(*line, *found_hz, *expected_hz, *spacing_hz))]
     NonUniformFrequencies {
         /// 0-based line index.
         line: usize,
         /// Frequency found, Hz.
         found_hz: f64,
-        /// Frequency expected from the spacing of the first two lines, Hz.
+        /// Frequency expected from the spacing of the first two lines, Hz (NaN when that
+        /// spacing is not positive).
         expected_hz: f64,
         /// Spacing of the first two lines, Hz.
         spacing_hz: f64,
     },
     /// A frequency or FRF value is NaN or infinite.
-    #[error("non-finite value in {what} at output {output}, input {input}, line {line}")]
+    #[error("{}", non_finite_message(what, *output, *input, *line))]
     NonFinite {
         /// Which array.
         what: &'static str,
@@ -230,9 +229,49 @@ impl EraError {
 /// Result alias of the core.
 pub type Result<T> = std::result::Result<T, EraError>;
 
+/// [`EraError::NonUniformFrequencies`]: a second line at or below 0 Hz has no spacing to
+/// expect anything from.
+fn non_uniform_message(line: usize, found_hz: f64, expected_hz: f64, spacing_hz: f64) -> String {
+    if spacing_hz > 0.0 && expected_hz.is_finite() {
+        format!(
+            "frequencies are not uniformly spaced: line {line} is {found_hz} Hz, expected {expected_hz} Hz (spacing {spacing_hz} Hz)"
+        )
+    } else {
+        format!("frequencies must increase from 0 Hz: line {line} is {found_hz} Hz")
+    }
+}
+
+/// [`EraError::NonFinite`]: the frequency vector has lines only (output and input 0).
+fn non_finite_message(what: &str, output: usize, input: usize, line: usize) -> String {
+    if output == 0 && input == 0 {
+        format!("non-finite value in {what} at line {line}")
+    } else {
+        format!("non-finite value in {what} at output {output}, input {input}, line {line}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The frequency checks' messages say what is wrong in every case: a second line at
+    /// or below 0 Hz has no spacing (no "expected NaN Hz"), and the frequency vector has no
+    /// outputs or inputs to name.
+    #[test]
+    fn frequency_messages_read_right_in_every_case() {
+        let decreasing = crate::frf::validate_frequencies(&[0.0, -12.5, -25.0]).unwrap_err();
+        assert_eq!(
+            decreasing.to_string(),
+            "frequencies must increase from 0 Hz: line 1 is -12.5 Hz"
+        );
+        let uneven = crate::frf::validate_frequencies(&[0.0, 2.0, 5.0]).unwrap_err();
+        assert_eq!(
+            uneven.to_string(),
+            "frequencies are not uniformly spaced: line 2 is 5 Hz, expected 4 Hz (spacing 2 Hz)"
+        );
+        let nan = crate::frf::validate_frequencies(&[0.0, 1.0, f64::NAN]).unwrap_err();
+        assert_eq!(nan.to_string(), "non-finite value in frequency at line 2");
+    }
 
     #[test]
     fn remedies_name_options_as_the_front_end_does() {

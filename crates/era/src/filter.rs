@@ -65,9 +65,9 @@ impl LowPass {
                 name: "lowpass-hz",
                 value: cutoff_hz.to_string(),
                 reason: format!(
-                    "the cut-off must lie between {:.6e} Hz and {:.6e} Hz ({MIN_NORMALISED_CUTOFF} to {} of the Nyquist frequency {nyquist} Hz)",
-                    MIN_NORMALISED_CUTOFF * nyquist,
-                    (1.0 - MIN_NORMALISED_CUTOFF) * nyquist,
+                    "the cut-off must lie between {} Hz and {} Hz ({MIN_NORMALISED_CUTOFF} to {} of the Nyquist frequency {nyquist} Hz)",
+                    six_digits(MIN_NORMALISED_CUTOFF * nyquist),
+                    six_digits((1.0 - MIN_NORMALISED_CUTOFF) * nyquist),
                     1.0 - MIN_NORMALISED_CUTOFF,
                 ),
             });
@@ -152,6 +152,21 @@ impl LowPass {
     }
 }
 
+/// `x` to 6 significant digits, without trailing zeros (`1.28`, `12798.7`), or in
+/// exponent form outside 1e-3 … 1e6.
+fn six_digits(x: f64) -> String {
+    if x == 0.0 || !(1e-3..1e6).contains(&x.abs()) {
+        return format!("{x:.5e}");
+    }
+    let decimals = (5 - x.abs().log10().floor() as i32).clamp(0, 8) as usize;
+    let text = format!("{x:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -174,6 +189,15 @@ mod tests {
         }
         assert!(LowPass::design(4, 0.1, f64::NAN).is_err());
         assert!(LowPass::design(4, 0.1, 0.0).is_err());
+        // The band's edges read as numbers a person writes.
+        let e = LowPass::design(4, 1e9, 1.0 / 25600.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("between 1.28 Hz and 12798.7 Hz"), "{e}");
+        assert_eq!(six_digits(0.00123456789), "0.00123457");
+        assert_eq!(six_digits(0.000123456789), "1.23457e-4");
+        assert_eq!(six_digits(2.5e-7), "2.50000e-7");
+        assert_eq!(six_digits(100.0), "100");
     }
 
     #[test]
