@@ -13,7 +13,8 @@
 //! triplets, `b = 13`) it converges at about 230 columns each way with 5 % noise and 270
 //! with 15 %, where the restarted iteration took 6–7 passes of 120 columns and four
 //! small SVDs of up to 480². The Rayleigh–Ritz step (the small SVD of `T`) runs only at
-//! checkpoints: first when the basis holds `rank + oversample` columns, then where the
+//! checkpoints: first when the basis holds `rank + oversample` columns (and at least
+//! `rank + 2b`), then where the
 //! residual's geometric decrease between the last two checkpoints predicts convergence
 //! (between one block and half the basis further on). The phase hands its best `k` Ritz
 //! triplets, with `Hᵀ u` (no product needed), to the restarted iteration when the basis
@@ -21,12 +22,14 @@
 //! stalls at the products' rounding floor. It runs first only with room for `2k`
 //! columns: where there is less, data with a gap past the rank (exact low-rank data) are
 //! served better by the restarted iteration's opening, which settles them in two passes
-//! of `k` columns, and the phase runs after the opening only when that has not. A block Krylov space finds at most `b` copies
-//! of a repeated singular value, hence the floor `b ≥ 8`.
+//! of `k` columns, and the phase runs after the opening only when that has not. A block
+//! Krylov space finds at most `b` copies of a repeated singular value, hence the floor
+//! `b ≥ 8`.
 //!
 //! **The opening** of the restarted iteration. It runs first where the unrestarted phase
 //! has room for fewer than `2k` columns (or `block = 0`); where it does not settle the
-//! data and the phase has room for `k + b`, the phase runs next, from a fresh start. The first two passes are randomized subspace iteration (Halko,
+//! data and the phase has room for `k + b`, the phase runs next, from a fresh start.
+//! The first two passes are randomized subspace iteration (Halko,
 //! Martinsson & Tropp 2011, Alg. 4.4 and 5.1): `Q = orth(H Ω)`, `W = orth(Hᵀ Q)` finds the
 //! range, then `H W = Q R`, `R = X Σ Yᵀ` gives the Ritz triplets `(Q X, Σ, W Y)` and
 //! `Hᵀ Q X` their residuals. Data with a clear gap past the order (exact Markov data of a
@@ -114,8 +117,10 @@ pub struct TruncatedSvdOptions {
     pub oversample: usize,
     /// Stop when every wanted residual `ρ_i ≤ tolerance` (relative to `σ₁`).
     pub tolerance: f64,
-    /// Give up after this many passes. The range-finding pass always runs, and the first
-    /// residual is measured at pass 2, so fewer than 2 always fails.
+    /// Give up after this many passes of the restarted iteration. The range-finding pass
+    /// always runs, and the first residual is measured at pass 2, so fewer than 2 always
+    /// fails. The unrestarted phase is bounded by its room, and by as many passes of its
+    /// own; the restarted iteration that may follow it counts from 0 again.
     pub max_iterations: usize,
     /// Seed of the random start ([`Minstd`]).
     pub seed: u64,
@@ -123,9 +128,11 @@ pub struct TruncatedSvdOptions {
     /// the two bases stay within [`BASIS_BUDGET_BYTES`] and each basis within half the
     /// operator's smaller side.
     pub depth: usize,
-    /// Block width of the unrestarted Krylov phase that runs first (0: none, straight to
-    /// the restarted iteration). The phase runs while its basis fits the same bounds as
-    /// `depth`, and only when it can hold twice `rank + oversample` columns.
+    /// Block width of the unrestarted Krylov phase (0: none, the restarted iteration
+    /// alone). The phase runs while its basis fits the same bounds as `depth`: first when
+    /// it has room for twice `rank + oversample` columns, after the restarted iteration's
+    /// opening when it has room for `rank + oversample` and a block and the opening has
+    /// not converged, and not at all with less room.
     pub block: usize,
 }
 
@@ -388,29 +395,17 @@ pub fn truncated_svd(
     }
     let (mut step, mut pass) = match opened {
         Some(opened) => opened,
-        None => {
-            let budget = options.max_iterations.saturating_sub(before.0);
-            match deep_krylov(
-                op,
-                options,
-                budget,
-                k,
-                block,
-                deep_width,
-                &mut rng,
-                &mut timings,
-            )? {
-                Deep::Converged(mut svd) => {
-                    svd.iterations += before.0;
-                    svd.columns += before.1;
-                    return Ok(svd);
-                }
-                Deep::Exhausted { step, passes } => {
-                    before = (before.0 + passes, before.1 + passes * block);
-                    (step, before.0)
-                }
+        None => match deep_krylov(op, options, k, block, deep_width, &mut rng, &mut timings)? {
+            Deep::Converged(mut svd) => {
+                svd.iterations += before.0;
+                svd.columns += before.1;
+                return Ok(svd);
             }
-        }
+            Deep::Exhausted { step, passes } => {
+                before = (before.0 + passes, before.1 + passes * block);
+                (step, before.0)
+            }
+        },
     };
     let columns = |passes: usize| before.1 + (passes - before.0) * k;
     loop {
@@ -425,13 +420,15 @@ pub fn truncated_svd(
                 timings,
             });
         }
-        if pass >= options.max_iterations {
+        // The restarted iteration's own passes: those after the phase.
+        if pass - before.0 >= options.max_iterations {
             return Err(not_converged(options, step.residual));
         }
         if depth > 1 {
             // The pass's Ritz vectors are the Krylov recurrence's first blocks:
             // U_0 = u, V_0 = v, T_00 = Σ, and Hᵀ U_0 is formed.
-            let mut svd = krylov(op, step, options, k, depth, pass, timings)?;
+            let mut svd = krylov(op, step, options, k, depth, pass - before.0, timings)?;
+            svd.iterations += before.0;
             svd.columns = columns(svd.iterations);
             return Ok(svd);
         }
@@ -735,11 +732,9 @@ enum Deep {
 /// reorthogonalisation against one growing basis (one GEMM a sweep) and the
 /// Rayleigh–Ritz step only at checkpoints. The next checkpoint is where the residual's
 /// geometric decrease over the last two predicts convergence (within `W + b … 3W/2`).
-#[allow(clippy::too_many_arguments)]
 fn deep_krylov(
     op: &dyn LinearOperator,
     options: &TruncatedSvdOptions,
-    max_passes: usize,
     k: usize,
     b: usize,
     max_width: usize,
@@ -750,7 +745,9 @@ fn deep_krylov(
     let mut clock = Stopwatch::new();
     let start = Mat::from_fn(cols, b, |_, _| 2.0 * rng.uniform() - 1.0);
     let range = op.apply(start.as_ref());
+    drop(start);
     let back = op.apply_transpose(range.as_ref());
+    drop(range);
     clock.lap(&mut timings.products);
     let mut v = Mat::<f64>::with_capacity(cols, max_width + b);
     append_columns(&mut v, &block_qr(back).0);
@@ -796,7 +793,7 @@ fn deep_krylov(
         s_mat.as_mut().submatrix_mut(vw, w, b, b).copy_from(&l);
         clock.lap(&mut timings.orthogonalisation);
         let w = w + b;
-        let out_of_room = w + b > max_width || pass >= max_passes;
+        let out_of_room = w + b > max_width || pass >= options.max_iterations;
         if w < next_check && !out_of_room {
             continue;
         }
@@ -822,9 +819,8 @@ fn deep_krylov(
             })
             .fold(0.0, worst);
         let xk = x.subcols(0, k);
-        let ritz = |u: &Mat<f64>, v: &Mat<f64>| (u * xk, v.subcols(0, w) * y.subcols(0, k));
         if residual <= options.tolerance {
-            let (ritz_u, ritz_v) = ritz(&u, &v);
+            let (ritz_u, ritz_v) = (&u * xk, v.subcols(0, w) * y.subcols(0, k));
             clock.lap(&mut timings.rayleigh_ritz);
             return Ok(Deep::Converged(TruncatedSvd {
                 u: ritz_u,
@@ -843,10 +839,13 @@ fn deep_krylov(
         let stalled =
             last.is_some_and(|(_, r0)| residual > 0.5 * r0 && residual < 100.0 * options.tolerance);
         if out_of_room || stalled {
-            // Hᵀ U X_k = V S X_k, with V's last block included.
+            // Hᵀ U X_k = V S X_k, with V's last block included. Each basis is dropped once
+            // its products are formed, so that at most one is alive beside k-column blocks.
+            let ritz_u = &u * xk;
+            drop(u);
             let back = &v * (&s_mat * xk);
-            let (ritz_u, ritz_v) = ritz(&u, &v);
-            drop((u, v));
+            let ritz_v = v.subcols(0, w) * y.subcols(0, k);
+            drop(v);
             clock.lap(&mut timings.rayleigh_ritz);
             return Ok(Deep::Exhausted {
                 step: SubspaceStep {
@@ -882,7 +881,10 @@ fn next_checkpoint(
             .then(|| width as f64 + (tolerance / residual).ln() / rate)
     });
     match predicted {
-        Some(p) if p.is_finite() => ((p / b as f64).ceil() as usize * b).clamp(near, far),
+        // Clamped before the cast: a residual that barely moved predicts a huge width.
+        Some(p) if p.is_finite() => {
+            ((p.clamp(near as f64, far as f64) / b as f64).ceil() as usize * b).clamp(near, far)
+        }
         _ => width + (width / 4).max(b),
     }
 }
@@ -1144,6 +1146,19 @@ mod tests {
         // in passes of k = 16 columns.
         assert!(t.iterations > 5, "{} passes", t.iterations);
         assert_eq!(t.columns, 5 * 8 + (t.iterations - 5) * 16);
+        // The restarted iteration's passes count from 0 after the phase: a budget of
+        // fewer passes than the two together, but as many as either, still converges.
+        let restarted = t.iterations - 5;
+        let budget = TruncatedSvdOptions {
+            max_iterations: restarted.max(5),
+            ..options
+        };
+        assert!(budget.max_iterations < t.iterations);
+        let again = truncated_svd(&a, &budget).unwrap();
+        assert_eq!(
+            (again.iterations, again.s.clone()),
+            (t.iterations, t.s.clone())
+        );
         // With less room (24 columns, under 2k) the opening goes first: exact low-rank
         // data stop there, after 2 passes of k columns; the others go on to the phase
         // (3 blocks after its start fill the room) and then to the restarted iteration.
