@@ -10,6 +10,7 @@ lines; ns 80, lh 5, ni 1, nz 3, ndpts 1024):
    same process (python/examples/python_control_side_by_side.py explains the data).
 
     python python/bench/bench_python.py [--repeats 15] [--control-repeats 1] [--era PATH]
+                                        [--noise 0.05] [--seed 1]
 
 Prints a table and a JSON line. Not a test: timings go here, never into assertions.
 """
@@ -45,9 +46,11 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--control-repeats", type=int, default=1)
     parser.add_argument("--era", type=pathlib.Path, default=default_binary())
+    parser.add_argument("--noise", type=float, default=0.05, help="noise of the set (fraction)")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the set and its noise")
     args = parser.parse_args()
 
-    frf = era.simulate_modal(collocated=True, noise=0.05)
+    frf = era.simulate_modal(collocated=True, noise=args.noise, seed=args.seed)
     folder = pathlib.Path(tempfile.mkdtemp(prefix="era-bench-"))
     path = folder / "dta.csv"
     era.write_frf(path, frf)
