@@ -568,6 +568,19 @@ fn worst(so_far: f64, residual: f64) -> f64 {
     }
 }
 
+/// The largest Ritz residual `ρ_i = ‖[inner_i ; outer_i]‖ / σ₁` over the columns: `inner`
+/// is `(S − Tᵀ) X` and `outer` the last block row's `L X` (module doc), one column per
+/// wanted triplet. NaN counts as not converged.
+fn ritz_residual(inner: MatRef<'_, f64>, outer: MatRef<'_, f64>, s1: f64) -> f64 {
+    (0..inner.ncols())
+        .map(|i| {
+            let a = inner.col(i).norm_l2();
+            let b = outer.col(i).norm_l2();
+            (a * a + b * b).sqrt() / s1
+        })
+        .fold(0.0, worst)
+}
+
 /// The restarted block Golub–Kahan–Lanczos iteration of the module doc, seeded with the
 /// opening's last pass (its Ritz triplets and `Hᵀ u`), after `done` passes.
 fn krylov(
@@ -654,13 +667,7 @@ fn krylov(
         let wanted = x.subcols(0, options.rank);
         let inner = (&s_mat - t.transpose()) * wanted;
         let outer = &tail * wanted.subrows(j * k, k);
-        residual = (0..options.rank)
-            .map(|i| {
-                let a = inner.col(i).norm_l2();
-                let b = outer.col(i).norm_l2();
-                (a * a + b * b).sqrt() / s1
-            })
-            .fold(0.0, worst);
+        residual = ritz_residual(inner.as_ref(), outer.as_ref(), s1);
         if residual <= options.tolerance {
             let keep = k.min(width);
             let u = combine(&u_blocks, x.subcols(0, keep));
@@ -811,13 +818,7 @@ fn deep_krylov(
         let wanted = x.subcols(0, options.rank);
         let inner = (s_mat.subrows(0, w) - t.transpose()) * wanted;
         let outer = s_mat.subrows(w, b) * wanted;
-        let residual = (0..options.rank)
-            .map(|i| {
-                let a = inner.col(i).norm_l2();
-                let c = outer.col(i).norm_l2();
-                (a * a + c * c).sqrt() / s1
-            })
-            .fold(0.0, worst);
+        let residual = ritz_residual(inner.as_ref(), outer.as_ref(), s1);
         let xk = x.subcols(0, k);
         if residual <= options.tolerance {
             let (ritz_u, ritz_v) = (&u * xk, v.subcols(0, w) * y.subcols(0, k));
