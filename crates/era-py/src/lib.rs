@@ -44,20 +44,9 @@ mod model;
 /// An error of the core as a Python exception: `ValueError` for the caller's data or
 /// parameters, `RuntimeError` for a numerical failure.
 pub(crate) fn era_error(e: era::EraError) -> PyErr {
-    // A refused parameter is named as the CLI's flag (`pad-to`); here it is the keyword.
-    let text = match &e {
-        era::EraError::InvalidParameter {
-            name,
-            value,
-            reason,
-        } => format!(
-            "invalid parameter {} = {value}: {reason}",
-            era::params::Naming::Keyword.name(&name.replace('-', "_"))
-        ),
-        _ => e.to_string(),
-    };
     // Core messages quote options by field name; here they are keywords.
-    let message = era::params::render(era::params::Naming::Keyword, &text);
+    let naming = era::params::Naming::Keyword;
+    let message = era::params::render(naming, &e.message(naming));
     if e.is_input_error() {
         PyValueError::new_err(message)
     } else {

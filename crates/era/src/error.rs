@@ -174,11 +174,21 @@ pub enum EraError {
 impl EraError {
     /// The message, with the options a remedy names spelled as `naming` spells them
     /// (`--hankel-factor` for [`Naming::Flag`], `hankel_factor` for
-    /// [`Naming::Keyword`], which `Display` uses). Variants without a remedy read as
-    /// their `Display`.
+    /// [`Naming::Keyword`], which `Display` uses). A refused parameter is named as the
+    /// CLI's flag without its dashes (`pad-to`) in `Display` and for [`Naming::Flag`], and
+    /// as the keyword (`pad_to`) for [`Naming::Keyword`]. Other variants without a remedy
+    /// read as their `Display`.
     pub fn message(&self, naming: Naming) -> String {
         let n = |key: &str| naming.name(key);
         match self {
+            EraError::InvalidParameter {
+                name,
+                value,
+                reason,
+            } if naming == Naming::Keyword => format!(
+                "invalid parameter {} = {value}: {reason}",
+                n(&name.replace('-', "_"))
+            ),
             EraError::NotEnoughMarkovSamples {
                 needed,
                 available,
@@ -271,6 +281,24 @@ mod tests {
         );
         let nan = crate::frf::validate_frequencies(&[0.0, 1.0, f64::NAN]).unwrap_err();
         assert_eq!(nan.to_string(), "non-finite value in frequency at line 2");
+    }
+
+    /// A refused parameter keeps the CLI's name for the CLI and takes the keyword for
+    /// Python.
+    #[test]
+    fn refused_parameters_are_named_as_the_front_end_does() {
+        let e = EraError::InvalidParameter {
+            name: "lowpass-hz",
+            value: "-3".into(),
+            reason: "must be positive".into(),
+        };
+        let flag = "invalid parameter lowpass-hz = -3: must be positive";
+        assert_eq!(e.message(Naming::Flag), flag);
+        assert_eq!(e.to_string(), flag);
+        assert_eq!(
+            e.message(Naming::Keyword),
+            "invalid parameter lowpass = -3: must be positive"
+        );
     }
 
     #[test]
