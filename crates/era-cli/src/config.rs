@@ -37,6 +37,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
             SvdArg::MatrixFree => SvdPath::MatrixFree,
             SvdArg::Auto => SvdPath::Auto,
         },
+        lag_window: None,
     };
     // Sizes are checked against their limits here, under the flag's name, before anything
     // is read or allocated (the core checks them again for library users). With
@@ -71,4 +72,29 @@ fn reason_of(e: &era::EraError) -> String {
         era::EraError::InvalidParameter { reason, .. } => reason.clone(),
         other => other.to_string(),
     }
+}
+
+/// The lag window of the Welch estimate an FRF file came from, when its metadata (an
+/// `era frf` CSV, or `--from-time`) names a tapered window, the frame and the sample
+/// rate; `None` for a rectangular window (transients need no correction), or when the
+/// file does not say. The reason goes to the echo.
+pub fn lag_window(
+    metadata: &std::collections::BTreeMap<String, String>,
+) -> Option<(era::markov::LagWindow, String)> {
+    use era::frf::estimate::Window;
+    let window = match metadata.get("window")?.trim() {
+        "hann" => Window::Hann,
+        "flattop" | "flat-top" => Window::FlatTop,
+        _ => return None,
+    };
+    let frame: usize = metadata.get("frame")?.trim().parse().ok()?;
+    let rate: f64 = metadata.get("sample_rate_hz")?.trim().parse().ok()?;
+    let lag = era::markov::LagWindow::new(window, frame, rate).ok()?;
+    Some((
+        lag,
+        format!(
+            "the Welch estimate's {} lag window (frames of {frame} samples at {rate} Hz) divided out of the impulse responses",
+            window.name()
+        ),
+    ))
 }

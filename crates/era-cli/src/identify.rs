@@ -99,6 +99,15 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let read_s = clock.elapsed().as_secs_f64() - estimate_s.unwrap_or(0.0);
     let frf = &input.file.frf;
+    let mut opts = opts;
+    if !a.no_window_correction {
+        if let Some((lag, why)) = crate::config::lag_window(&input.file.metadata) {
+            opts.lag_window = Some(lag);
+            human.print(&format!(
+                "  window correction: {why} (--no-window-correction: off)\n"
+            ));
+        }
+    }
     if a.refine {
         crate::refine::check_shape(&refine_options, frf)?;
     }

@@ -126,6 +126,7 @@ pub fn summary(found: &Identification) -> String {
         f.cost_after,
         found.timings.refine
     );
+    let _ = writeln!(s, "  fitted domain: {}", r.fit_domain.reason);
     for line in r.start_lines() {
         let _ = writeln!(s, "  {line}");
     }

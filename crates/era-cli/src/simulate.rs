@@ -1,6 +1,8 @@
 //! `era simulate truth-model|modal`: synthetic FRF files.
 
-use crate::args::{ModalArgs, SimulateArgs, SimulateCommon, SimulateModel};
+use crate::args::{
+    ExcitationArg, ModalArgs, ShakerArgs, SimulateArgs, SimulateCommon, SimulateModel,
+};
 use crate::report::{finish_output, Human};
 use crate::usage;
 use era::params::Naming;
@@ -159,5 +161,171 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
         SimulateModel::TruthModel(sim) => truth(sim),
         SimulateModel::Modal(m) => modal(m),
         SimulateModel::Experiment(e) => crate::experiment::run(e),
+        SimulateModel::Shaker(s) => shaker(s),
     }
+}
+
+/// `LO..HI` of `--band`.
+fn parse_band(text: &str) -> anyhow::Result<(f64, f64)> {
+    let parsed = text.split_once("..").and_then(|(lo, hi)| {
+        Some((
+            lo.trim().parse::<f64>().ok()?,
+            hi.trim().parse::<f64>().ok()?,
+        ))
+    });
+    match parsed {
+        Some(band) => Ok(band),
+        None => usage(format!("--band {text}: expected LO..HI in Hz, e.g. 1..25")),
+    }
+}
+
+/// The record as a time-history CSV: `time_s,force1..,acc1..` (names by quantity).
+fn shaker_csv(r: &era::sim::shaker::ShakerRecord, quantity: Quantity, header: &str) -> String {
+    use std::fmt::Write as _;
+    let prefix = match quantity {
+        Quantity::Acceleration => "acc",
+        Quantity::Velocity => "vel",
+        Quantity::Displacement => "disp",
+    };
+    let n = r.outputs.first().map_or(0, Vec::len);
+    let mut out = String::with_capacity(n * 20 * (r.inputs.len() + r.outputs.len() + 1));
+    let _ = writeln!(out, "# {header}");
+    out.push_str("time_s");
+    for j in 1..=r.inputs.len() {
+        let _ = write!(out, ",force{j}");
+    }
+    for i in 1..=r.outputs.len() {
+        let _ = write!(out, ",{prefix}{i}");
+    }
+    out.push('\n');
+    for k in 0..n {
+        let _ = write!(out, "{}", k as f64 / r.sample_rate_hz);
+        for v in r.inputs.iter().chain(&r.outputs) {
+            let _ = write!(out, ",{:e}", v[k]);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
+    use era::sim::shaker::{simulate_shaker_test, Excitation, ShakerTest};
+    let human = Human::new(&a.common);
+    check_noise(a.noise)?;
+    let (damping_min, damping_max) = parse_range(&a.damping)?;
+    let band = a.band.as_deref().map(parse_band).transpose()?;
+    if band.is_some()
+        && !matches!(
+            a.excitation,
+            ExcitationArg::BandLimited | ExcitationArg::Sweep
+        )
+    {
+        return usage(
+            "--band sets band-limited noise or a sweep: add --excitation band-limited or sweep",
+        );
+    }
+    let nyquist = a.sample_rate / 2.0;
+    let excitation = match a.excitation {
+        ExcitationArg::White => Excitation::White,
+        ExcitationArg::BandLimited => {
+            let (lo_hz, hi_hz) = band.unwrap_or((0.0, nyquist));
+            Excitation::BandLimited { lo_hz, hi_hz }
+        }
+        ExcitationArg::Burst => Excitation::Burst {
+            period_s: a.period,
+            on_fraction: a.burst_on,
+        },
+        ExcitationArg::Sweep => {
+            let (lo_hz, hi_hz) = band.unwrap_or((a.fmin / 2.0, (1.2 * a.fmax).min(nyquist)));
+            Excitation::Sweep { lo_hz, hi_hz }
+        }
+        ExcitationArg::Impact => Excitation::Impact {
+            period_s: a.period,
+            width_s: a.pulse_width,
+        },
+    };
+    // The structure's sizes and ranges are checked, against their limits, before
+    // anything is allocated (ModalStructure::random, inside the simulation).
+    let spec = ModalSpec {
+        outputs: a.outputs,
+        inputs: a.inputs,
+        modes: a.modes,
+        fmin_hz: a.fmin,
+        fmax_hz: a.fmax,
+        damping_min,
+        damping_max,
+        collocated: false,
+        seed: a.seed,
+    };
+    let quantity: Quantity = a.quantity.into();
+    let mut test = ShakerTest::new(spec, a.sample_rate, a.duration);
+    test.excitation = excitation;
+    test.quantity = quantity;
+    test.noise = a.noise;
+    let clock = Instant::now();
+    let record = simulate_shaker_test(&test).map_err(|e| match e {
+        era::EraError::InvalidParameter {
+            name,
+            value,
+            reason,
+        } => anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}"))),
+        other => anyhow::Error::from(other),
+    })?;
+    let simulate_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let truth = &record.truth;
+    let modes: Vec<_> = truth
+        .frequencies_hz
+        .iter()
+        .zip(&truth.damping_ratios)
+        .zip(&truth.output_shapes)
+        .map(|((f, z), shape)| json!({"frequency_hz": f, "damping_ratio": z, "shape": shape}))
+        .collect();
+    let summary = json!({"file": a.out, "model": "shaker", "outputs": a.outputs, "inputs": a.inputs,
+        "sample_rate_hz": a.sample_rate, "duration_s": a.duration, "samples": record.outputs[0].len(),
+        "excitation": excitation.name(), "quantity": quantity.name(), "noise": a.noise, "seed": a.seed,
+        "inputs_columns": format!("1-{}", a.inputs), "outputs_columns": format!("{}-{}", a.inputs + 1, a.inputs + a.outputs),
+        "modes": modes});
+    let header = format!(
+        "era simulate shaker: {} modes {}..{} Hz, {} excitation, {} % sensor noise, seed {}",
+        a.modes,
+        a.fmin,
+        a.fmax,
+        excitation.name(),
+        100.0 * a.noise,
+        a.seed
+    );
+    let truth_path = {
+        let stem = a
+            .out
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        a.out.with_file_name(format!("{stem}.truth.json"))
+    };
+    let mut set = era_io::atomic::OutputSet::beside(&a.out)?;
+    let staged = set.stage(crate::output::output_name("--out", &a.out)?)?;
+    std::fs::write(&staged, shaker_csv(&record, quantity, &header).as_bytes())?;
+    let staged = set.stage(crate::output::output_name("--out", &truth_path)?)?;
+    std::fs::write(&staged, serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    set.commit()?;
+    human.print(&format!(
+        "wrote {} ({} samples at {} Hz: force1-{} then {} outputs, columns {}) and {}\n",
+        a.out.display(),
+        record.outputs[0].len(),
+        a.sample_rate,
+        a.inputs,
+        a.outputs,
+        summary["outputs_columns"].as_str().unwrap_or_default(),
+        truth_path.display()
+    ));
+    finish_output(
+        &human,
+        &a.common,
+        summary,
+        &[
+            ("simulate", simulate_s),
+            ("write", clock.elapsed().as_secs_f64()),
+        ],
+    )
 }

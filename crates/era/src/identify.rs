@@ -51,6 +51,9 @@ pub struct EraOptions {
     pub direct_term: DirectTerm,
     /// Dense, matrix-free or automatic SVD.
     pub svd: SvdPath,
+    /// The lag window of a Welch estimate with tapered frames, divided out of the
+    /// impulse responses ([`crate::markov::LagWindow`]); `None` for none (the thesis).
+    pub lag_window: Option<crate::markov::LagWindow>,
 }
 
 impl EraOptions {
@@ -66,6 +69,7 @@ impl EraOptions {
             domain: ModelDomain::Discrete,
             direct_term: DirectTerm::Zero,
             svd: SvdPath::Auto,
+            lag_window: None,
         }
     }
     /// The thesis's DTA settings (Appendix J): `ns 80, lh 5, ni 1, nz 3, ndpts 1024`.
@@ -288,6 +292,8 @@ pub struct Refined {
     /// Integrator states of the lower residual in the model (they are its real poles at
     /// `s = 0`).
     pub residual_states: usize,
+    /// The domain of the fit, chosen for the data, and why.
+    pub fit_domain: FitDomain,
 }
 
 impl Refined {
@@ -567,6 +573,9 @@ fn front(
         Path::Fast => impulse_responses(&pre.frf)?,
         Path::Naive => impulse_responses_naive(&pre.frf),
     };
+    if let Some(lag) = &options.lag_window {
+        lag.correct(&mut series, pre.sample_time_s);
+    }
     if let Some((order, cutoff_hz)) = options.lowpass {
         let filter = LowPass::design(order, cutoff_hz, pre.sample_time_s)?;
         for s in series.iter_mut() {
@@ -854,6 +863,12 @@ pub struct ScanOptions {
     pub diagram: DiagramCriteria,
     /// Automatic-choice thresholds.
     pub selection: SelectionCriteria,
+    /// The band where the data carries information, Hz: modes outside it are not
+    /// physical (default: every fitted line).
+    pub band_hz: Option<(f64, f64)>,
+    /// Judge each chosen mode against the noise of the data (step 5 of the automatic
+    /// choice; default true).
+    pub significance: bool,
 }
 
 impl Default for ScanOptions {
@@ -863,6 +878,8 @@ impl Default for ScanOptions {
             svd_tolerance: 1e-6,
             diagram: DiagramCriteria::default(),
             selection: SelectionCriteria::default(),
+            band_hz: None,
+            significance: true,
         }
     }
 }
@@ -1088,7 +1105,14 @@ pub fn identify_auto(
         scan_front(frf, options, scan_options, observer, progress, &mut timings)?;
     // The band needs the lines only: the data is integrated once, in `assess`.
     let (_, band_hz) = fit_band(frf.frequency_hz(), options);
-    let selection = select(&s, band_hz, &criteria_for(scan_options, &range));
+    let band_hz = match scan_options.band_hz {
+        Some((lo, hi)) => (band_hz.0.max(lo), band_hz.1.min(hi)),
+        None => band_hz,
+    };
+    let mut selection = select(&s, band_hz, &criteria_for(scan_options, &range));
+    if scan_options.significance {
+        judge_significance(&mut selection, &s, frf, options, band_hz, f.sample_time_s)?;
+    }
     let chosen: Vec<&crate::modal::stabilization::ScanPole> = selection
         .physical()
         .map(|c| &s.poles[c.representative])
@@ -1146,6 +1170,10 @@ pub fn identify_auto(
         q.stable_orders = cluster.map(|c| c.members.len());
         if q.physical && q.indicators.cmi < Some(scan_options.selection.cmi_minimum) {
             q.physical = false;
+            q.reason = Some(
+                crate::modal::stabilization::Rejection::LowCmi(p.cmi()).to_string()
+                    + " at the order its pole was taken from",
+            );
         }
         if q.physical {
             q.reason = None;
@@ -1162,6 +1190,107 @@ pub fn identify_auto(
         Some(note),
     ));
     Ok(found)
+}
+
+/// Step 5 of the automatic choice (docs/design.md §10): each physical cluster's mode
+/// judged against the noise of the data. The representatives' poles are fitted to the
+/// processed FRFs over the band, with free residues and residual terms (a linear least
+/// squares, [`crate::refine`] with no iteration), in the domain that fits better (a
+/// continuous model, or the zero-order-hold image). The residual gives the noise
+/// variance `σ̂²`, and each mode's significance is its energy in the fit over `σ̂²`
+/// per parameter ([`crate::refine::RefinedMode::significance`]). The least
+/// significant mode below Schwarz's bar ([`crate::refine::Refinement::significance_minimum`])
+/// is marked [`Rejection::Insignificant`] and the rest refitted, until every mode
+/// passes. A noise mode is stable across orders (the orders realize the same data), so
+/// recurrence cannot tell it; the noise can. The noise from the residual includes what
+/// no mode explains (leakage, nonlinearity), which only raises the bar.
+///
+/// [`Rejection::Insignificant`]: crate::modal::stabilization::Rejection::Insignificant
+fn judge_significance(
+    selection: &mut Selection,
+    scan: &Scan,
+    frf: &FrfData,
+    options: &EraOptions,
+    band_hz: (f64, f64),
+    sample_time_s: f64,
+) -> Result<()> {
+    use crate::modal::stabilization::Rejection;
+    let processed = integrate(frf, options.integrations)?;
+    let freq = processed.frequency_hz();
+    let (first_line, _) = fit_band(freq, options);
+    let first = (first_line..freq.len())
+        .find(|&k| freq[k] > 0.0 && freq[k] >= band_hz.0)
+        .unwrap_or(freq.len());
+    let end = freq
+        .iter()
+        .rposition(|&f| f <= band_hz.1)
+        .map_or(0, |k| k + 1);
+    if end <= first + 2 {
+        return Ok(());
+    }
+    let mut probe = crate::refine::RefineOptions::default();
+    probe.max_iterations = 0;
+    probe.add_missed = false;
+    probe.rank_one = false;
+    probe.band = Some((first, end));
+    let mut alive: Vec<usize> = (0..selection.clusters.len())
+        .filter(|&c| selection.clusters[c].physical)
+        .collect();
+    let mut domain: Option<Option<f64>> = None;
+    while !alive.is_empty() {
+        let poles: Vec<crate::Complex64> = alive
+            .iter()
+            .map(|&c| scan.poles[selection.clusters[c].representative].continuous_pole)
+            .collect();
+        let fit = |ts: Option<f64>| {
+            let mut o = probe.clone();
+            o.sample_time_s = ts;
+            crate::refine::refine(&processed, &poles, &o, &mut |_, _| {})
+        };
+        let r = match domain {
+            Some(ts) => fit(ts),
+            None => {
+                // The domain that fits better, decided once on the full set.
+                let (c, z) = (fit(None), fit(Some(sample_time_s)));
+                match (c, z) {
+                    (Ok(c), Ok(z)) => {
+                        let zoh = z.cost_before < c.cost_before;
+                        domain = Some(zoh.then_some(sample_time_s));
+                        Ok(if zoh { z } else { c })
+                    }
+                    (Ok(c), Err(_)) => {
+                        domain = Some(None);
+                        Ok(c)
+                    }
+                    (Err(e), _) => Err(e),
+                }
+            }
+        };
+        // A fit the data cannot support (too few lines for the modes) judges nothing.
+        let Ok(r) = r else { return Ok(()) };
+        let least = r.significance_minimum();
+        // Start poles the fit dropped (coalesced with another) are duplicates.
+        let mut worst: Option<(usize, f64)> =
+            r.dropped.first().map(|(k, _)| (*k, f64::NEG_INFINITY));
+        if worst.is_none() {
+            for m in &r.modes {
+                if m.significance.is_finite()
+                    && m.significance < least
+                    && worst.is_none_or(|(_, w)| m.significance < w)
+                {
+                    worst = Some((m.start, m.significance));
+                }
+            }
+        }
+        let Some((k, significance)) = worst else {
+            break;
+        };
+        let c = alive.remove(k);
+        let cluster = &mut selection.clusters[c];
+        cluster.physical = false;
+        cluster.rejection = Some(Rejection::Insignificant(significance.max(0.0), least));
+    }
+    Ok(())
 }
 
 /// A refined mode whose share of the band's FRF norm exceeds this is not physical: it is
@@ -1330,18 +1459,21 @@ pub fn refine_identification(
         .map(|&k| found.modal.modes[k].continuous_pole)
         .collect();
     let mut ropts = options.clone();
+    // The domain the user asked the model in ...
     let discrete_ts = match found.model.domain {
         crate::TimeDomain::Discrete { sample_time_s } => Some(sample_time_s),
         crate::TimeDomain::Continuous => None,
     };
-    ropts.sample_time_s = discrete_ts;
     let freq = found.processed.frequency_hz();
     let lines = freq.len();
     if ropts.band.is_none() {
         let positive = freq.iter().position(|&f| f > 0.0).unwrap_or(lines);
         ropts.band = Some((found.first_line.max(positive), lines));
     }
-    let fitted = match discrete_ts {
+    // ... and the domain of the fit, chosen for the data (`FitDomain`).
+    let fit_domain = choose_fit_domain(&found, &start_poles, &ropts, discrete_ts)?;
+    ropts.sample_time_s = fit_domain.sample_time_s;
+    let fitted = match fit_domain.sample_time_s {
         Some(_) => &found.processed,
         None => frf,
     };
@@ -1492,8 +1624,88 @@ pub fn refine_identification(
             .collect(),
         refinement,
         residual_states,
+        fit_domain,
     });
     Ok(found)
+}
+
+/// How many standard deviations of the noise's part of the difference of the two
+/// probe costs ([`choose_fit_domain`]) the zero-order-hold image must win by.
+const ZOH_SIGNIFICANCE: f64 = 8.0;
+
+/// Which model the refinement fits, and why ([`choose_fit_domain`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitDomain {
+    /// `Some(Ts)` for the zero-order-hold image (a sampled system's FRFs), `None` for a
+    /// continuous pole–residue model (FRFs of a physical structure).
+    pub sample_time_s: Option<f64>,
+    /// Relative error of each at ERA's poles with free residues: (continuous, ZOH).
+    pub probe_fit: (f64, f64),
+    /// The choice in words, with its figures.
+    pub reason: String,
+}
+
+/// Chooses the domain of the refinement's fit for the data, not for the model asked
+/// for. FRFs measured on a structure are those of a continuous system; FRFs computed
+/// from a zero-order-hold discrete model (the thesis's truth model) are not those of
+/// any continuous pole–residue model. Fitting data with the wrong one leaves a
+/// systematic residual that the scan for missed modes reads as modes, and junk poles
+/// are added. Both are fitted at the start poles with free residues (a linear least
+/// squares each, no iteration, uniform weights) to the processed data. They have the
+/// same `k` parameters, so on data that suits either, their costs differ by noise
+/// alone, about `σ²√k` (each projects the noise on a `k`-dimensional subspace); the
+/// ZOH image is taken when the continuous cost exceeds its own by more than
+/// [`ZOH_SIGNIFICANCE`] of that, with `σ²` the ZOH fit's residual variance, and the
+/// continuous model when its cost is lower by as much. When neither wins (noise, or a
+/// start that misses modes and leaves both far from the data), the fit is in the domain
+/// of the model asked for (`requested_ts`). The model returned is then converted to the
+/// domain asked for.
+fn choose_fit_domain(
+    found: &Identification,
+    start_poles: &[crate::Complex64],
+    ropts: &crate::refine::RefineOptions,
+    requested_ts: Option<f64>,
+) -> Result<FitDomain> {
+    let mut probe = ropts.clone();
+    probe.max_iterations = 0;
+    probe.add_missed = false;
+    probe.rank_one = false;
+    probe.weighting = crate::refine::Weighting::Uniform;
+    probe.sample_time_s = None;
+    let continuous = crate::refine::refine(&found.processed, start_poles, &probe, &mut |_, _| {})?;
+    probe.sample_time_s = Some(found.sample_time_s);
+    let zoh = crate::refine::refine(&found.processed, start_poles, &probe, &mut |_, _| {})?;
+    let (c, z) = (continuous.fit_before, zoh.fit_before);
+    let (band_lines, pairs) = (zoh.band.1 - zoh.band.0, zoh.outputs * zoh.inputs);
+    let observations = (2 * band_lines * pairs) as f64;
+    // Unknowns from the residual variance's definition, `cost/(observations − unknowns)`.
+    let unknowns = if zoh.noise_variance > 0.0 && zoh.noise_variance.is_finite() {
+        (observations - zoh.cost_before / zoh.noise_variance).max(1.0)
+    } else {
+        observations
+    };
+    let noise_part = zoh.noise_variance.max(0.0) * unknowns.sqrt();
+    let gain = continuous.cost_before - zoh.cost_before;
+    let (take_zoh, reason) = if gain > ZOH_SIGNIFICANCE * noise_part {
+        (true, format!(
+            "the zero-order-hold image fits the data better than a continuous model (relative error {z:.2e} against {c:.2e} at the start poles, beyond the noise): the FRFs are those of a sampled system"
+        ))
+    } else if -gain > ZOH_SIGNIFICANCE * noise_part {
+        (false, format!(
+            "a continuous model fits the data better than the zero-order-hold image (relative error {c:.2e} against {z:.2e} at the start poles, beyond the noise): FRFs measured on a structure are continuous-time data"
+        ))
+    } else {
+        let zoh = requested_ts.is_some();
+        (zoh, format!(
+            "the data does not tell a continuous model from the zero-order-hold image at the start poles (relative error {c:.2e} against {z:.2e}): the {} model, as the model's time domain asks",
+            if zoh { "zero-order-hold" } else { "continuous" }
+        ))
+    };
+    Ok(FitDomain {
+        sample_time_s: take_zoh.then_some(found.sample_time_s),
+        probe_fit: (c, z),
+        reason,
+    })
 }
 
 /// The dominant rank-one part `u σ vᴴ` of a q × p residue as (shape, participation):

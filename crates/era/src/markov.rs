@@ -238,3 +238,130 @@ mod tests {
         assert!(h[1..].iter().all(|v| v.abs() < 1e-15));
     }
 }
+
+/// The lag window of a Welch-averaged FRF estimate, and its correction.
+///
+/// Under stationary random excitation, the expected H1 of frames tapered by a window
+/// `w` of `N` samples is the true FRF convolved with `|W|²` (Bendat & Piersol, §11.5):
+/// in the lag domain, the impulse response the inverse FFT returns is the true one
+/// multiplied by the window's normalised autocorrelation
+///
+/// ```text
+/// c(τ) = Σ_n w(n) w(n + τ) / Σ_n w(n)²,   0 ≤ τ < N
+/// ```
+///
+/// A damped exponential times `c(τ)` is not a sum of damped exponentials: ERA fits the
+/// product with extra poles beside each mode (doublets, 1–3 % away) and damping biased
+/// upwards, the more so the shorter the frame is against the modes' decay. Dividing the
+/// Markov samples by `c(τ)` undoes it in expectation. The samples are those of a
+/// period `N/fs` of the frame (with or without a kept span: the inverse FFT of
+/// lines `df` apart always spans `1/df`); lags past [`LAG_CORRECTION_FLOOR`] of `c(0)`
+/// are left as they are (their noise would be amplified more than the bias is removed).
+///
+/// A transient that lies whole inside a frame (impact, burst that decays, a sweep with
+/// quiet ends) has no such bias: the correction is for random excitation, and the
+/// pipeline applies it only to tapered windows (see [`crate::identify::EraOptions`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LagWindow {
+    /// `c(τ)` at the frame's sample lags `τ = 0 … N − 1`, `c(0) = 1`.
+    pub c: Vec<f64>,
+    /// The frame's sample rate, Hz.
+    pub sample_rate_hz: f64,
+}
+
+/// Lags whose `c(τ)` is below this are not corrected.
+pub const LAG_CORRECTION_FLOOR: f64 = 0.1;
+
+impl LagWindow {
+    /// The lag window of `window` over frames of `frame` samples at `sample_rate_hz`
+    /// (the autocorrelation by FFT, zero-padded to `2N`).
+    ///
+    /// # Errors
+    /// [`EraError::InvalidParameter`] for a frame below 2 samples or a bad rate.
+    pub fn new(
+        window: crate::frf::estimate::Window,
+        frame: usize,
+        sample_rate_hz: f64,
+    ) -> Result<Self> {
+        if frame < 2 || !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+            return Err(EraError::InvalidParameter {
+                name: "frame",
+                value: format!("{frame} samples at {sample_rate_hz} Hz"),
+                reason: "the lag window needs a frame of 2 samples or more and a positive rate"
+                    .into(),
+            });
+        }
+        crate::limits::SAMPLES.check("frame", frame as u64)?;
+        let w = window.values(frame);
+        let n2 = 2 * frame;
+        let (r2c, c2r) = crate::hankel_op::real_fft_plans(n2);
+        let mut padded = vec![0.0; n2];
+        padded[..frame].copy_from_slice(&w);
+        let mut spectrum = r2c.make_output_vec();
+        r2c.process(&mut padded, &mut spectrum)
+            .map_err(|e| EraError::Numerical(format!("FFT: {e}")))?;
+        for v in spectrum.iter_mut() {
+            *v = crate::Complex64::new(v.norm_sqr(), 0.0);
+        }
+        let mut r = c2r.make_output_vec();
+        c2r.process(&mut spectrum, &mut r)
+            .map_err(|e| EraError::Numerical(format!("inverse FFT: {e}")))?;
+        let r0 = r[0];
+        let c = r[..frame].iter().map(|v| v / r0).collect();
+        Ok(LagWindow { c, sample_rate_hz })
+    }
+
+    /// `c(t)` at `t` seconds (linear between the frame's lags; 0 past the frame).
+    pub fn at(&self, t: f64) -> f64 {
+        let x = t.abs() * self.sample_rate_hz;
+        let k = x.floor() as usize;
+        if k + 1 >= self.c.len() {
+            return if k < self.c.len() { self.c[k] } else { 0.0 };
+        }
+        let frac = x - k as f64;
+        self.c[k] * (1.0 - frac) + self.c[k + 1] * frac
+    }
+
+    /// Divides the causal half of each impulse response (`sample_time_s` apart) by
+    /// `c(t)` where `c(t) ≥` [`LAG_CORRECTION_FLOOR`]. Returns the samples corrected.
+    pub fn correct(&self, series: &mut [Vec<f64>], sample_time_s: f64) -> usize {
+        let len = series.first().map_or(0, Vec::len);
+        let mut corrected = 0;
+        for k in 1..len / 2 {
+            let c = self.at(k as f64 * sample_time_s);
+            if c < LAG_CORRECTION_FLOOR {
+                break;
+            }
+            for s in series.iter_mut() {
+                s[k] /= c;
+            }
+            corrected = k + 1;
+        }
+        corrected
+    }
+}
+
+#[cfg(test)]
+mod lag_window_tests {
+    use super::*;
+    use crate::frf::estimate::Window;
+
+    /// Against the definition, summed directly.
+    #[test]
+    fn the_lag_window_is_the_normalised_autocorrelation_of_the_window() {
+        for window in [Window::Hann, Window::Rectangular, Window::FlatTop] {
+            let n = 64;
+            let lw = LagWindow::new(window, n, 10.0).unwrap();
+            let w = window.values(n);
+            let r0: f64 = w.iter().map(|v| v * v).sum();
+            for tau in 0..n {
+                let r: f64 = (0..n - tau).map(|k| w[k] * w[k + tau]).sum();
+                assert!((lw.c[tau] - r / r0).abs() < 1e-12, "{window:?} {tau}");
+            }
+            // Rectangular: the triangle 1 − τ/N.
+            if window == Window::Rectangular {
+                assert!((lw.at(1.6) - (1.0 - 16.0 / 64.0)).abs() < 1e-12);
+            }
+        }
+    }
+}

@@ -461,6 +461,9 @@ pub enum Rejection {
     NoContribution(f64),
     /// The same mode as the larger cluster at this frequency, Hz.
     Duplicate(f64),
+    /// Explains fewer noise variances per parameter (first) than tell a mode from noise
+    /// (second), in a fit of the chosen modes to the data.
+    Insignificant(f64, f64),
 }
 
 impl std::fmt::Display for Rejection {
@@ -494,6 +497,10 @@ impl std::fmt::Display for Rejection {
             Rejection::Duplicate(hz) => {
                 write!(f, "the same mode as the larger cluster at {hz:.4} Hz")
             }
+            Rejection::Insignificant(s, least) => write!(
+                f,
+                "it explains {s:.2} noise variances per parameter of the data, fewer than the {least:.2} that tell a mode from noise"
+            ),
         }
     }
 }

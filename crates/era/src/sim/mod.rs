@@ -8,6 +8,7 @@
 //! noise and structures in both.
 
 pub mod experiment;
+pub mod shaker;
 
 use crate::error::{EraError, Result};
 use crate::frf::{uniform_lines, FrfData, Quantity};
