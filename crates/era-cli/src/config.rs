@@ -93,7 +93,7 @@ pub fn lag_window(
     Some((
         lag,
         format!(
-            "the Welch estimate's {} lag window (frames of {frame} samples at {rate} Hz) divided out of the impulse responses",
+            "the Welch estimate's {} lag window (frames of {frame} samples at {rate} Hz) divided out of the FRFs (their impulse responses)",
             window.name()
         ),
     ))

@@ -98,16 +98,18 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         input
     };
     let read_s = clock.elapsed().as_secs_f64() - estimate_s.unwrap_or(0.0);
-    let frf = &input.file.frf;
-    let mut opts = opts;
+    let mut input = input;
     if !a.no_window_correction {
         if let Some((lag, why)) = crate::config::lag_window(&input.file.metadata) {
-            opts.lag_window = Some(lag);
+            input.file.frf = lag
+                .correct_frf(&input.file.frf)
+                .with_context(|| format!("correcting the window of {}", a.file.display()))?;
             human.print(&format!(
                 "  window correction: {why} (--no-window-correction: off)\n"
             ));
         }
     }
+    let frf = &input.file.frf;
     if a.refine {
         crate::refine::check_shape(&refine_options, frf)?;
     }

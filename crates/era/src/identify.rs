@@ -925,6 +925,69 @@ pub fn default_orders(
     OrderRange::new(min, max, step)
 }
 
+/// States of the probe Hankel whose singular values bound a default scan
+/// ([`signal_order`]).
+pub const PROBE_STATES: usize = 100;
+
+/// The order the data supports: the number of singular values of a small Hankel of
+/// the Markov sequence ([`PROBE_STATES`] states at `hankel_factor`, a dense SVD) above
+/// the noise floor. The floor is Gavish & Donoho's (2014) optimal hard threshold for a
+/// matrix of unknown white noise, `ω(β)·σ_med` with `β` the aspect ratio and
+/// `ω(β) ≈ 0.56β³ − 0.95β² + 1.82β + 1.43`: the median singular value measures the
+/// noise when most singular values are noise. `None` when the probe cannot tell (too
+/// few samples, or more than a third of its singular values above the floor, so that
+/// the median is not noise).
+pub fn signal_order(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    hankel_factor: usize,
+) -> Option<usize> {
+    let states = supported_hankel_states(markov.samples(), hankel_factor).min(PROBE_STATES);
+    if states < 8 {
+        return None;
+    }
+    let probe = Factorization::thesis(
+        markov,
+        sample_time_s,
+        &FactorOptions {
+            hankel_states: states,
+            max_states: 1,
+            hankel_factor,
+            svd: SvdPath::Dense,
+            svd_tolerance: 1e-12,
+        },
+    )
+    .ok()?;
+    let sv = probe.singular_values();
+    let (rows, cols) = probe.hankel_size();
+    if sv.len() < 8 || sv[0] <= 0.0 {
+        return None;
+    }
+    let beta = rows.min(cols) as f64 / rows.max(cols) as f64;
+    let omega = 0.56 * beta.powi(3) - 0.95 * beta.powi(2) + 1.82 * beta + 1.43;
+    let mut sorted = sv.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    // Exact data: the floor is rounding, far below the signal.
+    let floor = (omega * median).max(1e-13 * sv[0]);
+    let rank = sv.iter().take_while(|&&v| v > floor).count();
+    (rank * 3 <= sv.len()).then_some(rank)
+}
+
+/// The default scan bounded by the data's order `rank` ([`signal_order`]): from half of
+/// it to twice it plus 20 (noise poles appear past the signal order, and weak modes
+/// settle there), within the default range, in even steps, at most 40 orders. `None`
+/// when that is the default range anyway.
+fn orders_for_rank(rank: usize, default: &OrderRange) -> Option<OrderRange> {
+    let max = (2 * rank + 20).next_multiple_of(2);
+    if max >= default.max {
+        return None;
+    }
+    let min = (rank / 2).max(2).next_multiple_of(2).min(max);
+    let step = (max - min).div_ceil(39).max(2).next_multiple_of(2);
+    OrderRange::new(min, max, step).ok()
+}
+
 /// The largest Hankel order of a default scan.
 pub const DEFAULT_MAX_ORDER: usize = 400;
 
@@ -960,12 +1023,19 @@ fn scan_front(
     let f = front(frf, options, Path::Fast, observer, timings)?;
     let range = match scan_options.orders.clone() {
         Some(r) => r,
-        None => default_orders(
-            f.markov.samples(),
-            options.hankel_factor,
-            frf.outputs(),
-            frf.inputs(),
-        )?,
+        None => {
+            let default = default_orders(
+                f.markov.samples(),
+                options.hankel_factor,
+                frf.outputs(),
+                frf.inputs(),
+            )?;
+            let clock = Instant::now();
+            let bounded = signal_order(&f.markov, f.sample_time_s, options.hankel_factor)
+                .and_then(|rank| orders_for_rank(rank, &default));
+            timings.hankel_svd += clock.elapsed().as_secs_f64();
+            bounded.unwrap_or(default)
+        }
     };
     let hankel_states = range
         .max
@@ -1283,6 +1353,7 @@ fn judge_significance(
             }
         }
         let Some((k, significance)) = worst else {
+            mark_satellites(selection, scan, &alive, &r);
             break;
         };
         let c = alive.remove(k);
@@ -1291,6 +1362,70 @@ fn judge_significance(
         cluster.rejection = Some(Rejection::Insignificant(significance.max(0.0), least));
     }
     Ok(())
+}
+
+/// A mode this close (relative frequency) to a stronger one may be its satellite
+/// ([`mark_satellites`]).
+pub const SATELLITE_DISTANCE: f64 = 0.05;
+
+/// A satellite's share of the data is below this fraction of its host's
+/// ([`mark_satellites`]). In the shaker study the satellites were at 2–9 % and the
+/// weaker partners of true close pairs at 15–30 %.
+pub const SATELLITE_SHARE: f64 = 0.1;
+
+/// Step 6 of the automatic choice: satellites. Errors of a strong mode's estimate
+/// (leakage the window correction leaves, a bias of the FRF estimate, a nonlinearity)
+/// are structured like a mode beside it, and ERA gives them a weak pole of their own,
+/// stable across orders and significant against the noise. Such a pole is told by
+/// three things together: it lies within [`SATELLITE_DISTANCE`] of a physical mode,
+/// its share of the data in the significance fit is below [`SATELLITE_SHARE`] of that mode's, and its
+/// consistency over the record (median CMI) is below half of that mode's. A weak
+/// mode of the structure beside a strong one is as consistent as its neighbour and is
+/// kept.
+fn mark_satellites(
+    selection: &mut Selection,
+    scan: &Scan,
+    alive: &[usize],
+    fit: &crate::refine::Refinement,
+) {
+    use crate::modal::stabilization::Rejection;
+    let share = |k: usize| {
+        fit.modes
+            .iter()
+            .find(|m| m.start == k)
+            .map_or(0.0, |m| m.contribution)
+    };
+    let facts: Vec<(f64, f64, f64)> = alive
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            let cluster = &selection.clusters[c];
+            (
+                scan.poles[cluster.representative].frequency_hz,
+                share(k),
+                cluster.median_cmi,
+            )
+        })
+        .collect();
+    for (k, &c) in alive.iter().enumerate() {
+        let (f, s, cmi) = facts[k];
+        let host = facts.iter().enumerate().find(|&(j, &(fj, sj, cj))| {
+            j != k
+                && (f - fj).abs() <= SATELLITE_DISTANCE * fj
+                && s < SATELLITE_SHARE * sj
+                && cmi < 0.5 * cj
+        });
+        if let Some((_, &(fj, sj, cj))) = host {
+            let cluster = &mut selection.clusters[c];
+            cluster.physical = false;
+            cluster.rejection = Some(Rejection::Satellite {
+                host_hz: fj,
+                share: s / sj,
+                cmi,
+                host_cmi: cj,
+            });
+        }
+    }
 }
 
 /// A refined mode whose share of the band's FRF norm exceeds this is not physical: it is

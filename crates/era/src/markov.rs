@@ -341,6 +341,56 @@ impl LagWindow {
     }
 }
 
+impl LagWindow {
+    /// `frf` with the lag window divided out: each pair's impulse response (the inverse
+    /// FFT of its lines, which spans one frame, `1/df`) divided by `c(t)` where
+    /// `c(t) ≥` [`LAG_CORRECTION_FLOOR`], and transformed back. In expectation this
+    /// is the FRF without the window's smoothing, so that every stage (ERA, the
+    /// refinement, the fit and the figures) sees the same debiased data. Lines
+    /// `0 … L−1` must start at 0 Hz (as an analyzer's do).
+    ///
+    /// # Errors
+    /// As [`impulse_responses`], and [`EraError::InvalidParameter`] when the lines do
+    /// not start at 0 Hz.
+    pub fn correct_frf(&self, frf: &FrfData) -> Result<FrfData> {
+        let lines = frf.lines();
+        if frf.frequency_hz().first().copied() != Some(0.0) {
+            return Err(EraError::InvalidParameter {
+                name: "frf",
+                value: format!("first line {} Hz", frf.frequency_hz()[0]),
+                reason: "the window correction needs lines from 0 Hz".into(),
+            });
+        }
+        let mut series = impulse_responses(frf)?;
+        let n = 2 * (lines - 1);
+        let sample_time_s = 1.0 / (n as f64 * frf.spacing_hz());
+        for k in 1..n {
+            let c = self.at(k as f64 * sample_time_s);
+            if c < LAG_CORRECTION_FLOOR {
+                break;
+            }
+            for s in series.iter_mut() {
+                s[k] /= c;
+            }
+        }
+        let (r2c, _) = crate::hankel_op::real_fft_plans(n);
+        let mut values = Vec::with_capacity(frf.values().len());
+        let mut spectrum = r2c.make_output_vec();
+        for mut h in series {
+            r2c.process(&mut h, &mut spectrum)
+                .map_err(|e| EraError::Numerical(format!("FFT: {e}")))?;
+            values.extend_from_slice(&spectrum[..lines]);
+        }
+        FrfData::new(
+            frf.frequency_hz().to_vec(),
+            frf.outputs(),
+            frf.inputs(),
+            values,
+            frf.quantity(),
+        )
+    }
+}
+
 #[cfg(test)]
 mod lag_window_tests {
     use super::*;

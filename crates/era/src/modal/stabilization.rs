@@ -464,6 +464,17 @@ pub enum Rejection {
     /// Explains fewer noise variances per parameter (first) than tell a mode from noise
     /// (second), in a fit of the chosen modes to the data.
     Insignificant(f64, f64),
+    /// A weak, inconsistent pole beside a stronger mode (the identification's step 6).
+    Satellite {
+        /// The stronger mode's frequency, Hz.
+        host_hz: f64,
+        /// Its share of the data relative to the stronger mode's.
+        share: f64,
+        /// Its median CMI.
+        cmi: f64,
+        /// The stronger mode's median CMI.
+        host_cmi: f64,
+    },
 }
 
 impl std::fmt::Display for Rejection {
@@ -497,6 +508,16 @@ impl std::fmt::Display for Rejection {
             Rejection::Duplicate(hz) => {
                 write!(f, "the same mode as the larger cluster at {hz:.4} Hz")
             }
+            Rejection::Satellite {
+                host_hz,
+                share,
+                cmi,
+                host_cmi,
+            } => write!(
+                f,
+                "a satellite of the mode at {host_hz:.4} Hz: {:.1} % of its share and CMI {cmi:.2} against its {host_cmi:.2} (an error of that mode's estimate, not a mode)",
+                100.0 * share
+            ),
             Rejection::Insignificant(s, least) => write!(
                 f,
                 "it explains {s:.2} noise variances per parameter of the data, fewer than the {least:.2} that tell a mode from noise"
@@ -762,7 +783,15 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
     let orders_of =
         |c: &Cluster| -> Vec<usize> { c.members.iter().map(|&i| scan.poles[i].order).collect() };
     let mut by_size: Vec<usize> = (0..out.len()).collect();
-    by_size.sort_by(|&a, &b| out[b].members.len().cmp(&out[a].members.len()));
+    // Larger first; of two the same size, the more consistent (a satellite of a mode
+    // can be as stable as the mode).
+    by_size.sort_by(|&a, &b| {
+        out[b]
+            .members
+            .len()
+            .cmp(&out[a].members.len())
+            .then(out[b].median_cmi.total_cmp(&out[a].median_cmi))
+    });
     for (rank, &a) in by_size.iter().enumerate() {
         if !out[a].physical {
             continue;
