@@ -1353,7 +1353,7 @@ fn judge_significance(
             }
         }
         let Some((k, significance)) = worst else {
-            mark_satellites(selection, scan, &alive, &r);
+            mark_satellites(selection, scan, &alive, &freq[first..end], sample_time_s);
             break;
         };
         let c = alive.remove(k);
@@ -1378,7 +1378,8 @@ pub const SATELLITE_SHARE: f64 = 0.1;
 /// are structured like a mode beside it, and ERA gives them a weak pole of their own,
 /// stable across orders and significant against the noise. Such a pole is told by
 /// three things together: it lies within [`SATELLITE_DISTANCE`] of a physical mode,
-/// its share of the data in the significance fit is below [`SATELLITE_SHARE`] of that mode's, and its
+/// the norm of its own term over the band (ERA's shape and participation) is below
+/// [`SATELLITE_SHARE`] of that mode's, and its
 /// consistency over the record (median CMI) is below half of that mode's. A weak
 /// mode of the structure beside a strong one is as consistent as its neighbour and is
 /// kept.
@@ -1386,14 +1387,33 @@ fn mark_satellites(
     selection: &mut Selection,
     scan: &Scan,
     alive: &[usize],
-    fit: &crate::refine::Refinement,
+    band_lines_hz: &[f64],
+    sample_time_s: f64,
 ) {
     use crate::modal::stabilization::Rejection;
+    // The energy of each pole pair's own term (ERA's shape and participation) over the
+    // band: `Σ_lines Σ_ij |r_ij w + r̄_ij w'|²` with `w = 1/(z − λ)`, `w' = 1/(z − λ̄)`.
+    let points: Vec<crate::Complex64> = band_lines_hz
+        .iter()
+        .map(|f| crate::Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * f * sample_time_s))
+        .collect();
     let share = |k: usize| {
-        fit.modes
+        let pole = &scan.poles[selection.clusters[alive[k]].representative];
+        let s1 = pole.shape.iter().map(|c| c.norm_sqr()).sum::<f64>()
+            * pole.participation.iter().map(|b| b.norm_sqr()).sum::<f64>();
+        let s2 = pole.shape.iter().map(|c| c * c).sum::<crate::Complex64>()
+            * pole.participation.iter().map(|b| b * b).sum::<crate::Complex64>();
+        let lambda = pole.eigenvalue;
+        points
             .iter()
-            .find(|m| m.start == k)
-            .map_or(0.0, |m| m.contribution)
+            .map(|z| {
+                let w = 1.0 / (z - lambda);
+                let w2 = 1.0 / (z - lambda.conj());
+                s1 * (w.norm_sqr() + w2.norm_sqr()) + 2.0 * (s2 * w * w2.conj()).re
+            })
+            .sum::<f64>()
+            .max(0.0)
+            .sqrt()
     };
     let facts: Vec<(f64, f64, f64)> = alive
         .iter()

@@ -270,7 +270,7 @@ pub struct LagWindow {
 }
 
 /// Lags whose `c(τ)` is below this are not corrected.
-pub const LAG_CORRECTION_FLOOR: f64 = 0.1;
+pub const LAG_CORRECTION_FLOOR: f64 = 0.2;
 
 impl LagWindow {
     /// The lag window of `window` over frames of `frame` samples at `sample_rate_hz`
