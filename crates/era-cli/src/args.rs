@@ -507,6 +507,13 @@ pub struct IdentifyArgs {
     /// is a range the data supports (docs/design.md §10).
     #[arg(long, value_name = "MIN..MAX[:STEP]")]
     pub orders: Option<String>,
+    /// The band the test excited, LO..HI Hz (a sweep's range, a shaker's band): modes
+    /// outside it are not physical, and the refinement fits only its lines (with
+    /// residual terms for the modes outside). Default: where the coherence (estimated
+    /// with --from-time, or read from NAME.coherence.csv beside the FRF file) is at
+    /// least 0.5; every line when there is no coherence.
+    #[arg(long, value_name = "LO..HI")]
+    pub band: Option<String>,
     /// FILE holds time histories: estimate the FRFs first (as era frf), then identify.
     #[arg(long, requires = "inputs")]
     pub from_time: bool,

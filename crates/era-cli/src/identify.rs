@@ -122,8 +122,25 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     );
     human.print(&echo);
 
+    let band = identify_band(a, frf, coherence.as_ref())?;
+    if let Some((lo, hi, why)) = &band {
+        human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"));
+    }
+    let mut refine_options = refine_options;
+    if let Some((lo, hi, _)) = band {
+        let freq = frf.frequency_hz();
+        let first = freq.iter().position(|&f| f >= lo && f > 0.0).unwrap_or(0);
+        let end = freq
+            .iter()
+            .rposition(|&f| f <= hi)
+            .map_or(freq.len(), |k| k + 1);
+        if end > first {
+            refine_options.band = Some((first, end));
+        }
+    }
     let scan_options = ScanOptions {
         orders: scan_orders(a)?,
+        band_hz: band.map(|(lo, hi, _)| (lo, hi)),
         ..ScanOptions::default()
     };
     let spinner = crate::progress::spinner(&a.common);
@@ -252,4 +269,64 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         print_json(&model)?;
     }
     Ok(())
+}
+
+/// The band to identify over: `--band LO..HI`, or where the coherence is at least
+/// [`era::frf::BAND_COHERENCE`] (`era::frf::coherence_band`), with the reason to echo.
+fn identify_band(
+    a: &IdentifyArgs,
+    frf: &era::FrfData,
+    estimated: Option<&crate::output::InputCoherence>,
+) -> anyhow::Result<Option<(f64, f64, String)>> {
+    let freq = frf.frequency_hz();
+    let top = freq.last().copied().unwrap_or(0.0);
+    if let Some(text) = &a.band {
+        let parsed = text.split_once("..").and_then(|(lo, hi)| {
+            Some((
+                lo.trim().parse::<f64>().ok()?,
+                hi.trim().parse::<f64>().ok()?,
+            ))
+        });
+        let Some((lo, hi)) = parsed else {
+            return crate::usage(format!(
+                "--band {text}: expected LO..HI in Hz, e.g. 60..500"
+            ));
+        };
+        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
+            return crate::usage(format!("--band {text}: need 0 <= LO < HI"));
+        }
+        if lo >= top {
+            return crate::usage(format!(
+                "--band {text}: the data's lines end at {top} Hz, below the band"
+            ));
+        }
+        return Ok(Some((lo, hi.min(top), "as --band says".into())));
+    }
+    let companion;
+    let (curves, source) = match estimated {
+        Some(c) => (c, "estimated here".to_string()),
+        None => match crate::output::InputCoherence::companion(&a.file, frf) {
+            Ok(Some(c)) => {
+                companion = c;
+                (
+                    &companion,
+                    crate::frf::coherence_path(&a.file).display().to_string(),
+                )
+            }
+            _ => return Ok(None),
+        },
+    };
+    let values: Vec<Vec<f64>> = curves.curves.iter().map(|(_, v)| v.clone()).collect();
+    Ok(
+        era::frf::coherence_band(&curves.frequency_hz, &values).map(|(lo, hi)| {
+            (
+                lo,
+                hi,
+                format!(
+                    "where the coherence ({source}) is at least {} (--band LO..HI to set it)",
+                    era::frf::BAND_COHERENCE
+                ),
+            )
+        }),
+    )
 }

@@ -264,8 +264,78 @@ pub fn uniform_lines(lines: usize, spacing_hz: f64) -> Vec<f64> {
     (0..lines).map(|k| k as f64 * spacing_hz).collect()
 }
 
+/// Coherence below which a line carries little information (more noise than signal
+/// in the output: `γ² < 0.5` means the noise power exceeds the coherent power).
+pub const BAND_COHERENCE: f64 = 0.5;
+
+/// Lines of the running median that smooths the coherence before the band is read.
+const BAND_MEDIAN_LINES: usize = 9;
+
+/// The band where the data carries information, from coherence: per line the largest
+/// of `curves` (the multiple coherence of each output, say), smoothed by a running
+/// median of 9 lines (a notch at a single line, an antiresonance, does not cut the
+/// band), and the band runs from the first to the last line where it is at least
+/// [`BAND_COHERENCE`]. `None` when that is every line above 0 Hz (nothing to cut), or
+/// when no line qualifies.
+pub fn coherence_band(frequency_hz: &[f64], curves: &[Vec<f64>]) -> Option<(f64, f64)> {
+    let n = frequency_hz.len();
+    if n < 3 || curves.is_empty() || curves.iter().any(|c| c.len() != n) {
+        return None;
+    }
+    let best: Vec<f64> = (0..n)
+        .map(|k| {
+            curves
+                .iter()
+                .map(|c| c[k])
+                .filter(|v| v.is_finite())
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    let half = BAND_MEDIAN_LINES / 2;
+    let smooth = |k: usize| {
+        let mut w: Vec<f64> = best[k.saturating_sub(half)..(k + half + 1).min(n)].to_vec();
+        w.sort_by(f64::total_cmp);
+        w[w.len() / 2]
+    };
+    let good: Vec<usize> = (0..n)
+        .filter(|&k| frequency_hz[k] > 0.0 && smooth(k) >= BAND_COHERENCE)
+        .collect();
+    let (first, last) = (*good.first()?, *good.last()?);
+    let first_positive = frequency_hz.iter().position(|&f| f > 0.0)?;
+    if first <= first_positive && last == n - 1 {
+        return None;
+    }
+    Some((frequency_hz[first], frequency_hz[last]))
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_coherence_band_ignores_single_notches_and_cuts_the_noisy_ends() {
+        let f: Vec<f64> = (0..101).map(f64::from).collect();
+        let mut c: Vec<f64> = f
+            .iter()
+            .map(|&x| {
+                if (20.0..=80.0).contains(&x) {
+                    0.98
+                } else {
+                    0.1
+                }
+            })
+            .collect();
+        c[50] = 0.05; // an antiresonance
+        assert_eq!(super::coherence_band(&f, &[c.clone()]), Some((20.0, 80.0)));
+        // A second output coherent further up widens the band.
+        let other: Vec<f64> = f
+            .iter()
+            .map(|&x| if x >= 30.0 { 0.9 } else { 0.2 })
+            .collect();
+        assert_eq!(super::coherence_band(&f, &[c, other]), Some((20.0, 100.0)));
+        // Coherent everywhere: nothing to cut.
+        assert_eq!(super::coherence_band(&f, &[vec![0.99; 101]]), None);
+        assert_eq!(super::coherence_band(&f, &[vec![0.1; 101]]), None);
+    }
+
     use super::*;
 
     fn ones(lines: usize) -> Vec<Complex64> {

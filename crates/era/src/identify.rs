@@ -1402,7 +1402,11 @@ fn mark_satellites(
         let s1 = pole.shape.iter().map(|c| c.norm_sqr()).sum::<f64>()
             * pole.participation.iter().map(|b| b.norm_sqr()).sum::<f64>();
         let s2 = pole.shape.iter().map(|c| c * c).sum::<crate::Complex64>()
-            * pole.participation.iter().map(|b| b * b).sum::<crate::Complex64>();
+            * pole
+                .participation
+                .iter()
+                .map(|b| b * b)
+                .sum::<crate::Complex64>();
         let lambda = pole.eigenvalue;
         points
             .iter()
