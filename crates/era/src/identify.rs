@@ -1371,7 +1371,7 @@ pub const SATELLITE_DISTANCE: f64 = 0.05;
 /// A satellite's share of the data is below this fraction of its host's
 /// ([`mark_satellites`]). In the shaker study the satellites were at 2–9 % and the
 /// weaker partners of true close pairs at 15–30 %.
-pub const SATELLITE_SHARE: f64 = 0.1;
+pub const SATELLITE_SHARE: f64 = 0.25;
 
 /// Step 6 of the automatic choice: satellites. Errors of a strong mode's estimate
 /// (leakage the window correction leaves, a bias of the FRF estimate, a nonlinearity)
@@ -1438,6 +1438,7 @@ fn mark_satellites(
                 && (f - fj).abs() <= SATELLITE_DISTANCE * fj
                 && s < SATELLITE_SHARE * sj
                 && cmi < 0.5 * cj
+                && cmi < 0.5
         });
         if let Some((_, &(fj, sj, cj))) = host {
             let cluster = &mut selection.clusters[c];

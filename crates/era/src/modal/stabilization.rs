@@ -38,7 +38,8 @@
 //!    does not stand for the mode.
 //! 4. *Duplicates*. Noise can split one mode into two clusters; two physical clusters
 //!    within the frequency tolerance whose shapes agree (MAC) are one mode, and only the
-//!    larger is kept. A pole can also drift by more than the tolerance between two orders
+//!    larger is kept, unless the smaller is far more consistent (median CMI above
+//!    `DUPLICATE_CMI_RATIO` times the larger's). A pole can also drift by more than the tolerance between two orders
 //!    as the model settles; two clusters with the same shape within three tolerances that
 //!    share at most a fifth of the smaller one's orders are that mode, and the one that
 //!    reached the higher order is kept. Close modes of a structure have distinct shapes and stay apart.
@@ -653,6 +654,10 @@ fn representative(scan: &Scan, members: &[usize], upper: &[usize]) -> usize {
     })
 }
 
+/// Of two clusters of one mode, the smaller is kept when its median CMI is more than
+/// this many times the larger's (step 4).
+const DUPLICATE_CMI_RATIO: f64 = 1.5;
+
 /// Weight of the relative damping difference in the distance between a pole and a
 /// track (step 2): a pair of modes 0.0077 and 0.0137 apart in damping is kept apart, the
 /// few per cent by which noise moves one mode's damping barely count.
@@ -811,7 +816,13 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             let (oa, ob) = (orders_of(&out[a]), orders_of(&out[b]));
             let shared = oa.iter().filter(|o| ob.contains(o)).count();
             let (keep, drop) = if df <= criteria.frequency_tolerance {
-                (a, b)
+                // The larger, unless the smaller is far more consistent over the
+                // record: noise can hold a pole on the mode's track at more orders.
+                if out[b].median_cmi > DUPLICATE_CMI_RATIO * out[a].median_cmi {
+                    (b, a)
+                } else {
+                    (a, b)
+                }
             } else if df <= 3.0 * criteria.frequency_tolerance
                 && shared * 5 <= oa.len().min(ob.len())
             {
