@@ -62,28 +62,8 @@ fn physical(v: &serde_json::Value) -> Vec<f64> {
 
 /// One-to-one matching within `tolerance` (relative), nearest first: (found, spurious).
 fn score(truth: &[f64], found: &[f64], tolerance: f64) -> (usize, Vec<f64>) {
-    let mut pairs = Vec::new();
-    for (i, t) in truth.iter().enumerate() {
-        for (j, f) in found.iter().enumerate() {
-            let rel = (f - t).abs() / t;
-            if rel <= tolerance {
-                pairs.push((rel, i, j));
-            }
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (mut ti, mut fj) = (vec![false; truth.len()], vec![false; found.len()]);
-    for (_, i, j) in pairs {
-        if !ti[i] && !fj[j] {
-            ti[i] = true;
-            fj[j] = true;
-        }
-    }
-    let spurious = (0..found.len())
-        .filter(|&j| !fj[j])
-        .map(|j| found[j])
-        .collect();
-    (ti.iter().filter(|t| **t).count(), spurious)
+    let (pairs, left) = common::match_frequencies(truth, found, tolerance);
+    (pairs.len(), left.iter().map(|&j| found[j]).collect())
 }
 
 const THESIS: [&str; 8] = [

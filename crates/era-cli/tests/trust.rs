@@ -22,31 +22,7 @@ fn physical(v: &serde_json::Value) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// One-to-one matching within `tolerance` (relative), nearest first: the matched
-/// (truth index, found index) pairs and the found indices left over.
-fn matched(truth: &[f64], found: &[f64], tolerance: f64) -> (Vec<(usize, usize)>, Vec<usize>) {
-    let mut pairs = Vec::new();
-    for (i, t) in truth.iter().enumerate() {
-        for (j, f) in found.iter().enumerate() {
-            let rel = (f - t).abs() / t;
-            if rel <= tolerance {
-                pairs.push((rel, i, j));
-            }
-        }
-    }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (mut ti, mut fj) = (vec![false; truth.len()], vec![false; found.len()]);
-    let mut out = Vec::new();
-    for (_, i, j) in pairs {
-        if !ti[i] && !fj[j] {
-            ti[i] = true;
-            fj[j] = true;
-            out.push((i, j));
-        }
-    }
-    let left = (0..found.len()).filter(|&j| !fj[j]).collect();
-    (out, left)
-}
+use common::match_frequencies as matched;
 
 /// The shaker test: 10 modes 1.9–20 Hz, 2 shakers, 8 accelerometers, 64 Hz,
 /// 300 s, 2 % sensor noise; returns the record and the true (frequency, damping).
@@ -144,7 +120,7 @@ fn a_simulated_shaker_test_gives_its_modes_and_few_spurious_ones_at_every_frame(
 fn the_window_correction_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
     let (file, truth) = shaker_test(dir.path(), 24);
-    let run = |extra: &[&str]| {
+    let args = |extra: &[&'static str]| {
         let mut args = vec![
             "identify",
             s(&file),
@@ -159,7 +135,10 @@ fn the_window_correction_is_said_and_can_be_turned_off() {
             "auto",
         ];
         args.extend_from_slice(extra);
-        let out = era().args(&args).output().unwrap();
+        args
+    };
+    let run = |extra: &[&'static str]| {
+        let out = era().args(args(extra)).output().unwrap();
         assert!(
             out.status.success(),
             "{}",
@@ -174,24 +153,10 @@ fn the_window_correction_is_said_and_can_be_turned_off() {
     );
     let off = run(&["--no-window-correction"]);
     assert!(!off.contains("window correction"), "{off}");
-    let damping_error = |extra: &[&str]| {
-        let mut args = vec![
-            "identify",
-            s(&file),
-            "--from-time",
-            "--inputs",
-            "1-2",
-            "--outputs",
-            "3-10",
-            "--frame",
-            "1024",
-            "--states",
-            "auto",
-            "--json",
-            "-q",
-        ];
-        args.extend_from_slice(extra);
-        let v = json_of(&args);
+    let damping_error = |extra: &[&'static str]| {
+        let mut a = args(extra);
+        a.extend(["--json", "-q"]);
+        let v = json_of(&a);
         let found = physical(&v);
         let tf: Vec<f64> = truth.iter().map(|t| t.0).collect();
         let ff: Vec<f64> = found.iter().map(|f| f.0).collect();

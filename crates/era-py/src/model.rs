@@ -493,6 +493,8 @@ pub fn identify(
                 ))
             }
         },
+        // Arrays carry no record of the window that estimated them.
+        lag_window: None,
     };
     let checked = EraOptions {
         states: states.max(usize::from(chosen.is_none())),

@@ -1298,11 +1298,13 @@ fn judge_significance(
     if end <= first + 2 {
         return Ok(());
     }
-    let mut probe = crate::refine::RefineOptions::default();
-    probe.max_iterations = 0;
-    probe.add_missed = false;
-    probe.rank_one = false;
-    probe.band = Some((first, end));
+    let probe = crate::refine::RefineOptions {
+        max_iterations: 0,
+        add_missed: false,
+        rank_one: false,
+        band: Some((first, end)),
+        ..Default::default()
+    };
     let mut alive: Vec<usize> = (0..selection.clusters.len())
         .filter(|&c| selection.clusters[c].physical)
         .collect();
@@ -1365,12 +1367,12 @@ fn judge_significance(
 }
 
 /// A mode this close (relative frequency) to a stronger one may be its satellite
-/// ([`mark_satellites`]).
+/// (step 6 of the automatic choice, docs/trust.md).
 pub const SATELLITE_DISTANCE: f64 = 0.05;
 
-/// A satellite's share of the data is below this fraction of its host's
-/// ([`mark_satellites`]). In the shaker study the satellites were at 2–9 % and the
-/// weaker partners of true close pairs at 15–30 %.
+/// A satellite's norm over the band is below this fraction of its host's
+/// (step 6 of the automatic choice, docs/trust.md). In the shaker study (docs/trust.md) the satellites were at
+/// 2–23 %; the weaker partners of true close pairs passed by their consistency.
 pub const SATELLITE_SHARE: f64 = 0.25;
 
 /// Step 6 of the automatic choice: satellites. Errors of a strong mode's estimate
@@ -1379,10 +1381,9 @@ pub const SATELLITE_SHARE: f64 = 0.25;
 /// stable across orders and significant against the noise. Such a pole is told by
 /// three things together: it lies within [`SATELLITE_DISTANCE`] of a physical mode,
 /// the norm of its own term over the band (ERA's shape and participation) is below
-/// [`SATELLITE_SHARE`] of that mode's, and its
-/// consistency over the record (median CMI) is below half of that mode's. A weak
-/// mode of the structure beside a strong one is as consistent as its neighbour and is
-/// kept.
+/// [`SATELLITE_SHARE`] of that mode's, and its consistency over the record (median CMI)
+/// is below 0.5 and below half of that mode's. A weak mode of the structure beside a
+/// strong one is as consistent as its neighbour and is kept.
 fn mark_satellites(
     selection: &mut Selection,
     scan: &Scan,
@@ -1790,10 +1791,10 @@ pub fn refine_identification(
 }
 
 /// How many standard deviations of the noise's part of the difference of the two
-/// probe costs ([`choose_fit_domain`]) the zero-order-hold image must win by.
+/// probe costs (chosen by the refinement in the pipeline) the zero-order-hold image must win by.
 const ZOH_SIGNIFICANCE: f64 = 8.0;
 
-/// Which model the refinement fits, and why ([`choose_fit_domain`]).
+/// Which model the refinement fits, and why (chosen by the refinement in the pipeline).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitDomain {
     /// `Some(Ts)` for the zero-order-hold image (a sampled system's FRFs), `None` for a

@@ -53,4 +53,36 @@ pub fn data_file(rel: &str) -> PathBuf {
     );
     p
 }
+
+/// One-to-one matching of `found` frequencies to `truth` within `tolerance` (relative),
+/// nearest pairs first: the matched (truth index, found index) pairs and the found
+/// indices left over (spurious).
+pub fn match_frequencies(
+    truth: &[f64],
+    found: &[f64],
+    tolerance: f64,
+) -> (Vec<(usize, usize)>, Vec<usize>) {
+    let mut pairs = Vec::new();
+    for (i, t) in truth.iter().enumerate() {
+        for (j, f) in found.iter().enumerate() {
+            let rel = (f - t).abs() / t;
+            if rel <= tolerance {
+                pairs.push((rel, i, j));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut ti, mut fj) = (vec![false; truth.len()], vec![false; found.len()]);
+    let mut out = Vec::new();
+    for (_, i, j) in pairs {
+        if !ti[i] && !fj[j] {
+            ti[i] = true;
+            fj[j] = true;
+            out.push((i, j));
+        }
+    }
+    let left = (0..found.len()).filter(|&j| !fj[j]).collect();
+    (out, left)
+}
+
 pub mod hostile;

@@ -334,7 +334,7 @@ fn band_limited(n: usize, fs: f64, lo_hz: f64, hi_hz: f64, rng: &mut Minstd) -> 
     }
     // A real inverse needs real 0 Hz and Nyquist lines.
     spectrum[0].im = 0.0;
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         if let Some(last) = spectrum.last_mut() {
             last.im = 0.0;
         }
@@ -381,7 +381,7 @@ mod tests {
             .unwrap();
         // y_k = D u_k + Σ_{m≥1} C A^(m−1) B u_(k−m), checked at k = 40.
         let k = 40;
-        let mut expected = vec![0.0; 3];
+        let mut expected = [0.0; 3];
         for (i, e) in expected.iter_mut().enumerate() {
             for j in 0..2 {
                 *e += model.d[(i, j)] * r.inputs[j][k];
@@ -402,13 +402,12 @@ mod tests {
             }
             x = &model.a * &x;
         }
-        for i in 0..3 {
-            let scale = r.outputs[i].iter().map(|v| v.abs()).fold(0.0, f64::max);
+        for (i, (output, e)) in r.outputs.iter().zip(expected).enumerate() {
+            let scale = output.iter().map(|v| v.abs()).fold(0.0, f64::max);
             assert!(
-                (r.outputs[i][k] - expected[i]).abs() <= 1e-10 * scale,
-                "{i}: {} vs {}",
-                r.outputs[i][k],
-                expected[i]
+                (output[k] - e).abs() <= 1e-10 * scale,
+                "{i}: {} vs {e}",
+                output[k]
             );
         }
     }
