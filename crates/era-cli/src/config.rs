@@ -37,7 +37,6 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
             SvdArg::MatrixFree => SvdPath::MatrixFree,
             SvdArg::Auto => SvdPath::Auto,
         },
-        lag_window: None,
     };
     // Sizes are checked against their limits here, under the flag's name, before anything
     // is read or allocated (the core checks them again for library users). With
@@ -75,13 +74,18 @@ fn reason_of(e: &era::EraError) -> String {
 }
 
 /// The lag window of the Welch estimate an FRF file came from, when its metadata (an
-/// `era frf` CSV, or `--from-time`) names a tapered window, the frame and the sample
-/// rate; `None` for a rectangular window (transients need no correction), or when the
-/// file does not say. The reason goes to the echo.
+/// `era frf` CSV, or `--from-time`) names the H1 estimator, a tapered window, the frame
+/// and the sample rate; `None` for a rectangular window (transients need no
+/// correction), another estimator, or when the file does not say. The reason goes to
+/// the echo.
 pub fn lag_window(
     metadata: &std::collections::BTreeMap<String, String>,
 ) -> Option<(era::markov::LagWindow, String)> {
     use era::frf::estimate::Window;
+    // The lag window is H1's bias (an output-noise estimator); H2 and Hv differ.
+    if metadata.get("estimator").map(|e| e.trim()) != Some("h1") {
+        return None;
+    }
     let window = match metadata.get("window")?.trim() {
         "hann" => Window::Hann,
         "flattop" | "flat-top" => Window::FlatTop,

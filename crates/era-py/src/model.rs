@@ -493,8 +493,6 @@ pub fn identify(
                 ))
             }
         },
-        // Arrays carry no record of the window that estimated them.
-        lag_window: None,
     };
     let checked = EraOptions {
         states: states.max(usize::from(chosen.is_none())),

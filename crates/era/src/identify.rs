@@ -51,9 +51,6 @@ pub struct EraOptions {
     pub direct_term: DirectTerm,
     /// Dense, matrix-free or automatic SVD.
     pub svd: SvdPath,
-    /// The lag window of a Welch estimate with tapered frames, divided out of the
-    /// impulse responses ([`crate::markov::LagWindow`]); `None` for none (the thesis).
-    pub lag_window: Option<crate::markov::LagWindow>,
 }
 
 impl EraOptions {
@@ -69,7 +66,6 @@ impl EraOptions {
             domain: ModelDomain::Discrete,
             direct_term: DirectTerm::Zero,
             svd: SvdPath::Auto,
-            lag_window: None,
         }
     }
     /// The thesis's DTA settings (Appendix J): `ns 80, lh 5, ni 1, nz 3, ndpts 1024`.
@@ -573,9 +569,6 @@ fn front(
         Path::Fast => impulse_responses(&pre.frf)?,
         Path::Naive => impulse_responses_naive(&pre.frf),
     };
-    if let Some(lag) = &options.lag_window {
-        lag.correct(&mut series, pre.sample_time_s);
-    }
     if let Some((order, cutoff_hz)) = options.lowpass {
         let filter = LowPass::design(order, cutoff_hz, pre.sample_time_s)?;
         for s in series.iter_mut() {
@@ -1037,13 +1030,16 @@ fn scan_front(
             bounded.unwrap_or(default)
         }
     };
-    let hankel_states = range
-        .max
-        .min(supported_hankel_states(
-            f.markov.samples(),
-            options.hankel_factor,
-        ))
-        .max(1);
+    let supported = supported_hankel_states(f.markov.samples(), options.hankel_factor);
+    // A default scan factors the Hankel of every supported sample, whatever its orders
+    // (a range bounded by the data's order keeps the record's whole span); an explicit
+    // range factors the Hankel of its largest order.
+    let hankel_states = if scan_options.orders.is_none() {
+        supported
+    } else {
+        range.max.min(supported)
+    }
+    .max(1);
     let clock = Instant::now();
     observer(Stage::HankelSvd);
     let factorization = Factorization::thesis(
@@ -1076,10 +1072,14 @@ fn scan_front(
         other => other,
     })?;
     timings.hankel_svd = factorization.seconds();
-    // Exact low-order data: the default range starts above the Hankel's rank; scan up to
-    // the rank instead (an explicit --orders is taken as given).
+    // Exact low-order data: the default range starts above the Hankel's rank, or most of
+    // it lies above (a range bounded by the data's order starts at half of it); scan up
+    // to the rank instead (an explicit --orders is taken as given).
     let rank = factorization.rank() / 2 * 2;
-    let range = if scan_options.orders.is_none() && rank < range.min && rank >= 2 {
+    let range = if scan_options.orders.is_none()
+        && (rank < range.min || 2 * rank < range.min + range.max)
+        && rank >= 2
+    {
         OrderRange::new(2, rank, 2)?
     } else {
         range
@@ -1341,17 +1341,22 @@ fn judge_significance(
         // A fit the data cannot support (too few lines for the modes) judges nothing.
         let Ok(r) = r else { return Ok(()) };
         let least = r.significance_minimum();
-        // Start poles the fit dropped (coalesced with another) are duplicates.
-        let mut worst: Option<(usize, f64)> =
-            r.dropped.first().map(|(k, _)| (*k, f64::NEG_INFINITY));
-        if worst.is_none() {
-            for m in &r.modes {
-                if m.significance.is_finite()
-                    && m.significance < least
-                    && worst.is_none_or(|(_, w)| m.significance < w)
-                {
-                    worst = Some((m.start, m.significance));
-                }
+        // Start poles the fit dropped (coalesced with another, real) go first, with
+        // the fit's reason.
+        if let Some((k, _)) = r.dropped.first() {
+            let c = alive.remove(*k);
+            let cluster = &mut selection.clusters[c];
+            cluster.physical = false;
+            cluster.rejection = Some(Rejection::Dropped);
+            continue;
+        }
+        let mut worst: Option<(usize, f64)> = None;
+        for m in &r.modes {
+            if m.significance.is_finite()
+                && m.significance < least
+                && worst.is_none_or(|(_, w)| m.significance < w)
+            {
+                worst = Some((m.start, m.significance));
             }
         }
         let Some((k, significance)) = worst else {
@@ -1632,7 +1637,17 @@ pub fn refine_identification(
         ropts.band = Some((found.first_line.max(positive), lines));
     }
     // ... and the domain of the fit, chosen for the data (`FitDomain`).
-    let fit_domain = choose_fit_domain(&found, &start_poles, &ropts, discrete_ts)?;
+    // A probe that fails (a basis the data cannot support) leaves the domain asked for.
+    let fit_domain =
+        choose_fit_domain(&found, &start_poles, &ropts, discrete_ts).unwrap_or_else(|e| {
+            FitDomain {
+                sample_time_s: discrete_ts.map(|_| found.sample_time_s),
+                probe_fit: (f64::NAN, f64::NAN),
+                reason: format!(
+                "the model's own time domain (the comparison of the two could not be made: {e})"
+            ),
+            }
+        });
     ropts.sample_time_s = fit_domain.sample_time_s;
     let fitted = match fit_domain.sample_time_s {
         Some(_) => &found.processed,
@@ -1668,7 +1683,16 @@ pub fn refine_identification(
     let (q, p) = (refinement.outputs, refinement.inputs);
     let mut modes = Vec::with_capacity(refinement.modes.len());
     for rm in &refinement.modes {
-        let residue = refinement.model_residue(rm, quantity);
+        let mut residue = refinement.model_residue(rm, quantity);
+        // A residue of the fitted domain in the domain asked for: the zero-order hold
+        // takes a continuous term `R/(s − p)` to `R (e^(pTs) − 1)/p / (z − e^(pTs))`.
+        let hold = |ts: f64| ((rm.pole * ts).exp() - 1.0) / rm.pole;
+        let factor = match (refinement.sample_time_s, discrete_ts) {
+            (None, Some(ts)) => hold(ts),
+            (Some(ts), None) => 1.0 / hold(ts),
+            _ => Complex64::new(1.0, 0.0),
+        };
+        residue.iter_mut().for_each(|r| *r *= factor);
         let (shape, participation) = rank_one(&residue, q, p)?;
         modes.push(crate::modal::Mode {
             frequency_hz: rm.frequency_hz,

@@ -259,8 +259,9 @@ mod tests {
 /// are left as they are (their noise would be amplified more than the bias is removed).
 ///
 /// A transient that lies whole inside a frame (impact, burst that decays, a sweep with
-/// quiet ends) has no such bias: the correction is for random excitation, and the
-/// pipeline applies it only to tapered windows (see [`crate::identify::EraOptions`]).
+/// quiet ends) has no such bias, and the derivation is H1's: the correction is for H1
+/// estimates under random excitation, and `era identify` applies it only to those made
+/// with tapered windows ([`LagWindow::correct_frf`], before any other step).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LagWindow {
     /// `c(τ)` at the frame's sample lags `τ = 0 … N − 1`, `c(0) = 1`.
@@ -320,24 +321,6 @@ impl LagWindow {
         }
         let frac = x - k as f64;
         self.c[k] * (1.0 - frac) + self.c[k + 1] * frac
-    }
-
-    /// Divides the causal half of each impulse response (`sample_time_s` apart) by
-    /// `c(t)` where `c(t) ≥` [`LAG_CORRECTION_FLOOR`]. Returns the samples corrected.
-    pub fn correct(&self, series: &mut [Vec<f64>], sample_time_s: f64) -> usize {
-        let len = series.first().map_or(0, Vec::len);
-        let mut corrected = 0;
-        for k in 1..len / 2 {
-            let c = self.at(k as f64 * sample_time_s);
-            if c < LAG_CORRECTION_FLOOR {
-                break;
-            }
-            for s in series.iter_mut() {
-                s[k] /= c;
-            }
-            corrected = k + 1;
-        }
-        corrected
     }
 }
 

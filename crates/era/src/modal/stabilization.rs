@@ -460,11 +460,14 @@ pub enum Rejection {
     Unstable(usize, usize),
     /// Share of the FRF below the minimum.
     NoContribution(f64),
-    /// The same mode as the larger cluster at this frequency, Hz.
+    /// The same mode as the cluster kept at this frequency, Hz.
     Duplicate(f64),
     /// Explains fewer noise variances per parameter (first) than tell a mode from noise
     /// (second), in a fit of the chosen modes to the data.
     Insignificant(f64, f64),
+    /// The fit of the chosen modes to the data dropped its pole (step 5): it coalesced
+    /// with another, or turned real.
+    Dropped,
     /// A weak, inconsistent pole beside a stronger mode (the identification's step 6).
     Satellite {
         /// The stronger mode's frequency, Hz.
@@ -507,7 +510,7 @@ impl std::fmt::Display for Rejection {
                 write!(f, "contributes {:.2e} of the FRF", c)
             }
             Rejection::Duplicate(hz) => {
-                write!(f, "the same mode as the larger cluster at {hz:.4} Hz")
+                write!(f, "the same mode as the cluster kept at {hz:.4} Hz")
             }
             Rejection::Satellite {
                 host_hz,
@@ -518,6 +521,10 @@ impl std::fmt::Display for Rejection {
                 f,
                 "a satellite of the mode at {host_hz:.4} Hz: {:.1} % of its share and CMI {cmi:.2} against its {host_cmi:.2} (an error of that mode's estimate, not a mode)",
                 100.0 * share
+            ),
+            Rejection::Dropped => write!(
+                f,
+                "the fit of the chosen modes to the data dropped its pole (it coalesced with another, or turned real)"
             ),
             Rejection::Insignificant(s, least) => write!(
                 f,
