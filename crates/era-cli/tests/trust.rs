@@ -6,19 +6,32 @@ mod common;
 use common::{data_file, era, json_of, s};
 use std::path::Path;
 
-/// Physical modes of a model.json: (frequency Hz, damping ratio).
-fn physical(v: &serde_json::Value) -> Vec<(f64, f64)> {
+/// (frequency Hz, damping ratio) of every mode of a JSON (`model.json`, or the truth
+/// `era simulate --json` prints).
+fn modes_of(v: &serde_json::Value) -> Vec<(f64, f64)> {
     v["modes"]
         .as_array()
         .unwrap()
         .iter()
-        .filter(|m| m["physical"].as_bool().unwrap())
         .map(|m| {
             (
                 m["frequency_hz"].as_f64().unwrap(),
                 m["damping_ratio"].as_f64().unwrap(),
             )
         })
+        .collect()
+}
+
+/// Physical modes of a model.json: (frequency Hz, damping ratio).
+fn physical(v: &serde_json::Value) -> Vec<(f64, f64)> {
+    let all = modes_of(v);
+    v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(all)
+        .filter(|(m, _)| m["physical"].as_bool().unwrap())
+        .map(|(_, fz)| fz)
         .collect()
 }
 
@@ -40,18 +53,7 @@ fn shaker_test(dir: &Path, seed: u64) -> (std::path::PathBuf, Vec<(f64, f64)>) {
         s(&file),
         "--json",
     ]);
-    let truth = v["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| {
-            (
-                m["frequency_hz"].as_f64().unwrap(),
-                m["damping_ratio"].as_f64().unwrap(),
-            )
-        })
-        .collect();
-    (file, truth)
+    (file, modes_of(&v))
 }
 
 /// Frames of 1024, 2048 and 4096 samples, on seeds the tuning did not use (21–23):
@@ -212,17 +214,7 @@ fn an_exact_receptance_refines_to_its_three_modes_in_either_time_domain() {
         s(&file),
         "--json",
     ]);
-    let truth: Vec<(f64, f64)> = v["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| {
-            (
-                m["frequency_hz"].as_f64().unwrap(),
-                m["damping_ratio"].as_f64().unwrap(),
-            )
-        })
-        .collect();
+    let truth = modes_of(&v);
     for domain in ["discrete", "continuous"] {
         let out = era()
             .args([
