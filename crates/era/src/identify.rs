@@ -1397,33 +1397,22 @@ fn mark_satellites(
     sample_time_s: f64,
 ) {
     use crate::modal::stabilization::Rejection;
-    // The energy of each pole pair's own term (ERA's shape and participation) over the
-    // band: `Σ_lines Σ_ij |r_ij w + r̄_ij w'|²` with `w = 1/(z − λ)`, `w' = 1/(z − λ̄)`.
+    // The norm of each pole pair's own term (ERA's shape and participation) over the band.
+    let domain = crate::TimeDomain::Discrete { sample_time_s };
     let points: Vec<crate::Complex64> = band_lines_hz
         .iter()
-        .map(|f| crate::Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * f * sample_time_s))
+        .map(|f| crate::response::evaluation_point(domain, *f))
         .collect();
     let share = |k: usize| {
         let pole = &scan.poles[selection.clusters[alive[k]].representative];
-        let s1 = pole.shape.iter().map(|c| c.norm_sqr()).sum::<f64>()
-            * pole.participation.iter().map(|b| b.norm_sqr()).sum::<f64>();
-        let s2 = pole.shape.iter().map(|c| c * c).sum::<crate::Complex64>()
-            * pole
-                .participation
-                .iter()
-                .map(|b| b * b)
-                .sum::<crate::Complex64>();
-        let lambda = pole.eigenvalue;
-        points
-            .iter()
-            .map(|z| {
-                let w = 1.0 / (z - lambda);
-                let w2 = 1.0 / (z - lambda.conj());
-                s1 * (w.norm_sqr() + w2.norm_sqr()) + 2.0 * (s2 * w * w2.conj()).re
-            })
-            .sum::<f64>()
-            .max(0.0)
-            .sqrt()
+        crate::modal::indicators::term_energy(
+            &pole.shape,
+            &pole.participation,
+            pole.eigenvalue,
+            &points,
+        )
+        .max(0.0)
+        .sqrt()
     };
     let facts: Vec<(f64, f64, f64)> = alive
         .iter()

@@ -168,6 +168,37 @@ fn power(lambda: Complex64, k: usize) -> Complex64 {
     result
 }
 
+/// `Σ_lines ‖G_k‖_F²` of one pole's term `c bᵀ/(z − λ)` (and its conjugate's, for a
+/// complex pole) at the evaluation `points` (`z = e^(jωTs)` or `jω`).
+///
+/// With `r_ij = c_i b_j`, `w = 1/(z − λ)` and `w' = 1/(z − λ̄)` (0 for a real pole),
+/// `Σ_ij |r_ij w + r̄_ij w'|² = S₁(|w|² + |w'|²) + 2 Re(S₂ w w̄')`, where
+/// `S₁ = Σ_ij |r_ij|² = Σ|c_i|² Σ|b_j|²` and `S₂ = Σ_ij r_ij² = Σc_i² Σb_j²`: O(1) per
+/// line instead of O(q·p).
+pub(crate) fn term_energy(
+    shape: &[Complex64],
+    participation: &[Complex64],
+    lambda: Complex64,
+    points: &[Complex64],
+) -> f64 {
+    let pair = lambda.im != 0.0;
+    let s1 = shape.iter().map(|c| c.norm_sqr()).sum::<f64>()
+        * participation.iter().map(|b| b.norm_sqr()).sum::<f64>();
+    let s2 = shape.iter().map(|c| c * c).sum::<Complex64>()
+        * participation.iter().map(|b| b * b).sum::<Complex64>();
+    let mut sum = 0.0;
+    for z in points {
+        let w = 1.0 / (z - lambda);
+        if pair {
+            let wc = 1.0 / (z - lambda.conj());
+            sum += s1 * (w.norm_sqr() + wc.norm_sqr()) + 2.0 * (s2 * w * wc.conj()).re;
+        } else {
+            sum += s1 * w.norm_sqr();
+        }
+    }
+    sum
+}
+
 /// `‖G_k‖_F / ‖G‖_F` of every eigenvalue of `form` (its conjugate's term included for a
 /// complex pole) over the lines `frequency_hz`; `measured` is the FRF `[out][in][line]`
 /// on those lines. 0 for all when the measurement is zero.
@@ -189,28 +220,8 @@ pub fn contributions(
             if reference <= 0.0 || !reference.is_finite() {
                 return 0.0;
             }
-            // With r_ij = c_i b_j, w = 1/(z − λ) and w' = 1/(z − λ̄) (0 for a real pole),
-            // Σ_ij |r_ij w + r̄_ij w'|² = S₁(|w|² + |w'|²) + 2 Re(S₂ w w̄'), where
-            // S₁ = Σ_ij |r_ij|² = Σ|c_i|² Σ|b_j|² and S₂ = Σ_ij r_ij² = Σc_i² Σb_j²:
-            // O(1) per line instead of O(q·p).
-            let shape = &form.shapes[k];
-            let part = &form.participations[k];
-            let pair = lambda.im != 0.0;
-            let s1 = shape.iter().map(|c| c.norm_sqr()).sum::<f64>()
-                * part.iter().map(|b| b.norm_sqr()).sum::<f64>();
-            let s2 = shape.iter().map(|c| c * c).sum::<Complex64>()
-                * part.iter().map(|b| b * b).sum::<Complex64>();
-            let mut sum = 0.0;
-            for z in &points {
-                let w = 1.0 / (z - lambda);
-                if pair {
-                    let wc = 1.0 / (z - lambda.conj());
-                    sum += s1 * (w.norm_sqr() + wc.norm_sqr()) + 2.0 * (s2 * w * wc.conj()).re;
-                } else {
-                    sum += s1 * w.norm_sqr();
-                }
-            }
-            sum.sqrt() / reference
+            term_energy(&form.shapes[k], &form.participations[k], *lambda, &points).sqrt()
+                / reference
         })
         .collect()
 }
