@@ -19,16 +19,20 @@ def cli_model(era_cli, path, *flags) -> dict:
     return json.loads(done.stdout)
 
 
+THESIS = ["--preset", "thesis"]
 CASES = [
     # file written by, CLI flags, Python keywords
+    ("truth.csv", THESIS + ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
+     dict(states=8, hankel_factor=4, pad_to=1024, preset="thesis")),
+    ("truth.uff", THESIS + ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "--time-domain", "continuous"],
+     dict(states=8, hankel_factor=4, pad_to=1024, time_domain="continuous", preset="thesis")),
+    ("dta.mat", THESIS + ["--states", "80", "--hankel-factor", "5", "--integrations", "1", "--zero-lines", "3", "--pad-to", "1024"],
+     dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024, preset="thesis")),
+    ("dta.csv", THESIS + ["--states", "40", "--lowpass-hz", "12", "--lowpass-order", "6", "--direct-term", "markov0", "--svd", "matrix-free"],
+     dict(states=40, lowpass=(6, 12.0), direct_term="markov0", svd="matrix-free", preset="thesis")),
+    # The default route (measured: refinement, continuous time) gives the same model too.
     ("truth.csv", ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
      dict(states=8, hankel_factor=4, pad_to=1024)),
-    ("truth.uff", ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "--time-domain", "continuous"],
-     dict(states=8, hankel_factor=4, pad_to=1024, time_domain="continuous")),
-    ("dta.mat", ["--states", "80", "--hankel-factor", "5", "--integrations", "1", "--zero-lines", "3", "--pad-to", "1024"],
-     dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024)),
-    ("dta.csv", ["--states", "40", "--lowpass-hz", "12", "--lowpass-order", "6", "--direct-term", "markov0", "--svd", "matrix-free"],
-     dict(states=40, lowpass=(6, 12.0), direct_term="markov0", svd="matrix-free")),
 ]
 
 
@@ -43,7 +47,7 @@ def files(tmp_path_factory, era_cli):
     return d
 
 
-@pytest.mark.parametrize("name,flags,keywords", CASES, ids=[c[0] + ":" + c[2].get("time_domain", c[2].get("svd", "")) for c in CASES])
+@pytest.mark.parametrize("name,flags,keywords", CASES, ids=[c[0] + ":" + c[2].get("time_domain", c[2].get("svd", "")) + ":" + c[2].get("preset", "measured") for c in CASES])
 def test_python_equals_cli_model_json(files, era_cli, name, flags, keywords):
     path = files / name
     expected = cli_model(era_cli, path, *flags)

@@ -40,7 +40,9 @@ def test_frfdata_values_are_validated_like_a_file():
     v[0, 1, 3] = np.nan
     with pytest.raises(ValueError, match=r"^non-finite value in FRF at output 1, input 2, line 3$"):
         era.FrfData(f, v)
-    with pytest.raises(ValueError, match="frequencies must start at 0 Hz, the first line is 1 Hz"):
+    # A start off the grid of the spacing is refused, with the remedy (one on it is
+    # padded with zero lines, as a file's is: test_route.py).
+    with pytest.raises(ValueError, match="frequency_hz: the first line is 1 Hz, 0.5000 increments of the 2 Hz spacing"):
         era.FrfData(f + 1, np.ones((1, 1, 5)))
     with pytest.raises(ValueError, match="not uniformly spaced: line 2 is 5 Hz, expected 4 Hz"):
         era.FrfData([0, 2, 5, 6, 8], np.ones((1, 1, 5)))
@@ -95,7 +97,7 @@ def test_identify_refuses_bad_parameters(truth, kwargs, message):
     assert message in str(caught.value)
 
 
-@pytest.mark.parametrize("kwargs", [dict(states=8.0), dict(states=True), dict(states=8, hankel_factor=2.5), dict(states=None)])
+@pytest.mark.parametrize("kwargs", [dict(states=8.0), dict(states=True), dict(states=8, hankel_factor=2.5), dict(states=[8])])
 def test_identify_refuses_wrong_types(truth, kwargs):
     with pytest.raises(TypeError):
         era.identify(truth, **kwargs)
@@ -324,7 +326,10 @@ def test_signatures_show_the_defaults():
 
     identify = inspect.signature(era.identify).parameters
     assert identify["hankel_factor"].default == 5
-    assert identify["time_domain"].default == "discrete"
-    assert identify["refine"].default is False
+    # The route's choices default to None: the preset (measured) fills them.
+    assert identify["time_domain"].default is None
+    assert identify["refine"].default is None
+    assert identify["preset"].default == "measured"
+    assert str(identify["states"]).endswith("'auto'")
     assert inspect.signature(era.simulate_modal).parameters["modes"].default == 40
     assert inspect.signature(era.simulate_truth_model).parameters["seed"].default == 1

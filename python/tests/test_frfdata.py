@@ -81,13 +81,13 @@ def test_simulators_match_their_cli_shapes():
     assert era.simulate_truth_model(noise=0.0) == truth
     modal = era.simulate_modal(outputs=3, inputs=2, modes=5, lines=201, df=0.1, fmax=15.0)
     assert (modal.outputs, modal.inputs, modal.lines) == (3, 2, 201)
-    found = era.identify(modal, 10, hankel_factor=8)
+    found = era.identify(modal, 10, hankel_factor=8, preset="thesis")
     assert len(found.frequency_hz) == 5
     assert np.all((found.frequency_hz > 0.4) & (found.frequency_hz < 15.1))
 
 
 def test_identification_results_are_plain_numpy():
-    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024)
+    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024, preset="thesis")
     n, q, p = 8, 3, 3
     assert found.a.shape == (n, n) and found.b.shape == (n, p)
     assert found.c.shape == (q, n) and found.d.shape == (q, p)
@@ -120,7 +120,7 @@ def test_identification_results_are_plain_numpy():
 
 def test_to_control_state_space():
     control = pytest.importorskip("control")
-    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024)
+    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024, preset="thesis")
     sys = found.to_control()
     assert isinstance(sys, control.StateSpace)
     assert sys.dt == found.sample_time_s

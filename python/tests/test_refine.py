@@ -19,9 +19,9 @@ def noisy_truth(tmp_path_factory, era_cli):
 
 def test_refine_gives_the_cli_refined_model(noisy_truth, era_cli):
     frf = era.read_frf(str(noisy_truth))
-    found = era.identify(frf, 8, hankel_factor=4, pad_to=1024, refine=True)
+    found = era.identify(frf, 8, hankel_factor=4, pad_to=1024, refine=True, preset="thesis")
     done = era_cli("identify", noisy_truth, "--states", "8", "--hankel-factor", "4",
-                   "--pad-to", "1024", "--refine", "--json", "--quiet")
+                   "--pad-to", "1024", "--refine", "--preset", "thesis", "--json", "--quiet")
     cli = json.loads(done.stdout)
     ours = np.array([m.eigenvalue for m in found.modes])
     theirs = np.array([m["eigenvalue_re"] + 1j * m["eigenvalue_im"] for m in cli["modes"]])
@@ -39,11 +39,11 @@ def test_refine_gives_the_cli_refined_model(noisy_truth, era_cli):
 
 def test_refine_options_and_plain_identify_have_no_std(noisy_truth):
     frf = era.read_frf(str(noisy_truth))
-    plain = era.identify(frf, 8, hankel_factor=4, pad_to=1024)
+    plain = era.identify(frf, 8, hankel_factor=4, pad_to=1024, preset="thesis")
     assert all(m.frequency_std_hz is None for m in plain.modes)
     refined = era.identify(frf, 8, hankel_factor=4, pad_to=1024, refine=True,
                            residuals="none", reciprocal=True, weighting="uniform",
-                           max_iterations=30)
+                           max_iterations=30, preset="thesis")
     assert len(refined.modes) == 4
     # The refined model's own FRF is what the fit compared: a better fit than ERA's.
     assert np.mean(refined.fit["relative_error"]) < np.mean(plain.fit["relative_error"])
@@ -53,8 +53,9 @@ def test_modes_the_start_missed_are_added_as_the_cli_adds_them(noisy_truth, era_
     # Four states give ERA two of the four modes; the refinement finds the others in
     # its residual, as `era identify --refine` does.
     frf = era.read_frf(str(noisy_truth))
-    found = era.identify(frf, 4, refine=True)
-    done = era_cli("identify", noisy_truth, "--states", "4", "--refine", "--json", "--quiet")
+    found = era.identify(frf, 4, refine=True, time_domain="discrete")
+    done = era_cli("identify", noisy_truth, "--states", "4", "--refine", "--time-domain", "discrete",
+                   "--json", "--quiet")
     cli = json.loads(done.stdout)
     ours = np.array([m.eigenvalue for m in found.modes])
     theirs = np.array([m["eigenvalue_re"] + 1j * m["eigenvalue_im"] for m in cli["modes"]])
@@ -63,6 +64,6 @@ def test_modes_the_start_missed_are_added_as_the_cli_adds_them(noisy_truth, era_
     assert all(m.physical for m in found.modes)
     added = json.loads(found.to_json())["refinement"]["added_hz"]
     assert len(added) == 2 and added == pytest.approx(cli["refinement"]["added_hz"])
-    only_start = era.identify(frf, 4, refine=True, added_modes=False)
+    only_start = era.identify(frf, 4, refine=True, added_modes=False, time_domain="discrete")
     assert len(only_start.modes) == 2
     assert json.loads(only_start.to_json())["parameters"]["added_modes"] is False

@@ -23,7 +23,8 @@ pub enum Command {
     /// noise, side by side.
     Demo(DemoArgs),
     /// Identify a model from an FRF file (docs/design.md §1), or from time histories with
-    /// --from-time.
+    /// --from-time. By default on the route measured data need (automatic order,
+    /// refinement, continuous time); --preset thesis for plain ERA as the thesis runs it.
     Identify(Box<IdentifyArgs>),
     /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
     /// HDF5): Welch-averaged spectra, H1, H2 or Hv.
@@ -309,6 +310,26 @@ pub struct DemoArgs {
     pub common: CommonArgs,
 }
 
+/// Which defaults `era identify` starts from (era::identify::route).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PresetArg {
+    /// The route for measured FRFs: automatic order, refinement, continuous time, D from
+    /// the quantity, the band from the coherence, the Welch window corrected.
+    Measured,
+    /// Plain ERA as the thesis runs it: no refinement, discrete time, D = 0, every line,
+    /// the FRFs as given.
+    Thesis,
+}
+
+impl From<PresetArg> for era::identify::route::Preset {
+    fn from(p: PresetArg) -> Self {
+        match p {
+            PresetArg::Measured => era::identify::route::Preset::Measured,
+            PresetArg::Thesis => era::identify::route::Preset::Thesis,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum TimeDomainArg {
     Discrete,
@@ -457,11 +478,18 @@ pub struct IdentifyArgs {
     /// FRF file: CSV (docs/design.md §4), UFF 58/58b, or MAT v5 (FRF + FreqV, xferIJ +
     /// FreqV, or a q × p × lines array + FreqV), told apart by content.
     pub file: PathBuf,
-    /// Model order: first-order states (thesis ns), two per mode; or `auto`: scan the
-    /// orders of --orders, cluster the stable poles and keep the physical modes
-    /// (docs/design.md §10).
+    /// The defaults of every choice below that is not given: `measured` (the default)
+    /// is the route measured FRFs need; `thesis` is plain ERA with the thesis's settings
+    /// (no refinement, discrete time, D = 0, every line). Explicit flags override either.
+    /// Scripts that pass the thesis's flags and want the thesis's numbers add
+    /// --preset thesis.
+    #[arg(long, value_enum, default_value_t = PresetArg::Measured)]
+    pub preset: PresetArg,
+    /// Model order: first-order states (thesis ns), two per mode; or `auto` (the
+    /// default): scan the orders of --orders, cluster the stable poles and keep the
+    /// physical modes (docs/design.md §10).
     #[arg(long, value_name = "N | auto", value_parser = parse_states)]
-    pub states: StatesArg,
+    pub states: Option<StatesArg>,
     /// M = states × hankel-factor Markov samples go into the Hankel matrix (thesis lh).
     #[arg(long, default_value_t = 5)]
     pub hankel_factor: usize,
@@ -481,12 +509,15 @@ pub struct IdentifyArgs {
     /// Pad with zero lines to pad-to + 1 lines; 0 = no padding (thesis ndpts).
     #[arg(long, default_value_t = 0)]
     pub pad_to: usize,
-    /// Model returned (thesis cord).
-    #[arg(long, value_enum, default_value_t = TimeDomainArg::Discrete)]
-    pub time_domain: TimeDomainArg,
-    /// The model's D matrix.
-    #[arg(long, value_enum, default_value_t = DirectTermArg::Zero)]
-    pub direct_term: DirectTermArg,
+    /// Model returned (thesis cord). Default: continuous when refining (measured FRFs
+    /// are continuous-time data), else discrete, ERA's own.
+    #[arg(long, value_enum)]
+    pub time_domain: Option<TimeDomainArg>,
+    /// The model's D matrix. Default: markov0 for accelerance (it tends to a constant
+    /// above its modes), zero for mobility and receptance, and zero with
+    /// --preset thesis.
+    #[arg(long, value_enum)]
+    pub direct_term: Option<DirectTermArg>,
     /// How the Hankel SVD is computed.
     #[arg(long, value_enum, default_value_t = SvdArg::Auto)]
     pub svd: SvdArg,
@@ -511,8 +542,9 @@ pub struct IdentifyArgs {
     /// outside it are not physical, and the refinement fits only its lines (with
     /// residual terms for the modes outside). Default: where the coherence (estimated
     /// with --from-time, or read from NAME.coherence.csv beside the FRF file) is at
-    /// least 0.5; every line when there is no coherence.
-    #[arg(long, value_name = "LO..HI")]
+    /// least 0.5; every line when there is no coherence, with --preset thesis, or with
+    /// --band all.
+    #[arg(long, value_name = "LO..HI | all")]
     pub band: Option<String>,
     /// FILE holds time histories: estimate the FRFs first (as era frf), then identify.
     #[arg(long, requires = "inputs")]
@@ -525,16 +557,21 @@ pub struct IdentifyArgs {
     /// With --from-time: also write the estimated FRFs (.csv, .uff or .mat).
     #[arg(long, value_name = "FILE", requires = "from_time")]
     pub save_frf: Option<PathBuf>,
-    /// Refine the identified model against the FRFs: poles, residues and residual
-    /// terms by maximum likelihood, starting from the physical modes (--states auto) or
-    /// every mode (--states N); model.json and every output then show the refined
-    /// model, with standard deviations.
-    #[arg(long)]
+    /// Refine the identified model against the FRFs (the default, but for
+    /// --preset thesis): poles, residues and residual terms by maximum likelihood over
+    /// the band, starting from the physical modes (--states auto) or every mode
+    /// (--states N); model.json and every output then show the refined model, with
+    /// standard deviations.
+    #[arg(long, conflicts_with = "no_refine")]
     pub refine: bool,
+    /// Plain ERA: no refinement.
+    #[arg(long)]
+    pub no_refine: bool,
     /// Leave the impulse responses of a Welch estimate with tapered (Hann, flat-top)
-    /// frames as they are. By default the window's lag window, which biases damping
-    /// and adds doublet poles beside each mode under random excitation, is divided out
-    /// when the FRF file (or --from-time) says which window and frame made it.
+    /// frames as they are. By default (not with --preset thesis) the window's lag
+    /// window, which biases damping and adds doublet poles beside each mode under
+    /// random excitation, is divided out when the FRF file (or --from-time) says which
+    /// window and frame made it.
     #[arg(long)]
     pub no_window_correction: bool,
     #[command(flatten)]

@@ -41,7 +41,9 @@ pub struct CompareArgs {
     #[command(flatten)]
     pub common: CommonArgs,
     /// Identify both sets with these `era identify` flags (everything after --identify),
-    /// e.g. --identify --states 80 --hankel-factor 5 --integrations 1.
+    /// e.g. --identify --states 80 --hankel-factor 5 --integrations 1: plain ERA at that
+    /// order (no refinement), with identify's defaults otherwise (--preset thesis for
+    /// the thesis's).
     #[arg(long, num_args = 1.., allow_hyphen_values = true, conflicts_with_all = ["model_a", "model_b"])]
     pub identify: Option<Vec<String>>,
 }
@@ -134,7 +136,16 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
     argv.extend(flags.iter().cloned());
     let parsed = IdentifyFlags::try_parse_from(&argv)
         .map_err(|e| crate::UsageError(format!("--identify: {e}")))?;
-    let opts = crate::config::options(&parsed.args)?;
+    let mut opts = crate::config::options(&parsed.args)?;
+    if opts.states == 0 {
+        return usage("--identify needs --states N: compare realizes each set at one order");
+    }
+    // Compare realizes with ERA alone: the route's refinement does not apply, and its
+    // domain and direct term are those of an unrefined run.
+    let mut request = crate::config::route_request(&parsed.args);
+    request.refine = Some(false);
+    let route = request.resolve(frf.quantity(), opts.integrations);
+    crate::config::apply_route(&mut opts, &route);
     let found = era::identify(frf, &opts)?;
     Ok(Side {
         model: found.model,

@@ -4,18 +4,71 @@
 //! other front ends (Python) can word the same checks their own way.
 
 use crate::args::{DirectTermArg, IdentifyArgs, StatesArg, SvdArg, TimeDomainArg};
+use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
 use era::modal::stabilization::OrderRange;
 use era::params::Naming;
 use era::realize::{DirectTerm, SvdPath};
 
+/// The route the flags ask for: the preset, and every choice given explicitly
+/// (era::identify::route resolves the rest once the data's quantity is known).
+pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
+    let mut r = RouteRequest::new(a.preset.into());
+    r.states = match a.states {
+        Some(StatesArg::Fixed(n)) => Some(n),
+        Some(StatesArg::Auto) | None => None,
+    };
+    r.refine = if a.refine {
+        Some(true)
+    } else if a.no_refine {
+        Some(false)
+    } else {
+        None
+    };
+    r.domain = a.time_domain.map(|d| match d {
+        TimeDomainArg::Discrete => ModelDomain::Discrete,
+        TimeDomainArg::Continuous => ModelDomain::Continuous,
+    });
+    r.direct_term = a.direct_term.map(|d| match d {
+        DirectTermArg::Zero => DirectTerm::Zero,
+        DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
+    });
+    r.coherence_band = match a.band.as_deref().map(str::trim) {
+        Some("all") => Some(false),
+        _ => None,
+    };
+    r.window_correction = a.no_window_correction.then_some(false);
+    r
+}
+
+/// The route's domain and direct term in `options` (the rest of the route is the
+/// front end's: refinement, band, window correction).
+pub fn apply_route(options: &mut EraOptions, route: &Route) {
+    options.domain = route.domain;
+    options.direct_term = route.direct_term;
+}
+
+/// The options ERA runs with on `route`: a refined route realizes in discrete time,
+/// ERA's own, and the refinement returns the route's domain (a discrete realization
+/// with a negative real pole has no continuous image to start from).
+pub fn era_options(options: &EraOptions, route: &Route) -> EraOptions {
+    let mut era = options.clone();
+    if route.refine {
+        era.domain = ModelDomain::Discrete;
+    }
+    era
+}
+
 /// Options from flags, with the checks clap cannot do (those of the library call are
 /// [`EraOptions::check`], shared with the Python package; `--orders` is the CLI's own).
+/// The domain and direct term are those given, or the thesis's until
+/// [`apply_route`] sets the route's.
 pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
+    let auto = !matches!(a.states, Some(StatesArg::Fixed(_)));
     let states = match a.states {
-        StatesArg::Fixed(n) => n,
+        Some(StatesArg::Fixed(n)) => n,
         // The scan sets its own orders; this is only echoed.
-        StatesArg::Auto => 0,
+        _ => 0,
     };
     let opts = EraOptions {
         states,
@@ -25,12 +78,12 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
         zero_lines: a.zero_lines,
         pad_to: a.pad_to,
         domain: match a.time_domain {
-            TimeDomainArg::Discrete => ModelDomain::Discrete,
-            TimeDomainArg::Continuous => ModelDomain::Continuous,
+            Some(TimeDomainArg::Continuous) => ModelDomain::Continuous,
+            _ => ModelDomain::Discrete,
         },
         direct_term: match a.direct_term {
-            DirectTermArg::Zero => DirectTerm::Zero,
-            DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
+            Some(DirectTermArg::Markov0) => DirectTerm::FirstMarkov,
+            _ => DirectTerm::Zero,
         },
         svd: match a.svd {
             SvdArg::Dense => SvdPath::Dense,
@@ -42,7 +95,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     // is read or allocated (the core checks them again for library users). With
     // --states auto every other parameter is checked as for one state.
     let checked = EraOptions {
-        states: states.max(usize::from(a.states == StatesArg::Auto)),
+        states: states.max(usize::from(auto)),
         ..opts.clone()
     };
     checked.check(Naming::Flag)?;

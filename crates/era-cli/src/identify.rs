@@ -2,8 +2,8 @@
 //! options in [`crate::config`], the file is read by [`crate::input`] (or estimated from
 //! time histories by [`crate::frf`]), and the outputs are written by [`crate::output`].
 
-use crate::args::{IdentifyArgs, QuantityArg, StatesArg};
-use crate::config::{options, scan_orders};
+use crate::args::{IdentifyArgs, QuantityArg};
+use crate::config::{apply_route, era_options, options, route_request, scan_orders};
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
 use crate::output::{pair_fit_table, prepare_out_dir, write_identification, write_output};
 use crate::report::{
@@ -17,10 +17,13 @@ use std::time::Instant;
 
 pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let human = Human::new(&a.common);
-    let opts = options(a)?;
-    if !a.refine && crate::refine::any_given(&a.refine_fit) {
+    let mut opts = options(a)?;
+    let request = route_request(a);
+    // Whether to refine does not depend on the data: known before anything is read.
+    let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
+    if !refine && crate::refine::any_given(&a.refine_fit) {
         return crate::usage(
-            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement: add --refine",
+            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine or --preset thesis): add --refine",
         );
     }
     let refine_options = crate::refine::options(&a.refine_fit)?;
@@ -99,7 +102,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let read_s = clock.elapsed().as_secs_f64() - estimate_s.unwrap_or(0.0);
     let mut input = input;
-    if !a.no_window_correction {
+    let route = request.resolve(input.file.frf.quantity(), a.integrations);
+    apply_route(&mut opts, &route);
+    if route.window_correction {
         if let Some((lag, why)) = crate::config::lag_window(&input.file.metadata) {
             input.file.frf = lag
                 .correct_frf(&input.file.frf)
@@ -110,37 +115,41 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         }
     }
     let frf = &input.file.frf;
-    if a.refine {
+    if route.refine {
         crate::refine::check_shape(&refine_options, frf)?;
     }
     human.print(&format!("  {}{}\n", shape_line(frf), input.note));
     human.print(&describe_input(&input));
-    let auto = a.states == StatesArg::Auto;
+    human.print(&route_echo(&route));
+    let auto = route.states.is_none();
     let echo = parameter_echo_states(
         &opts,
         auto.then_some("auto (from the stabilization diagram)"),
     );
     human.print(&echo);
 
-    let band = identify_band(a, frf, coherence.as_ref())?;
+    let band = identify_band(a, frf, coherence.as_ref(), route.coherence_band)?;
     if let Some((lo, hi, why)) = &band {
         human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"));
     }
     let mut refine_options = refine_options;
+    // The refinement fits measured lines only: never the zero lines a late start was
+    // padded with (or --zero-lines zeroed), whatever the band.
+    let measured_from = era::suspect::leading_zero_lines(frf)
+        .max(a.zero_lines)
+        .min(frf.lines().saturating_sub(1));
+    if measured_from > 1 && band.is_none() {
+        refine_options.band = Some((measured_from, frf.lines()));
+    }
     if let Some((lo, hi, _)) = band {
-        let freq = frf.frequency_hz();
-        let first = freq.iter().position(|&f| f >= lo && f > 0.0).unwrap_or(0);
-        let end = freq
-            .iter()
-            .rposition(|&f| f <= hi)
-            .map_or(freq.len(), |k| k + 1);
+        let (first, end) = era::frf::band_lines(frf.frequency_hz(), (lo, hi), measured_from);
         if end > first {
             refine_options.band = Some((first, end));
         }
     }
     let scan_options = ScanOptions {
         orders: scan_orders(a)?,
-        band_hz: band.map(|(lo, hi, _)| (lo, hi)),
+        band_hz: band.as_ref().map(|(lo, hi, _)| (*lo, *hi)),
         ..ScanOptions::default()
     };
     let spinner = crate::progress::spinner(&a.common);
@@ -148,12 +157,13 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let mut on_order = |done: usize, total: usize| {
         spinner.set_message(format!("stabilization: order {done} of {total}"));
     };
+    let era_opts = era_options(&opts, &route);
     let found = if auto {
-        identify_auto(frf, &opts, &scan_options, &mut on_stage, &mut on_order)
+        identify_auto(frf, &era_opts, &scan_options, &mut on_stage, &mut on_order)
     } else if scan_options.orders.is_some() {
-        identify_with_scan(frf, &opts, &scan_options, &mut on_stage, &mut on_order)
+        identify_with_scan(frf, &era_opts, &scan_options, &mut on_stage, &mut on_order)
     } else {
-        identify_observed(frf, &opts, &mut on_stage)
+        identify_observed(frf, &era_opts, &mut on_stage)
     }
     .map_err(|e| match e {
         era::EraError::InvalidParameter {
@@ -171,11 +181,12 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let channels = input.file.channels.as_ref();
     crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let states = found.model.states();
-    let mut opts = opts;
     if auto {
         opts.states = states;
     }
-    if a.refine {
+    // What the data's zeroed start does to ERA's modes, measured on this model.
+    let zero_start = era::suspect::zero_start(&found, &era_opts, route.refine);
+    if route.refine {
         let era_fit = &found.fit;
         human.print(&format!(
             "\nERA model: {} states, {} modes; fit collocated {}, non-collocated {}\n",
@@ -188,10 +199,18 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
                 .noncollocated_mean_relative_error
                 .map_or("-".into(), |v| format!("{v:.3e}"))
         ));
-        found = crate::refine::refine_found(found, frf, &refine_options, &a.common)
+        found = crate::refine::refine_found(found, frf, &refine_options, Some(route.domain), &a.common)
             .with_context(|| format!("refining the model of {}", a.file.display()))?;
         human.print(&crate::refine::summary(&found));
     }
+    found.suspects.extend(zero_start);
+    let fitted_band = match band {
+        Some((lo, hi, _)) => (lo, hi),
+        None => (frf.frequency_hz()[measured_from], found.band_hz.1),
+    };
+    found
+        .suspects
+        .extend(era::suspect::band_edges(&found, fitted_band));
     human.print(&identification_summary(&found, states));
     human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
     if let Some(st) = &found.stabilization {
@@ -211,7 +230,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if let Some(st) = &found.stabilization {
         params.insert("orders".into(), serde_json::json!(st.range.to_string()));
     }
-    if a.refine {
+    params.insert("preset".into(), serde_json::json!(route.preset.name()));
+    if route.refine {
         timings.insert("refine".into(), found.timings.refine);
         era_io::model_json::refine_parameters(&refine_options, &mut params);
         params.insert(
@@ -271,16 +291,30 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The band to identify over: `--band LO..HI`, or where the coherence is at least
-/// [`era::frf::BAND_COHERENCE`] (`era::frf::coherence_band`), with the reason to echo.
+/// The route's choices, one line each, with their reasons; then its cautions.
+fn route_echo(route: &era::identify::route::Route) -> String {
+    let mut text = format!("  route (--preset {}):\n", route.preset.name());
+    for line in route.echo() {
+        text.push_str(&format!("    {line}\n"));
+    }
+    for caution in &route.cautions {
+        text.push_str(&format!("  warning: {caution}\n"));
+    }
+    text
+}
+
+/// The band to identify over: `--band LO..HI`, or (when the route takes the band from
+/// the coherence) where the coherence is at least [`era::frf::BAND_COHERENCE`]
+/// (`era::frf::coherence_band`), with the reason to echo; `None` for every line.
 fn identify_band(
     a: &IdentifyArgs,
     frf: &era::FrfData,
     estimated: Option<&crate::output::InputCoherence>,
+    from_coherence: bool,
 ) -> anyhow::Result<Option<(f64, f64, String)>> {
     let freq = frf.frequency_hz();
     let top = freq.last().copied().unwrap_or(0.0);
-    if let Some(text) = &a.band {
+    if let Some(text) = a.band.as_ref().filter(|t| t.trim() != "all") {
         let parsed = text.split_once("..").and_then(|(lo, hi)| {
             Some((
                 lo.trim().parse::<f64>().ok()?,
@@ -301,6 +335,9 @@ fn identify_band(
             ));
         }
         return Ok(Some((lo, hi.min(top), "as --band says".into())));
+    }
+    if !from_coherence {
+        return Ok(None);
     }
     let companion;
     let (curves, source) = match estimated {

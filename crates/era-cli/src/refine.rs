@@ -7,7 +7,7 @@ use crate::input::{read_frf_with, shape_line};
 use crate::output::{prepare_out_dir, write_identification};
 use crate::report::{identification_summary, print_json, Human};
 use anyhow::Context;
-use era::identify::{assess_model, refine_identification, EraOptions, Identification};
+use era::identify::{assess_model, refine_identification_in, EraOptions, Identification};
 use era::realize::SvdPath;
 use era::refine::RefineOptions;
 use era_io::model_json::{FitJson, ModelJson};
@@ -64,6 +64,7 @@ pub fn refine_found(
     found: Identification,
     frf: &era::FrfData,
     options: &RefineOptions,
+    domain: Option<era::ModelDomain>,
     common: &crate::args::CommonArgs,
 ) -> anyhow::Result<Identification> {
     let spinner = crate::progress::spinner(common);
@@ -74,7 +75,7 @@ pub fn refine_found(
             "refinement: iteration {iteration}, cost {cost:.3e}"
         ));
     };
-    let refined = refine_identification(found, frf, options, &mut on_stage, &mut on_step)
+    let refined = refine_identification_in(found, frf, options, domain, &mut on_stage, &mut on_step)
         .map_err(|e| match e {
             era::EraError::InvalidParameter {
                 name: "max-iterations",
@@ -244,7 +245,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
     let channels = input.file.channels.as_ref();
     crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let before = found.fit.clone();
-    let found = refine_found(found, frf, &ropts, &a.common)
+    let found = refine_found(found, frf, &ropts, None, &a.common)
         .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
     human.print(&format!(
         "  the model as given: fit collocated {}, non-collocated {}\n",

@@ -177,6 +177,8 @@ fn a_fixed_order_is_judged_against_the_scan_and_flags_suspect_modes() {
         "80",
         "--orders",
         "40..120:8",
+        "--preset",
+        "thesis",
     ];
     args.extend(THESIS);
     let out = era().args(&args).output().unwrap();

@@ -124,6 +124,8 @@ fn simulate_then_identify_the_truth_model() {
         .arg("identify")
         .arg(&frf)
         .args([
+            "--preset",
+            "thesis",
             "--states",
             "8",
             "--hankel-factor",
@@ -772,7 +774,16 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
     let frf = simulated_truth(dir.path());
     // Padded four times with a short Hankel, the truth model's realization has a
     // growing mode: the run succeeds, but says so, naming the flags to change.
-    let args = ["--states", "8", "--hankel-factor", "2", "--pad-to", "4096"];
+    let args = [
+        "--preset",
+        "thesis",
+        "--states",
+        "8",
+        "--hankel-factor",
+        "2",
+        "--pad-to",
+        "4096",
+    ];
     let out = era().arg("identify").arg(&frf).args(args).output().unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
@@ -872,6 +883,8 @@ fn threads_sets_the_run_and_refuses_absurd_counts() {
             .arg("identify")
             .arg(&frf)
             .args([
+                "--preset",
+                "thesis",
                 "--states",
                 "80",
                 "--hankel-factor",
@@ -988,4 +1001,123 @@ fn no_figures_writes_the_model_files_only() {
     assert!(said.contains("earlier run"), "{said}");
     // Without --out there is nothing to leave figures out of.
     expect_input_error(&["identify", frf, "--states", "8", "--no-figures"], "--out");
+}
+
+/// `era identify` with `args` on `frf`: its JSON and its human text.
+fn identify_json(frf: &Path, args: &[&str]) -> (Value, String) {
+    let out = era()
+        .arg("identify")
+        .arg(frf)
+        .args(args)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (
+        json_of(&out),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    // No flag at all: the measured route, each choice echoed with its reason.
+    let (v, text) = identify_json(&frf, &[]);
+    for line in [
+        "route (--preset measured):",
+        "order: automatic (from the stabilization diagram",
+        "refinement: on (the measured preset",
+        "time domain: continuous (the measured preset: measured FRFs are continuous-time data",
+        "direct term: D = 0 (the measured preset: a displacement FRF has no direct term)",
+    ] {
+        assert!(text.contains(line), "{line}: {text}");
+    }
+    assert_eq!(v["time_domain"], "continuous");
+    assert_eq!(v["parameters"]["preset"], "measured");
+    let physical: Vec<f64> = v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["physical"] == true)
+        .map(|m| m["frequency_hz"].as_f64().unwrap())
+        .collect();
+    assert_eq!(physical.len(), 4, "{physical:?}");
+    for (f, (t, _)) in physical.iter().zip(TABLE_5_2_TRUTH) {
+        assert!((f - t).abs() < 0.01, "{f} vs {t}");
+    }
+    // --preset thesis is plain ERA: the same model, bit for bit, as every thesis
+    // choice spelled out.
+    let thesis = ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"];
+    let mut preset = vec!["--preset", "thesis"];
+    preset.extend(thesis);
+    let (a, text) = identify_json(&frf, &preset);
+    assert!(text.contains("refinement: off (the thesis preset: plain ERA)"), "{text}");
+    let mut spelled = vec![
+        "--no-refine",
+        "--time-domain",
+        "discrete",
+        "--direct-term",
+        "zero",
+        "--band",
+        "all",
+        "--no-window-correction",
+    ];
+    spelled.extend(thesis);
+    let (b, _) = identify_json(&frf, &spelled);
+    assert_eq!(a["time_domain"], "discrete");
+    assert!(a["refinement"].is_null(), "{}", a["refinement"]);
+    for key in ["a", "b", "c", "d", "singular_values"] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+    // An explicit flag overrides the preset.
+    let mut refined = preset.clone();
+    refined.push("--refine");
+    let (r, _) = identify_json(&frf, &refined);
+    assert!(r["refinement"].is_object());
+    assert_eq!(r["time_domain"], "discrete");
+}
+
+#[test]
+fn a_late_start_warns_of_its_cost_and_the_refinement_is_free_of_it() {
+    // Receptance of modes at 6 and 13 Hz, lines from 5 Hz: padded with zeros below.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("late.csv");
+    let mut text = String::from("# quantity: displacement\nfrequency_hz,H1_1_re,H1_1_im\n");
+    for k in 50..=400 {
+        let f = k as f64 * 0.1;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let mut h = num_complex::Complex64::new(0.0, 0.0);
+        for (fn_hz, zeta) in [(6.0, 0.02), (13.0, 0.01)] {
+            let wn = 2.0 * std::f64::consts::PI * fn_hz;
+            h += 1.0 / num_complex::Complex64::new(wn * wn - w * w, 2.0 * zeta * wn * w);
+        }
+        text.push_str(&format!("{f},{:e},{:e}\n", h.re, h.im));
+    }
+    std::fs::write(&path, text).unwrap();
+    let base = ["--states", "4", "--hankel-factor", "20"];
+    let mut plain = vec!["--preset", "thesis"];
+    plain.extend(base);
+    let (v, _) = identify_json(&path, &plain);
+    let warnings: Vec<String> = v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect();
+    let late = warnings
+        .iter()
+        .find(|w| w.contains("the lines below 5 Hz are zero"))
+        .unwrap_or_else(|| panic!("{warnings:?}"));
+    assert!(late.contains("--zero-lines") && late.contains("% in damping"), "{late}");
+    let (v, _) = identify_json(&path, &base);
+    let first = &v["modes"][0];
+    assert!((first["frequency_hz"].as_f64().unwrap() - 6.0).abs() < 1e-6, "{first}");
+    assert!((first["damping_ratio"].as_f64().unwrap() - 0.02).abs() < 1e-6, "{first}");
+    assert!(v["warnings"].to_string().contains("free of it"), "{}", v["warnings"]);
 }

@@ -124,6 +124,8 @@ fn identify_reads_uff_and_writes_modes_uff_and_model_mat() {
     let text = stdout_of(&[
         "identify",
         s(&golden("binary_complex_double_even.uff")),
+        "--preset",
+        "thesis",
         "--states",
         "4",
         "--hankel-factor",
@@ -148,6 +150,8 @@ fn identify_reads_uff_and_writes_modes_uff_and_model_mat() {
         "identify",
         "-q",
         s(&golden("era/era_source.csv")),
+        "--preset",
+        "thesis",
         "--states",
         "4",
         "--hankel-factor",

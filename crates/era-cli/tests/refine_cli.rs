@@ -174,6 +174,8 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
             "--pad-to",
             "1024",
             "--refine",
+            "--time-domain",
+            "discrete",
             "--residuals",
             "none",
             "--reciprocal",
@@ -229,7 +231,16 @@ fn modes_the_start_missed_are_added_and_said() {
         .assert()
         .success();
     let run = |extra: &[&str]| {
-        let mut a = vec!["identify", s(&file), "--states", "4", "--refine", "--json"];
+        let mut a = vec![
+            "identify",
+            s(&file),
+            "--states",
+            "4",
+            "--refine",
+            "--time-domain",
+            "discrete",
+            "--json",
+        ];
         a.extend_from_slice(extra);
         let out = era().args(&a).output().unwrap();
         assert!(
@@ -327,9 +338,9 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
             &["--refine", "--max-iterations", "99999999999999"][..],
             "--max-iterations",
         ),
-        (&["--residuals", "lower"][..], "--refine"),
-        (&["--max-iterations", "5"][..], "--refine"),
-        (&["--no-added-modes"][..], "--refine"),
+        (&["--no-refine", "--residuals", "lower"][..], "--refine"),
+        (&["--no-refine", "--max-iterations", "5"][..], "--refine"),
+        (&["--preset", "thesis", "--no-added-modes"][..], "--preset thesis"),
     ] {
         let o = with(extra);
         o.assert_input_error();
@@ -339,6 +350,7 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
     for (extra, needle) in [
         (&["--refine", "--max-iterations=-3"][..], "--max-iterations"),
         (&["--refine", "--residuals", "sideways"][..], "--residuals"),
+        (&["--refine", "--no-refine"][..], "--no-refine"),
     ] {
         let mut a = base.to_vec();
         a.extend_from_slice(extra);

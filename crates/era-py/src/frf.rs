@@ -34,7 +34,8 @@ pub(crate) fn quantity(name: &str, text: &str) -> PyResult<Quantity> {
 /// Measured or simulated FRFs, axis order `[output, input, frequency]`.
 ///
 /// `FrfData(frequency_hz, values, quantity="acceleration")`: `frequency_hz` (L,) from
-/// 0 Hz, uniformly spaced; `values` complex128 (q, p, L); `quantity` what the outputs
+/// 0 Hz, uniformly spaced (a start at a whole number of spacings above 0 Hz is padded
+/// with zero lines, with a `UserWarning`, as `era identify` pads a file); `values` complex128 (q, p, L); `quantity` what the outputs
 /// measure per unit force. Validated as the CLI validates a file (same `ValueError`
 /// messages). `values` and `frequency_hz` read back as read-only numpy arrays.
 #[pyclass(module = "era", name = "FrfData", frozen)]
@@ -89,7 +90,23 @@ impl PyFrfData {
         }
         // The one copy: the core owns its validated data (and Python may change the
         // array afterwards, or while the GIL is released).
-        let data = v.readonly().as_slice()?.to_vec();
+        let mut data = v.readonly().as_slice()?.to_vec();
+        let mut freq = freq;
+        // A late start on the grid is padded with zero lines, as the files are (with
+        // the same note, as a warning); one off the grid is refused with the remedy.
+        let start = era_io::frf_file::zero_start(
+            std::path::Path::new("frequency_hz"),
+            "",
+            &freq,
+            outputs * inputs,
+        )
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+        if let Some(start) = start {
+            data = start.pad_values(&data, outputs * inputs);
+            let warnings = py.import("warnings")?;
+            warnings.call_method1("warn", (start.note(), py.get_type::<pyo3::exceptions::PyUserWarning>(), 2))?;
+            freq = start.frequency_hz;
+        }
         let frf = py
             .allow_threads(|| FrfData::new(freq, outputs, inputs, data, q_tag))
             .map_err(era_error)?;

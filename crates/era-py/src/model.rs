@@ -73,6 +73,8 @@ pub struct PyIdentification {
     options: EraOptions,
     /// The refinement's settings, when `refine=True`.
     refine: Option<era::refine::RefineOptions>,
+    /// The route taken (era::identify::route), with its reasons.
+    route: era::identify::route::Route,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -231,11 +233,32 @@ impl PyIdentification {
     fn hankel_size(&self) -> (usize, usize) {
         self.found.realization.hankel_size
     }
-    /// Warnings of the run: the realization's, then suspect results (a Hankel too
-    /// short for the lowest mode, negative damping, poles outside the unit circle).
+    /// Warnings of the run: cautions about the route's explicit choices, the
+    /// realization's, then suspect results (a Hankel too short for the lowest mode,
+    /// negative damping, poles outside the unit circle, zeroed leading lines with the
+    /// size of their effect, modes at the band's edge).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.found.warnings(era::params::Naming::Keyword)
+        let mut all = self.route.cautions.clone();
+        all.extend(self.found.warnings(era::params::Naming::Keyword));
+        all
+    }
+    /// The route taken: each choice the preset or the caller made, as
+    /// `(name, value, reason)`; then the cautions about explicit choices, as
+    /// `("caution", text, "")`.
+    #[getter]
+    fn route(&self) -> Vec<(String, String, String)> {
+        self.route
+            .choices
+            .iter()
+            .map(|c| (c.name.to_string(), c.value.clone(), c.reason.clone()))
+            .chain(
+                self.route
+                    .cautions
+                    .iter()
+                    .map(|c| ("caution".to_string(), c.clone(), String::new())),
+            )
+            .collect()
     }
     /// Every parameter of the run by its model.json name.
     #[getter]
@@ -294,6 +317,7 @@ impl PyIdentification {
     /// model.json's text (as `era identify --out` writes it, without timings).
     fn to_json(&self) -> PyResult<String> {
         let mut params = parameters(&self.options);
+        params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
         if let Some(r) = &self.refine {
             era_io::model_json::refine_parameters(r, &mut params);
             params.insert(
@@ -358,6 +382,17 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// `zero_lines` = nz, `pad_to` = ndpts, `lowpass` = (ford, Hzbreak),
 /// `time_domain` = cord.
 ///
+/// `preset` fills the choices left as `None`, as `era identify --preset` does:
+/// 'measured' (the default) is the route measured FRFs need (the order from the
+/// stabilization diagram, refinement, a continuous-time model, `D` = Y0 for
+/// accelerance and 0 otherwise); 'thesis' is plain ERA with the thesis's settings
+/// (no refinement, discrete time, `D` = 0). Explicit keywords override either; scripts
+/// that want the thesis's numbers pass `preset="thesis"`. The route taken, with its
+/// reasons, is in `Identification.route`.
+///
+/// `band=(lo_hz, hi_hz)` is the band the test excited: modes outside it are not
+/// physical, and the refinement fits only its lines.
+///
 /// `refine=True` refines the model against the FRFs (poles, residues and residual
 /// terms by maximum likelihood, `era identify --refine`): `residuals` ('none', 'lower',
 /// 'upper', 'both'), `reciprocal`, `weighting` ('pair-noise', 'uniform') and
@@ -370,28 +405,30 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// every core.
 #[pyfunction]
 #[pyo3(
-    signature = (frf, states, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain="discrete", direct_term="zero", svd="auto", refine=false, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, threads=None),
-    text_signature = "(frf, states, hankel_factor=5, integrations=0, zero_lines=0, pad_to=0, lowpass=None, time_domain='discrete', direct_term='zero', svd='auto', refine=False, residuals='both', reciprocal=False, weighting='pair-noise', max_iterations=100, added_modes=True, threads=None)"
+    signature = (frf, states=None, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain=None, direct_term=None, svd="auto", refine=None, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
+    text_signature = "(frf, states='auto', hankel_factor=5, integrations=0, zero_lines=0, pad_to=0, lowpass=None, time_domain=None, direct_term=None, svd='auto', refine=None, residuals='both', reciprocal=False, weighting='pair-noise', max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     py: Python<'_>,
     frf: &Bound<'_, PyFrfData>,
-    states: &Bound<'_, PyAny>,
+    states: Option<&Bound<'_, PyAny>>,
     hankel_factor: Int,
     integrations: Int,
     zero_lines: Int,
     pad_to: Int,
     lowpass: Option<&Bound<'_, PyAny>>,
-    time_domain: &str,
-    direct_term: &str,
+    time_domain: Option<&str>,
+    direct_term: Option<&str>,
     svd: &str,
-    refine: bool,
+    refine: Option<bool>,
     residuals: &str,
     reciprocal: bool,
     weighting: &str,
     max_iterations: Int,
     added_modes: bool,
+    band: Option<(f64, f64)>,
+    preset: &str,
     threads: Option<Int>,
 ) -> PyResult<PyIdentification> {
     let threads = match threads {
@@ -402,8 +439,53 @@ pub fn identify(
             Some(n)
         }
     };
-    let chosen = states_of(states)?;
+    let chosen = match states {
+        Some(s) if !s.is_none() => states_of(s)?,
+        _ => None,
+    };
     let states = chosen.unwrap_or(0);
+    let Some(preset) = era::identify::route::Preset::parse(preset) else {
+        return value_error(format!(
+            "preset '{preset}': expected 'measured' or 'thesis'"
+        ));
+    };
+    let mut request = era::identify::route::RouteRequest::new(preset);
+    request.states = chosen;
+    request.refine = refine;
+    request.domain = match time_domain {
+        None => None,
+        Some("discrete") => Some(ModelDomain::Discrete),
+        Some("continuous") => Some(ModelDomain::Continuous),
+        Some(other) => {
+            return value_error(format!(
+                "time_domain '{other}': expected 'discrete' or 'continuous'"
+            ))
+        }
+    };
+    request.direct_term = match direct_term {
+        None => None,
+        Some("zero") => Some(DirectTerm::Zero),
+        Some("markov0") => Some(DirectTerm::FirstMarkov),
+        Some(other) => {
+            return value_error(format!(
+                "direct_term '{other}': expected 'zero' or 'markov0'"
+            ))
+        }
+    };
+    let integrations_n = integrations.size("integrations")?;
+    let route = request.resolve(frf.get().inner.quantity(), integrations_n);
+    let refine = route.refine;
+    if let Some((lo, hi)) = band {
+        let top = frf.get().inner.frequency_hz().last().copied().unwrap_or(0.0);
+        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
+            return value_error(format!("band ({lo}, {hi}): need 0 <= lo < hi, in Hz"));
+        }
+        if lo >= top {
+            return value_error(format!(
+                "band ({lo}, {hi}): the data's lines end at {top} Hz, below the band"
+            ));
+        }
+    }
     let mut refine_options = era::refine::RefineOptions::default();
     refine_options.residuals = match residuals {
         "none" => era::refine::Residuals::None,
@@ -461,28 +543,12 @@ pub fn identify(
     let options = EraOptions {
         states,
         hankel_factor: hankel_factor.size("hankel_factor")?,
-        integrations: integrations.size("integrations")?,
+        integrations: integrations_n,
         lowpass,
         zero_lines: zero_lines.size("zero_lines")?,
         pad_to: pad_to.size("pad_to")?,
-        domain: match time_domain {
-            "discrete" => ModelDomain::Discrete,
-            "continuous" => ModelDomain::Continuous,
-            other => {
-                return value_error(format!(
-                    "time_domain '{other}': expected 'discrete' or 'continuous'"
-                ))
-            }
-        },
-        direct_term: match direct_term {
-            "zero" => DirectTerm::Zero,
-            "markov0" => DirectTerm::FirstMarkov,
-            other => {
-                return value_error(format!(
-                    "direct_term '{other}': expected 'zero' or 'markov0'"
-                ))
-            }
-        },
+        domain: route.domain,
+        direct_term: route.direct_term,
         svd: match svd {
             "auto" => SvdPath::Auto,
             "dense" => SvdPath::Dense,
@@ -500,31 +566,71 @@ pub fn identify(
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
     let data = frf.get().inner.clone();
+    // The refinement fits measured lines only: never leading zero lines (a padded
+    // start, or zero_lines), and only the band's when one is given.
+    let measured_from = era::suspect::leading_zero_lines(&data)
+        .max(options.zero_lines)
+        .min(data.lines().saturating_sub(1));
+    if let Some(b) = band {
+        let (first, end) = era::frf::band_lines(data.frequency_hz(), b, measured_from);
+        if end > first {
+            refine_options.band = Some((first, end));
+        }
+    } else if measured_from > 1 {
+        refine_options.band = Some((measured_from, data.lines()));
+    }
+    let scan_options = ScanOptions {
+        band_hz: band,
+        ..ScanOptions::default()
+    };
+    // A refined route realizes in discrete time, ERA's own; the refinement returns the
+    // route's domain (as the CLI does).
+    let era_run = EraOptions {
+        domain: if refine {
+            ModelDomain::Discrete
+        } else {
+            route.domain
+        },
+        ..options.clone()
+    };
     let found = guarded(py, || {
         // One pool for the whole call: identification and refinement alike.
         era::parallel::with_threads(Naming::Keyword, threads, || {
             match chosen {
-                Some(_) => run_identify(&data, &options),
+                Some(_) => run_identify(&data, &era_run),
                 None => identify_auto(
                     &data,
-                    &options,
-                    &ScanOptions::default(),
+                    &era_run,
+                    &scan_options,
                     &mut |_| {},
                     &mut |_, _| {},
                 ),
             }
             .and_then(|found| {
-                if refine {
-                    era::identify::refine_identification(
+                let mut at_order = era_run.clone();
+                at_order.states = found.realization.model.states();
+                let zero_start = era::suspect::zero_start(&found, &at_order, refine);
+                let found = if refine {
+                    era::identify::refine_identification_in(
                         found,
                         &data,
                         &refine_options,
+                        Some(route.domain),
                         &mut |_| {},
                         &mut |_, _| {},
-                    )
+                    )?
                 } else {
-                    Ok(found)
-                }
+                    found
+                };
+                let mut found = found;
+                found.suspects.extend(zero_start);
+                let fitted = band.unwrap_or((
+                    data.frequency_hz()[measured_from],
+                    found.band_hz.1,
+                ));
+                let edges = era::suspect::band_edges(&found, fitted);
+                found.suspects.extend(edges);
+                Ok(found)
             })
         })
         .and_then(|found| found)
@@ -534,5 +640,6 @@ pub fn identify(
         found,
         options,
         refine: refine.then_some(refine_options),
+        route,
     })
 }

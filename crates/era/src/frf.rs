@@ -69,6 +69,20 @@ pub struct FrfData {
     quantity: Quantity,
 }
 
+/// The lines `[first, end)` of `frequency_hz` inside `band_hz` (both edges included),
+/// from line `from` on and above 0 Hz: the lines a fit over that band uses. `end <=
+/// first` when none is inside.
+pub fn band_lines(frequency_hz: &[f64], band_hz: (f64, f64), from: usize) -> (usize, usize) {
+    let first = (from..frequency_hz.len())
+        .find(|&k| frequency_hz[k] > 0.0 && frequency_hz[k] >= band_hz.0)
+        .unwrap_or(frequency_hz.len());
+    let end = frequency_hz
+        .iter()
+        .rposition(|&f| f <= band_hz.1)
+        .map_or(0, |k| k + 1);
+    (first, end)
+}
+
 /// Relative tolerance on the spacing of the frequency lines (analyzers print 6–10
 /// significant digits).
 pub const FREQUENCY_SPACING_TOLERANCE: f64 = 1e-6;

@@ -19,6 +19,8 @@ use crate::response::{fit_metrics, frequency_response_naive, frequency_response_
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
+pub mod route;
+
 /// Model returned (thesis `cord`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ModelDomain {
@@ -1288,13 +1290,7 @@ fn judge_significance(
     let processed = integrate(frf, options.integrations)?;
     let freq = processed.frequency_hz();
     let (first_line, _) = fit_band(freq, options);
-    let first = (first_line..freq.len())
-        .find(|&k| freq[k] > 0.0 && freq[k] >= band_hz.0)
-        .unwrap_or(freq.len());
-    let end = freq
-        .iter()
-        .rposition(|&f| f <= band_hz.1)
-        .map_or(0, |k| k + 1);
+    let (first, end) = crate::frf::band_lines(freq, band_hz, first_line);
     if end <= first + 2 {
         return Ok(());
     }
@@ -1585,9 +1581,27 @@ pub fn assess_model(
 /// [`EraError::InvalidParameter`] when there is no mode to start from, and every error
 /// of [`crate::refine::refine`] and [`crate::refine::Refinement::to_state_space`].
 pub fn refine_identification(
+    found: Identification,
+    frf: &FrfData,
+    options: &crate::refine::RefineOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Identification> {
+    refine_identification_in(found, frf, options, None, observer, progress)
+}
+
+/// [`refine_identification`] with the refined model returned in `domain` (`None`: the
+/// domain of `found.model`). A route that wants a continuous-time model keeps ERA's
+/// start discrete (a discrete realization with a negative real pole has no
+/// continuous image) and asks for the continuous model here.
+///
+/// # Errors
+/// As [`refine_identification`].
+pub fn refine_identification_in(
     mut found: Identification,
     frf: &FrfData,
     options: &crate::refine::RefineOptions,
+    domain: Option<ModelDomain>,
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Identification> {
@@ -1615,9 +1629,11 @@ pub fn refine_identification(
         .collect();
     let mut ropts = options.clone();
     // The domain the user asked the model in ...
-    let discrete_ts = match found.model.domain {
-        crate::TimeDomain::Discrete { sample_time_s } => Some(sample_time_s),
-        crate::TimeDomain::Continuous => None,
+    let discrete_ts = match (domain, found.model.domain) {
+        (Some(ModelDomain::Discrete), _) => Some(found.sample_time_s),
+        (Some(ModelDomain::Continuous), _) => None,
+        (None, crate::TimeDomain::Discrete { sample_time_s }) => Some(sample_time_s),
+        (None, crate::TimeDomain::Continuous) => None,
     };
     let freq = found.processed.frequency_hz();
     let lines = freq.len();

@@ -401,7 +401,8 @@ pub fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec
 ///
 /// # Errors
 /// [`EraError::ShapeMismatch`] when the model's outputs or inputs differ from `like`'s;
-/// [`EraError::NonFinite`] when a line hits a pole exactly.
+/// [`EraError::NonFinite`] when a line other than 0 Hz hits a pole exactly (at 0 Hz, an
+/// integrator's line, the response is written as 0).
 pub fn model_frf(model: &StateSpace, like: &FrfData) -> Result<FrfData> {
     if model.outputs() != like.outputs() || model.inputs() != like.inputs() {
         return Err(EraError::ShapeMismatch {
@@ -410,7 +411,15 @@ pub fn model_frf(model: &StateSpace, like: &FrfData) -> Result<FrfData> {
             got: model.outputs() * model.inputs(),
         });
     }
-    let values = frequency_response(model, like.frequency_hz())?;
+    let mut values = frequency_response(model, like.frequency_hz())?;
+    // A refined model's lower residual integrates: its response is infinite at 0 Hz.
+    // That line was never fitted; it is written as 0, as the identification writes it.
+    let lines = like.lines();
+    for (i, v) in values.iter_mut().enumerate() {
+        if like.frequency_hz()[i % lines] == 0.0 && !(v.re.is_finite() && v.im.is_finite()) {
+            *v = Complex64::new(0.0, 0.0);
+        }
+    }
     FrfData::new(
         like.frequency_hz().to_vec(),
         like.outputs(),

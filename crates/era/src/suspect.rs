@@ -23,12 +23,30 @@
 //!   time, `s > 0` in continuous time (a real pole at exactly `s = 0`, the integrator of a
 //!   refinement's lower residual, is not unstable in this sense and is not reported).
 //!
+//!
+//! Two more checks need what the front end knows about the data, and run when it asks
+//! ([`zero_start`], [`band_edges`]):
+//!
+//! - **Zeroed leading lines.** An FRF that starts above 0 Hz is padded with zero lines
+//!   (ERA's inverse FFT needs every line from 0 Hz), and `zero_lines` zeroes lines on
+//!   purpose. ERA then fits an impulse response whose low-frequency content is missing,
+//!   and the lowest modes' damping comes out biased (38 % low on a mode just above a
+//!   5 Hz start). The size of the effect on this very model is measured: the model's
+//!   own FRF is identified twice, on every line and with the same lines zeroed, and the
+//!   largest shift of a physical mode's damping and frequency is reported. A refinement
+//!   fits only the measured lines and is free of it.
+//! - **A mode at the edge of the band.** A mode whose half-power band (three half-widths
+//!   `ζ f` each side, at least two lines) reaches past an edge of the band identified
+//!   over has one flank missing: its damping rests on one side of its peak. At the low
+//!   edge this is a band too short for the lowest mode.
+//!
 //! Each warning is worded for the calling front end ([`Naming`]): the CLI names flags,
 //! Python keywords.
 
 use crate::identify::{Identification, ModeQuality};
 use crate::modal::ModalParameters;
 use crate::params::Naming;
+use crate::Complex64;
 
 /// A result to treat with care.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,6 +62,31 @@ pub enum SuspectResult {
     NegativeDamping(Vec<(f64, f64)>),
     /// Real poles outside the unit circle: their continuous `Re s > 0`, rad/s.
     UnstableRealPoles(Vec<f64>),
+    /// The leading lines are zero (padded or zeroed), and this shifts ERA's modes.
+    ZeroStart {
+        /// The first line that is not zero, Hz.
+        first_hz: f64,
+        /// The mode shifted most: its frequency (Hz), then the relative shift of its
+        /// damping and of its frequency.
+        mode_hz: f64,
+        /// Relative shift of that mode's damping, `ζ_zeroed/ζ − 1`.
+        damping_shift: f64,
+        /// Relative shift of its frequency.
+        frequency_shift: f64,
+        /// Whether the model reported was refined over the measured lines only.
+        refined: bool,
+    },
+    /// A physical mode whose half-power band reaches past an edge of the band.
+    BandEdge {
+        /// The mode's frequency, Hz.
+        mode_hz: f64,
+        /// Its damping ratio.
+        damping_ratio: f64,
+        /// The edge, Hz.
+        edge_hz: f64,
+        /// Whether it is the low edge and the lowest physical mode.
+        lowest: bool,
+    },
 }
 
 impl SuspectResult {
@@ -86,6 +129,40 @@ impl SuspectResult {
                     list.join(", "),
                     if poles.len() > 5 { ", ..." } else { "" },
                     naming.name("states"),
+                )
+            }
+            SuspectResult::ZeroStart {
+                first_hz,
+                mode_hz,
+                damping_shift,
+                frequency_shift,
+                refined,
+            } => format!(
+                "the lines below {first_hz} Hz are zero (padded, or zeroed with {}): on this model's own FRF that shifts ERA's {mode_hz:.4} Hz mode by {:+.1} % in damping and {:+.3} % in frequency; {}",
+                naming.name("zero_lines"),
+                damping_shift * 100.0,
+                frequency_shift * 100.0,
+                if *refined {
+                    "the refinement fitted only the measured lines, so the values reported are free of it"
+                } else {
+                    "a refinement fits only the measured lines and is free of it; or export the FRFs from 0 Hz"
+                }
+            ),
+            SuspectResult::BandEdge {
+                mode_hz,
+                damping_ratio,
+                edge_hz,
+                lowest,
+            } => {
+                let which = if *lowest {
+                    "the band is too short for the lowest mode:"
+                } else {
+                    "a mode at the edge of the band:"
+                };
+                format!(
+                    "{which} the {mode_hz:.4} Hz mode (damping {:.2} %) is within three half-power widths of the band's edge at {edge_hz} Hz, so one flank of its peak is missing and its damping is poorly determined; widen the band ({}) if the data allow",
+                    damping_ratio * 100.0,
+                    naming.name("band"),
                 )
             }
         }
@@ -156,6 +233,142 @@ pub fn check_identification(found: &Identification) -> Vec<SuspectResult> {
     let (q, p) = (found.model.outputs().max(1), found.model.inputs().max(1));
     let window = (rows > 0 && cols > 0).then_some((rows / q + cols / p, found.sample_time_s));
     check(&found.modal, &found.quality, window)
+}
+
+/// Leading lines of `frf` that are zero in every pair.
+pub fn leading_zero_lines(frf: &crate::FrfData) -> usize {
+    let lines = frf.lines();
+    let pairs = frf.outputs() * frf.inputs();
+    (0..lines)
+        .take_while(|&k| (0..pairs).all(|s| frf.values()[s * lines + k] == Complex64::ZERO))
+        .count()
+}
+
+/// Relative shifts below which zeroed lines are not worth a warning: 5 % in damping,
+/// 0.1 % in frequency.
+const ZERO_START_QUIET: (f64, f64) = (0.05, 1e-3);
+
+/// The effect of zeroed leading lines on `found` (an ERA identification at its final
+/// order, run with `options`), when its data have leading lines that are zero beyond
+/// the 0 Hz line (see the module documentation); `None` when there are none, when the
+/// effect is below 5 % in damping and 0.1 % in frequency, or when the model's own FRF
+/// cannot be identified at its order. `refined` says whether the model reported is
+/// refined (the wording only).
+pub fn zero_start(
+    found: &Identification,
+    options: &crate::EraOptions,
+    refined: bool,
+) -> Option<SuspectResult> {
+    let zeroed = leading_zero_lines(&found.processed).max(options.zero_lines);
+    let freq = found.processed.frequency_hz();
+    if zeroed < 2 || zeroed >= freq.len() {
+        return None;
+    }
+    let physical: Vec<&crate::modal::Mode> = found
+        .modal
+        .modes
+        .iter()
+        .zip(&found.quality)
+        .filter(|(_, q)| q.physical)
+        .map(|(m, _)| m)
+        .collect();
+    if physical.is_empty() {
+        return None;
+    }
+    // The model's own FRF on every line (its response at the zeroed lines included),
+    // already in the quantity ERA fitted: identified on every line, then with the same
+    // lines zeroed, at the model's order.
+    let own = crate::FrfData::new(
+        freq.to_vec(),
+        found.processed.outputs(),
+        found.processed.inputs(),
+        found.model_response.clone(),
+        found.processed.quantity(),
+    )
+    .ok()?;
+    let mut plain = options.clone();
+    plain.states = found.realization.model.states();
+    plain.integrations = 0;
+    plain.zero_lines = 0;
+    plain.lowpass = None;
+    plain.domain = crate::ModelDomain::Discrete;
+    let mut cut = plain.clone();
+    cut.zero_lines = zeroed;
+    let whole = crate::identify(&own, &plain).ok()?;
+    let zeroed_fit = crate::identify(&own, &cut).ok()?;
+    let nearest = |f: f64, modes: &[crate::modal::Mode]| {
+        modes
+            .iter()
+            .min_by(|a, b| (a.frequency_hz - f).abs().total_cmp(&(b.frequency_hz - f).abs()))
+            .cloned()
+    };
+    let mut worst: Option<(f64, f64, f64)> = None;
+    for m in physical {
+        let (Some(a), Some(b)) = (
+            nearest(m.frequency_hz, &whole.modal.modes),
+            nearest(m.frequency_hz, &zeroed_fit.modal.modes),
+        ) else {
+            continue;
+        };
+        if a.damping_ratio <= 0.0 || (a.frequency_hz - m.frequency_hz).abs() > 0.02 * m.frequency_hz
+        {
+            continue;
+        }
+        let dz = b.damping_ratio / a.damping_ratio - 1.0;
+        let df = b.frequency_hz / a.frequency_hz - 1.0;
+        if worst.is_none_or(|(_, z, f)| dz.abs() / ZERO_START_QUIET.0 + df.abs() / ZERO_START_QUIET.1 > z.abs() / ZERO_START_QUIET.0 + f.abs() / ZERO_START_QUIET.1) {
+            worst = Some((m.frequency_hz, dz, df));
+        }
+    }
+    let (mode_hz, damping_shift, frequency_shift) = worst?;
+    (damping_shift.abs() >= ZERO_START_QUIET.0 || frequency_shift.abs() >= ZERO_START_QUIET.1)
+        .then_some(SuspectResult::ZeroStart {
+            first_hz: freq[zeroed],
+            mode_hz,
+            damping_shift,
+            frequency_shift,
+            refined,
+        })
+}
+
+/// Physical modes of `found` whose half-power band (three half-widths `ζ f` each side,
+/// at least two lines) reaches past an edge of `band_hz`, the band identified over. An
+/// edge where the data's lines end (0 Hz, the last line) is not checked: there is no
+/// data beyond it to leave out.
+pub fn band_edges(found: &Identification, band_hz: (f64, f64)) -> Vec<SuspectResult> {
+    let freq = found.processed.frequency_hz();
+    let (Some(&first), Some(&last)) = (freq.first(), freq.last()) else {
+        return Vec::new();
+    };
+    let spacing = found.processed.spacing_hz();
+    let (lo, hi) = band_hz;
+    let check_lo = lo > first + spacing / 2.0;
+    let check_hi = hi < last - spacing / 2.0;
+    let mut lowest = true;
+    let mut out = Vec::new();
+    for (m, q) in found.modal.modes.iter().zip(&found.quality) {
+        if !q.physical || !(m.frequency_hz.is_finite() && m.damping_ratio.is_finite()) {
+            continue;
+        }
+        let reach = (3.0 * m.damping_ratio.abs() * m.frequency_hz).max(2.0 * spacing);
+        let edge = if check_lo && m.frequency_hz - reach < lo {
+            Some(lo)
+        } else if check_hi && m.frequency_hz + reach > hi {
+            Some(hi)
+        } else {
+            None
+        };
+        if let Some(edge_hz) = edge {
+            out.push(SuspectResult::BandEdge {
+                mode_hz: m.frequency_hz,
+                damping_ratio: m.damping_ratio,
+                edge_hz,
+                lowest: lowest && edge_hz == lo,
+            });
+        }
+        lowest = false;
+    }
+    out
 }
 
 #[cfg(test)]
@@ -261,5 +474,76 @@ mod tests {
         // With a window: 1 s is less than the 2 Hz mode's period of 0.5 s? No: no warning.
         assert_eq!(check(&modal, &[], Some((100, 0.01))).len(), 2);
         assert_eq!(check(&modal, &[], Some((10, 0.01))).len(), 3);
+    }
+
+    /// Receptance of modes `(f Hz, ζ)`, unit residues, `lines` lines at `df`.
+    fn modes(list: &[(f64, f64)], df: f64, lines: usize) -> FrfData {
+        let f: Vec<f64> = (0..lines).map(|k| k as f64 * df).collect();
+        let v = f
+            .iter()
+            .map(|&h| {
+                let w = 2.0 * std::f64::consts::PI * h;
+                list.iter()
+                    .map(|&(fn_hz, zeta)| {
+                        let wn = 2.0 * std::f64::consts::PI * fn_hz;
+                        Complex64::new(1.0, 0.0)
+                            / Complex64::new(wn * wn - w * w, 2.0 * zeta * wn * w)
+                    })
+                    .sum()
+            })
+            .collect();
+        FrfData::new(f, 1, 1, v, Quantity::Displacement).unwrap()
+    }
+
+    #[test]
+    fn zeroed_leading_lines_report_the_damping_they_cost() {
+        let frf = modes(&[(6.0, 0.02), (13.0, 0.01)], 0.1, 401);
+        let options = EraOptions::new(4, 20);
+        let clean = identify(&frf, &options).unwrap();
+        assert_eq!(leading_zero_lines(&clean.processed), 0);
+        assert_eq!(zero_start(&clean, &options, false), None);
+        // The lines below 5 Hz zeroed, as a padded late start would be.
+        let zeroed = crate::preprocess::zero_leading_lines(&frf, 50);
+        assert_eq!(leading_zero_lines(&zeroed), 50);
+        let found = identify(&zeroed, &options).unwrap();
+        let z = found.modal.modes[0].damping_ratio;
+        let Some(SuspectResult::ZeroStart {
+            first_hz,
+            mode_hz,
+            damping_shift,
+            refined,
+            ..
+        }) = zero_start(&found, &options, false)
+        else {
+            panic!("no warning; damping {z}");
+        };
+        assert!((first_hz - 5.0).abs() < 1e-9);
+        assert!((mode_hz - 6.0).abs() < 0.3, "{mode_hz}");
+        // The shift measured on the model's own FRF has the sign and size of the
+        // bias the zeroed lines put on the data's own estimate.
+        let actual = z / 0.02 - 1.0;
+        assert!(actual.abs() > 0.05, "actual {actual}");
+        assert!(damping_shift.signum() == actual.signum(), "{damping_shift} vs {actual}");
+        assert!(!refined);
+        let text = zero_start(&found, &options, true).unwrap().message(Naming::Flag);
+        assert!(text.contains("--zero-lines") && text.contains("free of it"), "{text}");
+    }
+
+    #[test]
+    fn modes_near_a_band_edge_are_named_and_the_lowest_at_the_low_edge_says_so() {
+        let frf = modes(&[(6.0, 0.02), (13.0, 0.01), (30.0, 0.01)], 0.1, 401);
+        let found = identify(&frf, &EraOptions::new(6, 20)).unwrap();
+        assert!(found.quality.iter().all(|q| q.physical));
+        // Every line: no edge is checked.
+        assert!(band_edges(&found, (0.0, 40.0)).is_empty());
+        // A band from 5.8 Hz cuts the 6 Hz mode's lower flank; one to 30.5 Hz the
+        // 30 Hz mode's upper one; 13 Hz is well inside.
+        let edges = band_edges(&found, (5.8, 30.5));
+        assert_eq!(edges.len(), 2, "{edges:?}");
+        assert!(matches!(edges[0], SuspectResult::BandEdge { lowest: true, edge_hz, .. } if edge_hz == 5.8));
+        assert!(matches!(edges[1], SuspectResult::BandEdge { lowest: false, edge_hz, .. } if edge_hz == 30.5));
+        assert!(edges[0].to_string().contains("too short for the lowest mode"));
+        assert!(edges[1].to_string().contains("edge of the band"));
+        assert!(band_edges(&found, (3.0, 36.0)).is_empty());
     }
 }

@@ -208,10 +208,18 @@ pub(crate) fn missed_modes(frf: &FrfData, fit: &Refinement) -> Vec<Missed> {
         .map(|s| s.0)
         .filter(|f| f.is_finite())
         .fold(0.0, f64::max);
+    // A candidate whose window reaches the band's edge has no lines on one side: its
+    // peak cannot be told from the residual terms' misfit at the edge (on estimated FRFs
+    // it lands on the last line, the Nyquist line or the first), and is not added.
     let mut order_by: Vec<usize> = (0..lines)
         .filter(|&k| {
             let f = scores[k].0;
-            f.is_finite() && f >= scores[k].3 && f >= top * STRONGEST_FRACTION
+            let (lo, hi) = scores[k].1;
+            f.is_finite()
+                && f >= scores[k].3
+                && f >= top * STRONGEST_FRACTION
+                && lo > 0
+                && hi < lines
         })
         .collect();
     order_by.sort_by(|&x, &y| scores[y].0.total_cmp(&scores[x].0));
