@@ -11,7 +11,7 @@ command -v octave >/dev/null || { echo "octave is not installed (see the header 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$era" simulate truth-model -q --out "$work/truth.csv"
-"$era" identify "$work/truth.csv" -q --states 8 --hankel-factor 4 --pad-to 1024 --out "$work/out"
+"$era" identify "$work/truth.csv" -q --preset thesis --states 8 --hankel-factor 4 --pad-to 1024 --out "$work/out"
 python3 -c "import json; [print('%.10f %.10f' % (m['frequency_hz'], m['damping_ratio'])) for m in json.load(open('$work/out/model.json'))['modes']]" > "$work/json_modes.txt"
 (cd "$work/out" && octave --no-gui -q -H --eval "pkg load control; load model.mat; sys = ss(a,b,c,d,Ts); [wn, z] = damp(sys); [wn, i] = unique(round(wn*1e6)/1e6); z = z(i); printf('%.10f %.10f\n', [wn(:)/(2*pi), z(:)]'); printf('freq_hz from the file: '); printf('%.4f ', freq_hz); printf('\n');" 2>/dev/null) > "$work/octave.txt"
 echo "model.json:"; cat "$work/json_modes.txt"

@@ -15,6 +15,6 @@ for frame in 2048 1024; do
   echo "=== frame $frame samples"
   "$era" frf "$mat" --inputs 1,2 --outputs 3-30 --sample-rate 1024 --frame "$frame" \
       --window hann --overlap 0.5 --estimator h1 --out "$out/frf_$frame.csv"
-  "$era" identify "$out/frf_$frame.csv" --states 60 --orders 50,70,80 --out "$out/model_$frame"
+  "$era" identify "$out/frf_$frame.csv" --states 60 --no-refine --orders 50,70,80 --out "$out/model_$frame"
 done
 echo "outputs in $out (FRFs, coherence, model.json, fit.json, report.html per frame)"

@@ -11,7 +11,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$era" demo -q --out "$work/demo"
 "$era" simulate modal -q --collocated --seed 987654321 --out "$work/dta.csv"
-"$era" identify "$work/dta.csv" -q --states 80 --hankel-factor 5 --integrations 1 --zero-lines 3 --pad-to 1024 --out "$work/dta"
+"$era" identify "$work/dta.csv" -q --preset thesis --states 80 --hankel-factor 5 --integrations 1 --zero-lines 3 --pad-to 1024 --out "$work/dta"
 cp "$work/demo/noisy/pairs/pair_1_2.png" docs/img/truth_noisy_y1_f2.png
 cp "$work/demo/noisy/singular_values.png" docs/img/truth_noisy_singular_values.png
 cp "$work/dta/grid.png" docs/img/dta_grid.png

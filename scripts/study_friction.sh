@@ -47,7 +47,7 @@ done
 list=$(IFS=,; echo "${coefficients[*]}")
 identify() {
   mkdir -p "$out/id_$1"
-  "$era" identify "$out/$1.csv" --states 80 --hankel-factor 5 --integrations 1 \
+  "$era" identify "$out/$1.csv" --preset thesis --states 80 --hankel-factor 5 --integrations 1 \
     --zero-lines 3 --pad-to 1024 --out "$out/id_$1" -q
 }
 compare() {

@@ -30,7 +30,7 @@ case "${1:-}" in
     "$era" convert -q --binary "$out/era_source.csv" "$out/era_binary_double.uff"
     "$era" convert -q --single "$out/era_source.csv" "$out/era_ascii_single.uff"
     "$era" convert -q --binary --single "$out/era_source.csv" "$out/era_binary_single.uff"
-    "$era" identify -q "$out/era_source.csv" --states 4 --hankel-factor 4 --out "$out/model"
+    "$era" identify -q "$out/era_source.csv" --preset thesis --states 4 --hankel-factor 4 --out "$out/model"
     cp "$out/model/modes.uff" "$out/era_modes.uff"
     rm -rf "$out/model"
     # era's values in full precision, for the comparison.

@@ -30,8 +30,8 @@ import numpy as np
 import era
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-SETTINGS = dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024)
-FLAGS = ["--states", "80", "--hankel-factor", "5", "--integrations", "1",
+SETTINGS = dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024, preset="thesis")
+FLAGS = ["--preset", "thesis", "--states", "80", "--hankel-factor", "5", "--integrations", "1",
          "--zero-lines", "3", "--pad-to", "1024"]
 STAGES = ("preprocess", "markov", "hankel_svd", "realize", "modes", "fit")
 

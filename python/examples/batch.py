@@ -38,7 +38,8 @@ import era
 def identify_file(path, states=8, hankel_factor=4, pad_to=1024):
     """One file in, its modes out, as plain Python values (cheap to send between
     processes or machines)."""
-    found = era.identify(era.read_frf(path), states, hankel_factor=hankel_factor, pad_to=pad_to)
+    found = era.identify(era.read_frf(path), states, hankel_factor=hankel_factor, pad_to=pad_to,
+                         preset="thesis")
     return {
         "file": str(path),
         "frequency_hz": found.frequency_hz.tolist(),

@@ -25,11 +25,15 @@ frf, coherence = era.estimate_frf(
 )
 print(f"{frf!r}; median coherence {np.median(coherence[:, :, 1:]):.3f}")
 
-found = era.identify(frf, states=60)
+# The default route: the order from the stabilization diagram, refined in continuous
+# time; the band where the coherence is high carries the structure's modes.
+found = era.identify(frf, band=(60.0, 500.0))
+for name, value, reason in found.route:
+    print(f"  {name}: {value} ({reason})")
 print(f"{found!r}\n")
 print(f"{'f (Hz)':>9} {'zeta (%)':>9} {'largest |shape|':>16}")
 for mode in found.modes:
-    if mode.damping_ratio < 0.10:  # structural modes; the rest fit noise and leakage
+    if mode.physical:  # the modes judged physical; the rest fit noise and leakage
         print(f"{mode.frequency_hz:>9.2f} {100 * mode.damping_ratio:>9.2f} "
               f"{np.argmax(np.abs(mode.shape)) + 3:>13} (channel)")
 fit = found.fit

@@ -42,7 +42,7 @@ def markov_of(frf: era.FrfData, integrations: int, zero_lines: int, pad_to: int)
 def side_by_side(name, frf, states, hankel_factor=5, integrations=0, zero_lines=0, pad_to=0):
     t0 = time.perf_counter()
     found = era.identify(frf, states, hankel_factor=hankel_factor, integrations=integrations,
-                         zero_lines=zero_lines, pad_to=pad_to)
+                         zero_lines=zero_lines, pad_to=pad_to, preset="thesis")
     t_era = time.perf_counter() - t0
 
     markov = markov_of(frf, integrations, zero_lines, pad_to)

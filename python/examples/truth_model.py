@@ -13,8 +13,8 @@ import era
 
 clean = era.simulate_truth_model()
 noisy = era.simulate_truth_model(noise=0.15, seed=1)  # the thesis's 15 % noise
-truth = era.identify(clean, states=8, hankel_factor=4, pad_to=1024)
-found = era.identify(noisy, states=8, hankel_factor=4, pad_to=1024)
+truth = era.identify(clean, states=8, hankel_factor=4, pad_to=1024, preset="thesis")
+found = era.identify(noisy, states=8, hankel_factor=4, pad_to=1024, preset="thesis")
 
 print(f"{noisy!r}\n{found!r}\n")
 print(f"{'mode':>4} {'f truth (Hz)':>13} {'f ERA (Hz)':>11} {'zeta truth':>11} {'zeta ERA':>9}")

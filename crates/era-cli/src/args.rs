@@ -552,6 +552,13 @@ pub struct IdentifyArgs {
     /// With --from-time: the input channels of the time file.
     #[arg(long, value_name = "CHANNELS", requires = "from_time")]
     pub inputs: Option<String>,
+    /// With --from-time and the automatic order refined (the default): do not check the
+    /// physical modes against a second estimate through frames twice as long (half as
+    /// long when the records are too short for that). By
+    /// default a mode not found again there (leakage, a short frame's bias, one
+    /// estimate's noise) is not physical.
+    #[arg(long, requires = "from_time")]
+    pub no_frame_check: bool,
     #[command(flatten)]
     pub welch: WelchArgs,
     /// With --from-time: also write the estimated FRFs (.csv, .uff or .mat).

@@ -152,32 +152,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         band_hz: band.as_ref().map(|(lo, hi, _)| (*lo, *hi)),
         ..ScanOptions::default()
     };
-    let spinner = crate::progress::spinner(&a.common);
-    let mut on_stage = |stage: era::Stage| spinner.set_message(stage.name());
-    let mut on_order = |done: usize, total: usize| {
-        spinner.set_message(format!("stabilization: order {done} of {total}"));
-    };
     let era_opts = era_options(&opts, &route);
-    let found = if auto {
-        identify_auto(frf, &era_opts, &scan_options, &mut on_stage, &mut on_order)
-    } else if scan_options.orders.is_some() {
-        identify_with_scan(frf, &era_opts, &scan_options, &mut on_stage, &mut on_order)
-    } else {
-        identify_observed(frf, &era_opts, &mut on_stage)
-    }
-    .map_err(|e| match e {
-        era::EraError::InvalidParameter {
-            name,
-            value,
-            reason,
-        } if name == "orders" || (name == "states" && value == "auto") => {
-            anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}")))
-        }
-        other => anyhow::Error::from(other),
-    })
-    .with_context(|| format!("identifying {}", a.file.display()));
-    spinner.finish_and_clear();
-    let mut found = found?;
+    let mut found = realize(a, frf, &era_opts, &scan_options, auto, &a.common)?;
     let channels = input.file.channels.as_ref();
     crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let states = found.model.states();
@@ -202,6 +178,16 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         found = crate::refine::refine_found(found, frf, &refine_options, Some(route.domain), &a.common)
             .with_context(|| format!("refining the model of {}", a.file.display()))?;
         human.print(&crate::refine::summary(&found));
+        if a.from_time && auto && !a.no_frame_check {
+            let check = Check {
+                band_hz: band.as_ref().map(|(lo, hi, _)| (*lo, *hi)),
+                era_opts: &era_opts,
+                scan_options: &scan_options,
+                refine_options: &refine_options,
+                route: &route,
+            };
+            human.print(&frame_check(a, &mut found, &check)?);
+        }
     }
     found.suspects.extend(zero_start);
     let fitted_band = match band {
@@ -289,6 +275,139 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         print_json(&model)?;
     }
     Ok(())
+}
+
+/// ERA on `frf` as the flags ask: the automatic order, a fixed order judged against a
+/// scan, or a fixed order alone; a spinner on stderr meanwhile.
+fn realize(
+    a: &IdentifyArgs,
+    frf: &era::FrfData,
+    era_opts: &era::EraOptions,
+    scan_options: &ScanOptions,
+    auto: bool,
+    common: &crate::args::CommonArgs,
+) -> anyhow::Result<era::Identification> {
+    let spinner = crate::progress::spinner(common);
+    let mut on_stage = |stage: era::Stage| spinner.set_message(stage.name());
+    let mut on_order = |done: usize, total: usize| {
+        spinner.set_message(format!("stabilization: order {done} of {total}"));
+    };
+    let found = if auto {
+        identify_auto(frf, era_opts, scan_options, &mut on_stage, &mut on_order)
+    } else if scan_options.orders.is_some() {
+        identify_with_scan(frf, era_opts, scan_options, &mut on_stage, &mut on_order)
+    } else {
+        identify_observed(frf, era_opts, &mut on_stage)
+    }
+    .map_err(|e| match e {
+        era::EraError::InvalidParameter {
+            name,
+            value,
+            reason,
+        } if name == "orders" || (name == "states" && value == "auto") => {
+            anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}")))
+        }
+        other => anyhow::Error::from(other),
+    })
+    .with_context(|| format!("identifying {}", a.file.display()));
+    spinner.finish_and_clear();
+    found
+}
+
+/// Fewest averages the frame check's second estimate needs: fewer give an estimate too
+/// noisy to vouch for (or against) a mode.
+const CHECK_AVERAGES: u64 = 8;
+
+/// What the frame check repeats of the first identification.
+struct Check<'a> {
+    band_hz: Option<(f64, f64)>,
+    era_opts: &'a era::EraOptions,
+    scan_options: &'a ScanOptions,
+    refine_options: &'a era::refine::RefineOptions,
+    route: &'a era::identify::route::Route,
+}
+
+/// With `--from-time`: the records are estimated again through frames twice as long
+/// (half as long when the records are too short for that) and identified on the same
+/// route, and `found`'s physical modes that are not found
+/// again there are not physical ([`era::identify::confirm_modes`]): a structure's
+/// modes stay where they are, the poles a fit adds for leakage, a short frame's bias
+/// or one estimate's noise do not. Skipped, and said, when the records give fewer than
+/// [`CHECK_AVERAGES`] averages at either frame. Returns the lines to print.
+fn frame_check(
+    a: &IdentifyArgs,
+    found: &mut era::Identification,
+    check: &Check,
+) -> anyhow::Result<String> {
+    let quiet = crate::args::CommonArgs {
+        quiet: true,
+        json: false,
+        timings: false,
+    };
+    let clock = Instant::now();
+    // Twice the frame (finer lines, the modes better resolved); half of it when the
+    // records are too short for that.
+    let frame = a.welch.frame;
+    let mut second = None;
+    let mut tried = Vec::new();
+    for other in [frame.saturating_mul(2), frame / 2] {
+        if other < 64 {
+            continue;
+        }
+        let mut welch = a.welch.clone();
+        welch.frame = other;
+        // Too few frames for the inputs is one way for these records to be too short
+        // at that frame: the check then tries the other.
+        let Ok(estimate) = crate::frf::estimate_from_time(
+            std::slice::from_ref(&a.file),
+            a.inputs.as_deref().unwrap_or_default(),
+            a.outputs.as_deref().unwrap_or_default(),
+            &welch,
+            a.quantity.unwrap_or(QuantityArg::Acceleration),
+            &quiet,
+        ) else {
+            tried.push(format!("{other} samples give no estimate"));
+            continue;
+        };
+        let averages = estimate.json["averages"].as_u64().unwrap_or(0);
+        if averages >= CHECK_AVERAGES {
+            second = Some((estimate, other, averages));
+            break;
+        }
+        tried.push(format!("{other} samples give {averages}"));
+    }
+    let Some((second, other, averages)) = second else {
+        return Ok(format!(
+            "  frame check: skipped: frames of {} averages of these records, fewer than {CHECK_AVERAGES} (--no-frame-check: off)\n",
+            tried.join(" and ")
+        ));
+    };
+    let mut frf = second.input.file.frf;
+    if check.route.window_correction {
+        if let Some((lag, _)) = crate::config::lag_window(&second.input.file.metadata) {
+            frf = lag.correct_frf(&frf)?;
+        }
+    }
+    let mut refine_options = check.refine_options.clone();
+    refine_options.band = check.band_hz.and_then(|b| {
+        let (first, end) = era::frf::band_lines(frf.frequency_hz(), b, 0);
+        (end > first).then_some((first, end))
+    });
+    let again = realize(a, &frf, check.era_opts, check.scan_options, true, &quiet)
+        .context("the frame check")?;
+    let again = crate::refine::refine_found(
+        again,
+        &frf,
+        &refine_options,
+        Some(check.route.domain),
+        &quiet,
+    )
+    .context("the frame check's refinement")?;
+    let unconfirmed = era::identify::confirm_modes(found, &again, other);
+    Ok(format!(
+        "  frame check: identified again from frames of {other} samples ({averages} averages, {:.2} s): {unconfirmed} physical mode(s) not found again, so not physical (--no-frame-check: off)\n",
+        clock.elapsed().as_secs_f64()
+    ))
 }
 
 /// The route's choices, one line each, with their reasons; then its cautions.

@@ -1572,10 +1572,12 @@ pub fn assess_model(
 ///   the minimum and at most [`MAX_REFINED_SHARE`], its significance is at least
 ///   [`crate::refine::Refinement::significance_minimum`] (not judged when the weights
 ///   vary by line), its frequency's standard deviation is at most
-///   [`MAX_FREQUENCY_SPREAD`] of `ζ f`, and (when a scan ran) its start mode was physical. A mode whose
-///   pole the refinement added for one the start missed has no start mode: the
-///   residual and its significance vouch for it, even where the stabilization scan had
-///   judged a pole there not physical.
+///   [`MAX_FREQUENCY_SPREAD`] of `ζ f`, and (when a scan ran) its start mode was
+///   physical. A mode whose pole the
+///   refinement added for one the start missed has no start mode: the residual and its
+///   significance vouch for it, even where the stabilization scan had judged a pole
+///   there not physical, when its refined shape's MPC reaches the scan's minimum. Last, a weaker mode inside a stronger one's half-power band
+///   with its shape is not resolved from it (`mark_unresolved`).
 ///
 /// # Errors
 /// [`EraError::InvalidParameter`] when there is no mode to start from, and every error
@@ -1588,6 +1590,138 @@ pub fn refine_identification(
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Identification> {
     refine_identification_in(found, frf, options, None, observer, progress)
+}
+
+/// Largest share of its host's that a pole inside the host's half-power band, with the
+/// host's shape, may have to be called unresolved from it ([`mark_unresolved`]).
+pub const UNRESOLVED_SHARE: f64 = 0.3;
+
+/// Shape MAC from which two shapes are one at the measured outputs
+/// ([`mark_unresolved`]).
+pub const UNRESOLVED_MAC: f64 = 0.9;
+
+/// The refinement's last judgement: a physical mode inside the half-power band of a
+/// stronger physical one (`|f₁ − f₂| < ζ₁f₁ + ζ₂f₂`), with the stronger one's shape at the
+/// outputs (MAC at least [`UNRESOLVED_MAC`]) and less than [`UNRESOLVED_SHARE`] of its
+/// share (`shares`, per mode), is not physical
+/// ([`crate::modal::stabilization::Rejection::Unresolved`]). A pole the refinement
+/// added (`added`: no start mode, so no order of a scan supports it) is unresolved from
+/// a start mode it is weaker than, whatever the ratio. Two modes that close are told
+/// apart by their shapes or not at all: a weaker pole with the same shape is how a fit
+/// bends to a distorted peak (a Welch window's leakage, noise), and a refinement, free
+/// to add poles, finds such poles significant on estimated FRFs. With one output every
+/// shape has MAC 1, and a weak pole inside a stronger one's band is always unresolved.
+fn mark_unresolved(
+    modes: &[crate::modal::Mode],
+    shares: &[f64],
+    added: &[bool],
+    quality: &mut [ModeQuality],
+) {
+    use crate::modal::stabilization::Rejection;
+    let mut verdicts = Vec::new();
+    for (k, m) in modes.iter().enumerate() {
+        if !quality.get(k).is_some_and(|q| q.physical) {
+            continue;
+        }
+        let host = modes
+            .iter()
+            .enumerate()
+            .filter(|&(j, h)| {
+                j != k
+                    && quality.get(j).is_some_and(|q| q.physical)
+                    && (h.frequency_hz - m.frequency_hz).abs()
+                        < h.damping_ratio.abs() * h.frequency_hz
+                            + m.damping_ratio.abs() * m.frequency_hz
+                    && shares[k]
+                        < if added[k] && !added[j] {
+                            shares[j]
+                        } else {
+                            UNRESOLVED_SHARE * shares[j]
+                        }
+            })
+            .map(|(j, h)| (j, crate::stability::mac(&m.shape, &h.shape)))
+            .filter(|&(_, mac)| mac >= UNRESOLVED_MAC)
+            .max_by(|a, b| shares[a.0].total_cmp(&shares[b.0]));
+        if let Some((j, mac)) = host {
+            verdicts.push((
+                k,
+                Rejection::Unresolved {
+                    host_hz: modes[j].frequency_hz,
+                    share: shares[k] / shares[j],
+                    mac,
+                },
+            ));
+        }
+    }
+    for (k, why) in verdicts {
+        quality[k].physical = false;
+        quality[k].reason = Some(why.to_string());
+    }
+}
+
+/// Checks `found`'s physical modes against `check`, the identification of a second
+/// estimate of the same test (the same records through frames of `frame` samples, a
+/// length other than `found`'s): each physical mode must have a counterpart
+/// among `check`'s modes with `0 < ζ ≤ 20 %`, matched one to one by increasing
+/// frequency distance within the larger of its half-power half-width `ζ f` and two
+/// lines of the coarser of the two estimates (a short frame's leakage moves a mode's
+/// estimate by about a line). A mode without one is not physical
+/// ([`crate::modal::stabilization::Rejection::Unconfirmed`]). Returns how many were
+/// unconfirmed.
+///
+/// A structure's mode is where it is whatever the frame; the poles a fit adds for a
+/// window's leakage, for the bias of a short frame or for one estimate's noise move
+/// or vanish when the frame changes.
+pub fn confirm_modes(found: &mut Identification, check: &Identification, frame: usize) -> usize {
+    use crate::modal::stabilization::Rejection;
+    let spacing = 2.0 * found.processed.spacing_hz().max(check.processed.spacing_hz());
+    let candidates: Vec<f64> = check
+        .modal
+        .modes
+        .iter()
+        .filter(|m| m.damping_ratio > 0.0 && m.damping_ratio <= 0.2)
+        .map(|m| m.frequency_hz)
+        .collect();
+    let physical: Vec<usize> = (0..found.modal.modes.len())
+        .filter(|&k| found.quality.get(k).is_some_and(|q| q.physical))
+        .collect();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for &k in &physical {
+        let m = &found.modal.modes[k];
+        let tolerance = (m.damping_ratio.abs() * m.frequency_hz).max(spacing);
+        for (j, &f) in candidates.iter().enumerate() {
+            let d = (f - m.frequency_hz).abs();
+            if d <= tolerance {
+                pairs.push((d, k, j));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut matched, mut used) = (Vec::new(), Vec::new());
+    for (_, k, j) in pairs {
+        if !matched.contains(&k) && !used.contains(&j) {
+            matched.push(k);
+            used.push(j);
+        }
+    }
+    let mut count = 0;
+    for k in physical {
+        if matched.contains(&k) {
+            continue;
+        }
+        let f = found.modal.modes[k].frequency_hz;
+        let nearest_hz = candidates
+            .iter()
+            .copied()
+            .min_by(|a, b| (a - f).abs().total_cmp(&(b - f).abs()));
+        found.quality[k].physical = false;
+        found.quality[k].reason = Some(
+            Rejection::Unconfirmed { frame, nearest_hz }
+            .to_string(),
+        );
+        count += 1;
+    }
+    count
 }
 
 /// [`refine_identification`] with the refined model returned in `domain` (`None`: the
@@ -1766,6 +1900,15 @@ pub fn refine_identification_in(
             }
             let emac = before.as_ref().and_then(|b| b.indicators.emac);
             let m_pc = mpc(&m.shape);
+            // The scan's rule on an added pole's refined shape (a start mode passed it
+            // over the scan's orders): a structure's normal mode has a near-real shape;
+            // a pole the fit bent to noise need not.
+            if reason.is_none() && before.is_none() && m_pc < criteria.mpc_minimum {
+                reason = Some(format!(
+                    "its refined shape is complex (MPC {m_pc:.2}, under {:.2}): not a normal mode of the structure",
+                    criteria.mpc_minimum
+                ));
+            }
             let finite = |v: f64| v.is_finite().then_some(v);
             ModeQuality {
                 physical: reason.is_none(),
@@ -1782,6 +1925,14 @@ pub fn refine_identification_in(
             }
         })
         .collect();
+    let mut quality: Vec<ModeQuality> = quality;
+    let shares: Vec<f64> = refinement.modes.iter().map(|rm| rm.contribution).collect();
+    let added: Vec<bool> = refinement
+        .modes
+        .iter()
+        .map(|rm| starts.get(rm.start).is_none())
+        .collect();
+    mark_unresolved(&modes, &shares, &added, &mut quality);
     let mut response =
         crate::response::frequency_response_blocks(&model, found.measured.frequency_hz());
     // Below the band the lower residual's integrators are infinite at 0 Hz: those lines
@@ -1927,6 +2078,72 @@ fn rank_one(
 mod tests {
     use super::*;
     use crate::sim::truth_model_frf;
+
+    #[test]
+    fn a_weak_pole_with_a_stronger_ones_shape_inside_its_band_is_unresolved() {
+        use crate::modal::stabilization::Rejection;
+        use crate::Complex64;
+        use crate::modal::Mode;
+        let mode = |f: f64, z: f64, shape: &[f64]| Mode {
+            frequency_hz: f,
+            damping_ratio: z,
+            eigenvalue: Complex64::new(0.0, 0.0),
+            continuous_pole: Complex64::new(0.0, 0.0),
+            shape: shape.iter().map(|&x| Complex64::new(x, 0.0)).collect(),
+            participation: vec![Complex64::new(1.0, 0.0)],
+        };
+        let fresh = |n: usize| {
+            vec![
+                ModeQuality {
+                    physical: true,
+                    reason: None,
+                    indicators: ModeIndicators {
+                        mpc: 1.0,
+                        emac: None,
+                        cmi: None,
+                        contribution: None,
+                    },
+                    stable_orders: None,
+                    frequency_std_hz: None,
+                    damping_ratio_std: None,
+                };
+                n
+            ]
+        };
+        // 10 Hz at 1 %: its half-power band is ±0.1 Hz. A pole at 10.05 Hz with its
+        // shape and a fifth of its share is unresolved; one at 10.05 Hz with another
+        // shape is a close mode; one at 10.5 Hz is outside the band.
+        let host = mode(10.0, 0.01, &[1.0, 0.5, -0.2]);
+        let same = mode(10.05, 0.005, &[1.0, 0.49, -0.21]);
+        let other = mode(10.05, 0.005, &[0.1, -1.0, 0.6]);
+        let far = mode(10.5, 0.005, &[1.0, 0.5, -0.2]);
+        let mut q = fresh(2);
+        mark_unresolved(&[host.clone(), same.clone()], &[1.0, 0.2], &[false, false], &mut q);
+        assert!(q[0].physical && !q[1].physical);
+        let text = q[1].reason.clone().unwrap();
+        assert_eq!(
+            text,
+            Rejection::Unresolved {
+                host_hz: 10.0,
+                share: 0.2,
+                mac: crate::stability::mac(&same.shape, &host.shape)
+            }
+            .to_string()
+        );
+        for (second, shares) in [(&other, [1.0, 0.2]), (&far, [1.0, 0.2]), (&same, [1.0, 0.5])] {
+            let mut q = fresh(2);
+            mark_unresolved(&[host.clone(), second.clone()], &shares, &[false, false], &mut q);
+            assert!(q.iter().all(|q| q.physical), "{shares:?}");
+        }
+        // A pole the refinement added, weaker than a start mode: unresolved at half
+        // its share too; a start mode is not judged against an added pole that way.
+        let mut q = fresh(2);
+        mark_unresolved(&[host.clone(), same.clone()], &[1.0, 0.5], &[false, true], &mut q);
+        assert!(q[0].physical && !q[1].physical);
+        let mut q = fresh(2);
+        mark_unresolved(&[host, same], &[1.0, 0.5], &[true, false], &mut q);
+        assert!(q.iter().all(|q| q.physical));
+    }
 
     fn scaled(frf: &FrfData, factor: f64) -> FrfData {
         FrfData::new(

@@ -479,6 +479,25 @@ pub enum Rejection {
         /// The stronger mode's median CMI.
         host_cmi: f64,
     },
+    /// Not found again in a second estimate of the same test (other frames): a pole
+    /// that moves with the estimate's settings is the estimate's, not the structure's.
+    Unconfirmed {
+        /// The second estimate's frame, samples.
+        frame: usize,
+        /// Its nearest mode, Hz, when it has any.
+        nearest_hz: Option<f64>,
+    },
+    /// After a refinement: within the half-power band of a stronger mode, with that
+    /// mode's shape at the outputs and a small part of its share; the outputs cannot
+    /// tell it from a distortion of that mode's peak.
+    Unresolved {
+        /// The stronger mode's frequency, Hz.
+        host_hz: f64,
+        /// Its share relative to the stronger mode's.
+        share: f64,
+        /// MAC of the two shapes at the outputs.
+        mac: f64,
+    },
 }
 
 impl std::fmt::Display for Rejection {
@@ -520,6 +539,16 @@ impl std::fmt::Display for Rejection {
             } => write!(
                 f,
                 "a satellite of the mode at {host_hz:.4} Hz: {:.1} % of its share and CMI {cmi:.2} against its {host_cmi:.2} (an error of that mode's estimate, not a mode)",
+                100.0 * share
+            ),
+            Rejection::Unconfirmed { frame, nearest_hz } => write!(
+                f,
+                "not found again in the FRFs estimated from frames of {frame} samples{}: a pole that moves with the frame length is the estimate's, not the structure's",
+                nearest_hz.map_or(String::new(), |n| format!(" (their nearest mode is at {n:.4} Hz)"))
+            ),
+            Rejection::Unresolved { host_hz, share, mac } => write!(
+                f,
+                "inside the half-power band of the mode at {host_hz:.4} Hz, with its shape (MAC {mac:.3}) and {:.1} % of its share: these outputs cannot tell it from a distortion of that mode's peak (leakage, a window, noise), so it is not a mode of its own",
                 100.0 * share
             ),
             Rejection::Dropped => write!(
