@@ -175,8 +175,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
                 .noncollocated_mean_relative_error
                 .map_or("-".into(), |v| format!("{v:.3e}"))
         ));
-        found = crate::refine::refine_found(found, frf, &refine_options, Some(route.domain), &a.common)
-            .with_context(|| format!("refining the model of {}", a.file.display()))?;
+        found =
+            crate::refine::refine_found(found, frf, &refine_options, Some(route.domain), &a.common)
+                .with_context(|| format!("refining the model of {}", a.file.display()))?;
         human.print(&crate::refine::summary(&found));
         if a.from_time && auto && !a.no_frame_check {
             let check = Check {

@@ -75,18 +75,19 @@ pub fn refine_found(
             "refinement: iteration {iteration}, cost {cost:.3e}"
         ));
     };
-    let refined = refine_identification_in(found, frf, options, domain, &mut on_stage, &mut on_step)
-        .map_err(|e| match e {
-            era::EraError::InvalidParameter {
-                name: "max-iterations",
-                value,
-                reason,
-            } => anyhow::Error::from(crate::UsageError(format!(
-                "--max-iterations {value}: {reason}"
-            ))),
-            other => anyhow::Error::from(other),
-        })
-        .context("refining the model");
+    let refined =
+        refine_identification_in(found, frf, options, domain, &mut on_stage, &mut on_step)
+            .map_err(|e| match e {
+                era::EraError::InvalidParameter {
+                    name: "max-iterations",
+                    value,
+                    reason,
+                } => anyhow::Error::from(crate::UsageError(format!(
+                    "--max-iterations {value}: {reason}"
+                ))),
+                other => anyhow::Error::from(other),
+            })
+            .context("refining the model");
     spinner.finish_and_clear();
     refined
 }

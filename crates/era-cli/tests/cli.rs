@@ -1057,7 +1057,10 @@ fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
     let mut preset = vec!["--preset", "thesis"];
     preset.extend(thesis);
     let (a, text) = identify_json(&frf, &preset);
-    assert!(text.contains("refinement: off (the thesis preset: plain ERA)"), "{text}");
+    assert!(
+        text.contains("refinement: off (the thesis preset: plain ERA)"),
+        "{text}"
+    );
     let mut spelled = vec![
         "--no-refine",
         "--time-domain",
@@ -1114,10 +1117,23 @@ fn a_late_start_warns_of_its_cost_and_the_refinement_is_free_of_it() {
         .iter()
         .find(|w| w.contains("the lines below 5 Hz are zero"))
         .unwrap_or_else(|| panic!("{warnings:?}"));
-    assert!(late.contains("--zero-lines") && late.contains("% in damping"), "{late}");
+    assert!(
+        late.contains("--zero-lines") && late.contains("% in damping"),
+        "{late}"
+    );
     let (v, _) = identify_json(&path, &base);
     let first = &v["modes"][0];
-    assert!((first["frequency_hz"].as_f64().unwrap() - 6.0).abs() < 1e-6, "{first}");
-    assert!((first["damping_ratio"].as_f64().unwrap() - 0.02).abs() < 1e-6, "{first}");
-    assert!(v["warnings"].to_string().contains("free of it"), "{}", v["warnings"]);
+    assert!(
+        (first["frequency_hz"].as_f64().unwrap() - 6.0).abs() < 1e-6,
+        "{first}"
+    );
+    assert!(
+        (first["damping_ratio"].as_f64().unwrap() - 0.02).abs() < 1e-6,
+        "{first}"
+    );
+    assert!(
+        v["warnings"].to_string().contains("free of it"),
+        "{}",
+        v["warnings"]
+    );
 }

@@ -340,7 +340,10 @@ fn bad_refinement_input_exits_2_naming_the_flag_or_file() {
         ),
         (&["--no-refine", "--residuals", "lower"][..], "--refine"),
         (&["--no-refine", "--max-iterations", "5"][..], "--refine"),
-        (&["--preset", "thesis", "--no-added-modes"][..], "--preset thesis"),
+        (
+            &["--preset", "thesis", "--no-added-modes"][..],
+            "--preset thesis",
+        ),
     ] {
         let o = with(extra);
         o.assert_input_error();

@@ -155,7 +155,8 @@ fn the_window_correction_is_said_and_can_be_turned_off() {
     );
     let off = run(&["--no-window-correction"]);
     assert!(
-        !off.contains("window correction: the Welch") && off.contains("window correction: off (as asked)"),
+        !off.contains("window correction: the Welch")
+            && off.contains("window correction: off (as asked)"),
         "{off}"
     );
     let damping_error = |extra: &[&'static str]| {

@@ -104,7 +104,14 @@ impl PyFrfData {
         if let Some(start) = start {
             data = start.pad_values(&data, outputs * inputs);
             let warnings = py.import("warnings")?;
-            warnings.call_method1("warn", (start.note(), py.get_type::<pyo3::exceptions::PyUserWarning>(), 2))?;
+            warnings.call_method1(
+                "warn",
+                (
+                    start.note(),
+                    py.get_type::<pyo3::exceptions::PyUserWarning>(),
+                    2,
+                ),
+            )?;
             freq = start.frequency_hz;
         }
         let frf = py

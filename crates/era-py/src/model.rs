@@ -476,7 +476,13 @@ pub fn identify(
     let route = request.resolve(frf.get().inner.quantity(), integrations_n);
     let refine = route.refine;
     if let Some((lo, hi)) = band {
-        let top = frf.get().inner.frequency_hz().last().copied().unwrap_or(0.0);
+        let top = frf
+            .get()
+            .inner
+            .frequency_hz()
+            .last()
+            .copied()
+            .unwrap_or(0.0);
         if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
             return value_error(format!("band ({lo}, {hi}): need 0 <= lo < hi, in Hz"));
         }
@@ -598,13 +604,7 @@ pub fn identify(
         era::parallel::with_threads(Naming::Keyword, threads, || {
             match chosen {
                 Some(_) => run_identify(&data, &era_run),
-                None => identify_auto(
-                    &data,
-                    &era_run,
-                    &scan_options,
-                    &mut |_| {},
-                    &mut |_, _| {},
-                ),
+                None => identify_auto(&data, &era_run, &scan_options, &mut |_| {}, &mut |_, _| {}),
             }
             .and_then(|found| {
                 let mut at_order = era_run.clone();
@@ -624,10 +624,7 @@ pub fn identify(
                 };
                 let mut found = found;
                 found.suspects.extend(zero_start);
-                let fitted = band.unwrap_or((
-                    data.frequency_hz()[measured_from],
-                    found.band_hz.1,
-                ));
+                let fitted = band.unwrap_or((data.frequency_hz()[measured_from], found.band_hz.1));
                 let edges = era::suspect::band_edges(&found, fitted);
                 found.suspects.extend(edges);
                 Ok(found)

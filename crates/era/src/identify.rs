@@ -1674,7 +1674,11 @@ fn mark_unresolved(
 /// or vanish when the frame changes.
 pub fn confirm_modes(found: &mut Identification, check: &Identification, frame: usize) -> usize {
     use crate::modal::stabilization::Rejection;
-    let spacing = 2.0 * found.processed.spacing_hz().max(check.processed.spacing_hz());
+    let spacing = 2.0
+        * found
+            .processed
+            .spacing_hz()
+            .max(check.processed.spacing_hz());
     let candidates: Vec<f64> = check
         .modal
         .modes
@@ -1715,10 +1719,7 @@ pub fn confirm_modes(found: &mut Identification, check: &Identification, frame: 
             .copied()
             .min_by(|a, b| (a - f).abs().total_cmp(&(b - f).abs()));
         found.quality[k].physical = false;
-        found.quality[k].reason = Some(
-            Rejection::Unconfirmed { frame, nearest_hz }
-            .to_string(),
-        );
+        found.quality[k].reason = Some(Rejection::Unconfirmed { frame, nearest_hz }.to_string());
         count += 1;
     }
     count
@@ -2079,11 +2080,67 @@ mod tests {
     use super::*;
     use crate::sim::truth_model_frf;
 
+    /// Receptance of modes `(f Hz, ζ)` with unit residues, 1 x 1, `lines` lines at `df`.
+    fn receptance(list: &[(f64, f64)], df: f64, lines: usize) -> FrfData {
+        use crate::Complex64;
+        let f: Vec<f64> = (0..lines).map(|k| k as f64 * df).collect();
+        let v = f
+            .iter()
+            .map(|&h| {
+                let w = 2.0 * std::f64::consts::PI * h;
+                list.iter()
+                    .map(|&(fn_hz, zeta)| {
+                        let wn = 2.0 * std::f64::consts::PI * fn_hz;
+                        Complex64::new(1.0, 0.0)
+                            / Complex64::new(wn * wn - w * w, 2.0 * zeta * wn * w)
+                    })
+                    .sum()
+            })
+            .collect();
+        FrfData::new(f, 1, 1, v, crate::Quantity::Displacement).unwrap()
+    }
+
+    #[test]
+    fn a_physical_mode_not_found_again_in_a_second_estimate_is_not_physical() {
+        let options = EraOptions::new(4, 20);
+        let mut found = identify(
+            &receptance(&[(6.0, 0.02), (13.0, 0.01)], 0.1, 401),
+            &options,
+        )
+        .unwrap();
+        assert!(found.quality.iter().all(|q| q.physical));
+        // The same 6 Hz mode, and a 14 Hz one in place of 13 Hz: 13 Hz moved.
+        let check = identify(
+            &receptance(&[(6.01, 0.02), (14.0, 0.01)], 0.05, 801),
+            &options,
+        )
+        .unwrap();
+        assert_eq!(confirm_modes(&mut found, &check, 4096), 1);
+        assert!(found.quality[0].physical && !found.quality[1].physical);
+        let why = found.quality[1].reason.clone().unwrap();
+        assert!(
+            why.contains("frames of 4096 samples") && why.contains("nearest mode is at 14.0"),
+            "{why}"
+        );
+        // Found again within ζf or two lines: confirmed.
+        let mut again = identify(
+            &receptance(&[(6.0, 0.02), (13.0, 0.01)], 0.1, 401),
+            &options,
+        )
+        .unwrap();
+        let near = identify(
+            &receptance(&[(6.05, 0.02), (13.1, 0.01)], 0.05, 801),
+            &options,
+        )
+        .unwrap();
+        assert_eq!(confirm_modes(&mut again, &near, 4096), 0);
+    }
+
     #[test]
     fn a_weak_pole_with_a_stronger_ones_shape_inside_its_band_is_unresolved() {
         use crate::modal::stabilization::Rejection;
-        use crate::Complex64;
         use crate::modal::Mode;
+        use crate::Complex64;
         let mode = |f: f64, z: f64, shape: &[f64]| Mode {
             frequency_hz: f,
             damping_ratio: z,
@@ -2118,7 +2175,12 @@ mod tests {
         let other = mode(10.05, 0.005, &[0.1, -1.0, 0.6]);
         let far = mode(10.5, 0.005, &[1.0, 0.5, -0.2]);
         let mut q = fresh(2);
-        mark_unresolved(&[host.clone(), same.clone()], &[1.0, 0.2], &[false, false], &mut q);
+        mark_unresolved(
+            &[host.clone(), same.clone()],
+            &[1.0, 0.2],
+            &[false, false],
+            &mut q,
+        );
         assert!(q[0].physical && !q[1].physical);
         let text = q[1].reason.clone().unwrap();
         assert_eq!(
@@ -2130,15 +2192,29 @@ mod tests {
             }
             .to_string()
         );
-        for (second, shares) in [(&other, [1.0, 0.2]), (&far, [1.0, 0.2]), (&same, [1.0, 0.5])] {
+        for (second, shares) in [
+            (&other, [1.0, 0.2]),
+            (&far, [1.0, 0.2]),
+            (&same, [1.0, 0.5]),
+        ] {
             let mut q = fresh(2);
-            mark_unresolved(&[host.clone(), second.clone()], &shares, &[false, false], &mut q);
+            mark_unresolved(
+                &[host.clone(), second.clone()],
+                &shares,
+                &[false, false],
+                &mut q,
+            );
             assert!(q.iter().all(|q| q.physical), "{shares:?}");
         }
         // A pole the refinement added, weaker than a start mode: unresolved at half
         // its share too; a start mode is not judged against an added pole that way.
         let mut q = fresh(2);
-        mark_unresolved(&[host.clone(), same.clone()], &[1.0, 0.5], &[false, true], &mut q);
+        mark_unresolved(
+            &[host.clone(), same.clone()],
+            &[1.0, 0.5],
+            &[false, true],
+            &mut q,
+        );
         assert!(q[0].physical && !q[1].physical);
         let mut q = fresh(2);
         mark_unresolved(&[host, same], &[1.0, 0.5], &[true, false], &mut q);

@@ -299,7 +299,11 @@ pub fn zero_start(
     let nearest = |f: f64, modes: &[crate::modal::Mode]| {
         modes
             .iter()
-            .min_by(|a, b| (a.frequency_hz - f).abs().total_cmp(&(b.frequency_hz - f).abs()))
+            .min_by(|a, b| {
+                (a.frequency_hz - f)
+                    .abs()
+                    .total_cmp(&(b.frequency_hz - f).abs())
+            })
             .cloned()
     };
     let mut worst: Option<(f64, f64, f64)> = None;
@@ -316,7 +320,10 @@ pub fn zero_start(
         }
         let dz = b.damping_ratio / a.damping_ratio - 1.0;
         let df = b.frequency_hz / a.frequency_hz - 1.0;
-        if worst.is_none_or(|(_, z, f)| dz.abs() / ZERO_START_QUIET.0 + df.abs() / ZERO_START_QUIET.1 > z.abs() / ZERO_START_QUIET.0 + f.abs() / ZERO_START_QUIET.1) {
+        if worst.is_none_or(|(_, z, f)| {
+            dz.abs() / ZERO_START_QUIET.0 + df.abs() / ZERO_START_QUIET.1
+                > z.abs() / ZERO_START_QUIET.0 + f.abs() / ZERO_START_QUIET.1
+        }) {
             worst = Some((m.frequency_hz, dz, df));
         }
     }
@@ -347,7 +354,7 @@ pub fn band_edges(found: &Identification, band_hz: (f64, f64)) -> Vec<SuspectRes
     let mut lowest = true;
     let mut out = Vec::new();
     for (m, q) in found.modal.modes.iter().zip(&found.quality) {
-        if !q.physical || !(m.frequency_hz.is_finite() && m.damping_ratio.is_finite()) {
+        if !(q.physical && m.frequency_hz.is_finite() && m.damping_ratio.is_finite()) {
             continue;
         }
         let reach = (3.0 * m.damping_ratio.abs() * m.frequency_hz).max(2.0 * spacing);
@@ -523,10 +530,18 @@ mod tests {
         // bias the zeroed lines put on the data's own estimate.
         let actual = z / 0.02 - 1.0;
         assert!(actual.abs() > 0.05, "actual {actual}");
-        assert!(damping_shift.signum() == actual.signum(), "{damping_shift} vs {actual}");
+        assert!(
+            damping_shift.signum() == actual.signum(),
+            "{damping_shift} vs {actual}"
+        );
         assert!(!refined);
-        let text = zero_start(&found, &options, true).unwrap().message(Naming::Flag);
-        assert!(text.contains("--zero-lines") && text.contains("free of it"), "{text}");
+        let text = zero_start(&found, &options, true)
+            .unwrap()
+            .message(Naming::Flag);
+        assert!(
+            text.contains("--zero-lines") && text.contains("free of it"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -540,9 +555,15 @@ mod tests {
         // 30 Hz mode's upper one; 13 Hz is well inside.
         let edges = band_edges(&found, (5.8, 30.5));
         assert_eq!(edges.len(), 2, "{edges:?}");
-        assert!(matches!(edges[0], SuspectResult::BandEdge { lowest: true, edge_hz, .. } if edge_hz == 5.8));
-        assert!(matches!(edges[1], SuspectResult::BandEdge { lowest: false, edge_hz, .. } if edge_hz == 30.5));
-        assert!(edges[0].to_string().contains("too short for the lowest mode"));
+        assert!(
+            matches!(edges[0], SuspectResult::BandEdge { lowest: true, edge_hz, .. } if edge_hz == 5.8)
+        );
+        assert!(
+            matches!(edges[1], SuspectResult::BandEdge { lowest: false, edge_hz, .. } if edge_hz == 30.5)
+        );
+        assert!(edges[0]
+            .to_string()
+            .contains("too short for the lowest mode"));
         assert!(edges[1].to_string().contains("edge of the band"));
         assert!(band_edges(&found, (3.0, 36.0)).is_empty());
     }

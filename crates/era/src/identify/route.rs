@@ -179,10 +179,10 @@ impl RouteRequest {
             .into(),
             reason: match (self.direct_term, seen) {
                 (Some(_), _) => given(),
-                (None, _) if !measured => format!("{preset}"),
+                (None, _) if !measured => preset.clone(),
                 (None, Some(Quantity::Acceleration)) => format!("{preset}: an accelerance tends to a constant above its modes, which the time-zero Markov block carries"),
                 (None, Some(q)) => format!("{preset}: a {} FRF has no direct term", q.name()),
-                (None, None) => format!("{preset}"),
+                (None, None) => preset.clone(),
             },
         });
         if self.direct_term == Some(DirectTerm::Zero)
@@ -204,7 +204,7 @@ impl RouteRequest {
             reason: match self.coherence_band {
                 Some(_) => given(),
                 None if measured => format!("{preset}: where the coherence shows the test excited the structure, when the data has a coherence"),
-                None => format!("{preset}"),
+                None => preset.clone(),
             },
         });
 
@@ -283,8 +283,10 @@ mod tests {
 
     #[test]
     fn measured_without_refinement_stays_discrete_and_a_continuous_request_is_cautioned() {
-        let mut q = RouteRequest::default();
-        q.refine = Some(false);
+        let mut q = RouteRequest {
+            refine: Some(false),
+            ..RouteRequest::default()
+        };
         let r = q.resolve(Quantity::Acceleration, 0);
         assert_eq!(r.domain, ModelDomain::Discrete);
         assert!(r.cautions.is_empty());
