@@ -1593,11 +1593,11 @@ pub fn refine_identification(
 }
 
 /// Largest share of its host's that a pole inside the host's half-power band, with the
-/// host's shape, may have to be called unresolved from it ([`mark_unresolved`]).
+/// host's shape, may have to be called unresolved from it (see [`refine_identification`]).
 pub const UNRESOLVED_SHARE: f64 = 0.3;
 
 /// Shape MAC from which two shapes are one at the measured outputs
-/// ([`mark_unresolved`]).
+/// (see [`refine_identification`]).
 pub const UNRESOLVED_MAC: f64 = 0.9;
 
 /// The refinement's last judgement: a physical mode inside the half-power band of a
@@ -2080,28 +2080,9 @@ mod tests {
     use super::*;
     use crate::sim::truth_model_frf;
 
-    /// Receptance of modes `(f Hz, ζ)` with unit residues, 1 x 1, `lines` lines at `df`.
-    fn receptance(list: &[(f64, f64)], df: f64, lines: usize) -> FrfData {
-        use crate::Complex64;
-        let f: Vec<f64> = (0..lines).map(|k| k as f64 * df).collect();
-        let v = f
-            .iter()
-            .map(|&h| {
-                let w = 2.0 * std::f64::consts::PI * h;
-                list.iter()
-                    .map(|&(fn_hz, zeta)| {
-                        let wn = 2.0 * std::f64::consts::PI * fn_hz;
-                        Complex64::new(1.0, 0.0)
-                            / Complex64::new(wn * wn - w * w, 2.0 * zeta * wn * w)
-                    })
-                    .sum()
-            })
-            .collect();
-        FrfData::new(f, 1, 1, v, crate::Quantity::Displacement).unwrap()
-    }
-
     #[test]
     fn a_physical_mode_not_found_again_in_a_second_estimate_is_not_physical() {
+        use crate::test_support::receptance;
         let options = EraOptions::new(4, 20);
         let mut found = identify(
             &receptance(&[(6.0, 0.02), (13.0, 0.01)], 0.1, 401),

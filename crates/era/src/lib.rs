@@ -56,6 +56,9 @@ pub mod statespace;
 pub mod suspect;
 pub mod tsvd;
 
+#[cfg(test)]
+mod test_support;
+
 pub use error::{EraError, Result};
 pub use frf::{FrfData, Quantity};
 pub use identify::{identify, identify_observed, EraOptions, Identification, ModelDomain, Stage};

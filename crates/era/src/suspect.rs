@@ -483,24 +483,7 @@ mod tests {
         assert_eq!(check(&modal, &[], Some((10, 0.01))).len(), 3);
     }
 
-    /// Receptance of modes `(f Hz, ζ)`, unit residues, `lines` lines at `df`.
-    fn modes(list: &[(f64, f64)], df: f64, lines: usize) -> FrfData {
-        let f: Vec<f64> = (0..lines).map(|k| k as f64 * df).collect();
-        let v = f
-            .iter()
-            .map(|&h| {
-                let w = 2.0 * std::f64::consts::PI * h;
-                list.iter()
-                    .map(|&(fn_hz, zeta)| {
-                        let wn = 2.0 * std::f64::consts::PI * fn_hz;
-                        Complex64::new(1.0, 0.0)
-                            / Complex64::new(wn * wn - w * w, 2.0 * zeta * wn * w)
-                    })
-                    .sum()
-            })
-            .collect();
-        FrfData::new(f, 1, 1, v, Quantity::Displacement).unwrap()
-    }
+    use crate::test_support::receptance as modes;
 
     #[test]
     fn zeroed_leading_lines_report_the_damping_they_cost() {
