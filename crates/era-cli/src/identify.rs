@@ -120,17 +120,23 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     }
     human.print(&format!("  {}{}\n", shape_line(frf), input.note));
     human.print(&describe_input(&input));
-    human.print(&route_echo(&route));
     let auto = route.states.is_none();
-    let echo = parameter_echo_states(
-        &opts,
-        auto.then_some("auto (from the stabilization diagram)"),
+    // The route and the parameters: printed here, and the report's Parameters.
+    let echo = format!(
+        "{}{}",
+        route_echo(&route),
+        parameter_echo_states(&opts, auto.then_some("auto (from the stabilization diagram)"))
     );
     human.print(&echo);
 
     let band = identify_band(a, frf, coherence.as_ref(), route.coherence_band)?;
-    if let Some((lo, hi, why)) = &band {
-        human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"));
+    match &band {
+        Some((lo, hi, why)) => human.print(&format!("  band: {lo}..{hi} Hz, {why}\n")),
+        None if route.coherence_band => human.print(&format!(
+            "  band: every line (no coherence: not estimated here, and no {} beside the file; --band LO..HI to set it)\n",
+            crate::frf::coherence_path(&a.file).display()
+        )),
+        None => {}
     }
     let mut refine_options = refine_options;
     // The refinement fits measured lines only: never the zero lines a late start was
@@ -413,9 +419,9 @@ fn frame_check(
 
 /// The route's choices, one line each, with their reasons; then its cautions.
 fn route_echo(route: &era::identify::route::Route) -> String {
-    let mut text = format!("  route (--preset {}):\n", route.preset.name());
+    let mut text = format!("route (--preset {})\n", route.preset.name());
     for line in route.echo() {
-        text.push_str(&format!("    {line}\n"));
+        text.push_str(&format!("  {line}\n"));
     }
     for caution in &route.cautions {
         text.push_str(&format!("  warning: {caution}\n"));

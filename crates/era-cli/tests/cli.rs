@@ -1030,7 +1030,7 @@ fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
     // No flag at all: the measured route, each choice echoed with its reason.
     let (v, text) = identify_json(&frf, &[]);
     for line in [
-        "route (--preset measured):",
+        "route (--preset measured)\n",
         "order: automatic (from the stabilization diagram",
         "refinement: on (the measured preset",
         "time domain: continuous (the measured preset: measured FRFs are continuous-time data",
