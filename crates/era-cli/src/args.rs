@@ -509,12 +509,13 @@ pub struct IdentifyArgs {
     /// Pad with zero lines to pad-to + 1 lines; 0 = no padding (thesis ndpts).
     #[arg(long, default_value_t = 0)]
     pub pad_to: usize,
-    /// Model returned (thesis cord). Default: continuous when refining (measured FRFs
-    /// are continuous-time data), else discrete, ERA's own.
+    /// Model returned (thesis cord). Default: continuous when the measured preset
+    /// refines (measured FRFs are continuous-time data), else discrete, ERA's own.
     #[arg(long, value_enum)]
     pub time_domain: Option<TimeDomainArg>,
-    /// The model's D matrix. Default: markov0 for accelerance (it tends to a constant
-    /// above its modes), zero for mobility and receptance, and zero with
+    /// The model's D matrix (of ERA's model; a refined model's D is its upper
+    /// residual). Default: markov0 for accelerance after --integrations (it tends to a
+    /// constant above its modes), zero for mobility and receptance, and zero with
     /// --preset thesis.
     #[arg(long, value_enum)]
     pub direct_term: Option<DirectTermArg>,

@@ -136,6 +136,11 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
     argv.extend(flags.iter().cloned());
     let parsed = IdentifyFlags::try_parse_from(&argv)
         .map_err(|e| crate::UsageError(format!("--identify: {e}")))?;
+    if parsed.args.refine || parsed.args.band.is_some() || parsed.args.from_time {
+        return usage(
+            "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
+        );
+    }
     let mut opts = crate::config::options(&parsed.args)?;
     if opts.states == 0 {
         return usage("--identify needs --states N: compare realizes each set at one order");

@@ -33,12 +33,21 @@ pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
         DirectTermArg::Zero => DirectTerm::Zero,
         DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
     });
-    r.coherence_band = match a.band.as_deref().map(str::trim) {
-        Some("all") => Some(false),
-        _ => None,
-    };
+    match a.band.as_deref().map(str::trim) {
+        Some(t) if t.eq_ignore_ascii_case("all") => r.coherence_band = Some(false),
+        // Parsed and checked against the data by the identification; the route only
+        // says it is given.
+        Some(t) => r.band_hz = parse_band(t),
+        None => {}
+    }
     r.window_correction = a.no_window_correction.then_some(false);
     r
+}
+
+/// `LO..HI` as two numbers, or `None`.
+pub fn parse_band(text: &str) -> Option<(f64, f64)> {
+    let (lo, hi) = text.split_once("..")?;
+    Some((lo.trim().parse().ok()?, hi.trim().parse().ok()?))
 }
 
 /// The route's domain and direct term in `options` (the rest of the route is the

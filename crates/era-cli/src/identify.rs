@@ -106,9 +106,14 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     apply_route(&mut opts, &route);
     if route.window_correction {
         if let Some((lag, why)) = crate::config::lag_window(&input.file.metadata) {
-            input.file.frf = lag
-                .correct_frf(&input.file.frf)
-                .with_context(|| format!("correcting the window of {}", a.file.display()))?;
+            // The correction works on the impulse responses: it would spread values into
+            // the zero lines of a padded start, which stay zero.
+            let padded = era::suspect::leading_zero_lines(&input.file.frf);
+            input.file.frf = era::preprocess::zero_leading_lines(
+                &lag.correct_frf(&input.file.frf)
+                    .with_context(|| format!("correcting the window of {}", a.file.display()))?,
+                padded,
+            );
             human.print(&format!(
                 "  window correction: {why} (--no-window-correction: off)\n"
             ));
@@ -125,19 +130,23 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let echo = format!(
         "{}{}",
         route_echo(&route),
-        parameter_echo_states(&opts, auto.then_some("auto (from the stabilization diagram)"))
+        parameter_echo_states(
+            &opts,
+            auto.then_some("auto (from the stabilization diagram)")
+        )
     );
     human.print(&echo);
 
-    let band = identify_band(a, frf, coherence.as_ref(), route.coherence_band)?;
-    match &band {
-        Some((lo, hi, why)) => human.print(&format!("  band: {lo}..{hi} Hz, {why}\n")),
-        None if route.coherence_band => human.print(&format!(
-            "  band: every line (no coherence: not estimated here, and no {} beside the file; --band LO..HI to set it)\n",
-            crate::frf::coherence_path(&a.file).display()
-        )),
-        None => {}
-    }
+    let band = match identify_band(a, frf, coherence.as_ref(), route.coherence_band)? {
+        Ok((lo, hi, why)) => {
+            human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"));
+            Some((lo, hi, why))
+        }
+        Err(why) => {
+            human.print(&format!("  band: {why}\n"));
+            None
+        }
+    };
     let mut refine_options = refine_options;
     // The refinement fits measured lines only: never the zero lines a late start was
     // padded with (or --zero-lines zeroed), whatever the band.
@@ -147,11 +156,17 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if measured_from > 1 && band.is_none() {
         refine_options.band = Some((measured_from, frf.lines()));
     }
-    if let Some((lo, hi, _)) = band {
-        let (first, end) = era::frf::band_lines(frf.frequency_hz(), (lo, hi), measured_from);
-        if end > first {
-            refine_options.band = Some((first, end));
+    if let Some((lo, hi, _)) = &band {
+        let (first, end) = era::frf::band_lines(frf.frequency_hz(), (*lo, *hi), measured_from);
+        if end <= first + 1 {
+            return crate::usage(format!(
+                "--band {lo}..{hi}: the data has {} measured line(s) in it (lines from {} Hz at {} Hz spacing)",
+                end.saturating_sub(first),
+                frf.frequency_hz()[measured_from],
+                frf.spacing_hz()
+            ));
         }
+        refine_options.band = Some((first, end));
     }
     let scan_options = ScanOptions {
         orders: scan_orders(a)?,
@@ -233,6 +248,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         );
     }
     let mut model = ModelJson::from_identification(&found, params, None);
+    // The route's cautions lead the warnings, as they led the echo.
+    model.warnings.splice(0..0, route.cautions.iter().cloned());
     let fit = FitJson::from_report(&found.fit);
     if let Some(set) = outputs.as_mut() {
         let clock = Instant::now();
@@ -385,9 +402,37 @@ fn frame_check(
     }
     let Some((second, other, averages)) = second else {
         return Ok(format!(
-            "  frame check: skipped: frames of {} averages of these records, fewer than {CHECK_AVERAGES} (--no-frame-check: off)\n",
-            tried.join(" and ")
+            "  frame check: skipped: at frames of {}, these records give no estimate with at least {CHECK_AVERAGES} averages (--no-frame-check: off)\n",
+            if tried.is_empty() { "twice or half the frame".to_string() } else { tried.join(" and ") }
         ));
+    };
+    match second_identification(a, second, other, check) {
+        Ok(again) => {
+            let unconfirmed = era::identify::confirm_modes(found, &again, other);
+            Ok(format!(
+                "  frame check: identified again from frames of {other} samples ({averages} averages, {:.2} s): {unconfirmed} physical mode(s) not found again, so not physical (--no-frame-check: off)\n",
+                clock.elapsed().as_secs_f64()
+            ))
+        }
+        // The check vouches for modes; when it cannot be made, the run stands as it is.
+        Err(e) => Ok(format!(
+            "  frame check: skipped: the second estimate (frames of {other} samples) could not be identified: {e:#}\n"
+        )),
+    }
+}
+
+/// The frame check's second identification: the estimate at `other` samples per frame,
+/// window-corrected as the first, identified and refined on the same route.
+fn second_identification(
+    a: &IdentifyArgs,
+    second: crate::frf::FromTime,
+    other: usize,
+    check: &Check,
+) -> anyhow::Result<era::Identification> {
+    let quiet = crate::args::CommonArgs {
+        quiet: true,
+        json: false,
+        timings: false,
     };
     let mut frf = second.input.file.frf;
     if check.route.window_correction {
@@ -400,21 +445,17 @@ fn frame_check(
         let (first, end) = era::frf::band_lines(frf.frequency_hz(), b, 0);
         (end > first).then_some((first, end))
     });
-    let again = realize(a, &frf, check.era_opts, check.scan_options, true, &quiet)
-        .context("the frame check")?;
-    let again = crate::refine::refine_found(
+    // Zeroed lines are a count of lines: the same Hz at the other frame.
+    let mut era_opts = check.era_opts.clone();
+    era_opts.zero_lines = (era_opts.zero_lines * other).div_ceil(a.welch.frame.max(1));
+    let again = realize(a, &frf, &era_opts, check.scan_options, true, &quiet)?;
+    crate::refine::refine_found(
         again,
         &frf,
         &refine_options,
         Some(check.route.domain),
         &quiet,
     )
-    .context("the frame check's refinement")?;
-    let unconfirmed = era::identify::confirm_modes(found, &again, other);
-    Ok(format!(
-        "  frame check: identified again from frames of {other} samples ({averages} averages, {:.2} s): {unconfirmed} physical mode(s) not found again, so not physical (--no-frame-check: off)\n",
-        clock.elapsed().as_secs_f64()
-    ))
 }
 
 /// The route's choices, one line each, with their reasons; then its cautions.
@@ -431,25 +472,24 @@ fn route_echo(route: &era::identify::route::Route) -> String {
 
 /// The band to identify over: `--band LO..HI`, or (when the route takes the band from
 /// the coherence) where the coherence is at least [`era::frf::BAND_COHERENCE`]
-/// (`era::frf::coherence_band`), with the reason to echo; `None` for every line.
+/// (`era::frf::coherence_band`), with the reason to echo; `Err(why)` inside the `Ok`
+/// for every line, with the reason.
 fn identify_band(
     a: &IdentifyArgs,
     frf: &era::FrfData,
     estimated: Option<&crate::output::InputCoherence>,
     from_coherence: bool,
-) -> anyhow::Result<Option<(f64, f64, String)>> {
+) -> anyhow::Result<Result<(f64, f64, String), String>> {
     let freq = frf.frequency_hz();
     let top = freq.last().copied().unwrap_or(0.0);
-    if let Some(text) = a.band.as_ref().filter(|t| t.trim() != "all") {
-        let parsed = text.split_once("..").and_then(|(lo, hi)| {
-            Some((
-                lo.trim().parse::<f64>().ok()?,
-                hi.trim().parse::<f64>().ok()?,
-            ))
-        });
-        let Some((lo, hi)) = parsed else {
+    if let Some(text) = a
+        .band
+        .as_ref()
+        .filter(|t| !t.trim().eq_ignore_ascii_case("all"))
+    {
+        let Some((lo, hi)) = crate::config::parse_band(text) else {
             return crate::usage(format!(
-                "--band {text}: expected LO..HI in Hz, e.g. 60..500"
+                "--band {text}: expected LO..HI in Hz, e.g. 60..500, or all"
             ));
         };
         if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
@@ -460,10 +500,10 @@ fn identify_band(
                 "--band {text}: the data's lines end at {top} Hz, below the band"
             ));
         }
-        return Ok(Some((lo, hi.min(top), "as --band says".into())));
+        return Ok(Ok((lo, hi.min(top), "as --band says".into())));
     }
     if !from_coherence {
-        return Ok(None);
+        return Ok(Err("every line, as the route asks".into()));
     }
     let companion;
     let (curves, source) = match estimated {
@@ -476,20 +516,27 @@ fn identify_band(
                     crate::frf::coherence_path(&a.file).display().to_string(),
                 )
             }
-            _ => return Ok(None),
+            _ => return Ok(Err(format!(
+                "every line: no coherence (no {} beside the file; --band LO..HI to set the band)",
+                crate::frf::coherence_path(&a.file).display()
+            ))),
         },
     };
     let values: Vec<Vec<f64>> = curves.curves.iter().map(|(_, v)| v.clone()).collect();
     Ok(
-        era::frf::coherence_band(&curves.frequency_hz, &values).map(|(lo, hi)| {
-            (
+        match era::frf::coherence_band(&curves.frequency_hz, &values) {
+            Some((lo, hi)) => Ok((
                 lo,
                 hi,
                 format!(
                     "where the coherence ({source}) is at least {} (--band LO..HI to set it)",
                     era::frf::BAND_COHERENCE
                 ),
-            )
-        }),
+            )),
+            None => Err(format!(
+                "every line: the coherence ({source}) marks no narrower band where it is at least {} (--band LO..HI to set it)",
+                era::frf::BAND_COHERENCE
+            )),
+        },
     )
 }

@@ -1121,6 +1121,17 @@ fn a_late_start_warns_of_its_cost_and_the_refinement_is_free_of_it() {
         late.contains("--zero-lines") && late.contains("% in damping"),
         "{late}"
     );
+    // A band that starts inside the lowest mode's half-power band says so.
+    let mut edge = base.to_vec();
+    edge.extend(["--band", "5.8..40"]);
+    let (v, _) = identify_json(&path, &edge);
+    assert!(
+        v["warnings"]
+            .to_string()
+            .contains("the band is too short for the lowest mode"),
+        "{}",
+        v["warnings"]
+    );
     let (v, _) = identify_json(&path, &base);
     let first = &v["modes"][0];
     assert!(

@@ -555,13 +555,14 @@ fn huge_and_tiny_frf_magnitudes_are_identified() {
             "--out",
             out.to_str().unwrap(),
         ];
-        // The default route refines: at any scale it ends cleanly (beyond about 1e154
-        // the refinement's squared norms overflow and it stops with exit 2, naming it).
+        // The default route refines. Up to 1e154 it refines; beyond (1e250, 1e300,
+        // 1e-300) the refinement's squared norms leave the doubles and it stops with
+        // exit 2, naming the refinement (a known limit: ERA alone, below, takes them).
         let o = run(&args);
         o.assert_no_crash();
         if *scale == 1.0 || *scale == 1e154 {
             assert_eq!(o.code, Some(0), "refined x {scale:e}: {}", o.stderr);
-        } else if o.code != Some(0) {
+        } else {
             assert_eq!(o.code, Some(2), "refined x {scale:e}: {}", o.stderr);
             assert!(o.stderr.contains("refining"), "{}", o.stderr);
         }

@@ -378,3 +378,39 @@ fn the_ladisk_plate_over_its_swept_band_gives_its_four_peaks() {
         }
     }
 }
+
+/// `--from-time` checks the physical modes against a second estimate at twice the
+/// frame, says so, and `--no-frame-check` leaves it out.
+#[test]
+fn the_frame_check_is_said_and_can_be_turned_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, _) = shaker_test(dir.path(), 29);
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "identify",
+            s(&file),
+            "--from-time",
+            "--inputs",
+            "1-2",
+            "--outputs",
+            "3-10",
+            "--frame",
+            "1024",
+        ];
+        args.extend_from_slice(extra);
+        let out = era().args(&args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let on = run(&[]);
+    assert!(
+        on.contains("frame check: identified again from frames of 2048 samples"),
+        "{on}"
+    );
+    let off = run(&["--no-frame-check"]);
+    assert!(!off.contains("frame check"), "{off}");
+}

@@ -263,7 +263,9 @@ impl PyIdentification {
     /// Every parameter of the run by its model.json name.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let text = serde_json::to_string(&parameters(&self.options))
+        let mut params = parameters(&self.options);
+        params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
+        let text = serde_json::to_string(&params)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         py.import("json")?.call_method1("loads", (text,))
     }
@@ -318,6 +320,17 @@ impl PyIdentification {
     fn to_json(&self) -> PyResult<String> {
         let mut params = parameters(&self.options);
         params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
+        // As the CLI writes them: the automatic order and its scan.
+        if self.route.states.is_none() {
+            params.insert("states".into(), serde_json::json!("auto"));
+            params.insert(
+                "model_states".into(),
+                serde_json::json!(self.found.model.states()),
+            );
+        }
+        if let Some(st) = &self.found.stabilization {
+            params.insert("orders".into(), serde_json::json!(st.range.to_string()));
+        }
         if let Some(r) = &self.refine {
             era_io::model_json::refine_parameters(r, &mut params);
             params.insert(
@@ -450,6 +463,10 @@ pub fn identify(
         ));
     };
     let mut request = era::identify::route::RouteRequest::new(preset);
+    // An FrfData carries no coherence and no window metadata: neither is used, and
+    // the route says so.
+    request.without_metadata = true;
+    request.band_hz = band;
     request.states = chosen;
     request.refine = refine;
     request.domain = match time_domain {

@@ -63,8 +63,14 @@ pub struct RouteRequest {
     pub direct_term: Option<DirectTerm>,
     /// Identify over the band where the coherence says the test carried information.
     pub coherence_band: Option<bool>,
+    /// The band the caller gives, Hz: it replaces the coherence's.
+    pub band_hz: Option<(f64, f64)>,
     /// Divide a Welch estimate's lag window out of the FRFs when their metadata names it.
     pub window_correction: Option<bool>,
+    /// Whether the front end's data can carry a coherence and window metadata (files
+    /// and time histories can; a bare array cannot): without, neither is used, and the
+    /// echo says why.
+    pub without_metadata: bool,
 }
 
 /// One choice of the route: what was chosen and why.
@@ -180,7 +186,7 @@ impl RouteRequest {
             reason: match (self.direct_term, seen) {
                 (Some(_), _) => given(),
                 (None, _) if !measured => preset.clone(),
-                (None, Some(Quantity::Acceleration)) => format!("{preset}: an accelerance tends to a constant above its modes, which the time-zero Markov block carries"),
+                (None, Some(Quantity::Acceleration)) => format!("{preset}: an accelerance tends to a constant above its modes, which the time-zero Markov block carries{}", if refine { "; the refined model's D is its upper residual" } else { "" }),
                 (None, Some(q)) => format!("{preset}: a {} FRF has no direct term", q.name()),
                 (None, None) => preset.clone(),
             },
@@ -192,28 +198,33 @@ impl RouteRequest {
             cautions.push("D = 0 on accelerance: the collocated pairs' constant above the modes is left out of the model, and their fit suffers (D = Y0 carries it)".into());
         }
 
-        let coherence_band = self.coherence_band.unwrap_or(measured);
+        let bare = "this data carries no coherence or window metadata (an array, not a file)";
+        let coherence_band = self.band_hz.is_none()
+            && !self.without_metadata
+            && self.coherence_band.unwrap_or(measured);
         choices.push(Choice {
             name: "band",
-            value: if coherence_band {
-                "from the coherence"
-            } else {
-                "every line"
-            }
-            .into(),
-            reason: match self.coherence_band {
-                Some(_) => given(),
-                None if measured => format!("{preset}: where the coherence shows the test excited the structure, when the data has a coherence"),
-                None => preset.clone(),
+            value: match self.band_hz {
+                Some((lo, hi)) => format!("{lo}..{hi} Hz"),
+                None if coherence_band => "from the coherence".into(),
+                None => "every line".into(),
+            },
+            reason: match (self.band_hz, self.coherence_band) {
+                (Some(_), _) | (None, Some(_)) => given(),
+                _ if self.without_metadata => bare.to_string(),
+                _ if measured => format!("{preset}: where the coherence shows the test excited the structure, when the data has a coherence"),
+                _ => preset.clone(),
             },
         });
 
-        let window_correction = self.window_correction.unwrap_or(measured);
+        let window_correction =
+            !self.without_metadata && self.window_correction.unwrap_or(measured);
         choices.push(Choice {
             name: "window correction",
             value: if window_correction { "on" } else { "off" }.into(),
             reason: match self.window_correction {
                 Some(_) => given(),
+                None if self.without_metadata => bare.to_string(),
                 None if measured => format!("{preset}: a Welch estimate's lag window, when the data's metadata names it, biases damping and adds doublets"),
                 None => format!("{preset}: the FRFs as given"),
             },
@@ -295,6 +306,27 @@ mod tests {
         let r = q.resolve(Quantity::Acceleration, 0);
         assert_eq!(r.cautions.len(), 2, "{:?}", r.cautions);
         assert_eq!(r.echo().len(), r.choices.len());
+    }
+
+    #[test]
+    fn a_given_band_and_bare_data_are_said_as_such() {
+        let q = RouteRequest {
+            band_hz: Some((60.0, 500.0)),
+            ..RouteRequest::default()
+        };
+        let r = q.resolve(Quantity::Acceleration, 0);
+        assert!(!r.coherence_band && r.window_correction);
+        assert_eq!(r.choices[4].value, "60..500 Hz");
+        assert_eq!(r.choices[4].reason, "as asked");
+        let q = RouteRequest {
+            without_metadata: true,
+            ..RouteRequest::default()
+        };
+        let r = q.resolve(Quantity::Acceleration, 0);
+        assert!(!r.coherence_band && !r.window_correction);
+        assert!(r.choices[5]
+            .reason
+            .contains("no coherence or window metadata"));
     }
 
     #[test]
