@@ -57,15 +57,12 @@ pub fn apply_route(options: &mut EraOptions, route: &Route) {
     options.direct_term = route.direct_term;
 }
 
-/// The options ERA runs with on `route`: a refined route realizes in discrete time,
-/// ERA's own, and the refinement returns the route's domain (a discrete realization
-/// with a negative real pole has no continuous image to start from).
+/// The options ERA runs with on `route` ([`Route::realization_domain`]).
 pub fn era_options(options: &EraOptions, route: &Route) -> EraOptions {
-    let mut era = options.clone();
-    if route.refine {
-        era.domain = ModelDomain::Discrete;
+    EraOptions {
+        domain: route.realization_domain(),
+        ..options.clone()
     }
-    era
 }
 
 /// Options from flags, with the checks clap cannot do (those of the library call are
@@ -133,6 +130,22 @@ fn reason_of(e: &era::EraError) -> String {
         era::EraError::InvalidParameter { reason, .. } => reason.clone(),
         other => other.to_string(),
     }
+}
+
+/// `frf` with the lag window of the Welch estimate it came from divided out (see
+/// [`lag_window`]), and the reason to echo; `None` when `metadata` names no such
+/// window. Leading lines that are zero in every pair (a padded late start) stay zero:
+/// the correction works on the impulse responses and would spread values into them.
+pub fn window_corrected(
+    frf: &era::FrfData,
+    metadata: &std::collections::BTreeMap<String, String>,
+) -> anyhow::Result<Option<(era::FrfData, String)>> {
+    let Some((lag, why)) = lag_window(metadata) else {
+        return Ok(None);
+    };
+    let padded = era::suspect::leading_zero_lines(frf);
+    let corrected = era::preprocess::zero_leading_lines(&lag.correct_frf(frf)?, padded);
+    Ok(Some((corrected, why)))
 }
 
 /// The lag window of the Welch estimate an FRF file came from, when its metadata (an

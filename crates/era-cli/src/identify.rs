@@ -105,15 +105,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let route = request.resolve(input.file.frf.quantity(), a.integrations);
     apply_route(&mut opts, &route);
     if route.window_correction {
-        if let Some((lag, why)) = crate::config::lag_window(&input.file.metadata) {
-            // The correction works on the impulse responses: it would spread values into
-            // the zero lines of a padded start, which stay zero.
-            let padded = era::suspect::leading_zero_lines(&input.file.frf);
-            input.file.frf = era::preprocess::zero_leading_lines(
-                &lag.correct_frf(&input.file.frf)
-                    .with_context(|| format!("correcting the window of {}", a.file.display()))?,
-                padded,
-            );
+        if let Some((corrected, why)) =
+            crate::config::window_corrected(&input.file.frf, &input.file.metadata)
+                .with_context(|| format!("correcting the window of {}", a.file.display()))?
+        {
+            input.file.frf = corrected;
             human.print(&format!(
                 "  window correction: {why} (--no-window-correction: off)\n"
             ));
@@ -137,40 +133,28 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     );
     human.print(&echo);
 
-    let band = match identify_band(a, frf, coherence.as_ref(), route.coherence_band)? {
-        Ok((lo, hi, why)) => {
-            human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"));
-            Some((lo, hi, why))
+    let band = identify_band(a, frf, coherence.as_ref(), route.coherence_band)?;
+    // The refinement fits measured lines only (never the zero lines a late start was
+    // padded with, or --zero-lines zeroed), inside the band when there is one.
+    let fit = era::frf::fit_lines(frf, a.zero_lines, band.as_ref().ok().map(|b| (b.0, b.1)))
+        .map_err(|why| {
+            let text = a.band.clone().unwrap_or_else(|| match &band {
+                Ok((lo, hi, _)) => format!("{lo}..{hi}"),
+                Err(_) => String::new(),
+            });
+            crate::UsageError(format!("--band {text}: {why}"))
+        })?;
+    match (&band, fit.band_hz) {
+        (Ok((_, _, why)), Some((lo, hi))) => {
+            human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"))
         }
-        Err(why) => {
-            human.print(&format!("  band: {why}\n"));
-            None
-        }
-    };
+        (Err(why), _) | (Ok((_, _, why)), None) => human.print(&format!("  band: {why}\n")),
+    }
     let mut refine_options = refine_options;
-    // The refinement fits measured lines only: never the zero lines a late start was
-    // padded with (or --zero-lines zeroed), whatever the band.
-    let measured_from = era::suspect::leading_zero_lines(frf)
-        .max(a.zero_lines)
-        .min(frf.lines().saturating_sub(1));
-    if measured_from > 1 && band.is_none() {
-        refine_options.band = Some((measured_from, frf.lines()));
-    }
-    if let Some((lo, hi, _)) = &band {
-        let (first, end) = era::frf::band_lines(frf.frequency_hz(), (*lo, *hi), measured_from);
-        if end <= first + 1 {
-            return crate::usage(format!(
-                "--band {lo}..{hi}: the data has {} measured line(s) in it (lines from {} Hz at {} Hz spacing)",
-                end.saturating_sub(first),
-                frf.frequency_hz()[measured_from],
-                frf.spacing_hz()
-            ));
-        }
-        refine_options.band = Some((first, end));
-    }
+    refine_options.band = fit.lines;
     let scan_options = ScanOptions {
         orders: scan_orders(a)?,
-        band_hz: band.as_ref().map(|(lo, hi, _)| (*lo, *hi)),
+        band_hz: fit.band_hz,
         ..ScanOptions::default()
     };
     let era_opts = era_options(&opts, &route);
@@ -202,7 +186,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         human.print(&crate::refine::summary(&found));
         if a.from_time && auto && !a.no_frame_check {
             let check = Check {
-                band_hz: band.as_ref().map(|(lo, hi, _)| (*lo, *hi)),
+                band_hz: fit.band_hz,
                 era_opts: &era_opts,
                 scan_options: &scan_options,
                 refine_options: &refine_options,
@@ -212,13 +196,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         }
     }
     found.suspects.extend(zero_start);
-    let fitted_band = match band {
-        Some((lo, hi, _)) => (lo, hi),
-        None => (frf.frequency_hz()[measured_from], found.band_hz.1),
-    };
     found
         .suspects
-        .extend(era::suspect::band_edges(&found, fitted_band));
+        .extend(era::suspect::band_edges(&found, fit.fitted_hz));
     human.print(&identification_summary(&found, states));
     human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
     if let Some(st) = &found.stabilization {
@@ -406,7 +386,7 @@ fn frame_check(
             if tried.is_empty() { "twice or half the frame".to_string() } else { tried.join(" and ") }
         ));
     };
-    match second_identification(a, second, other, check) {
+    match second_identification(a, second, other, check, &quiet) {
         Ok(again) => {
             let unconfirmed = era::identify::confirm_modes(found, &again, other);
             Ok(format!(
@@ -428,16 +408,14 @@ fn second_identification(
     second: crate::frf::FromTime,
     other: usize,
     check: &Check,
+    quiet: &crate::args::CommonArgs,
 ) -> anyhow::Result<era::Identification> {
-    let quiet = crate::args::CommonArgs {
-        quiet: true,
-        json: false,
-        timings: false,
-    };
     let mut frf = second.input.file.frf;
     if check.route.window_correction {
-        if let Some((lag, _)) = crate::config::lag_window(&second.input.file.metadata) {
-            frf = lag.correct_frf(&frf)?;
+        if let Some((corrected, _)) =
+            crate::config::window_corrected(&frf, &second.input.file.metadata)?
+        {
+            frf = corrected;
         }
     }
     let mut refine_options = check.refine_options.clone();
@@ -448,13 +426,13 @@ fn second_identification(
     // Zeroed lines are a count of lines: the same Hz at the other frame.
     let mut era_opts = check.era_opts.clone();
     era_opts.zero_lines = (era_opts.zero_lines * other).div_ceil(a.welch.frame.max(1));
-    let again = realize(a, &frf, &era_opts, check.scan_options, true, &quiet)?;
+    let again = realize(a, &frf, &era_opts, check.scan_options, true, quiet)?;
     crate::refine::refine_found(
         again,
         &frf,
         &refine_options,
         Some(check.route.domain),
-        &quiet,
+        quiet,
     )
 }
 
@@ -480,27 +458,18 @@ fn identify_band(
     estimated: Option<&crate::output::InputCoherence>,
     from_coherence: bool,
 ) -> anyhow::Result<Result<(f64, f64, String), String>> {
-    let freq = frf.frequency_hz();
-    let top = freq.last().copied().unwrap_or(0.0);
     if let Some(text) = a
         .band
         .as_ref()
         .filter(|t| !t.trim().eq_ignore_ascii_case("all"))
     {
+        // Checked against the data by era::frf::fit_lines.
         let Some((lo, hi)) = crate::config::parse_band(text) else {
             return crate::usage(format!(
                 "--band {text}: expected LO..HI in Hz, e.g. 60..500, or all"
             ));
         };
-        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
-            return crate::usage(format!("--band {text}: need 0 <= LO < HI"));
-        }
-        if lo >= top {
-            return crate::usage(format!(
-                "--band {text}: the data's lines end at {top} Hz, below the band"
-            ));
-        }
-        return Ok(Ok((lo, hi.min(top), "as --band says".into())));
+        return Ok(Ok((lo, hi, "as --band says".into())));
     }
     if !from_coherence {
         return Ok(Err("every line, as the route asks".into()));
@@ -516,10 +485,12 @@ fn identify_band(
                     crate::frf::coherence_path(&a.file).display().to_string(),
                 )
             }
-            _ => return Ok(Err(format!(
+            _ => {
+                return Ok(Err(format!(
                 "every line: no coherence (no {} beside the file; --band LO..HI to set the band)",
                 crate::frf::coherence_path(&a.file).display()
-            ))),
+            )))
+            }
         },
     };
     let values: Vec<Vec<f64>> = curves.curves.iter().map(|(_, v)| v.clone()).collect();

@@ -118,36 +118,45 @@ fn a_simulated_shaker_test_gives_its_modes_and_few_spurious_ones_at_every_frame(
 
 /// `--no-window-correction` brings the bias back: the damping of the uncorrected
 /// estimate is further from the truth (the correction is what the test above measures).
+/// `era identify --from-time` of a shaker test's record (2 forces, 8 accelerations) at
+/// 1024-sample frames, then `extra`.
+fn from_time_1024<'a>(file: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "identify",
+        file,
+        "--from-time",
+        "--inputs",
+        "1-2",
+        "--outputs",
+        "3-10",
+        "--frame",
+        "1024",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
+/// The human text (stdout) of an era run that must succeed.
+fn human_text(args: &[&str]) -> String {
+    let out = era().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 #[test]
 fn the_window_correction_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
     let (file, truth) = shaker_test(dir.path(), 24);
     let args = |extra: &[&'static str]| {
-        let mut args = vec![
-            "identify",
-            s(&file),
-            "--from-time",
-            "--inputs",
-            "1-2",
-            "--outputs",
-            "3-10",
-            "--frame",
-            "1024",
-            "--states",
-            "auto",
-        ];
+        let mut args = from_time_1024(s(&file), &["--states", "auto"]);
         args.extend_from_slice(extra);
         args
     };
-    let run = |extra: &[&'static str]| {
-        let out = era().args(args(extra)).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
+    let run = |extra: &[&'static str]| human_text(&args(extra));
     let on = run(&[]);
     assert!(
         on.contains("window correction: the Welch estimate's hann lag window"),
@@ -385,27 +394,7 @@ fn the_ladisk_plate_over_its_swept_band_gives_its_four_peaks() {
 fn the_frame_check_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
     let (file, _) = shaker_test(dir.path(), 29);
-    let run = |extra: &[&str]| {
-        let mut args = vec![
-            "identify",
-            s(&file),
-            "--from-time",
-            "--inputs",
-            "1-2",
-            "--outputs",
-            "3-10",
-            "--frame",
-            "1024",
-        ];
-        args.extend_from_slice(extra);
-        let out = era().args(&args).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
+    let run = |extra: &[&str]| human_text(&from_time_1024(s(&file), extra));
     let on = run(&[]);
     assert!(
         on.contains("frame check: identified again from frames of 2048 samples"),

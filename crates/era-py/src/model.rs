@@ -492,23 +492,6 @@ pub fn identify(
     let integrations_n = integrations.size("integrations")?;
     let route = request.resolve(frf.get().inner.quantity(), integrations_n);
     let refine = route.refine;
-    if let Some((lo, hi)) = band {
-        let top = frf
-            .get()
-            .inner
-            .frequency_hz()
-            .last()
-            .copied()
-            .unwrap_or(0.0);
-        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
-            return value_error(format!("band ({lo}, {hi}): need 0 <= lo < hi, in Hz"));
-        }
-        if lo >= top {
-            return value_error(format!(
-                "band ({lo}, {hi}): the data's lines end at {top} Hz, below the band"
-            ));
-        }
-    }
     let mut refine_options = era::refine::RefineOptions::default();
     refine_options.residuals = match residuals {
         "none" => era::refine::Residuals::None,
@@ -589,31 +572,19 @@ pub fn identify(
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
     let data = frf.get().inner.clone();
-    // The refinement fits measured lines only: never leading zero lines (a padded
-    // start, or zero_lines), and only the band's when one is given.
-    let measured_from = era::suspect::leading_zero_lines(&data)
-        .max(options.zero_lines)
-        .min(data.lines().saturating_sub(1));
-    if let Some(b) = band {
-        let (first, end) = era::frf::band_lines(data.frequency_hz(), b, measured_from);
-        if end > first {
-            refine_options.band = Some((first, end));
-        }
-    } else if measured_from > 1 {
-        refine_options.band = Some((measured_from, data.lines()));
-    }
+    // The refinement fits measured lines only (never leading zero lines: a padded
+    // start, or zero_lines), inside the band when one is given: as the CLI does.
+    let fit = era::frf::fit_lines(&data, options.zero_lines, band).or_else(|why| {
+        let (lo, hi) = band.unwrap_or_default();
+        value_error(format!("band ({lo}, {hi}): {why}"))
+    })?;
+    refine_options.band = fit.lines;
     let scan_options = ScanOptions {
-        band_hz: band,
+        band_hz: fit.band_hz,
         ..ScanOptions::default()
     };
-    // A refined route realizes in discrete time, ERA's own; the refinement returns the
-    // route's domain (as the CLI does).
     let era_run = EraOptions {
-        domain: if refine {
-            ModelDomain::Discrete
-        } else {
-            route.domain
-        },
+        domain: route.realization_domain(),
         ..options.clone()
     };
     let found = guarded(py, || {
@@ -641,8 +612,7 @@ pub fn identify(
                 };
                 let mut found = found;
                 found.suspects.extend(zero_start);
-                let fitted = band.unwrap_or((data.frequency_hz()[measured_from], found.band_hz.1));
-                let edges = era::suspect::band_edges(&found, fitted);
+                let edges = era::suspect::band_edges(&found, fit.fitted_hz);
                 found.suspects.extend(edges);
                 Ok(found)
             })

@@ -83,6 +83,72 @@ pub fn band_lines(frequency_hz: &[f64], band_hz: (f64, f64), from: usize) -> (us
     (first, end)
 }
 
+/// Where a refinement of some FRFs fits, from [`fit_lines`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitLines {
+    /// The first measured line: past the leading lines that are zero in every pair (a
+    /// padded late start) and past the lines zeroed on purpose.
+    pub measured_from: usize,
+    /// The band given, Hz, its top clipped to the last line.
+    pub band_hz: Option<(f64, f64)>,
+    /// The lines `[first, end)` the refinement fits; `None` leaves them to the
+    /// identification (no band, and no line past 0 Hz zero).
+    pub lines: Option<(usize, usize)>,
+    /// The band identified over, Hz: the band given, or the measured lines'.
+    pub fitted_hz: (f64, f64),
+}
+
+/// Where a refinement of `frf` fits: its measured lines (past the leading lines zero in
+/// every pair and past `zero_lines`), inside `band_hz` (LO, HI in Hz) when one is
+/// given. The CLI and the Python package both ask here, so that they fit the same
+/// lines.
+///
+/// # Errors
+/// The reason, for the front end to word with its name of the band: a band that is
+/// not `0 <= lo < hi`, one above the data's last line, or one with fewer than two
+/// measured lines in it.
+pub fn fit_lines(
+    frf: &FrfData,
+    zero_lines: usize,
+    band_hz: Option<(f64, f64)>,
+) -> std::result::Result<FitLines, String> {
+    let freq = frf.frequency_hz();
+    let top = freq.last().copied().unwrap_or(0.0);
+    let measured_from = crate::suspect::leading_zero_lines(frf)
+        .max(zero_lines)
+        .min(freq.len().saturating_sub(1));
+    let Some((lo, hi)) = band_hz else {
+        return Ok(FitLines {
+            measured_from,
+            band_hz: None,
+            lines: (measured_from > 1).then_some((measured_from, freq.len())),
+            fitted_hz: (freq[measured_from], top),
+        });
+    };
+    if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
+        return Err("need 0 <= lo < hi, in Hz".into());
+    }
+    if lo >= top {
+        return Err(format!("the data's lines end at {top} Hz, below the band"));
+    }
+    let hi = hi.min(top);
+    let (first, end) = band_lines(freq, (lo, hi), measured_from);
+    if end <= first + 1 {
+        return Err(format!(
+            "the data has {} measured line(s) in it (lines from {} Hz at {} Hz spacing)",
+            end.saturating_sub(first),
+            freq[measured_from],
+            frf.spacing_hz()
+        ));
+    }
+    Ok(FitLines {
+        measured_from,
+        band_hz: Some((lo, hi)),
+        lines: Some((first, end)),
+        fitted_hz: (lo, hi),
+    })
+}
+
 /// Relative tolerance on the spacing of the frequency lines (analyzers print 6–10
 /// significant digits).
 pub const FREQUENCY_SPACING_TOLERANCE: f64 = 1e-6;

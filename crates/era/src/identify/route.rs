@@ -245,6 +245,17 @@ impl RouteRequest {
 }
 
 impl Route {
+    /// The domain ERA realizes in on this route: a refined route realizes in discrete
+    /// time, ERA's own, and the refinement returns [`Route::domain`] (a discrete
+    /// realization with a negative real pole has no continuous image to start from).
+    pub fn realization_domain(&self) -> ModelDomain {
+        if self.refine {
+            ModelDomain::Discrete
+        } else {
+            self.domain
+        }
+    }
+
     /// The choices as lines `name: value (reason)`, for an echo.
     pub fn echo(&self) -> Vec<String> {
         self.choices
