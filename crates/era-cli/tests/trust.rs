@@ -71,21 +71,11 @@ fn a_simulated_shaker_test_gives_its_modes_and_few_spurious_ones_at_every_frame(
     for seed in [21, 22, 23] {
         let (file, truth) = shaker_test(dir.path(), seed);
         for frame in ["1024", "2048", "4096"] {
-            let v = json_of(&[
-                "identify",
+            let v = json_of(&from_time(
                 s(&file),
-                "--from-time",
-                "--inputs",
-                "1-2",
-                "--outputs",
-                "3-10",
-                "--frame",
                 frame,
-                "--states",
-                "auto",
-                "--json",
-                "-q",
-            ]);
+                &["--states", "auto", "--json", "-q"],
+            ));
             let found = physical(&v);
             let tf: Vec<f64> = truth.iter().map(|t| t.0).collect();
             let ff: Vec<f64> = found.iter().map(|f| f.0).collect();
@@ -119,8 +109,8 @@ fn a_simulated_shaker_test_gives_its_modes_and_few_spurious_ones_at_every_frame(
 /// `--no-window-correction` brings the bias back: the damping of the uncorrected
 /// estimate is further from the truth (the correction is what the test above measures).
 /// `era identify --from-time` of a shaker test's record (2 forces, 8 accelerations) at
-/// 1024-sample frames, then `extra`.
-fn from_time_1024<'a>(file: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+/// `frame`-sample frames, then `extra`.
+fn from_time<'a>(file: &'a str, frame: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
         "identify",
         file,
@@ -130,7 +120,7 @@ fn from_time_1024<'a>(file: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
         "--outputs",
         "3-10",
         "--frame",
-        "1024",
+        frame,
     ];
     args.extend_from_slice(extra);
     args
@@ -152,7 +142,7 @@ fn the_window_correction_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
     let (file, truth) = shaker_test(dir.path(), 24);
     let args = |extra: &[&'static str]| {
-        let mut args = from_time_1024(s(&file), &["--states", "auto"]);
+        let mut args = from_time(s(&file), "1024", &["--states", "auto"]);
         args.extend_from_slice(extra);
         args
     };
@@ -394,7 +384,7 @@ fn the_ladisk_plate_over_its_swept_band_gives_its_four_peaks() {
 fn the_frame_check_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
     let (file, _) = shaker_test(dir.path(), 29);
-    let run = |extra: &[&str]| human_text(&from_time_1024(s(&file), extra));
+    let run = |extra: &[&str]| human_text(&from_time(s(&file), "1024", extra));
     let on = run(&[]);
     assert!(
         on.contains("frame check: identified again from frames of 2048 samples"),
