@@ -7,7 +7,8 @@
 Counted per crate under crates/*/src:
 - import circles: strongly connected groups of two or more files, where a file points at
   another when it names a path in it (`crate::a::b`, `super::x`, `use crate::{..}`).
-  A re-export (`pub use`) and a `mod` declaration are not references.
+  A re-export (`pub use`), a `mod` declaration and a `#[cfg(test)]` module (the tests'
+  imports, not the file's) are not references.
 - functions over 150 lines (from `fn` to its closing brace, comments and strings skipped);
 - CLI flag spellings in the core: a kebab-case string given as a parameter name
   (`name: "hankel-factor"`) or backticked in a message;
@@ -149,6 +150,9 @@ def graph(src):
     edges = defaultdict(set)
     for p, here in mods.items():
         text = strip(open(p, encoding="utf-8").read())
+        # a `#[cfg(test)]` module's imports are the tests', not the file's
+        text = re.sub(r"#\[cfg\(test\)\]\s*mod\s+\w+\s*\{.*", "", text, flags=re.S)
+        text = re.sub(r"#\[cfg\(test\)\]\s*(pub(\([^)]*\))?\s+)?mod\s+\w+\s*;", "", text)
         is_mod = os.path.basename(p) in ("mod.rs", "lib.rs", "main.rs")
         refs = []
         for m in re.finditer(r"(^|\n)\s*(pub(\([^)]*\))?\s+)?use\s+([^;]+);", text):

@@ -6,13 +6,134 @@
 //! *numerical* failures (a decomposition did not converge: exit 1); see
 //! [`EraError::is_input_error`].
 //!
-//! A remedy names the option to change by its field in [`crate::EraOptions`]
-//! (`hankel_factor`, `pad_to`), as Python writes it; a front end that names options
-//! otherwise (the CLI's `--hankel-factor`) prints [`EraError::message`] with its
-//! [`Naming`], so the core never quotes one front end's spelling to another's users.
+//! A parameter is named by a [`Param`], never by one front end's spelling: a front end
+//! shows a message through [`EraError::spelled`] with its own spelling of each parameter.
 
-use crate::params::Naming;
 use thiserror::Error;
+
+/// A parameter of the core's options, as the core names it: by its field
+/// ([`Param::field`], snake case, as in [`crate::EraOptions`] and Python's keywords).
+/// A front end spells it its own way (the CLI as a flag, Python as a keyword) through
+/// [`EraError::spelled`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Param {
+    /// Model order.
+    States,
+    /// Hankel size factor.
+    HankelFactor,
+    /// Integrations of the FRFs.
+    Integrations,
+    /// Low-pass cut-off, Hz.
+    LowpassHz,
+    /// Low-pass Butterworth order.
+    LowpassOrder,
+    /// Zeroed leading lines.
+    ZeroLines,
+    /// Padding of the FRFs.
+    PadTo,
+    /// Time domain of the model.
+    TimeDomain,
+    /// Direct term of the model.
+    DirectTerm,
+    /// SVD method.
+    Svd,
+    /// Orders of the stability check.
+    Orders,
+    /// Samples per Welch frame.
+    Frame,
+    /// Overlap of Welch frames.
+    Overlap,
+    /// Line spacing, Hz.
+    Df,
+    /// Frequency lines.
+    Lines,
+    /// Duration, s.
+    Duration,
+    /// Cycles.
+    Cycles,
+    /// Worker threads.
+    Threads,
+    /// Sample time of impulse responses, s.
+    SampleTime,
+    /// Sample rate of time histories, Hz.
+    SampleRate,
+    /// Highest line kept, Hz.
+    MaxHz,
+    /// Rate of the compensator's controller, Hz.
+    CompensatorRate,
+    /// Viscous damping ratio of an oscillator.
+    ViscousDampingRatio,
+}
+
+impl Param {
+    /// Every parameter, in declaration order.
+    pub const ALL: [Param; 23] = [
+        Param::States,
+        Param::HankelFactor,
+        Param::Integrations,
+        Param::LowpassHz,
+        Param::LowpassOrder,
+        Param::ZeroLines,
+        Param::PadTo,
+        Param::TimeDomain,
+        Param::DirectTerm,
+        Param::Svd,
+        Param::Orders,
+        Param::Frame,
+        Param::Overlap,
+        Param::Df,
+        Param::Lines,
+        Param::Duration,
+        Param::Cycles,
+        Param::Threads,
+        Param::SampleTime,
+        Param::SampleRate,
+        Param::MaxHz,
+        Param::CompensatorRate,
+        Param::ViscousDampingRatio,
+    ];
+
+    /// The field name: `hankel_factor`, `lowpass_hz`.
+    pub const fn field(self) -> &'static str {
+        match self {
+            Param::States => "states",
+            Param::HankelFactor => "hankel_factor",
+            Param::Integrations => "integrations",
+            Param::LowpassHz => "lowpass_hz",
+            Param::LowpassOrder => "lowpass_order",
+            Param::ZeroLines => "zero_lines",
+            Param::PadTo => "pad_to",
+            Param::TimeDomain => "time_domain",
+            Param::DirectTerm => "direct_term",
+            Param::Svd => "svd",
+            Param::Orders => "orders",
+            Param::Frame => "frame",
+            Param::Overlap => "overlap",
+            Param::Df => "df",
+            Param::Lines => "lines",
+            Param::Duration => "duration",
+            Param::Cycles => "cycles",
+            Param::Threads => "threads",
+            Param::SampleTime => "sample_time",
+            Param::SampleRate => "sample_rate",
+            Param::MaxHz => "max_hz",
+            Param::CompensatorRate => "compensator_rate",
+            Param::ViscousDampingRatio => "viscous_damping_ratio",
+        }
+    }
+
+    /// The parameter whose field name is `field`.
+    pub fn from_field(field: &str) -> Option<Param> {
+        Param::ALL.into_iter().find(|p| p.field() == field)
+    }
+}
+
+impl std::fmt::Display for Param {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.field())
+    }
+}
 
 /// Everything that can go wrong in the numeric core.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -71,7 +192,8 @@ pub enum EraError {
     /// An option is outside its allowed range.
     #[error("invalid parameter {name} = {value}: {reason}")]
     InvalidParameter {
-        /// Parameter (flag) name, e.g. `states`.
+        /// The parameter's field name, snake case (`hankel_factor`); a front end spells
+        /// the ones that are [`Param`]s its own way.
         name: &'static str,
         /// The value given, as text.
         value: String,
@@ -79,7 +201,7 @@ pub enum EraError {
         reason: String,
     },
     /// The Hankel matrix asks for more Markov samples than the data has.
-    #[error("{}", self.message(Naming::Keyword))]
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
     NotEnoughMarkovSamples {
         /// Samples needed.
         needed: usize,
@@ -92,7 +214,7 @@ pub enum EraError {
     },
     /// The Hankel matrix is smaller than the requested model order (thesis §1.8 error,
     /// "increase the length of the time series").
-    #[error("{}", self.message(Naming::Keyword))]
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
     HankelTooSmall {
         /// Rows of H0.
         rows: usize,
@@ -104,7 +226,7 @@ pub enum EraError {
         states: usize,
     },
     /// The data's Hankel matrix has numerical rank below the requested order.
-    #[error("{}", self.message(Naming::Keyword))]
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
     RankDeficient {
         /// Numerical rank.
         rank: usize,
@@ -114,7 +236,7 @@ pub enum EraError {
         threshold: f64,
     },
     /// A discrete pole has no real logarithm (on or near the negative real axis, or zero).
-    #[error("{}", self.message(Naming::Keyword))]
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
     NoRealLogarithm {
         /// Real part of the pole.
         re: f64,
@@ -126,7 +248,7 @@ pub enum EraError {
     Conversion(String),
     /// The zero-order-hold inverse does not reproduce the discrete model: its
     /// eigenvectors are nearly dependent.
-    #[error("{}", self.message(Naming::Keyword))]
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
     UnreliableContinuous {
         /// Relative difference of `c2d(d2c(A, B))` from `(A, B)`.
         round_trip_error: f64,
@@ -172,23 +294,21 @@ pub enum EraError {
 }
 
 impl EraError {
-    /// The message, with the options a remedy names spelled as `naming` spells them
-    /// (`--hankel-factor` for [`Naming::Flag`], `hankel_factor` for
-    /// [`Naming::Keyword`], which `Display` uses). A refused parameter is named as the
-    /// CLI's flag without its dashes (`pad-to`) in `Display` and for [`Naming::Flag`], and
-    /// as the keyword (`pad_to`) for [`Naming::Keyword`]. Other variants without a remedy
-    /// read as their `Display`.
-    pub fn message(&self, naming: Naming) -> String {
-        let n = |key: &str| naming.name(key);
+    /// The message, with each parameter it names (the refused one, or the one a remedy
+    /// asks to change) spelled by `spell`: a front end passes its own spelling (a flag,
+    /// a keyword); `Display` uses the field names. Variants that name no parameter read
+    /// as their `Display`.
+    pub fn spelled(&self, spell: &dyn Fn(Param) -> String) -> String {
+        let n = |p: Param| spell(p);
         match self {
             EraError::InvalidParameter {
                 name,
                 value,
                 reason,
-            } if naming == Naming::Keyword => format!(
-                "invalid parameter {} = {value}: {reason}",
-                n(&name.replace('-', "_"))
-            ),
+            } => {
+                let shown = Param::from_field(name).map_or_else(|| name.to_string(), n);
+                format!("invalid parameter {shown} = {value}: {reason}")
+            }
             EraError::NotEnoughMarkovSamples {
                 needed,
                 available,
@@ -196,9 +316,9 @@ impl EraError {
                 hankel_factor,
             } => format!(
                 "the Hankel matrix needs {needed} Markov samples (states {states} x hankel factor {hankel_factor}, plus the direct term), the data gives {available}: lower {} or {}, or pad with {}",
-                n("hankel_factor"),
-                n("states"),
-                n("pad_to")
+                n(Param::HankelFactor),
+                n(Param::States),
+                n(Param::PadTo)
             ),
             EraError::HankelTooSmall {
                 rows,
@@ -207,7 +327,7 @@ impl EraError {
                 states,
             } => format!(
                 "the Hankel matrix is {rows} x {cols}: it has only {available} singular values, fewer than the {states} states requested; increase {}",
-                n("hankel_factor")
+                n(Param::HankelFactor)
             ),
             EraError::RankDeficient {
                 rank,
@@ -215,15 +335,15 @@ impl EraError {
                 threshold,
             } => format!(
                 "the data supports only {rank} states (singular values beyond that are below {threshold:.3e}), but {states} were requested: lower {}",
-                n("states")
+                n(Param::States)
             ),
             EraError::UnreliableContinuous { round_trip_error } => format!(
                 "the zero-order-hold inverse is unreliable for this model (round trip error {round_trip_error:.2e}): its eigenvectors are nearly dependent; keep {} discrete",
-                n("time_domain")
+                n(Param::TimeDomain)
             ),
             EraError::NoRealLogarithm { re, im } => format!(
                 "the discrete model has a pole at z = {re:+.6e}{im:+.6e}i, which has no real continuous-time equivalent (zero-order-hold inverse undefined): keep {} discrete",
-                n("time_domain")
+                n(Param::TimeDomain)
             ),
             other => other.to_string(),
         }
@@ -262,7 +382,7 @@ fn non_finite_message(what: &str, output: usize, input: usize, line: usize) -> S
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+
 
     /// The frequency checks' messages say what is wrong in every case: a second line at
     /// or below 0 Hz has no spacing (no "expected NaN Hz"), and the frequency vector has no
@@ -281,61 +401,5 @@ mod tests {
         );
         let nan = crate::frf::validate_frequencies(&[0.0, 1.0, f64::NAN]).unwrap_err();
         assert_eq!(nan.to_string(), "non-finite value in frequency at line 2");
-    }
-
-    /// A refused parameter keeps the CLI's name for the CLI and takes the keyword for
-    /// Python.
-    #[test]
-    fn refused_parameters_are_named_as_the_front_end_does() {
-        let e = EraError::InvalidParameter {
-            name: "lowpass-hz",
-            value: "-3".into(),
-            reason: "must be positive".into(),
-        };
-        let flag = "invalid parameter lowpass-hz = -3: must be positive";
-        assert_eq!(e.message(Naming::Flag), flag);
-        assert_eq!(e.to_string(), flag);
-        assert_eq!(
-            e.message(Naming::Keyword),
-            "invalid parameter lowpass = -3: must be positive"
-        );
-    }
-
-    #[test]
-    fn remedies_name_options_as_the_front_end_does() {
-        let e = EraError::NotEnoughMarkovSamples {
-            needed: 401,
-            available: 320,
-            states: 8,
-            hankel_factor: 50,
-        };
-        let flag = e.message(Naming::Flag);
-        assert!(
-            flag.ends_with("lower --hankel-factor or --states, or pad with --pad-to"),
-            "{flag}"
-        );
-        let shown = e.to_string();
-        assert!(
-            shown.ends_with("lower hankel_factor or states, or pad with pad_to"),
-            "{shown}"
-        );
-        assert!(!shown.contains("--"), "{shown}");
-        let e = EraError::NoRealLogarithm { re: -0.5, im: 0.0 };
-        assert!(e
-            .message(Naming::Flag)
-            .ends_with("keep --time-domain discrete"));
-        assert!(e.to_string().ends_with("keep time_domain discrete"));
-        let e = EraError::UnreliableContinuous {
-            round_trip_error: 3e-6,
-        };
-        assert!(e
-            .message(Naming::Flag)
-            .ends_with("keep --time-domain discrete"));
-        assert!(e.to_string().contains("round trip error 3.00e-6"));
-        // Variants without a remedy read the same either way.
-        assert_eq!(
-            EraError::AllZero.message(Naming::Flag),
-            EraError::AllZero.to_string()
-        );
     }
 }

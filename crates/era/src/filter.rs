@@ -46,14 +46,14 @@ impl LowPass {
     pub fn design(order: usize, cutoff_hz: f64, sample_time_s: f64) -> Result<Self> {
         if order == 0 || order > 20 {
             return Err(EraError::InvalidParameter {
-                name: "lowpass-order",
+                name: "lowpass_order",
                 value: order.to_string(),
                 reason: "the Butterworth order must be 1 to 20".into(),
             });
         }
         if !(sample_time_s.is_finite() && sample_time_s > 0.0) {
             return Err(EraError::InvalidParameter {
-                name: "sample-time",
+                name: "sample_time",
                 value: sample_time_s.to_string(),
                 reason: "the impulse responses need a positive, finite sample time".into(),
             });
@@ -62,7 +62,7 @@ impl LowPass {
         let nyquist = 0.5 / sample_time_s;
         if !(MIN_NORMALISED_CUTOFF..=1.0 - MIN_NORMALISED_CUTOFF).contains(&normalised) {
             return Err(EraError::InvalidParameter {
-                name: "lowpass-hz",
+                name: "lowpass_hz",
                 value: cutoff_hz.to_string(),
                 reason: format!(
                     "the cut-off must lie between {} Hz and {} Hz ({MIN_NORMALISED_CUTOFF} to {} of the Nyquist frequency {nyquist} Hz)",
@@ -91,7 +91,7 @@ impl LowPass {
             .all(|s| s.b.iter().chain(s.a.iter()).all(|c| c.is_finite()));
         if !finite {
             return Err(EraError::InvalidParameter {
-                name: "lowpass-hz",
+                name: "lowpass_hz",
                 value: cutoff_hz.to_string(),
                 reason: format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower `lowpass_order`"),
             });
@@ -129,7 +129,7 @@ impl LowPass {
         let edge = self.edge_samples();
         if signal.len() <= edge {
             return Err(EraError::InvalidParameter {
-                name: "lowpass-order",
+                name: "lowpass_order",
                 value: self.order.to_string(),
                 reason: format!(
                     "zero-phase filtering needs more than {edge} samples, the impulse response has {}",
@@ -140,7 +140,7 @@ impl LowPass {
         let out = sosfiltfilt_dyn(signal.iter(), &self.sections);
         if out.iter().any(|x| !x.is_finite()) {
             return Err(EraError::InvalidParameter {
-                name: "lowpass-hz",
+                name: "lowpass_hz",
                 value: self.cutoff_hz.to_string(),
                 reason: format!(
                     "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower `lowpass_order`",
@@ -185,7 +185,7 @@ mod tests {
             1e300,
         ] {
             let e = LowPass::design(4, hz, 1.0).unwrap_err();
-            assert!(e.to_string().contains("lowpass-hz"), "{hz}: {e}");
+            assert!(e.to_string().contains("lowpass_hz"), "{hz}: {e}");
         }
         assert!(LowPass::design(4, 0.1, f64::NAN).is_err());
         assert!(LowPass::design(4, 0.1, 0.0).is_err());

@@ -114,7 +114,7 @@ pub fn fit_lines(
 ) -> std::result::Result<FitLines, String> {
     let freq = frf.frequency_hz();
     let top = freq.last().copied().unwrap_or(0.0);
-    let measured_from = crate::suspect::leading_zero_lines(frf)
+    let measured_from = leading_zero_lines(frf)
         .max(zero_lines)
         .min(freq.len().saturating_sub(1));
     let Some((lo, hi)) = band_hz else {
@@ -386,6 +386,15 @@ pub fn coherence_band(frequency_hz: &[f64], curves: &[Vec<f64>]) -> Option<(f64,
         return None;
     }
     Some((frequency_hz[first], frequency_hz[last]))
+}
+
+/// Leading lines of `frf` that are zero in every pair.
+pub fn leading_zero_lines(frf: &FrfData) -> usize {
+    let lines = frf.lines();
+    let pairs = frf.outputs() * frf.inputs();
+    (0..lines)
+        .take_while(|&k| (0..pairs).all(|s| frf.values()[s * lines + k] == Complex64::ZERO))
+        .count()
 }
 
 #[cfg(test)]

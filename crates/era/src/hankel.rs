@@ -121,17 +121,17 @@ impl ThesisHankel {
         // sample limit cannot be filled from any data a limit lets through. Refusing it
         // here also keeps the product (and every message that prints it) from wrapping.
         let product = crate::limits::SAMPLES.check_product(
-            "Markov samples (states x hankel-factor)",
+            "Markov samples (states x hankel factor)",
             &[states as u64, hankel_factor as u64],
         )?;
         let markov_samples = product / 4 * 4;
         let half = markov_samples / 2;
         if half < 2 {
             return Err(EraError::InvalidParameter {
-                name: "hankel-factor",
+                name: "hankel_factor",
                 value: hankel_factor.to_string(),
                 reason: format!(
-                    "states x hankel-factor = {product} is below 8: the Hankel matrix would be empty"
+                    "states x hankel factor = {product} is below 8: the Hankel matrix would be empty"
                 ),
             });
         }

@@ -17,7 +17,7 @@
 //! needs `R q · C p`. `Hᵀ y` is the same with the roles of outputs and inputs swapped.
 //! Columns are processed in parallel with `rayon`.
 //!
-//! **Made once.** FFT plans come from one process-wide planner ([`real_fft_plans`]), so a
+//! **Made once.** FFT plans come from one process-wide planner ([`crate::linalg::fft`]), so a
 //! length planned once (every identification at the same `ndpts` and `lh`) is never
 //! planned again; the spectra `A_ij` live as long as the operator; each worker thread
 //! owns its buffers (time signal, input spectra, accumulator, FFT scratch, the operand
@@ -29,64 +29,10 @@ use crate::markov::MarkovSequence;
 use faer::{Mat, MatRef};
 use num_complex::Complex64;
 use rayon::prelude::*;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
-use std::sync::{Arc, Mutex, OnceLock};
-
-/// A linear operator known through its products (what a truncated SVD needs).
-pub trait LinearOperator: Sync {
-    /// Rows.
-    fn nrows(&self) -> usize;
-    /// Columns.
-    fn ncols(&self) -> usize;
-    /// `self · x`.
-    fn apply(&self, x: MatRef<'_, f64>) -> Mat<f64>;
-    /// `selfᵀ · y`.
-    fn apply_transpose(&self, y: MatRef<'_, f64>) -> Mat<f64>;
-}
-
-impl LinearOperator for Mat<f64> {
-    fn nrows(&self) -> usize {
-        Mat::nrows(self)
-    }
-    fn ncols(&self) -> usize {
-        Mat::ncols(self)
-    }
-    fn apply(&self, x: MatRef<'_, f64>) -> Mat<f64> {
-        self * x
-    }
-    fn apply_transpose(&self, y: MatRef<'_, f64>) -> Mat<f64> {
-        self.transpose() * y
-    }
-}
-
-/// Smallest `n ≥ min` whose prime factors are 2, 3, 5 and 7 (fast FFT sizes).
-pub fn fast_fft_len(min: usize) -> usize {
-    let mut n = min.max(1);
-    loop {
-        let mut m = n;
-        for f in [2, 3, 5, 7] {
-            while m.is_multiple_of(f) {
-                m /= f;
-            }
-        }
-        if m == 1 {
-            return n;
-        }
-        n += 1;
-    }
-}
-
-/// Forward and inverse real FFT plans of length `len`, from a planner shared by the
-/// process: `realfft` caches plans per planner, so each length is planned once.
-pub fn real_fft_plans(len: usize) -> (Arc<dyn RealToComplex<f64>>, Arc<dyn ComplexToReal<f64>>) {
-    static PLANNER: OnceLock<Mutex<RealFftPlanner<f64>>> = OnceLock::new();
-    let mut planner = PLANNER
-        .get_or_init(|| Mutex::new(RealFftPlanner::new()))
-        .lock()
-        // A panic elsewhere while planning leaves a usable planner (plans are immutable).
-        .unwrap_or_else(|poisoned| poisoned.into_inner());
-    (planner.plan_fft_forward(len), planner.plan_fft_inverse(len))
-}
+use crate::linalg::fft::{fast_fft_len, real_fft_plans};
+pub use crate::linalg::LinearOperator;
+use realfft::{ComplexToReal, RealToComplex};
+use std::sync::Arc;
 
 /// `H` of a [`HankelShape`] over a [`MarkovSequence`], applied by FFT correlations.
 pub struct HankelOperator {

@@ -15,11 +15,18 @@ use crate::realize::{
     realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
     SvdPath,
 };
-use crate::response::{fit_metrics, frequency_response_naive, frequency_response_with, FitReport};
+use crate::response::{fit_metrics, frequency_response_naive, frequency_response_with};
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
 pub mod route;
+mod zero_start;
+
+pub use zero_start::zero_start;
+
+pub use crate::identification::{
+    FitDomain, Identification, ModeQuality, Refined, Stabilization, Stage, StageTimings,
+};
 
 /// Model returned (thesis `cord`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -145,240 +152,6 @@ impl EraOptions {
         }
         Ok(())
     }
-}
-
-/// A stage of the pipeline, reported to an observer as it starts
-/// ([`identify_observed`]); front ends turn these into progress displays.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
-    /// Integration, padding, zeroing.
-    Preprocess,
-    /// Inverse FFT (and filter).
-    Markov,
-    /// Hankel and SVD (the long one).
-    HankelSvd,
-    /// Realization products and continuous conversion.
-    Realize,
-    /// Eigendecomposition and modes.
-    Modes,
-    /// Model FRF and fit.
-    Fit,
-    /// Refinement of the poles and residues against the FRFs ([`refine_identification`]).
-    Refine,
-}
-
-impl Stage {
-    /// Human name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Preprocess => "preprocessing",
-            Stage::Markov => "Markov parameters",
-            Stage::HankelSvd => "Hankel + SVD",
-            Stage::Realize => "realization",
-            Stage::Modes => "modes",
-            Stage::Fit => "fit",
-            Stage::Refine => "refinement",
-        }
-    }
-}
-
-/// Wall time of each stage, seconds.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct StageTimings {
-    /// Integration, padding, zeroing.
-    pub preprocess: f64,
-    /// Inverse FFT (and filter) to Markov parameters.
-    pub markov: f64,
-    /// Hankel construction and SVD.
-    pub hankel_svd: f64,
-    /// The realization products of §1.9, and the continuous conversion when asked.
-    pub realize: f64,
-    /// Eigendecomposition and modal parameters.
-    pub modes: f64,
-    /// Model FRF and fit metrics.
-    pub fit: f64,
-    /// The refinement ([`refine_identification`]), 0 when none ran.
-    pub refine: f64,
-}
-
-/// Everything `identify` found.
-#[derive(Debug, Clone)]
-pub struct Identification {
-    /// The identified model (discrete, or continuous on request).
-    pub model: StateSpace,
-    /// The realization diagnostics (singular values, Hankel size, warnings); its model
-    /// is the discrete one.
-    pub realization: Realization,
-    /// Modes and real poles.
-    pub modal: ModalParameters,
-    /// Fit against the processed measurement.
-    pub fit: FitReport,
-    /// The measurement after the same integrations, on its own lines (the zeroed
-    /// leading lines kept): the data a refinement fits.
-    pub processed: FrfData,
-    /// `processed` with its leading lines zeroed: what the fit compared and what every
-    /// plot overlays (docs/design.md §1.10). Built here once, for every consumer.
-    pub measured: FrfData,
-    /// First line of `measured` in the fit (the zeroed lines, and the 0 Hz line of
-    /// integrated data, are left out).
-    pub first_line: usize,
-    /// Sample time of the impulse responses, s.
-    pub sample_time_s: f64,
-    /// The model's FRF on the lines of `measured`, `[output][input][line]` as in
-    /// [`FrfData::values`], evaluated from `model`'s (A, B, C, D): what the fit compared,
-    /// kept for plots ([`Identification::model_frf`]).
-    pub model_response: Vec<crate::Complex64>,
-    /// Stage times.
-    pub timings: StageTimings,
-    /// Per mode of `modal.modes` (same order): indicators, and whether to trust it.
-    pub quality: Vec<ModeQuality>,
-    /// The fitted band, Hz: the frequencies of the first and last fitted lines.
-    pub band_hz: (f64, f64),
-    /// The scan across orders, when one was asked for (`--orders` or `--states auto`).
-    pub stabilization: Option<Stabilization>,
-    /// The refinement that gave `model`, when one ran ([`refine_identification`]).
-    pub refinement: Option<Refined>,
-    /// Results to treat with care ([`crate::suspect`]): a Hankel too short for the
-    /// lowest mode, negative damping, poles outside the unit circle.
-    pub suspects: Vec<crate::suspect::SuspectResult>,
-}
-
-impl Identification {
-    /// `self` with [`Identification::suspects`] found anew from its modes.
-    pub fn with_suspects(mut self) -> Self {
-        self.suspects = crate::suspect::check_identification(&self);
-        self
-    }
-
-    /// Every warning of the run, worded for `naming`'s front end: the realization's
-    /// (docs/design.md §1.8), then the suspect results.
-    pub fn warnings(&self, naming: crate::params::Naming) -> Vec<String> {
-        self.realization
-            .warnings
-            .iter()
-            .map(|w| w.message(naming))
-            .chain(self.suspects.iter().map(|s| s.message(naming)))
-            .collect()
-    }
-
-    /// `model_response` as an [`FrfData`] on the lines of `measured`: the model's side of
-    /// every overlay.
-    ///
-    /// # Errors
-    /// None in practice: the shapes are the identification's own.
-    pub fn model_frf(&self) -> Result<FrfData> {
-        FrfData::new(
-            self.measured.frequency_hz().to_vec(),
-            self.measured.outputs(),
-            self.measured.inputs(),
-            self.model_response.clone(),
-            self.measured.quantity(),
-        )
-    }
-}
-
-/// A refinement in the pipeline: the fit, and what it started from.
-#[derive(Debug, Clone)]
-pub struct Refined {
-    /// The fit ([`crate::refine::refine`]).
-    pub refinement: crate::refine::Refinement,
-    /// Frequencies of the start poles (ERA's modes), Hz, in the refinement's start order,
-    /// then of the poles it added for modes the start missed
-    /// ([`crate::refine::Refinement::added`]): [`crate::refine::Refinement::dropped`]
-    /// and [`crate::refine::RefinedMode::start`] index them.
-    pub start_frequency_hz: Vec<f64>,
-    /// Integrator states of the lower residual in the model (they are its real poles at
-    /// `s = 0`).
-    pub residual_states: usize,
-    /// The domain of the fit, chosen for the data, and why.
-    pub fit_domain: FitDomain,
-}
-
-impl Refined {
-    /// The caller's start poles (ERA's modes), without the ones added for missed modes.
-    pub fn start_modes(&self) -> usize {
-        self.start_frequency_hz.len() - self.refinement.added.len()
-    }
-
-    /// `"the mode at 12.3456 Hz was dropped: why"` for every dropped start pole.
-    pub fn dropped_lines(&self) -> Vec<String> {
-        self.refinement
-            .dropped
-            .iter()
-            .map(|(k, why)| {
-                format!(
-                    "the mode at {:.4} Hz was dropped: {why}",
-                    self.start_frequency_hz.get(*k).copied().unwrap_or(f64::NAN)
-                )
-            })
-            .collect()
-    }
-
-    /// Frequencies (Hz) of the poles the refinement added for modes the start missed
-    /// (the end of [`Refined::start_frequency_hz`]).
-    pub fn added_hz(&self) -> &[f64] {
-        &self.start_frequency_hz[self.start_modes()..]
-    }
-
-    /// What the refinement did to its start, a line each: `"the residual showed …"` when
-    /// poles were added for modes the start missed, then [`Refined::dropped_lines`].
-    pub fn start_lines(&self) -> Vec<String> {
-        let added = self.added_hz();
-        let added_line = (!added.is_empty()).then(|| {
-            let list: Vec<String> = added.iter().map(|f| format!("{f:.4}")).collect();
-            format!(
-                "the residual showed {} mode(s) the start missed: poles added at {} Hz",
-                added.len(),
-                list.join(", ")
-            )
-        });
-        added_line.into_iter().chain(self.dropped_lines()).collect()
-    }
-}
-
-/// Whether a mode is to be trusted, and why not.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModeQuality {
-    /// Judged a mode of the structure.
-    pub physical: bool,
-    /// Why not, when not.
-    pub reason: Option<String>,
-    /// The indicators.
-    pub indicators: ModeIndicators,
-    /// Orders of the scan in which the mode's cluster has a pole, when a scan ran.
-    pub stable_orders: Option<usize>,
-    /// Standard deviation of the frequency, Hz, when a refinement estimated it.
-    pub frequency_std_hz: Option<f64>,
-    /// Standard deviation of the damping ratio, when a refinement estimated it.
-    pub damping_ratio_std: Option<f64>,
-}
-
-/// A scan across orders, its diagram and (for `--states auto`) the automatic choice.
-#[derive(Debug, Clone)]
-pub struct Stabilization {
-    /// The orders asked for.
-    pub range: OrderRange,
-    /// Every pole of every order.
-    pub scan: Scan,
-    /// The clusters and the rule.
-    pub selection: Selection,
-    /// Singular values of the factored `H0`: all (dense) or the largest order plus
-    /// [`crate::realize::EXTRA_SINGULAR_VALUES`] (matrix-free).
-    pub singular_values: Vec<f64>,
-    /// `H0` size of the factorization.
-    pub hankel_size: (usize, usize),
-    /// The CMIF: singular values of the measured FRF matrix at each line of the
-    /// processed data, `[line][k]`, largest first.
-    pub cmif: Vec<Vec<f64>>,
-    /// Wall time of the scan (factorization, realizations, diagram), s.
-    pub seconds: f64,
-    /// Of which the factorization of `H0` (Hankel, SVD, `H1` product), s.
-    pub factor_seconds: f64,
-    /// Iterations of the truncated SVD (matrix-free path).
-    pub svd_iterations: Option<usize>,
-    /// How the model of `--states auto` was built, in words (`None` for a scan beside a
-    /// fixed order).
-    pub model_note: Option<String>,
 }
 
 impl Stabilization {
@@ -1974,18 +1747,6 @@ pub fn refine_identification_in(
 /// How many standard deviations of the noise's part of the difference of the two
 /// probe costs (chosen by the refinement in the pipeline) the zero-order-hold image must win by.
 const ZOH_SIGNIFICANCE: f64 = 8.0;
-
-/// Which model the refinement fits, and why (chosen by the refinement in the pipeline).
-#[derive(Debug, Clone, PartialEq)]
-pub struct FitDomain {
-    /// `Some(Ts)` for the zero-order-hold image (a sampled system's FRFs), `None` for a
-    /// continuous pole–residue model (FRFs of a physical structure).
-    pub sample_time_s: Option<f64>,
-    /// Relative error of each at ERA's poles with free residues: (continuous, ZOH).
-    pub probe_fit: (f64, f64),
-    /// The choice in words, with its figures.
-    pub reason: String,
-}
 
 /// Chooses the domain of the refinement's fit for the data, not for the model asked
 /// for. FRFs measured on a structure are those of a continuous system; FRFs computed

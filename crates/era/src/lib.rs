@@ -40,8 +40,10 @@ pub mod frf;
 pub mod friction;
 pub mod hankel;
 pub mod hankel_op;
+pub mod identification;
 pub mod identify;
 pub mod limits;
+pub mod linalg;
 pub mod markov;
 pub mod modal;
 pub mod parallel;
@@ -54,7 +56,6 @@ pub mod sim;
 pub mod stability;
 pub mod statespace;
 pub mod suspect;
-pub mod tsvd;
 
 #[cfg(test)]
 mod test_support;

@@ -5,7 +5,7 @@
 //! MATLAB's `h = real(ifft(mirror(G)))` of the thesis. Taking the real part there discards
 //! the imaginary parts of the DC and Nyquist lines (which a mirror cannot make
 //! Hermitian); here those are set to zero before a real inverse FFT (`realfft`), which
-//! is the same thing. The plan comes from [`crate::hankel_op::real_fft_plans`], made once
+//! is the same thing. The plan comes from [`crate::linalg::fft::real_fft_plans`], made once
 //! per length per process. Sample `h[k]` is the Markov block `Y_k`: `Y_0` is the direct
 //! term and `Y_k = C A^(k-1) B` for `k ≥ 1`.
 
@@ -132,7 +132,7 @@ pub fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
         return Err(EraError::TooFewLines { lines });
     }
     let n = 2 * (lines - 1);
-    let (_, c2r) = crate::hankel_op::real_fft_plans(n);
+    let (_, c2r) = crate::linalg::fft::real_fft_plans(n);
     let mut spectrum = c2r.make_input_vec();
     let mut scratch = c2r.make_scratch_vec();
     let scale = 1.0 / n as f64;
@@ -295,7 +295,7 @@ impl LagWindow {
         crate::limits::SAMPLES.check("frame", frame as u64)?;
         let w = window.values(frame);
         let n2 = 2 * frame;
-        let (r2c, c2r) = crate::hankel_op::real_fft_plans(n2);
+        let (r2c, c2r) = crate::linalg::fft::real_fft_plans(n2);
         let mut padded = vec![0.0; n2];
         padded[..frame].copy_from_slice(&w);
         let mut spectrum = r2c.make_output_vec();
@@ -356,7 +356,7 @@ impl LagWindow {
                 s[k] /= c;
             }
         }
-        let (r2c, _) = crate::hankel_op::real_fft_plans(n);
+        let (r2c, _) = crate::linalg::fft::real_fft_plans(n);
         let mut values = Vec::with_capacity(frf.values().len());
         let mut spectrum = r2c.make_output_vec();
         for mut h in series {

@@ -17,7 +17,7 @@
 //! `ValueError` in Python), or [`EraError::Limit`] when a size is above one of
 //! [`crate::limits`].
 
-use crate::error::{EraError, Result};
+use crate::error::{EraError, Param, Result};
 
 /// How the calling front end names its parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -30,6 +30,11 @@ pub enum Naming {
 }
 
 impl Naming {
+    /// `param` as this front end spells it.
+    pub fn spell(self, param: Param) -> String {
+        self.name(param.field())
+    }
+
     /// The name of the parameter `key` (snake case, as in [`crate::EraOptions`]) for this
     /// front end.
     pub fn name(self, key: &str) -> String {
@@ -41,6 +46,15 @@ impl Naming {
                 other => other.into(),
             },
         }
+    }
+}
+
+impl EraError {
+    /// The message with the parameters it names spelled as `naming`'s front end spells
+    /// them (`--hankel-factor` for [`Naming::Flag`], `hankel_factor` for
+    /// [`Naming::Keyword`]); see [`EraError::spelled`].
+    pub fn message(&self, naming: Naming) -> String {
+        self.spelled(&|p| naming.spell(p))
     }
 }
 
@@ -151,5 +165,66 @@ mod tests {
         );
         assert_eq!(render(Naming::Flag, "no quotes"), "no quotes");
         assert_eq!(render(Naming::Flag, "`lowpass_hz`"), "--lowpass-hz");
+    }
+
+    /// A refused parameter is the CLI's flag for the CLI, the keyword for Python and the
+    /// field name in `Display`.
+    #[test]
+    fn refused_parameters_are_named_as_the_front_end_does() {
+        let e = EraError::InvalidParameter {
+            name: "lowpass_hz",
+            value: "-3".into(),
+            reason: "must be positive".into(),
+        };
+        assert_eq!(
+            e.message(Naming::Flag),
+            "invalid parameter --lowpass-hz = -3: must be positive"
+        );
+        assert_eq!(
+            e.to_string(),
+            "invalid parameter lowpass_hz = -3: must be positive"
+        );
+        assert_eq!(
+            e.message(Naming::Keyword),
+            "invalid parameter lowpass = -3: must be positive"
+        );
+    }
+
+    #[test]
+    fn remedies_name_options_as_the_front_end_does() {
+        let e = EraError::NotEnoughMarkovSamples {
+            needed: 401,
+            available: 320,
+            states: 8,
+            hankel_factor: 50,
+        };
+        let flag = e.message(Naming::Flag);
+        assert!(
+            flag.ends_with("lower --hankel-factor or --states, or pad with --pad-to"),
+            "{flag}"
+        );
+        let shown = e.to_string();
+        assert!(
+            shown.ends_with("lower hankel_factor or states, or pad with pad_to"),
+            "{shown}"
+        );
+        assert!(!shown.contains("--"), "{shown}");
+        let e = EraError::NoRealLogarithm { re: -0.5, im: 0.0 };
+        assert!(e
+            .message(Naming::Flag)
+            .ends_with("keep --time-domain discrete"));
+        assert!(e.to_string().ends_with("keep time_domain discrete"));
+        let e = EraError::UnreliableContinuous {
+            round_trip_error: 3e-6,
+        };
+        assert!(e
+            .message(Naming::Flag)
+            .ends_with("keep --time-domain discrete"));
+        assert!(e.to_string().contains("round trip error 3.00e-6"));
+        // Variants without a remedy read the same either way.
+        assert_eq!(
+            EraError::AllZero.message(Naming::Flag),
+            EraError::AllZero.to_string()
+        );
     }
 }

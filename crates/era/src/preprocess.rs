@@ -118,14 +118,14 @@ pub fn preprocess(
 ) -> Result<Preprocessed> {
     if zero_lines >= frf.lines() {
         return Err(EraError::InvalidParameter {
-            name: "zero-lines",
+            name: "zero_lines",
             value: zero_lines.to_string(),
             reason: format!("the data has only {} lines", frf.lines()),
         });
     }
     if pad_to != 0 && pad_to.saturating_add(1) < frf.lines() {
         return Err(EraError::InvalidParameter {
-            name: "pad-to",
+            name: "pad_to",
             value: pad_to.to_string(),
             reason: format!(
                 "padding to {} lines would truncate the {} measured lines (use 0 for no padding)",

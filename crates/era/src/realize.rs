@@ -20,7 +20,7 @@ use crate::hankel::{self, HankelShape, ThesisHankel};
 use crate::hankel_op::{HankelOperator, LinearOperator};
 use crate::markov::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
-use crate::tsvd::{truncated_svd, TruncatedSvdOptions};
+use crate::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
 use faer::Mat;
 use std::time::Instant;
 
@@ -40,7 +40,7 @@ pub enum SvdPath {
     /// Form `H0` and take its thin SVD (all singular values).
     Dense,
     /// Never form `H0`: FFT products ([`crate::hankel_op`]) and a truncated SVD
-    /// ([`crate::tsvd`]); only the leading singular values.
+    /// ([`crate::linalg::tsvd`]); only the leading singular values.
     MatrixFree,
     /// Dense while `H0` is small (below [`AUTO_MATRIX_FREE_MIN_DIM`] on its short
     /// side), matrix-free beyond.
@@ -82,7 +82,7 @@ pub struct RealizeOptions {
     pub direct_term: DirectTerm,
     /// Dense or matrix-free SVD.
     pub svd: SvdPath,
-    /// Residual tolerance of the truncated SVD ([`crate::tsvd`]), relative to `σ₁`.
+    /// Residual tolerance of the truncated SVD ([`crate::linalg::tsvd`]), relative to `σ₁`.
     pub svd_tolerance: f64,
 }
 
@@ -230,7 +230,7 @@ fn plan(
     }
     if options.hankel_factor == 0 {
         return Err(EraError::InvalidParameter {
-            name: "hankel-factor",
+            name: "hankel_factor",
             value: "0".into(),
             reason: "must be at least 1".into(),
         });

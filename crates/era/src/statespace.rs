@@ -90,7 +90,7 @@ impl StateSpace {
     pub fn c2d(&self, sample_time_s: f64) -> Result<StateSpace> {
         if self.domain != TimeDomain::Continuous {
             return Err(EraError::InvalidParameter {
-                name: "time-domain",
+                name: "time_domain",
                 value: "discrete".into(),
                 reason: "c2d needs a continuous model".into(),
             });
@@ -130,7 +130,7 @@ impl StateSpace {
     pub fn d2c(&self) -> Result<StateSpace> {
         let TimeDomain::Discrete { sample_time_s: ts } = self.domain else {
             return Err(EraError::InvalidParameter {
-                name: "time-domain",
+                name: "time_domain",
                 value: "continuous".into(),
                 reason: "d2c needs a discrete model".into(),
             });

@@ -43,51 +43,9 @@
 //! Each warning is worded for the calling front end ([`Naming`]): the CLI names flags,
 //! Python keywords.
 
-use crate::identify::{Identification, ModeQuality};
+use crate::identification::{Identification, ModeQuality, SuspectResult};
 use crate::modal::ModalParameters;
 use crate::params::Naming;
-use crate::Complex64;
-
-/// A result to treat with care.
-#[derive(Debug, Clone, PartialEq)]
-pub enum SuspectResult {
-    /// The Hankel's window is shorter than the period of the lowest mode.
-    ShortHankel {
-        /// The window `(r + c)·Ts`, s.
-        window_s: f64,
-        /// The lowest mode's frequency, Hz.
-        lowest_hz: f64,
-    },
-    /// Modes with negative damping, as (frequency in Hz, damping ratio).
-    NegativeDamping(Vec<(f64, f64)>),
-    /// Real poles outside the unit circle: their continuous `Re s > 0`, rad/s.
-    UnstableRealPoles(Vec<f64>),
-    /// The leading lines are zero (padded or zeroed), and this shifts ERA's modes.
-    ZeroStart {
-        /// The first line that is not zero, Hz.
-        first_hz: f64,
-        /// The mode shifted most: its frequency (Hz), then the relative shift of its
-        /// damping and of its frequency.
-        mode_hz: f64,
-        /// Relative shift of that mode's damping, `ζ_zeroed/ζ − 1`.
-        damping_shift: f64,
-        /// Relative shift of its frequency.
-        frequency_shift: f64,
-        /// Whether the model reported was refined over the measured lines only.
-        refined: bool,
-    },
-    /// A physical mode whose half-power band reaches past an edge of the band.
-    BandEdge {
-        /// The mode's frequency, Hz.
-        mode_hz: f64,
-        /// Its damping ratio.
-        damping_ratio: f64,
-        /// The edge, Hz.
-        edge_hz: f64,
-        /// Whether it is the low edge and the lowest physical mode.
-        lowest: bool,
-    },
-}
 
 impl SuspectResult {
     /// The warning in the words of `naming`'s front end.
@@ -235,109 +193,6 @@ pub fn check_identification(found: &Identification) -> Vec<SuspectResult> {
     check(&found.modal, &found.quality, window)
 }
 
-/// Leading lines of `frf` that are zero in every pair.
-pub fn leading_zero_lines(frf: &crate::FrfData) -> usize {
-    let lines = frf.lines();
-    let pairs = frf.outputs() * frf.inputs();
-    (0..lines)
-        .take_while(|&k| (0..pairs).all(|s| frf.values()[s * lines + k] == Complex64::ZERO))
-        .count()
-}
-
-/// Relative shifts below which zeroed lines are not worth a warning: 5 % in damping,
-/// 0.1 % in frequency.
-const ZERO_START_QUIET: (f64, f64) = (0.05, 1e-3);
-
-/// The effect of zeroed leading lines on `found` (an ERA identification at its final
-/// order, run with `options`), when its data have leading lines that are zero beyond
-/// the 0 Hz line (see the module documentation); `None` when there are none, when the
-/// effect is below 5 % in damping and 0.1 % in frequency, or when the model's own FRF
-/// cannot be identified at its order. `refined` says whether the model reported is
-/// refined (the wording only).
-pub fn zero_start(
-    found: &Identification,
-    options: &crate::EraOptions,
-    refined: bool,
-) -> Option<SuspectResult> {
-    let zeroed = leading_zero_lines(&found.processed).max(options.zero_lines);
-    let freq = found.processed.frequency_hz();
-    if zeroed < 2 || zeroed >= freq.len() {
-        return None;
-    }
-    let physical: Vec<&crate::modal::Mode> = found
-        .modal
-        .modes
-        .iter()
-        .zip(&found.quality)
-        .filter(|(_, q)| q.physical)
-        .map(|(m, _)| m)
-        .collect();
-    if physical.is_empty() {
-        return None;
-    }
-    // The model's own FRF on every line (its response at the zeroed lines included),
-    // already in the quantity ERA fitted: identified on every line, then with the same
-    // lines zeroed, at the model's order.
-    let own = crate::FrfData::new(
-        freq.to_vec(),
-        found.processed.outputs(),
-        found.processed.inputs(),
-        found.model_response.clone(),
-        found.processed.quantity(),
-    )
-    .ok()?;
-    let mut plain = options.clone();
-    plain.states = found.realization.model.states();
-    plain.integrations = 0;
-    plain.zero_lines = 0;
-    plain.lowpass = None;
-    plain.domain = crate::ModelDomain::Discrete;
-    let mut cut = plain.clone();
-    cut.zero_lines = zeroed;
-    let whole = crate::identify(&own, &plain).ok()?;
-    let zeroed_fit = crate::identify(&own, &cut).ok()?;
-    let nearest = |f: f64, modes: &[crate::modal::Mode]| {
-        modes
-            .iter()
-            .min_by(|a, b| {
-                (a.frequency_hz - f)
-                    .abs()
-                    .total_cmp(&(b.frequency_hz - f).abs())
-            })
-            .cloned()
-    };
-    let mut worst: Option<(f64, f64, f64)> = None;
-    for m in physical {
-        let (Some(a), Some(b)) = (
-            nearest(m.frequency_hz, &whole.modal.modes),
-            nearest(m.frequency_hz, &zeroed_fit.modal.modes),
-        ) else {
-            continue;
-        };
-        if a.damping_ratio <= 0.0 || (a.frequency_hz - m.frequency_hz).abs() > 0.02 * m.frequency_hz
-        {
-            continue;
-        }
-        let dz = b.damping_ratio / a.damping_ratio - 1.0;
-        let df = b.frequency_hz / a.frequency_hz - 1.0;
-        if worst.is_none_or(|(_, z, f)| {
-            dz.abs() / ZERO_START_QUIET.0 + df.abs() / ZERO_START_QUIET.1
-                > z.abs() / ZERO_START_QUIET.0 + f.abs() / ZERO_START_QUIET.1
-        }) {
-            worst = Some((m.frequency_hz, dz, df));
-        }
-    }
-    let (mode_hz, damping_shift, frequency_shift) = worst?;
-    (damping_shift.abs() >= ZERO_START_QUIET.0 || frequency_shift.abs() >= ZERO_START_QUIET.1)
-        .then_some(SuspectResult::ZeroStart {
-            first_hz: freq[zeroed],
-            mode_hz,
-            damping_shift,
-            frequency_shift,
-            refined,
-        })
-}
-
 /// Physical modes of `found` whose half-power band (three half-widths `ζ f` each side,
 /// at least two lines) reaches past an edge of `band_hz`, the band identified over. An
 /// edge where the data's lines end (0 Hz, the last line) is not checked: there is no
@@ -378,10 +233,30 @@ pub fn band_edges(found: &Identification, band_hz: (f64, f64)) -> Vec<SuspectRes
     out
 }
 
+impl Identification {
+    /// `self` with [`Identification::suspects`] found anew from its modes.
+    pub fn with_suspects(mut self) -> Self {
+        self.suspects = check_identification(&self);
+        self
+    }
+
+    /// Every warning of the run, worded for `naming`'s front end: the realization's
+    /// (docs/design.md §1.8), then the suspect results.
+    pub fn warnings(&self, naming: Naming) -> Vec<String> {
+        self.realization
+            .warnings
+            .iter()
+            .map(|w| w.message(naming))
+            .chain(self.suspects.iter().map(|s| s.message(naming)))
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::identify::{identify, EraOptions};
+    use crate::frf::leading_zero_lines;
+    use crate::identify::{identify, zero_start, EraOptions};
     use crate::{Complex64, FrfData, Quantity};
 
     /// Receptance of one mode, `1/(ωn² − ω² + 2iζωnω)`, on `lines` lines to `fmax`.

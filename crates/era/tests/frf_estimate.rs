@@ -299,7 +299,7 @@ fn bad_time_data_is_refused_with_a_reason() {
     assert!(matches!(
         run(&[&x], &[&y], &o),
         EraError::InvalidParameter {
-            name: "sample-rate",
+            name: "sample_rate",
             ..
         }
     ));

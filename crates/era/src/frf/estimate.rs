@@ -49,7 +49,6 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use num_complex::Complex64;
 use rayon::prelude::*;
-use realfft::RealFftPlanner;
 
 /// Frames transformed at once (bounds the working memory on long records).
 pub const BATCH_FRAMES: usize = 64;
@@ -226,7 +225,7 @@ impl WelchOptions {
     fn validate(&self, samples: usize) -> Result<()> {
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
             return Err(EraError::InvalidParameter {
-                name: "sample-rate",
+                name: "sample_rate",
                 value: self.sample_rate_hz.to_string(),
                 reason: "must be a positive number of samples per second".into(),
             });
@@ -446,7 +445,7 @@ pub fn spectra(
     let step = n - options.overlap_samples();
     let frames = options.frames(samples);
     let window = options.window.values(n);
-    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    let (fft, _) = crate::linalg::fft::real_fft_plans(n);
 
     let channels: Vec<&[f64]> = inputs.iter().chain(outputs.iter()).copied().collect();
     let mut gxx = vec![Complex64::new(0.0, 0.0); p * p * lines];
@@ -569,7 +568,7 @@ impl FrfEstimate {
         let total = self.spectra.lines();
         if lines < 2 || lines > total {
             return Err(EraError::InvalidParameter {
-                name: "max-hz",
+                name: "max_hz",
                 value: format!("{lines} lines"),
                 reason: format!("keeps fewer than 2 or more than the {total} lines"),
             });

@@ -101,8 +101,8 @@
 //! truncated or matrix-free SVD, and the products come from [`crate::hankel_op`].
 
 use crate::error::{EraError, Result};
-use crate::hankel_op::LinearOperator;
-use crate::sim::Minstd;
+use crate::linalg::LinearOperator;
+use crate::linalg::rng::Minstd;
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;

@@ -1,0 +1,9 @@
+//! Linear algebra and numerics the pipeline shares: the truncated SVD ([`tsvd`]) over a
+//! [`LinearOperator`], one FFT plan cache ([`fft`]) and the random generator ([`rng`]).
+
+pub mod fft;
+mod operator;
+pub mod rng;
+pub mod tsvd;
+
+pub use operator::LinearOperator;
