@@ -383,7 +383,6 @@ fn non_finite_message(what: &str, output: usize, input: usize, line: usize) -> S
 #[cfg(test)]
 mod tests {
 
-
     /// The frequency checks' messages say what is wrong in every case: a second line at
     /// or below 0 Hz has no spacing (no "expected NaN Hz"), and the frequency vector has no
     /// outputs or inputs to name.

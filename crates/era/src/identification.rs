@@ -1,17 +1,17 @@
-//! What an identification found: plain data, filled by the pipeline ([`crate::identify`])
+//! What an identification found: plain data, filled by the pipeline ([`mod@crate::identify`])
 //! and checked by [`crate::suspect`]. Nothing here runs a stage.
 
 use crate::error::Result;
 use crate::frf::FrfData;
 use crate::modal::indicators::ModeIndicators;
 use crate::modal::stabilization::{OrderRange, Scan, Selection};
-use crate::modal::ModalParameters;
-use crate::realize::Realization;
-use crate::response::FitReport;
+use crate::pipeline::fit::FitReport;
+use crate::pipeline::modes::ModalParameters;
+use crate::pipeline::realize::Realization;
 use crate::statespace::StateSpace;
 
 /// A stage of the pipeline, reported to an observer as it starts
-/// ([`identify_observed`]); front ends turn these into progress displays.
+/// ([`crate::identify::identify_observed`]); front ends turn these into progress displays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
     /// Integration, padding, zeroing.
@@ -26,7 +26,7 @@ pub enum Stage {
     Modes,
     /// Model FRF and fit.
     Fit,
-    /// Refinement of the poles and residues against the FRFs ([`refine_identification`]).
+    /// Refinement of the poles and residues against the FRFs ([`crate::identify::refine_identification`]).
     Refine,
 }
 
@@ -60,7 +60,7 @@ pub struct StageTimings {
     pub modes: f64,
     /// Model FRF and fit metrics.
     pub fit: f64,
-    /// The refinement ([`refine_identification`]), 0 when none ran.
+    /// The refinement ([`crate::identify::refine_identification`]), 0 when none ran.
     pub refine: f64,
 }
 
@@ -99,7 +99,7 @@ pub struct Identification {
     pub band_hz: (f64, f64),
     /// The scan across orders, when one was asked for (`--orders` or `--states auto`).
     pub stabilization: Option<Stabilization>,
-    /// The refinement that gave `model`, when one ran ([`refine_identification`]).
+    /// The refinement that gave `model`, when one ran ([`crate::identify::refine_identification`]).
     pub refinement: Option<Refined>,
     /// Results to treat with care ([`crate::suspect`]): a Hankel too short for the
     /// lowest mode, negative damping, poles outside the unit circle.
@@ -209,7 +209,7 @@ pub struct Stabilization {
     /// The clusters and the rule.
     pub selection: Selection,
     /// Singular values of the factored `H0`: all (dense) or the largest order plus
-    /// [`crate::realize::EXTRA_SINGULAR_VALUES`] (matrix-free).
+    /// [`crate::pipeline::realize::EXTRA_SINGULAR_VALUES`] (matrix-free).
     pub singular_values: Vec<f64>,
     /// `H0` size of the factorization.
     pub hankel_size: (usize, usize),

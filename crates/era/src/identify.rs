@@ -2,20 +2,20 @@
 //! singular values, modes and fit out.
 
 use crate::error::{EraError, Result};
-use crate::filter::LowPass;
 use crate::frf::FrfData;
-use crate::markov::{impulse_responses, impulse_responses_naive, MarkovSequence};
 use crate::modal::indicators::{contributions, emac, mpc, ModeIndicators};
 use crate::modal::stabilization::{
     hard_rejection, scan, select, DiagramCriteria, OrderRange, Scan, Selection, SelectionCriteria,
 };
-use crate::modal::{continuous_pole, modal_parameters_of, ModalForm, ModalParameters};
-use crate::preprocess::{integrate, preprocess, zero_leading_lines};
-use crate::realize::{
+use crate::pipeline::filter::LowPass;
+use crate::pipeline::fit::{fit_metrics, frequency_response_naive, frequency_response_with};
+use crate::pipeline::modes::{continuous_pole, modal_parameters_of, ModalForm, ModalParameters};
+use crate::pipeline::realize::{
     realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
     SvdPath,
 };
-use crate::response::{fit_metrics, frequency_response_naive, frequency_response_with};
+use crate::sources::frf::preprocess::{integrate, preprocess, zero_leading_lines};
+use crate::sources::frf::{impulse_responses, impulse_responses_naive, MarkovSequence};
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
@@ -674,7 +674,7 @@ pub fn default_orders(
     inputs: usize,
 ) -> Result<OrderRange> {
     let base = supported_hankel_states(markov_samples, hankel_factor);
-    let shapes = crate::hankel::ThesisHankel::new(base.max(2), hankel_factor.max(1));
+    let shapes = crate::pipeline::hankel::ThesisHankel::new(base.max(2), hankel_factor.max(1));
     let short_side = shapes
         .map(|t| t.h0.block_rows * outputs.min(inputs))
         .unwrap_or(0);
@@ -905,7 +905,8 @@ pub fn identify_with_scan(
             let rep = &s.poles[c.representative];
             (rep.frequency_hz - m.frequency_hz).abs()
                 <= scan_options.selection.frequency_tolerance * m.frequency_hz
-                && crate::stability::mac(&rep.shape, &m.shape) >= scan_options.selection.mac_minimum
+                && crate::modal::indicators::mac(&rep.shape, &m.shape)
+                    >= scan_options.selection.mac_minimum
         });
         match cluster {
             Some(c) => q.stable_orders = Some(c.members.len()),
@@ -1170,7 +1171,7 @@ fn mark_satellites(
     let domain = crate::TimeDomain::Discrete { sample_time_s };
     let points: Vec<crate::Complex64> = band_lines_hz
         .iter()
-        .map(|f| crate::response::evaluation_point(domain, *f))
+        .map(|f| crate::pipeline::fit::evaluation_point(domain, *f))
         .collect();
     let share = |k: usize| {
         let pole = &scan.poles[selection.clusters[alive[k]].representative];
@@ -1297,7 +1298,7 @@ pub fn assess_model(
         products_seconds: 0.0,
         svd_path,
         svd_iterations: None,
-        tails: crate::realize::HankelTails {
+        tails: crate::pipeline::realize::HankelTails {
             observability: faer::Mat::zeros(0, 0),
             controllability: faer::Mat::zeros(0, 0),
             outputs: model.outputs(),
@@ -1385,7 +1386,7 @@ pub const UNRESOLVED_MAC: f64 = 0.9;
 /// to add poles, finds such poles significant on estimated FRFs. With one output every
 /// shape has MAC 1, and a weak pole inside a stronger one's band is always unresolved.
 fn mark_unresolved(
-    modes: &[crate::modal::Mode],
+    modes: &[crate::pipeline::modes::Mode],
     shares: &[f64],
     added: &[bool],
     quality: &mut [ModeQuality],
@@ -1412,7 +1413,7 @@ fn mark_unresolved(
                             UNRESOLVED_SHARE * shares[j]
                         }
             })
-            .map(|(j, h)| (j, crate::stability::mac(&m.shape, &h.shape)))
+            .map(|(j, h)| (j, crate::modal::indicators::mac(&m.shape, &h.shape)))
             .filter(|&(_, mac)| mac >= UNRESOLVED_MAC)
             .max_by(|a, b| shares[a.0].total_cmp(&shares[b.0]));
         if let Some((j, mac)) = host {
@@ -1607,7 +1608,7 @@ pub fn refine_identification_in(
         };
         residue.iter_mut().for_each(|r| *r *= factor);
         let (shape, participation) = rank_one(&residue, q, p)?;
-        modes.push(crate::modal::Mode {
+        modes.push(crate::pipeline::modes::Mode {
             frequency_hz: rm.frequency_hz,
             damping_ratio: rm.damping_ratio,
             eigenvalue: match discrete_ts {
@@ -1620,7 +1621,7 @@ pub fn refine_identification_in(
         });
     }
     let real_poles = (0..residual_states)
-        .map(|_| crate::modal::RealPole {
+        .map(|_| crate::pipeline::modes::RealPole {
             eigenvalue: if discrete_ts.is_some() { 1.0 } else { 0.0 },
             continuous_pole: Complex64::new(0.0, 0.0),
             frequency_hz: 0.0,
@@ -1708,7 +1709,7 @@ pub fn refine_identification_in(
         .collect();
     mark_unresolved(&modes, &shares, &added, &mut quality);
     let mut response =
-        crate::response::frequency_response_blocks(&model, found.measured.frequency_hz());
+        crate::pipeline::fit::frequency_response_blocks(&model, found.measured.frequency_hz());
     // Below the band the lower residual's integrators are infinite at 0 Hz: those lines
     // were not fitted (like the zeroed measured lines) and are written as 0.
     let nl = found.measured.lines();
@@ -1881,7 +1882,7 @@ mod tests {
     #[test]
     fn a_weak_pole_with_a_stronger_ones_shape_inside_its_band_is_unresolved() {
         use crate::modal::stabilization::Rejection;
-        use crate::modal::Mode;
+        use crate::pipeline::modes::Mode;
         use crate::Complex64;
         let mode = |f: f64, z: f64, shape: &[f64]| Mode {
             frequency_hz: f,
@@ -1930,7 +1931,7 @@ mod tests {
             Rejection::Unresolved {
                 host_hz: 10.0,
                 share: 0.2,
-                mac: crate::stability::mac(&same.shape, &host.shape)
+                mac: crate::modal::indicators::mac(&same.shape, &host.shape)
             }
             .to_string()
         );

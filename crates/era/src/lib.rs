@@ -5,19 +5,30 @@
 //! thesis's `frffilt` (Woods 1994, §III.2 and Appendix J; Juang & Pappa 1985), as
 //! docs/design.md §1 lists it:
 //!
-//! 1. [`preprocess`]: integrate `ni` times, `G ← G/(j2πf)`; pad to `ndpts + 1` lines;
-//!    sample time `Ts = 1/(2Δf(N−1))`; zero the first `nz` lines.
-//! 2. [`markov`]: the Hermitian extension of each FRF, inverse-FFT'd with the `1/n`
-//!    factor, gives the Markov blocks `Y_k = C A^(k−1) B`.
-//! 3. [`filter`]: optional zero-phase Butterworth low-pass on the impulse responses.
-//! 4. [`hankel`]: `H0[r][c] = Y_(1+r+c)`, `H1[r][c] = Y_(2+r+c)`, `m − 1` blocks each way,
-//!    `m = M/2`, `M = ns·lh` rounded down to a multiple of 4.
-//! 5. [`realize`]: `H0 = U S Vᵀ`; `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`,
-//!    `C = E_qᵀ U S^(½)`.
-//! 6. [`statespace`]: `d2c` (zero-order-hold inverse, `log`) and `c2d` (`exp`).
-//! 7. [`modal`]: `s = ln(z)/Ts`; frequency `|s|/2π`, damping `−Re s/|s|`, shapes `Cφ`,
-//!    participations `ψB`.
-//! 8. [`response`]: the model's FRF through its modal form, and the per-pair fit.
+//! The house has one seam: a **source** turns its data into a [`sources::MarkovSequence`],
+//! and the **pipeline** after it is shared.
+//!
+//! 1. [`sources::frf`]: the FRF source. [`sources::frf::preprocess`] integrates `ni`
+//!    times, `G ← G/(j2πf)`, pads to `ndpts + 1` lines (sample time
+//!    `Ts = 1/(2Δf(N−1))`) and zeroes the first `nz` lines; the Hermitian extension of
+//!    each FRF, inverse-FFT'd with the `1/n` factor, gives the Markov blocks
+//!    `Y_k = C A^(k−1) B`.
+//! 2. [`pipeline::filter`]: optional zero-phase Butterworth low-pass on the impulse
+//!    responses.
+//! 3. [`pipeline::hankel`]: `H0[r][c] = Y_(1+r+c)`, `H1[r][c] = Y_(2+r+c)`, `m − 1`
+//!    blocks each way, `m = M/2`, `M = ns·lh` rounded down to a multiple of 4
+//!    ([`pipeline::hankel_op`] applies them without forming them).
+//! 4. [`pipeline::realize`]: `H0 = U S Vᵀ`; `A = S^(−½) Uᵀ H1 V S^(−½)`,
+//!    `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)`.
+//! 5. [`statespace`]: `d2c` (zero-order-hold inverse, `log`) and `c2d` (`exp`).
+//! 6. [`pipeline::modes`]: `s = ln(z)/Ts`; frequency `|s|/2π`, damping `−Re s/|s|`,
+//!    shapes `Cφ`, participations `ψB`.
+//! 7. [`pipeline::fit`]: the model's FRF through its modal form, and the per-pair fit.
+//!
+//! After the pipeline: [`modal`] (indicators, the order scan and the automatic order),
+//! [`refine`] (maximum likelihood) and [`suspect`] (results to treat with care); the
+//! result is plain data ([`identification`]). [`linalg`] holds the truncated SVD, the
+//! FFT plan cache and the random generator.
 //!
 //! [`identify::identify`] runs them all; [`identify::identify_naive`] runs the naive
 //! reference of every stage. [`sim`] holds the truth model of Table 5.2 and seeded
@@ -35,25 +46,19 @@
 #![warn(missing_docs)]
 
 pub mod error;
-pub mod filter;
 pub mod frf;
 pub mod friction;
-pub mod hankel;
-pub mod hankel_op;
 pub mod identification;
 pub mod identify;
 pub mod limits;
 pub mod linalg;
-pub mod markov;
 pub mod modal;
 pub mod parallel;
 pub mod params;
-pub mod preprocess;
-pub mod realize;
+pub mod pipeline;
 pub mod refine;
-pub mod response;
 pub mod sim;
-pub mod stability;
+pub mod sources;
 pub mod statespace;
 pub mod suspect;
 

@@ -25,7 +25,7 @@
 //!
 //!
 //! Two more checks need what the front end knows about the data, and run when it asks
-//! ([`zero_start`], [`band_edges`]):
+//! ([`crate::identify::zero_start`], [`band_edges`]):
 //!
 //! - **Zeroed leading lines.** An FRF that starts above 0 Hz is padded with zero lines
 //!   (ERA's inverse FFT needs every line from 0 Hz), and `zero_lines` zeroes lines on
@@ -44,8 +44,8 @@
 //! Python keywords.
 
 use crate::identification::{Identification, ModeQuality, SuspectResult};
-use crate::modal::ModalParameters;
 use crate::params::Naming;
+use crate::pipeline::modes::ModalParameters;
 
 impl SuspectResult {
     /// The warning in the words of `naming`'s front end.
@@ -325,7 +325,7 @@ mod tests {
 
     #[test]
     fn unstable_poles_are_named_and_stable_ones_are_not() {
-        let mode = |f: f64, z: f64| crate::modal::Mode {
+        let mode = |f: f64, z: f64| crate::pipeline::modes::Mode {
             frequency_hz: f,
             damping_ratio: z,
             eigenvalue: Complex64::new(0.0, 0.0),
@@ -333,7 +333,7 @@ mod tests {
             shape: vec![],
             participation: vec![],
         };
-        let real = |re: f64| crate::modal::RealPole {
+        let real = |re: f64| crate::pipeline::modes::RealPole {
             eigenvalue: re.exp(),
             continuous_pole: Complex64::new(re, 0.0),
             frequency_hz: re.abs() / (2.0 * std::f64::consts::PI),
@@ -368,7 +368,7 @@ mod tests {
         assert_eq!(leading_zero_lines(&clean.processed), 0);
         assert_eq!(zero_start(&clean, &options, false), None);
         // The lines below 5 Hz zeroed, as a padded late start would be.
-        let zeroed = crate::preprocess::zero_leading_lines(&frf, 50);
+        let zeroed = crate::sources::frf::preprocess::zero_leading_lines(&frf, 50);
         assert_eq!(leading_zero_lines(&zeroed), 50);
         let found = identify(&zeroed, &options).unwrap();
         let z = found.modal.modes[0].damping_ratio;

@@ -8,7 +8,7 @@
 //!    the record's median (the rest before the release and after sticking).
 //! 3. **Rough frequency**: the peak of the record's spectrum (`realfft`, zero-padded,
 //!    parabolic interpolation).
-//! 4. **Half-cycles**: a zero-phase Butterworth low-pass at 3 f_n ([`crate::filter`])
+//! 4. **Half-cycles**: a zero-phase Butterworth low-pass at 3 f_n ([`crate::pipeline::filter`])
 //!    for segmentation only; the lobes between zero crossings whose peak stands above
 //!    the noise (4σ after the filter, and 2 % of the largest) and last at least a
 //!    quarter period. The longest run of consecutive lobes is the oscillation.
@@ -38,7 +38,7 @@
 //!     exactly; at `r = 0` it is the exponential.
 
 use super::{coulomb_force_from_decay, FrictionError, Result};
-use crate::filter::LowPass;
+use crate::pipeline::filter::LowPass;
 use realfft::RealFftPlanner;
 
 /// Which damping law explains a decay better.

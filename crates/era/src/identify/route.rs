@@ -15,7 +15,7 @@
 
 use crate::frf::Quantity;
 use crate::identify::ModelDomain;
-use crate::realize::DirectTerm;
+use crate::pipeline::realize::DirectTerm;
 
 /// Which defaults fill the choices a caller leaves open.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -25,7 +25,7 @@ pub fn zero_start(
     if zeroed < 2 || zeroed >= freq.len() {
         return None;
     }
-    let physical: Vec<&crate::modal::Mode> = found
+    let physical: Vec<&crate::pipeline::modes::Mode> = found
         .modal
         .modes
         .iter()
@@ -57,7 +57,7 @@ pub fn zero_start(
     cut.zero_lines = zeroed;
     let whole = crate::identify(&own, &plain).ok()?;
     let zeroed_fit = crate::identify(&own, &cut).ok()?;
-    let nearest = |f: f64, modes: &[crate::modal::Mode]| {
+    let nearest = |f: f64, modes: &[crate::pipeline::modes::Mode]| {
         modes
             .iter()
             .min_by(|a, b| {
@@ -98,4 +98,3 @@ pub fn zero_start(
             refined,
         })
 }
-

@@ -98,11 +98,11 @@
 //! arbitrary completing columns are orthogonalised against the basis once more.
 //!
 //! These are written here rather than taken from a crate: faer has dense SVD and QR but no
-//! truncated or matrix-free SVD, and the products come from [`crate::hankel_op`].
+//! truncated or matrix-free SVD, and the products come from [`crate::pipeline::hankel_op`].
 
 use crate::error::{EraError, Result};
-use crate::linalg::LinearOperator;
 use crate::linalg::rng::Minstd;
+use crate::linalg::LinearOperator;
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::triangular_solve::solve_lower_triangular_in_place;

@@ -49,8 +49,8 @@
 //! Everything here is a few lines of complex arithmetic per mode; no crate provides these
 //! modal-analysis indicators, so they are written here.
 
-use crate::modal::ModalForm;
-use crate::realize::HankelTails;
+use crate::pipeline::modes::ModalForm;
+use crate::pipeline::realize::HankelTails;
 use crate::statespace::TimeDomain;
 use num_complex::Complex64;
 
@@ -211,7 +211,7 @@ pub fn contributions(
     let reference: f64 = measured.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
     let points: Vec<Complex64> = frequency_hz
         .iter()
-        .map(|f| crate::response::evaluation_point(domain, *f))
+        .map(|f| crate::pipeline::fit::evaluation_point(domain, *f))
         .collect();
     form.eigenvalues
         .iter()
@@ -240,13 +240,39 @@ pub struct ModeIndicators {
     pub contribution: Option<f64>,
 }
 
+/// Modal assurance criterion of two complex shapes (0 when either is zero).
+pub fn mac(a: &[Complex64], b: &[Complex64]) -> f64 {
+    let cross: Complex64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
+    let na: f64 = a.iter().map(|x| x.norm_sqr()).sum();
+    let nb: f64 = b.iter().map(|x| x.norm_sqr()).sum();
+    if na > 0.0 && nb > 0.0 {
+        cross.norm_sqr() / (na * nb)
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::markov::MarkovSequence;
-    use crate::realize::{realize, RealizeOptions};
+    use crate::pipeline::realize::{realize, RealizeOptions};
+    use crate::sources::frf::MarkovSequence;
     use crate::statespace::StateSpace;
     use faer::Mat;
+
+    #[test]
+    fn mac_is_one_for_scaled_shapes_and_zero_for_orthogonal() {
+        let a = [Complex64::new(1.0, 1.0), Complex64::new(2.0, -1.0)];
+        let b: Vec<Complex64> = a.iter().map(|v| v * Complex64::new(0.0, -3.0)).collect();
+        assert!((mac(&a, &b) - 1.0).abs() < 1e-15);
+        assert_eq!(
+            mac(
+                &[Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.0)],
+                &[Complex64::new(0.0, 0.0), Complex64::new(1.0, 0.0)]
+            ),
+            0.0
+        );
+    }
 
     fn c(re: f64, im: f64) -> Complex64 {
         Complex64::new(re, im)
@@ -397,7 +423,7 @@ mod tests {
         let truth = real_mode_model();
         let form = ModalForm::new(&truth).unwrap();
         let f: Vec<f64> = (1..400).map(|k| k as f64 * 0.05).collect();
-        let g = crate::response::frequency_response_modal(&truth, &form, &f);
+        let g = crate::pipeline::fit::frequency_response_modal(&truth, &form, &f);
         let share = contributions(&form, truth.domain, &f, &g);
         // Each pole and its conjugate give the same share (their pair's); the three
         // shares lie in (0, 1), and by the triangle inequality they sum to at least 1.
@@ -414,7 +440,7 @@ mod tests {
             participations: form.participations[..2].to_vec(),
             ..form.clone()
         };
-        let g1 = crate::response::frequency_response_modal(&truth, &one, &f);
+        let g1 = crate::pipeline::fit::frequency_response_modal(&truth, &one, &f);
         let alone: f64 = g1.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt()
             / g.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
         assert!(

@@ -51,10 +51,10 @@
 //! crate does this domain-specific matching, so it is written here.
 
 use crate::error::{EraError, Result};
+use crate::modal::indicators::mac;
 use crate::modal::indicators::{emac, mpc};
-use crate::modal::{continuous_pole, ModalForm};
-use crate::realize::{DirectTerm, Factorization};
-use crate::stability::mac;
+use crate::pipeline::modes::{continuous_pole, ModalForm};
+use crate::pipeline::realize::{DirectTerm, Factorization};
 use num_complex::Complex64;
 
 /// Orders `min, min + step, …, ≤ max` of a scan, or an explicit list.

@@ -760,7 +760,7 @@ pub fn exact_frf(spec: &ExperimentSpec, frequency_hz: &[f64]) -> Result<FrfData>
     let b = Mat::from_fn(bm.nrows(), a, |i, j| bm[(i, j)] * gains[j]);
     let d = Mat::from_fn(dm.nrows(), a, |i, j| dm[(i, j)] * gains[j]);
     let ss = StateSpace::new(am, b, cm, d, TimeDomain::Continuous);
-    let values = crate::response::frequency_response(&ss, frequency_hz)?;
+    let values = crate::pipeline::fit::frequency_response(&ss, frequency_hz)?;
     FrfData::new(
         frequency_hz.to_vec(),
         spec.structure.sensors(),

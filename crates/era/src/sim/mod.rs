@@ -12,7 +12,7 @@ pub mod shaker;
 
 use crate::error::{EraError, Result};
 use crate::frf::{uniform_lines, FrfData, Quantity};
-use crate::response::frequency_response;
+use crate::pipeline::fit::frequency_response;
 use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
 use num_complex::Complex64;
@@ -539,7 +539,7 @@ pub fn lightly_damped_markov(
     modes: usize,
     samples: usize,
     seed: u64,
-) -> crate::markov::MarkovSequence {
+) -> crate::sources::frf::MarkovSequence {
     let mut rng = Minstd::new(seed);
     let freq: Vec<f64> = (0..modes).map(|_| 0.01 + 0.44 * rng.uniform()).collect();
     let zeta: Vec<f64> = (0..modes).map(|_| 0.005 + 0.015 * rng.uniform()).collect();
@@ -549,7 +549,7 @@ pub fn lightly_damped_markov(
     let b: Vec<Vec<f64>> = (0..modes)
         .map(|_| (0..inputs).map(|_| rng.normal()).collect())
         .collect();
-    let mut markov = crate::markov::MarkovSequence::zeros(outputs, inputs, samples);
+    let mut markov = crate::sources::frf::MarkovSequence::zeros(outputs, inputs, samples);
     for r in 0..modes {
         let w = 2.0 * PI * freq[r];
         let wd = w * (1.0 - zeta[r] * zeta[r]).sqrt();

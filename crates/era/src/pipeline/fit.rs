@@ -24,7 +24,7 @@
 
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
-use crate::modal::ModalForm;
+use crate::pipeline::modes::ModalForm;
 use crate::statespace::{balancing_scale, StateSpace, TimeDomain};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::hessenberg;
@@ -706,7 +706,7 @@ mod tests {
     #[test]
     fn modal_dispatch_equals_the_hessenberg_solve_on_an_era_model() {
         use crate::identify::{identify, EraOptions};
-        use crate::realize::SvdPath;
+        use crate::pipeline::realize::SvdPath;
         let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
         let frf = structure
             .frf(801, 0.025, crate::frf::Quantity::Acceleration)

@@ -16,11 +16,11 @@
 //! faster path is tested against.
 
 use crate::error::{EraError, Result};
-use crate::hankel::{self, HankelShape, ThesisHankel};
-use crate::hankel_op::{HankelOperator, LinearOperator};
-use crate::markov::MarkovSequence;
-use crate::statespace::{StateSpace, TimeDomain};
 use crate::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
+use crate::pipeline::hankel::{self, HankelShape, ThesisHankel};
+use crate::pipeline::hankel_op::{HankelOperator, LinearOperator};
+use crate::sources::frf::MarkovSequence;
+use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
 use std::time::Instant;
 
@@ -39,7 +39,7 @@ pub enum DirectTerm {
 pub enum SvdPath {
     /// Form `H0` and take its thin SVD (all singular values).
     Dense,
-    /// Never form `H0`: FFT products ([`crate::hankel_op`]) and a truncated SVD
+    /// Never form `H0`: FFT products ([`crate::pipeline::hankel_op`]) and a truncated SVD
     /// ([`crate::linalg::tsvd`]); only the leading singular values.
     MatrixFree,
     /// Dense while `H0` is small (below [`AUTO_MATRIX_FREE_MIN_DIM`] on its short

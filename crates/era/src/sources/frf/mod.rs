@@ -9,6 +9,8 @@
 //! per length per process. Sample `h[k]` is the Markov block `Y_k`: `Y_0` is the direct
 //! term and `Y_k = C A^(k-1) B` for `k ≥ 1`.
 
+pub mod preprocess;
+
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
 use num_complex::Complex64;
@@ -17,7 +19,7 @@ use num_complex::Complex64;
 ///
 /// Storage is "woven" per input: for input `j`, the values `Y_k[i][j]` run output-fastest,
 /// then sample (`data[j·K·q + k·q + i]`). One block-Hankel column is then one contiguous
-/// slice, which is what makes [`crate::hankel`] a sequence of copies.
+/// slice, which is what makes [`crate::pipeline::hankel`] a sequence of copies.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MarkovSequence {
     outputs: usize,

@@ -10,7 +10,7 @@
 //! [`build_naive`] is the element-by-element reference it is tested against.
 
 use crate::error::{EraError, Result};
-use crate::markov::MarkovSequence;
+use crate::sources::frf::MarkovSequence;
 use faer::Mat;
 
 /// Shape of a general block Hankel matrix.

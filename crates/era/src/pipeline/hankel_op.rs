@@ -24,13 +24,13 @@
 //! column) for a whole product, so a product allocates per thread, not per column.
 
 use crate::error::Result;
-use crate::hankel::HankelShape;
-use crate::markov::MarkovSequence;
+use crate::linalg::fft::{fast_fft_len, real_fft_plans};
+pub use crate::linalg::LinearOperator;
+use crate::pipeline::hankel::HankelShape;
+use crate::sources::frf::MarkovSequence;
 use faer::{Mat, MatRef};
 use num_complex::Complex64;
 use rayon::prelude::*;
-use crate::linalg::fft::{fast_fft_len, real_fft_plans};
-pub use crate::linalg::LinearOperator;
 use realfft::{ComplexToReal, RealToComplex};
 use std::sync::Arc;
 
@@ -61,10 +61,10 @@ impl HankelOperator {
     /// Precomputes the spectra of the Markov sequences that `shape` uses.
     ///
     /// # Errors
-    /// As [`crate::hankel::build`]: a shape that needs samples the sequence lacks.
+    /// As [`crate::pipeline::hankel::build`]: a shape that needs samples the sequence lacks.
     pub fn new(markov: &MarkovSequence, shape: HankelShape) -> Result<Self> {
         // Validate exactly as the dense builder does, on a 1×1-block probe of the corner.
-        crate::hankel::check_shape(markov, shape)?;
+        crate::pipeline::hankel::check_shape(markov, shape)?;
         let (q, p) = (markov.outputs(), markov.inputs());
         let span = shape.block_rows + shape.block_cols - 1;
         let fft_len = fast_fft_len(span);
@@ -219,7 +219,7 @@ impl LinearOperator for HankelOperator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hankel::build_naive;
+    use crate::pipeline::hankel::build_naive;
 
     #[test]
     fn fast_lengths_are_7_smooth() {

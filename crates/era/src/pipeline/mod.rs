@@ -1,0 +1,20 @@
+//! The steps of the thesis's `frffilt` after the Markov sequence, in reading order
+//! (docs/design.md §1):
+//!
+//! 1. [`filter`]: optional zero-phase Butterworth low-pass on the impulse responses.
+//! 2. [`hankel`]: `H0[r][c] = Y_(1+r+c)`, `H1[r][c] = Y_(2+r+c)`; [`hankel_op`] applies
+//!    them by FFT correlations without forming them.
+//! 3. [`realize`]: `H0 = U S Vᵀ` (dense or truncated, one [`realize::Factorization`]);
+//!    `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)` at any order.
+//! 4. [`modes`]: eigenvalues to frequencies, damping, shapes and participations.
+//! 5. [`fit`]: the model's FRF through its modal form, and the per-pair fit.
+//!
+//! The sources ([`crate::sources`]) come before; the order scan and the automatic order
+//! ([`crate::modal::stabilization`]) and the refinement ([`crate::refine`]) after.
+
+pub mod filter;
+pub mod fit;
+pub mod hankel;
+pub mod hankel_op;
+pub mod modes;
+pub mod realize;
