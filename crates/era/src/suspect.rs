@@ -43,7 +43,13 @@
 //! Each warning is worded for the calling front end ([`Naming`]): the CLI names flags,
 //! Python keywords.
 
-use crate::identification::{Identification, ModeQuality, SuspectResult};
+#[doc(hidden)]
+pub use crate::frf::leading_zero_lines;
+#[doc(hidden)]
+pub use crate::identification::SuspectResult;
+use crate::identification::{Identification, ModeQuality};
+#[doc(hidden)]
+pub use crate::identify::zero_start;
 use crate::params::Naming;
 use crate::pipeline::modes::ModalParameters;
 

@@ -5,3 +5,6 @@
 
 pub mod indicators;
 pub mod stabilization;
+
+#[doc(hidden)]
+pub use crate::pipeline::modes::*;
