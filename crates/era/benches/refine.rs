@@ -113,9 +113,10 @@ fn bench_from_era(c: &mut Criterion) {
     let s = ModalStructure::random(&spec).unwrap();
     let clean = s.frf(801, 0.025, Quantity::Acceleration).unwrap();
     let noisy = add_noise(&clean, 0.05, spec.seed).unwrap();
-    let era_options = EraOptions {
-        domain: ModelDomain::Continuous,
-        ..EraOptions::thesis_dta()
+    let era_options = {
+        let mut o = EraOptions::thesis_dta();
+        o.domain = ModelDomain::Continuous;
+        o
     };
     let mut options = RefineOptions::default();
     options.weighting = Weighting::PairNoise;

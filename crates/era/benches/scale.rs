@@ -38,9 +38,10 @@ fn grid(c: &mut Criterion) {
             paths.push(SvdPath::Dense);
         }
         for svd in paths {
-            let options = RealizeOptions {
-                svd,
-                ..RealizeOptions::new(2 * modes, 1)
+            let options = {
+                let mut o = RealizeOptions::new(2 * modes, 1);
+                o.svd = svd;
+                o
             };
             g.bench_with_input(BenchmarkId::new(svd.name(), &label), &options, |b, o| {
                 b.iter(|| realize_general(black_box(&markov), 1.0, o, shape).unwrap())

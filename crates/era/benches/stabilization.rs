@@ -25,18 +25,21 @@ fn stabilization(c: &mut Criterion) {
         1,
     )
     .unwrap();
-    let at_160 = EraOptions {
-        states: 160,
-        ..EraOptions::thesis_dta()
+    let at_160 = {
+        let mut o = EraOptions::thesis_dta();
+        o.states = 160;
+        o
     };
     // The scan beside a tiny fixed-order model, so that it is what the bench times.
-    let small = EraOptions {
-        states: 2,
-        ..at_160.clone()
+    let small = {
+        let mut o = at_160.clone();
+        o.states = 2;
+        o
     };
-    let scan = ScanOptions {
-        orders: Some(OrderRange::parse("4..160:4").unwrap()),
-        ..ScanOptions::default()
+    let scan = {
+        let mut o = ScanOptions::default();
+        o.orders = Some(OrderRange::parse("4..160:4").unwrap());
+        o
     };
     let mut g = c.benchmark_group("dta_8x8_noisy");
     g.sample_size(10);

@@ -93,9 +93,10 @@ fn stages(c: &mut Criterion) {
             ("defaults", TruncatedSvdOptions::new(80).block),
             ("restarted", 0),
         ] {
-            let options = TruncatedSvdOptions {
-                block,
-                ..TruncatedSvdOptions::new(80)
+            let options = {
+                let mut o = TruncatedSvdOptions::new(80);
+                o.block = block;
+                o
             };
             g.bench_function(format!("{name}_noise_{percent}pc"), |b| {
                 b.iter(|| truncated_svd(black_box(&op), &options).unwrap())

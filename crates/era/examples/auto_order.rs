@@ -35,9 +35,10 @@ fn main() -> era::Result<()> {
                 frf = add_noise(&frf, noise, seed)?;
             }
             let options = EraOptions::thesis_dta();
-            let mut scan = ScanOptions {
-                orders: orders.clone(),
-                ..ScanOptions::default()
+            let mut scan = {
+                let mut o = ScanOptions::default();
+                o.orders = orders.clone();
+                o
             };
             if let Ok(v) = std::env::var("TOL") {
                 scan.svd_tolerance = v.parse().unwrap();

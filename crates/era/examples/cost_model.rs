@@ -72,9 +72,10 @@ fn measure(label: String, markov: &MarkovSequence, m: usize, n: usize, repeats: 
         block_cols: m,
         first_sample: 1,
     };
-    let options = RealizeOptions {
-        svd: SvdPath::MatrixFree,
-        ..RealizeOptions::new(n, 1)
+    let options = {
+        let mut o = RealizeOptions::new(n, 1);
+        o.svd = SvdPath::MatrixFree;
+        o
     };
     let mut times = Vec::new();
     let mut passes = 0;

@@ -119,9 +119,10 @@ fn main() {
                 block_cols: m,
                 first_sample: 1,
             };
-            let options = RealizeOptions {
-                svd,
-                ..RealizeOptions::new(states, 1)
+            let options = {
+                let mut o = RealizeOptions::new(states, 1);
+                o.svd = svd;
+                o
             };
             let clock = Instant::now();
             let r = realize_general(&markov, 1.0, &options, shape).unwrap_or_else(|e| {

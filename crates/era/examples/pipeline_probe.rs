@@ -15,9 +15,10 @@ fn main() {
         } else {
             clean.clone()
         };
-        let options = EraOptions {
-            svd: SvdPath::MatrixFree,
-            ..EraOptions::thesis_dta()
+        let options = {
+            let mut o = EraOptions::thesis_dta();
+            o.svd = SvdPath::MatrixFree;
+            o
         };
         let mut runs: Vec<[f64; 6]> = (0..15)
             .map(|_| {

@@ -109,9 +109,10 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             } else {
                 clean.clone()
             };
-            let options = EraOptions {
-                domain: ModelDomain::Continuous,
-                ..EraOptions::thesis_dta()
+            let options = {
+                let mut o = EraOptions::thesis_dta();
+                o.domain = ModelDomain::Continuous;
+                o
             };
             let found = identify_auto(
                 &frf,

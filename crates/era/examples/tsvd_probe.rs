@@ -69,10 +69,11 @@ fn main() {
                 defaults.block,
             ),
         ] {
-            let options = TruncatedSvdOptions {
-                depth,
-                block,
-                ..defaults
+            let options = {
+                let mut o = defaults;
+                o.depth = depth;
+                o.block = block;
+                o
             };
             let clock = Instant::now();
             let cpu = cpu_seconds();
@@ -95,11 +96,12 @@ fn main() {
                     continue;
                 }
                 // The restarted iteration alone, at this depth and block width.
-                let options = TruncatedSvdOptions {
-                    depth,
-                    oversample,
-                    block: 0,
-                    ..TruncatedSvdOptions::new(rank)
+                let options = {
+                    let mut o = TruncatedSvdOptions::new(rank);
+                    o.depth = depth;
+                    o.oversample = oversample;
+                    o.block = 0;
+                    o
                 };
                 let clock = Instant::now();
                 let cpu = cpu_seconds();

@@ -28,21 +28,12 @@ impl Quantity {
 
     /// Lower-case name as used in files and on the command line.
     pub fn name(self) -> &'static str {
-        match self {
-            Quantity::Acceleration => "acceleration",
-            Quantity::Velocity => "velocity",
-            Quantity::Displacement => "displacement",
-        }
+        crate::names::Named::name_of(&self)
     }
 
     /// Parses `acceleration`, `velocity` or `displacement` (case-insensitive).
     pub fn parse(text: &str) -> Option<Quantity> {
-        match text.trim().to_ascii_lowercase().as_str() {
-            "acceleration" | "accel" => Some(Quantity::Acceleration),
-            "velocity" | "vel" => Some(Quantity::Velocity),
-            "displacement" | "disp" => Some(Quantity::Displacement),
-            _ => None,
-        }
+        crate::names::parse(text).ok()
     }
 }
 

@@ -40,6 +40,7 @@ pub enum ModelDomain {
 
 /// Every parameter of the pipeline (docs/design.md §1 table).
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct EraOptions {
     /// Model order (thesis `ns`).
     pub states: usize,
@@ -620,6 +621,7 @@ fn nearest_continuous(
 
 /// Settings of a scan across orders.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct ScanOptions {
     /// Orders to scan; `None` for the default range of the data ([`default_orders`]).
     pub orders: Option<OrderRange>,

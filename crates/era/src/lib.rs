@@ -53,6 +53,7 @@ pub mod identify;
 pub mod limits;
 pub mod linalg;
 pub mod modal;
+pub mod names;
 pub mod parallel;
 pub mod params;
 pub mod pipeline;

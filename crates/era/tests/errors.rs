@@ -7,13 +7,11 @@ use era::{Complex64, EraError, FrfData, Quantity};
 #[test]
 fn more_states_than_the_data_supports() {
     let frf = truth_model_frf(None).unwrap();
-    let err = identify(
-        &frf,
-        &EraOptions {
-            states: 12,
-            ..EraOptions::thesis_truth_model()
-        },
-    )
+    let err = identify(&frf, &{
+        let mut o = EraOptions::thesis_truth_model();
+        o.states = 12;
+        o
+    })
     .unwrap_err();
     assert!(
         matches!(
@@ -31,13 +29,11 @@ fn more_states_than_the_data_supports() {
 #[test]
 fn hankel_factor_too_large_for_the_data() {
     let frf = truth_model_frf(None).unwrap();
-    let err = identify(
-        &frf,
-        &EraOptions {
-            hankel_factor: 400,
-            ..EraOptions::thesis_truth_model()
-        },
-    )
+    let err = identify(&frf, &{
+        let mut o = EraOptions::thesis_truth_model();
+        o.hankel_factor = 400;
+        o
+    })
     .unwrap_err();
     assert!(
         matches!(
@@ -89,13 +85,11 @@ fn all_zero_frf() {
 #[test]
 fn integrating_displacement_is_refused() {
     let frf = truth_model_frf(None).unwrap();
-    let err = identify(
-        &frf,
-        &EraOptions {
-            integrations: 1,
-            ..EraOptions::thesis_truth_model()
-        },
-    )
+    let err = identify(&frf, &{
+        let mut o = EraOptions::thesis_truth_model();
+        o.integrations = 1;
+        o
+    })
     .unwrap_err();
     assert!(
         matches!(

@@ -17,13 +17,12 @@ fn rms(x: &[f64]) -> f64 {
 }
 
 fn hann(frame: usize, fs: f64) -> WelchOptions {
-    WelchOptions {
-        sample_rate_hz: fs,
-        frame,
-        overlap: 0.5,
-        window: Window::Hann,
-        detrend: Detrend::Mean,
-    }
+    let o = WelchOptions::new(fs, frame);
+    assert_eq!(
+        (o.overlap, o.window, o.detrend),
+        (0.5, Window::Hann, Detrend::Mean)
+    );
+    o
 }
 
 /// Simulates `model` (discrete) driven by independent unit Gaussian inputs, drops the

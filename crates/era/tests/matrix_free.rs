@@ -17,13 +17,11 @@ use proptest::prelude::*;
 /// Worst eigenvalue mismatch between the paths, and the matrix-free path's passes.
 fn both_paths(frf: &era::FrfData) -> (f64, usize) {
     let run = |svd| {
-        identify(
-            frf,
-            &EraOptions {
-                svd,
-                ..EraOptions::thesis_dta()
-            },
-        )
+        identify(frf, &{
+            let mut o = EraOptions::thesis_dta();
+            o.svd = svd;
+            o
+        })
         .unwrap()
     };
     let (dense, free) = (run(SvdPath::Dense), run(SvdPath::MatrixFree));
@@ -119,7 +117,11 @@ proptest! {
         let hankel_factor = 6 + 12 / q.min(p);
         let noise = if noisy { 0.15 } else { 0.0 };
         let markov = markov_of_random_system(seed, modes, q, p, states * hankel_factor + 2, noise);
-        let run = |svd| realize(&markov, 1.0, &RealizeOptions { svd, ..RealizeOptions::new(states, hankel_factor) });
+        let run = |svd| realize(&markov, 1.0, &{
+            let mut o = RealizeOptions::new(states, hankel_factor);
+            o.svd = svd;
+            o
+        });
         let dense = run(SvdPath::Dense).unwrap();
         let free = run(SvdPath::MatrixFree).unwrap();
         let err = worst_match(&dense.model.poles().unwrap(), &free.model.poles().unwrap());
@@ -176,10 +178,11 @@ proptest! {
             })
             .collect();
         let a = with_spectrum(m, n, &d, seed);
-        let options = era::tsvd::TruncatedSvdOptions {
-            block,
-            depth,
-            ..era::tsvd::TruncatedSvdOptions::new(rank)
+        let options = {
+            let mut o = era::tsvd::TruncatedSvdOptions::new(rank);
+            o.block = block;
+            o.depth = depth;
+            o
         };
         let t = era::tsvd::truncated_svd(&a, &options).unwrap();
         prop_assert!(t.residual <= options.tolerance);

@@ -37,9 +37,10 @@ fn round_trip(outputs: usize, inputs: usize, modes: usize, seed: u64, domain: Mo
     let values = frequency_response(&discrete, &freq).unwrap();
     let frf = FrfData::new(freq, outputs, inputs, values, Quantity::Displacement).unwrap();
     let hankel_factor = if outputs.min(inputs) == 1 { 8 } else { 4 };
-    let options = EraOptions {
-        domain,
-        ..EraOptions::new(2 * modes, hankel_factor)
+    let options = {
+        let mut o = EraOptions::new(2 * modes, hankel_factor);
+        o.domain = domain;
+        o
     };
     let found = identify(&frf, &options).unwrap();
     assert_eq!(

@@ -59,9 +59,10 @@ fn a_realization_from_the_factors_is_a_fresh_identification_on_both_paths() {
         };
         for &n in orders {
             let from_factors = factors.realize(n, DirectTerm::Zero).unwrap();
-            let options = RealizeOptions {
-                svd: path,
-                ..RealizeOptions::new(n, 1)
+            let options = {
+                let mut o = RealizeOptions::new(n, 1);
+                o.svd = path;
+                o
             };
             let fresh = realize_general(&markov, 0.01, &options, shape).unwrap();
             let (a, b) = (
@@ -84,14 +85,11 @@ fn a_realization_from_the_factors_is_a_fresh_identification_on_both_paths() {
 #[test]
 fn thesis_factorization_refuses_orders_above_what_it_kept() {
     let markov = noisy_markov(5);
-    let f = Factorization::thesis(
-        &markov,
-        0.01,
-        &FactorOptions {
-            max_states: 30,
-            ..FactorOptions::new(30, 5)
-        },
-    )
+    let f = Factorization::thesis(&markov, 0.01, &{
+        let mut o = FactorOptions::new(30, 5);
+        o.max_states = 30;
+        o
+    })
     .unwrap();
     assert!(f.realize(31, DirectTerm::Zero).is_err());
     assert!(f.realize(0, DirectTerm::Zero).is_err());

@@ -16,9 +16,10 @@ fn dta_like_set_fast_equals_naive_reference() {
     let frf = structure.frf(801, 0.025, Quantity::Acceleration).unwrap();
     let naive = identify_naive(&frf, &EraOptions::thesis_dta()).unwrap();
     for svd in [SvdPath::Dense, SvdPath::MatrixFree] {
-        let options = EraOptions {
-            svd,
-            ..EraOptions::thesis_dta()
+        let options = {
+            let mut o = EraOptions::thesis_dta();
+            o.svd = svd;
+            o
         };
         let fast = identify(&frf, &options).unwrap();
         assert_eq!(fast.realization.svd_path, svd);

@@ -108,11 +108,7 @@ impl Window {
 
     /// Name as the CLI spells it.
     pub fn name(self) -> &'static str {
-        match self {
-            Window::Rectangular => "rectangular",
-            Window::Hann => "hann",
-            Window::FlatTop => "flat-top",
-        }
+        crate::names::Named::name_of(&self)
     }
 }
 
@@ -130,11 +126,7 @@ pub enum Detrend {
 impl Detrend {
     /// Name as the CLI spells it.
     pub fn name(self) -> &'static str {
-        match self {
-            Detrend::None => "none",
-            Detrend::Mean => "mean",
-            Detrend::Linear => "linear",
-        }
+        crate::names::Named::name_of(&self)
     }
 
     fn apply(self, frame: &mut [f64]) {
@@ -177,16 +169,13 @@ pub enum Estimator {
 impl Estimator {
     /// Name as the CLI spells it.
     pub fn name(self) -> &'static str {
-        match self {
-            Estimator::H1 => "h1",
-            Estimator::H2 => "h2",
-            Estimator::Hv => "hv",
-        }
+        crate::names::Named::name_of(&self)
     }
 }
 
 /// Welch parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct WelchOptions {
     /// Sampling rate of the time histories, Hz.
     pub sample_rate_hz: f64,
@@ -202,6 +191,18 @@ pub struct WelchOptions {
 }
 
 impl WelchOptions {
+    /// `frame`-sample frames of time histories sampled at `sample_rate_hz`, with the
+    /// usual choices: half overlap, a Hann window, each frame's mean removed.
+    pub fn new(sample_rate_hz: f64, frame: usize) -> Self {
+        WelchOptions {
+            sample_rate_hz,
+            frame,
+            overlap: 0.5,
+            window: Window::Hann,
+            detrend: Detrend::Mean,
+        }
+    }
+
     /// Overlap in samples.
     pub fn overlap_samples(&self) -> usize {
         (self.overlap * self.frame as f64).round() as usize

@@ -30,19 +30,12 @@ pub enum Preset {
 impl Preset {
     /// `measured` or `thesis`.
     pub fn name(self) -> &'static str {
-        match self {
-            Preset::Measured => "measured",
-            Preset::Thesis => "thesis",
-        }
+        crate::names::Named::name_of(&self)
     }
 
     /// Parses `measured` or `thesis` (case-insensitive).
     pub fn parse(text: &str) -> Option<Preset> {
-        match text.trim().to_ascii_lowercase().as_str() {
-            "measured" => Some(Preset::Measured),
-            "thesis" => Some(Preset::Thesis),
-            _ => None,
-        }
+        crate::names::parse(text).ok()
     }
 }
 

@@ -110,6 +110,7 @@ use faer::{Accum, Mat, MatRef, Par, Side};
 
 /// Settings of [`truncated_svd`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct TruncatedSvdOptions {
     /// Triplets wanted.
     pub rank: usize,

@@ -51,11 +51,7 @@ pub enum SvdPath {
 impl SvdPath {
     /// `"dense"`, `"matrix-free"` or `"auto"`.
     pub fn name(self) -> &'static str {
-        match self {
-            SvdPath::Dense => "dense",
-            SvdPath::MatrixFree => "matrix-free",
-            SvdPath::Auto => "auto",
-        }
+        crate::names::Named::name_of(&self)
     }
 
     /// Whether this path goes matrix-free for an `H0` whose short side is `short_side`.
@@ -73,6 +69,7 @@ pub const AUTO_MATRIX_FREE_MIN_DIM: usize = 1024;
 
 /// Options of the realization step.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct RealizeOptions {
     /// Model order `n` (thesis `ns`).
     pub states: usize,
@@ -564,6 +561,7 @@ pub const EXTRA_SINGULAR_VALUES: usize = 20;
 
 /// What [`Factorization::thesis`] factors and keeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct FactorOptions {
     /// `H0` is the thesis Hankel of this many states (`M = hankel_states · lh`).
     pub hankel_states: usize,
