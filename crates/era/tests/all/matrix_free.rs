@@ -3,7 +3,7 @@
 //! on random stable systems; and the truncated SVD recovers known spectra on each of its
 //! routes.
 
-mod common;
+use crate::common;
 
 use common::worst_match;
 use era::identify::{identify, EraOptions};

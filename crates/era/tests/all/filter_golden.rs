@@ -1,7 +1,7 @@
 //! The zero-phase Butterworth against scipy's `sosfiltfilt(butter(..., output='sos'))`
 //! (golden values made by scripts/make_filter_golden.py).
 
-mod common;
+use crate::common;
 
 use era::filter::LowPass;
 

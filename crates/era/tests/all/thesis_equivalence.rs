@@ -1,7 +1,7 @@
 //! The fast pipeline equals the naive reference of the thesis steps on a DTA-like set,
 //! and recovers the structure's modes.
 
-mod common;
+use crate::common;
 
 use common::{read_csv, worst_match};
 use era::identify::{identify, identify_naive, EraOptions, Identification};

@@ -4,7 +4,7 @@
 //! circularly aliased impulse response, `C A^(k−1) (I − A^n)⁻¹ B`, which has the same `A`:
 //! so ERA must return the poles to round-off, whatever the damping.
 
-mod common;
+use crate::common;
 
 use common::worst_match;
 use era::frf::uniform_lines;

@@ -1,7 +1,7 @@
 //! Property tests (proptest): Hankel block structure, `d2c(c2d(·)) = id`, and ERA on
 //! exact Markov data of random stable systems.
 
-mod common;
+use crate::common;
 
 use common::worst_match;
 use era::hankel::{build, build_naive, HankelShape};

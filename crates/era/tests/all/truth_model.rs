@@ -1,7 +1,7 @@
 //! Table 5.2 of the thesis: the 4-mass truth model, identified with the thesis settings,
 //! against the thesis's truth column, the exact model, and the Octave peer.
 
-mod common;
+use crate::common;
 
 use common::{read_csv, worst_match};
 use era::identify::{identify, EraOptions};
