@@ -271,7 +271,7 @@ impl FrfData {
 }
 
 /// Checks that lines start at 0 Hz and are uniform (docs/design.md §1).
-pub fn validate_frequencies(frequency_hz: &[f64]) -> Result<()> {
+pub(crate) fn validate_frequencies(frequency_hz: &[f64]) -> Result<()> {
     let lines = frequency_hz.len();
     for (line, f) in frequency_hz.iter().enumerate() {
         if !f.is_finite() {

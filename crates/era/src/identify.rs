@@ -185,9 +185,9 @@ impl Stabilization {
 
 /// The largest FRF magnitude identified as given: `2^300` (about 2e90). Above it the
 /// squared norms inside the SVD head for overflow (1e154 overflowed them).
-pub const SAFE_MAGNITUDE_MAX: f64 = 2.037_035_976_334_486e90; // 2^300
+pub(crate) const SAFE_MAGNITUDE_MAX: f64 = 2.037_035_976_334_486e90; // 2^300
 /// The smallest largest-magnitude identified as given, `2^-300`.
-pub const SAFE_MAGNITUDE_MIN: f64 = 4.909_093_465_297_727e-91; // 2^-300
+pub(crate) const SAFE_MAGNITUDE_MIN: f64 = 4.909_093_465_297_727e-91; // 2^-300
 
 /// An exact power-of-two scale `2^e` (`e` even) applied to data whose largest magnitude
 /// lies outside [`SAFE_MAGNITUDE_MIN`, `SAFE_MAGNITUDE_MAX`].
@@ -697,7 +697,7 @@ pub fn default_orders(
 
 /// States of the probe Hankel whose singular values bound a default scan
 /// ([`signal_order`]).
-pub const PROBE_STATES: usize = 100;
+pub(crate) const PROBE_STATES: usize = 100;
 
 /// The order the data supports: the number of singular values of a small Hankel of
 /// the Markov sequence ([`PROBE_STATES`] states at `hankel_factor`, a dense SVD) above
@@ -707,7 +707,7 @@ pub const PROBE_STATES: usize = 100;
 /// noise when most singular values are noise. `None` when the probe cannot tell (too
 /// few samples, or more than a third of its singular values above the floor, so that
 /// the median is not noise).
-pub fn signal_order(
+pub(crate) fn signal_order(
     markov: &MarkovSequence,
     sample_time_s: f64,
     hankel_factor: usize,
@@ -1145,12 +1145,12 @@ fn judge_significance(
 
 /// A mode this close (relative frequency) to a stronger one may be its satellite
 /// (step 6 of the automatic choice, docs/trust.md).
-pub const SATELLITE_DISTANCE: f64 = 0.05;
+pub(crate) const SATELLITE_DISTANCE: f64 = 0.05;
 
 /// A satellite's norm over the band is below this fraction of its host's
 /// (step 6 of the automatic choice, docs/trust.md). In the shaker study (docs/trust.md) the satellites were at
 /// 2–23 %; the weaker partners of true close pairs passed by their consistency.
-pub const SATELLITE_SHARE: f64 = 0.25;
+pub(crate) const SATELLITE_SHARE: f64 = 0.25;
 
 /// Step 6 of the automatic choice: satellites. Errors of a strong mode's estimate
 /// (leakage the window correction leaves, a bias of the FRF estimate, a nonlinearity)
@@ -1235,7 +1235,7 @@ pub const MAX_FREQUENCY_SPREAD: f64 = 0.15;
 /// `λ = α + iβ` with shape `c = Cφ` and participation `b = ψB`, the block
 /// `A = [[α, −β], [β, α]]`, `B = [Re b; Im b]`, `C = [2 Re c, −2 Im c]`, whose response
 /// `c b/(z − λ) + c̄ b̄/(z − λ̄)` is the pole pair's term. `d` is the realization's `D`.
-pub fn modal_model(
+pub(crate) fn modal_model(
     poles: &[&crate::modal::stabilization::ScanPole],
     d: &faer::Mat<f64>,
     sample_time_s: f64,
@@ -1370,11 +1370,11 @@ pub fn refine_identification(
 
 /// Largest share of its host's that a pole inside the host's half-power band, with the
 /// host's shape, may have to be called unresolved from it (see [`refine_identification`]).
-pub const UNRESOLVED_SHARE: f64 = 0.3;
+pub(crate) const UNRESOLVED_SHARE: f64 = 0.3;
 
 /// Shape MAC from which two shapes are one at the measured outputs
 /// (see [`refine_identification`]).
-pub const UNRESOLVED_MAC: f64 = 0.9;
+pub(crate) const UNRESOLVED_MAC: f64 = 0.9;
 
 /// The refinement's last judgement: a physical mode inside the half-power band of a
 /// stronger physical one (`|f₁ − f₂| < ζ₁f₁ + ζ₂f₂`), with the stronger one's shape at the

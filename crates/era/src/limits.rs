@@ -93,7 +93,7 @@ pub const STEPS: Limit = Limit {
 /// A count computed in floating point (samples = rate × duration, steps = cycles ×
 /// rate / f_n) as a `u64` for [`Limit::check`]: NaN and values beyond `u64::MAX`
 /// saturate at `u64::MAX`, so they are refused rather than wrapped.
-pub fn saturating_count(x: f64) -> u64 {
+pub(crate) fn saturating_count(x: f64) -> u64 {
     if x.is_nan() || x >= u64::MAX as f64 {
         u64::MAX
     } else if x <= 0.0 {

@@ -122,7 +122,7 @@ pub fn invalid<T>(message: impl Into<String>) -> Result<T> {
 ///
 /// # Errors
 /// [`EraError::Invalid`] for zero, negative, NaN or infinite values.
-pub fn check_positive(naming: Naming, key: &str, value: f64, what: &str) -> Result<()> {
+pub(crate) fn check_positive(naming: Naming, key: &str, value: f64, what: &str) -> Result<()> {
     if !(value.is_finite() && value > 0.0) {
         return invalid(format!(
             "{} {value}: must be a positive {what}",

@@ -182,7 +182,7 @@ impl StateSpace {
 ///
 /// # Errors
 /// [`EraError::Numerical`] when the eigen solver does not converge.
-pub fn balanced_eigen(a: &Mat<f64>) -> Result<(Vec<Complex64>, Mat<Complex64>)> {
+pub(crate) fn balanced_eigen(a: &Mat<f64>) -> Result<(Vec<Complex64>, Mat<Complex64>)> {
     let n = a.nrows();
     let d = balancing_scale(a);
     let ab = Mat::from_fn(n, n, |i, j| a[(i, j)] * d[j] / d[i]);

@@ -192,7 +192,7 @@ pub fn check(
 
 /// The checks on an identification: its modes, and its Hankel's window when the
 /// realization has one.
-pub fn check_identification(found: &Identification) -> Vec<SuspectResult> {
+pub(crate) fn check_identification(found: &Identification) -> Vec<SuspectResult> {
     let (rows, cols) = found.realization.hankel_size;
     let (q, p) = (found.model.outputs().max(1), found.model.inputs().max(1));
     let window = (rows > 0 && cols > 0).then_some((rows / q + cols / p, found.sample_time_s));

@@ -55,7 +55,7 @@ pub const BATCH_FRAMES: usize = 64;
 
 /// Smallest eigenvalue of the coherence-normalised input matrix below which it is taken
 /// as singular (1 − |γ| for two inputs).
-pub const SINGULAR_TOLERANCE: f64 = 1e-10;
+pub(crate) const SINGULAR_TOLERANCE: f64 = 1e-10;
 
 /// Lines where an input's autospectrum is below this fraction of its largest value are
 /// *unexcited*: zero in exact arithmetic (0 Hz after removing the mean with a

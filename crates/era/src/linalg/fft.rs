@@ -6,7 +6,7 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Smallest `n ≥ min` whose prime factors are 2, 3, 5 and 7 (fast FFT sizes).
-pub fn fast_fft_len(min: usize) -> usize {
+pub(crate) fn fast_fft_len(min: usize) -> usize {
     let mut n = min.max(1);
     loop {
         let mut m = n;

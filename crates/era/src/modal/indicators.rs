@@ -72,7 +72,7 @@ pub fn mpc(shape: &[Complex64]) -> f64 {
 
 /// Amplitude coherence of an identified vector with a predicted one: `Σ R_j W_j |b_j|² /
 /// Σ |b_j|²` (module doc). 0 when the prediction is zero.
-pub fn amplitude_coherence(identified: &[Complex64], predicted: &[Complex64]) -> f64 {
+pub(crate) fn amplitude_coherence(identified: &[Complex64], predicted: &[Complex64]) -> f64 {
     let mut weighted = 0.0;
     let mut total = 0.0;
     for (a, b) in identified.iter().zip(predicted) {
@@ -100,7 +100,7 @@ pub fn amplitude_coherence(identified: &[Complex64], predicted: &[Complex64]) ->
 pub const EMAC_DECAY: f64 = 0.05;
 
 /// The block index EMAC uses for eigenvalue `lambda` among `blocks` (module doc).
-pub fn emac_block(lambda: Complex64, blocks: usize) -> usize {
+pub(crate) fn emac_block(lambda: Complex64, blocks: usize) -> usize {
     let last = blocks.saturating_sub(1);
     let r = lambda.norm();
     if !(r > 0.0 && r < 1.0) {
@@ -202,7 +202,7 @@ pub(crate) fn term_energy(
 /// `‖G_k‖_F / ‖G‖_F` of every eigenvalue of `form` (its conjugate's term included for a
 /// complex pole) over the lines `frequency_hz`; `measured` is the FRF `[out][in][line]`
 /// on those lines. 0 for all when the measurement is zero.
-pub fn contributions(
+pub(crate) fn contributions(
     form: &ModalForm,
     domain: TimeDomain,
     frequency_hz: &[f64],

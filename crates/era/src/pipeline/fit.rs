@@ -313,7 +313,7 @@ pub fn frequency_response(model: &StateSpace, frequency_hz: &[f64]) -> Result<Ve
 /// [`frequency_response`] with the modal form of `model` already at hand (the pipeline
 /// computes it for the modes): the modal sum when `form` is well conditioned, the
 /// [`HessenbergForm`]s of `A`'s diagonal blocks otherwise or without a form.
-pub fn frequency_response_with(
+pub(crate) fn frequency_response_with(
     model: &StateSpace,
     form: Option<&ModalForm>,
     frequency_hz: &[f64],

@@ -144,7 +144,7 @@ pub fn modal_parameters(model: &StateSpace) -> Result<ModalParameters> {
 }
 
 /// Modal parameters from an already computed [`ModalForm`].
-pub fn modal_parameters_of(form: &ModalForm, domain: TimeDomain) -> ModalParameters {
+pub(crate) fn modal_parameters_of(form: &ModalForm, domain: TimeDomain) -> ModalParameters {
     let mut out = ModalParameters::default();
     for (k, z) in form.eigenvalues.iter().enumerate() {
         let s = continuous_pole(*z, domain);
