@@ -8,8 +8,8 @@ this resolves every relative link itself:
   in every docs/src/**/*.md, outside code blocks and code spans;
 - a target must be a file inside docs/src (the book is built from there alone: a link
   to ../../data/README.md works on GitHub and is dead in the book);
-- a `#anchor` must name a heading of its page by mdBook's id rule (the heading's text,
-  markup removed, lowercased ASCII, spaces to `-`, anything neither alphanumeric nor
+- a `#anchor` must name a heading of its page by mdBook's id rule (0.5: the heading's
+  text, markup removed, lowercased, spaces to `-`, anything neither alphanumeric nor
   `_`/`-` dropped, a repeated id numbered `-1`, `-2`, ...);
 - every chapter file is listed in SUMMARY.md (mdBook skips one that is not);
 - README.md's relative links must name files of the repository, and its anchors into
@@ -59,9 +59,9 @@ def heading_id(text):
     text = text.replace("`", "").replace("*", "").replace("\\", "")
     text = text.replace("&lt;", "").replace("&gt;", "").replace("&amp;", "")
     out = []
-    for ch in text.strip():
+    for ch in text.strip().lower():
         if ch.isalnum() or ch in "_-":
-            out.append(ch.lower() if ch.isascii() else ch)
+            out.append(ch)
         elif ch.isspace():
             out.append("-")
     return "".join(out)
