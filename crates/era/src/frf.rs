@@ -388,6 +388,12 @@ pub fn leading_zero_lines(frf: &FrfData) -> usize {
         .count()
 }
 
+crate::names::named!(Quantity, "quantity", [
+    Quantity::Acceleration => "acceleration" | "accel",
+    Quantity::Velocity => "velocity" | "vel",
+    Quantity::Displacement => "displacement" | "disp",
+]);
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -4,13 +4,6 @@
 //! Python does the same with its keyword strings. Parsing ignores case and takes `_` for
 //! `-`; a few enums also take the other names their users write (`hanning`, `accel`).
 
-use crate::frf::estimate::{Detrend, Estimator, Window};
-use crate::frf::Quantity;
-use crate::identify::route::Preset;
-use crate::identify::ModelDomain;
-use crate::pipeline::realize::{DirectTerm, SvdPath};
-use crate::refine::{Residuals, Weighting};
-
 /// An enum of named values.
 pub trait Named: Sized + 'static {
     /// What the values are, for messages: `window`, `estimator`.
@@ -70,7 +63,7 @@ pub fn parse<T: Named>(text: &str) -> Result<T, UnknownName> {
 /// `Type, "what", [Variant => "name" | "alias", ...]`.
 macro_rules! named {
     (@impl $ty:ty, $what:literal, [$($var:path => $name:literal $(| $alias:literal)*),+ $(,)?]) => {
-        impl Named for $ty {
+        impl $crate::names::Named for $ty {
             const WHAT: &'static str = $what;
             const NAMES: &'static [&'static str] = &[$($name),+];
             fn from_name(name: &str) -> Option<Self> {
@@ -88,76 +81,35 @@ macro_rules! named {
             }
         }
         impl std::str::FromStr for $ty {
-            type Err = UnknownName;
-            fn from_str(text: &str) -> Result<Self, UnknownName> {
-                parse(text)
+            type Err = $crate::names::UnknownName;
+            fn from_str(text: &str) -> std::result::Result<Self, $crate::names::UnknownName> {
+                $crate::names::parse(text)
             }
         }
     };
     (display $ty:ty, $what:literal, [$($table:tt)+]) => {
-        named!(@impl $ty, $what, [$($table)+]);
+        $crate::names::named!(@impl $ty, $what, [$($table)+]);
         impl std::fmt::Display for $ty {
             fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str(self.name_of())
+                f.write_str($crate::names::Named::name_of(self))
             }
         }
     };
     ($ty:ty, $what:literal, [$($table:tt)+]) => {
-        named!(@impl $ty, $what, [$($table)+]);
+        $crate::names::named!(@impl $ty, $what, [$($table)+]);
     };
 }
-
-named!(Quantity, "quantity", [
-    Quantity::Acceleration => "acceleration" | "accel",
-    Quantity::Velocity => "velocity" | "vel",
-    Quantity::Displacement => "displacement" | "disp",
-]);
-named!(display Window, "window", [
-    Window::Hann => "hann" | "hanning",
-    Window::Rectangular => "rectangular" | "boxcar",
-    Window::FlatTop => "flat-top" | "flattop",
-]);
-named!(display Estimator, "estimator", [
-    Estimator::H1 => "h1",
-    Estimator::H2 => "h2",
-    Estimator::Hv => "hv",
-]);
-named!(display Detrend, "detrend", [
-    Detrend::None => "none",
-    Detrend::Mean => "mean",
-    Detrend::Linear => "linear",
-]);
-named!(display Preset, "preset", [
-    Preset::Measured => "measured",
-    Preset::Thesis => "thesis",
-]);
-named!(display ModelDomain, "time domain", [
-    ModelDomain::Discrete => "discrete",
-    ModelDomain::Continuous => "continuous",
-]);
-named!(display DirectTerm, "direct term", [
-    DirectTerm::Zero => "zero",
-    DirectTerm::FirstMarkov => "markov0",
-]);
-named!(display SvdPath, "svd", [
-    SvdPath::Auto => "auto",
-    SvdPath::Dense => "dense",
-    SvdPath::MatrixFree => "matrix-free",
-]);
-named!(display Residuals, "residuals", [
-    Residuals::None => "none",
-    Residuals::Lower => "lower",
-    Residuals::Upper => "upper",
-    Residuals::Both => "both",
-]);
-named!(display Weighting, "weighting", [
-    Weighting::PairNoise => "pair-noise",
-    Weighting::Uniform => "uniform",
-]);
+pub(crate) use named;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frf::estimate::{Detrend, Estimator, Window};
+    use crate::frf::Quantity;
+    use crate::identify::route::Preset;
+    use crate::identify::ModelDomain;
+    use crate::pipeline::realize::{DirectTerm, SvdPath};
+    use crate::refine::{Residuals, Weighting};
 
     /// Every name reads back as the value that prints it, and the inherent `name()`
     /// spellings agree with the table.

@@ -873,3 +873,21 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
         reason,
     })
 }
+
+crate::names::named!(display Window, "window", [
+    Window::Hann => "hann" | "hanning",
+    Window::Rectangular => "rectangular" | "boxcar",
+    Window::FlatTop => "flat-top" | "flattop",
+]);
+
+crate::names::named!(display Estimator, "estimator", [
+    Estimator::H1 => "h1",
+    Estimator::H2 => "h2",
+    Estimator::Hv => "hv",
+]);
+
+crate::names::named!(display Detrend, "detrend", [
+    Detrend::None => "none",
+    Detrend::Mean => "mean",
+    Detrend::Linear => "linear",
+]);

@@ -258,6 +258,11 @@ impl Route {
     }
 }
 
+crate::names::named!(display Preset, "preset", [
+    Preset::Measured => "measured",
+    Preset::Thesis => "thesis",
+]);
+
 #[cfg(test)]
 mod tests {
     use super::*;

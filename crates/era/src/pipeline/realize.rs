@@ -861,3 +861,14 @@ impl Factorization {
         })
     }
 }
+
+crate::names::named!(display DirectTerm, "direct term", [
+    DirectTerm::Zero => "zero",
+    DirectTerm::FirstMarkov => "markov0",
+]);
+
+crate::names::named!(display SvdPath, "svd", [
+    SvdPath::Auto => "auto",
+    SvdPath::Dense => "dense",
+    SvdPath::MatrixFree => "matrix-free",
+]);

@@ -202,6 +202,7 @@
 //! (Peeters et al., "The PolyMAX frequency-domain method", Shock Vib. 11, 2004).
 
 mod fit;
+pub mod identification;
 mod model;
 mod naive;
 mod rank_one;
@@ -877,6 +878,18 @@ impl Refinement {
         Ok(StateSpace::new(a, b, c, d, TimeDomain::Continuous))
     }
 }
+
+crate::names::named!(display Residuals, "residuals", [
+    Residuals::None => "none",
+    Residuals::Lower => "lower",
+    Residuals::Upper => "upper",
+    Residuals::Both => "both",
+]);
+
+crate::names::named!(display Weighting, "weighting", [
+    Weighting::PairNoise => "pair-noise",
+    Weighting::Uniform => "uniform",
+]);
 
 #[cfg(test)]
 mod tests {
