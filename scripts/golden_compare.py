@@ -75,6 +75,7 @@ def walk_text(a, b, where, w):
             w.number(float(p), float(q), f"{where}:{k}")
 
 
+BINARY = re.compile(r"[^\s\"<>]*/target/release/era\b")
 DATE = re.compile(r"\d{4}-\d\d-\d\d[ T]\d\d:\d\d:\d\d(\.\d+)?( ?UTC|Z)?")
 
 
@@ -90,7 +91,9 @@ def compare(pa, pb, name, w, roots):
     except UnicodeDecodeError:
         w.text.append(f"{name}: binary files differ")
         return
-    # the output folder's own name and the dates of the runs are not results
+    # the output folder's own name, the binary's path and the dates of the runs are not
+    # results
+    ta, tb = (BINARY.sub("era", t) for t in (ta, tb))
     ta = DATE.sub("DATE", ta.replace(os.path.abspath(roots[0]), "OUT").replace(roots[0], "OUT"))
     tb = DATE.sub("DATE", tb.replace(os.path.abspath(roots[1]), "OUT").replace(roots[1], "OUT"))
     if ta == tb:
