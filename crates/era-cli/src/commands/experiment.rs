@@ -1,12 +1,12 @@
 //! `era simulate experiment`: the thesis's FRF test (§4.5) simulated in the time domain
 //! (`era::sim::experiment`), written as an FRF file with its coherence beside it.
 
-use crate::args::CommonArgs;
-use crate::figures::write_figure;
+use crate::args::{ExperimentArgs, OnOff, StructureQuantity};
+use crate::config::Settings;
+use crate::error::usage;
+use crate::output::figures::write_figure;
+use crate::output::report::{finish_output, Human};
 use crate::output::{output_name, write_output};
-use crate::report::{finish_output, Human};
-use crate::usage;
-use clap::{Args, ValueEnum};
 use era::sim::experiment::{
     dta_like_structure, run_experiment, thesis_actuators, Compensation, Drive, Experiment,
     ExperimentSpec, Structure, TABLE_5_1,
@@ -21,93 +21,8 @@ use era_plot::{Figure, Panel, Series, SeriesKind, YScale};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum OnOff {
-    On,
-    Off,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum StructureQuantity {
-    Velocity,
-    Acceleration,
-}
-
-#[derive(Debug, Args)]
-pub struct ExperimentArgs {
-    /// Friction compensation in the actuators (thesis §4.4: 200 Hz, dead zone 0.2 in/s,
-    /// 85 % of the coefficient).
-    #[arg(long, value_enum, default_value_t = OnOff::Off)]
-    pub compensation: OnOff,
-    /// Frames of 2048 samples (40 s) averaged per excited actuator.
-    #[arg(long, default_value_t = 20)]
-    pub averages: usize,
-    /// Seed of the excitation and the sensor noise (and of a --modes structure).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Multiplies every actuator's true Coulomb force (Table 5.1); 0 gives the linear
-    /// system.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    pub friction_scale: f64,
-    /// Compensator coefficients, lbf, one per actuator (e.g. from `era friction tune`);
-    /// default: the adjusted coefficients of Table 5.1 times --friction-scale.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    pub coefficients: Option<Vec<f64>>,
-    /// Excitation RMS voltage, V; default 0.6 without compensation, 0.3 with (§4.5).
-    #[arg(long, allow_negative_numbers = true)]
-    pub excitation: Option<f64>,
-    /// Drive every actuator at once with uncorrelated noise (one run), instead of one
-    /// at a time.
-    #[arg(long)]
-    pub simultaneous: bool,
-    /// Number of actuators, on structure inputs 1, 2, … (at most 8: Table 5.1 has 8).
-    #[arg(long, default_value_t = 8)]
-    pub actuators: usize,
-    /// Accelerometer noise RMS, in/s².
-    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
-    pub accel_noise: f64,
-    /// LVT (relative velocity) noise RMS, in/s.
-    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
-    pub lvt_noise: f64,
-    /// Structure: a model.json (square, outputs collocated with the inputs); default: the
-    /// DTA-like modal structure (40 modes under 14 Hz and 4 up to 20 Hz).
-    #[arg(long, value_name = "MODEL_JSON", conflicts_with_all = ["modes", "fmin", "fmax", "damping", "dofs"])]
-    pub structure: Option<PathBuf>,
-    /// What the --structure model's outputs measure.
-    #[arg(long, value_enum, default_value_t = StructureQuantity::Velocity)]
-    pub structure_quantity: StructureQuantity,
-    /// A seeded modal structure (as `simulate modal`, collocated): number of modes.
-    #[arg(long)]
-    pub modes: Option<usize>,
-    /// Its DOFs (inputs = outputs).
-    #[arg(long)]
-    pub dofs: Option<usize>,
-    /// Its lowest natural frequency, Hz.
-    #[arg(long, allow_negative_numbers = true)]
-    pub fmin: Option<f64>,
-    /// Its highest natural frequency, Hz.
-    #[arg(long, allow_negative_numbers = true)]
-    pub fmax: Option<f64>,
-    /// Its damping ratio range MIN..MAX (fractions).
-    #[arg(long)]
-    pub damping: Option<String>,
-    /// FRF file to write: .csv, .uff/.unv or .mat; the coherence goes beside it, to
-    /// <name>.coherence.csv.
-    #[arg(long, value_name = "FILE")]
-    pub out: PathBuf,
-    /// Also write the exact FRFs of the linear system (no friction) on the same lines.
-    #[arg(long, value_name = "FILE")]
-    pub exact_out: Option<PathBuf>,
-    /// Write the analyzer's time histories, one CSV per run (time_s, voltages,
-    /// accelerations, strokes, LVT velocities, compensation voltages), into DIR.
-    #[arg(long, value_name = "DIR")]
-    pub time_histories: Option<PathBuf>,
-    #[command(flatten)]
-    pub common: CommonArgs,
-}
 
 fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
     if !(v.is_finite() && v >= 0.0) {
@@ -120,15 +35,15 @@ fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
 fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
     if let Some(path) = &a.structure {
         let model = era_io::model_json::ModelJson::read(path)?;
-        let ss = model
-            .state_space()
-            .map_err(|e| crate::UsageError(format!("--structure {}: {e}", path.display())))?;
+        let ss = model.state_space().map_err(|e| {
+            crate::error::UsageError(format!("--structure {}: {e}", path.display()))
+        })?;
         let quantity = match a.structure_quantity {
             StructureQuantity::Velocity => Quantity::Velocity,
             StructureQuantity::Acceleration => Quantity::Acceleration,
         };
         return Structure::from_state_space(&ss, quantity).map_err(|e| {
-            crate::UsageError(format!(
+            crate::error::UsageError(format!(
                 "--structure {}: {e} (the structure needs one output collocated with each input)",
                 path.display()
             ))
@@ -145,7 +60,7 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
     }
     let d = ModalSpec::default();
     let (damping_min, damping_max) = match &a.damping {
-        Some(text) => crate::simulate::parse_range(text)?,
+        Some(text) => crate::config::parse_range(text)?,
         None => (d.damping_min, d.damping_max),
     };
     let dofs = a.dofs.unwrap_or(8);
@@ -163,7 +78,7 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
         collocated: true,
         seed: a.seed,
     };
-    let s = ModalStructure::random(&spec).map_err(|e| crate::UsageError(e.to_string()))?;
+    let s = ModalStructure::random(&spec).map_err(|e| crate::error::UsageError(e.to_string()))?;
     Ok(Structure::from_modal(&s))
 }
 
@@ -249,7 +164,7 @@ fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
         Drive::OneAtATime
     };
     spec.validate()
-        .map_err(|e| crate::UsageError(format!("era simulate experiment: {e}")))?;
+        .map_err(|e| crate::error::UsageError(format!("era simulate experiment: {e}")))?;
     Ok(spec)
 }
 
@@ -464,7 +379,8 @@ fn motion_shares(e: &Experiment, dead_zone: f64) -> (f64, f64) {
 }
 
 pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     frf_format("--out", &a.out)?;
     if let Some(p) = &a.exact_out {
         frf_format("--exact-out", p)?;
@@ -472,7 +388,7 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     // Refuse bad outputs before the work.
     let mut set = OutputSet::beside(&a.out)?;
     set.stage(output_name("--out", &a.out)?)?;
-    let coherence = crate::frf::coherence_path(&a.out);
+    let coherence = crate::output::coherence_path(&a.out);
     set.stage(output_name("--out", &coherence)?)?;
     let mut exact_set = match &a.exact_out {
         Some(p) => {
@@ -482,20 +398,19 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let mut th_set =
-        match &a.time_histories {
-            Some(dir) => Some(OutputSet::new(dir).map_err(|e| {
-                crate::UsageError(format!("--time-histories {}: {e}", dir.display()))
-            })?),
-            None => None,
-        };
+    let mut th_set = match &a.time_histories {
+        Some(dir) => Some(OutputSet::new(dir).map_err(|e| {
+            crate::error::UsageError(format!("--time-histories {}: {e}", dir.display()))
+        })?),
+        None => None,
+    };
     let spec = spec(a)?;
     let runs = match spec.drive {
         Drive::OneAtATime => spec.actuators.len(),
         Drive::Simultaneous => 1,
     };
     let clock = Instant::now();
-    let bar = crate::progress::bar(&a.common, runs as u64, "simulating runs");
+    let bar = crate::output::progress::bar(&settings, runs as u64, "simulating runs");
     let found = run_experiment(&spec, a.time_histories.is_some(), &|done| {
         bar.set_position(done as u64)
     })?;
@@ -602,7 +517,7 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     });
     finish_output(
         &human,
-        &a.common,
+        &settings,
         summary,
         &[("simulate", simulate_s), ("write", write_s)],
     )

@@ -2,11 +2,12 @@
 //! model of the same shape.
 
 use crate::args::PlotArgs;
-use crate::figures::{frf_view, write_figure, write_frf_figures};
+use crate::config::Settings;
+use crate::error::usage;
 use crate::input::read_frf_with;
+use crate::output::figures::{frf_view, write_figure, write_frf_figures};
 use crate::output::prepare_out_dir;
-use crate::report::{print_json, Human};
-use crate::usage;
+use crate::output::report::{print_json, Human};
 use anyhow::Context;
 use era::preprocess::{integrate, zero_leading_lines};
 use era::response::model_frf;
@@ -16,9 +17,10 @@ use serde_json::json;
 use std::path::Path;
 
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let mut set = prepare_out_dir(&a.out)?;
-    let input = read_frf_with(&a.file, &a.read.flags())?;
+    let input = read_frf_with(&a.file, &crate::input::FrfFlags::from(&a.read))?;
     let frf = input.file.frf.clone();
     let model = match &a.model {
         Some(path) => {
@@ -57,7 +59,7 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
     let model_frf = match &model {
         Some(m) => {
-            let ss = m.state_space().map_err(crate::UsageError)?;
+            let ss = m.state_space().map_err(crate::error::UsageError)?;
             if m.states > 0 {
                 write_figure(
                     &mut set,
@@ -70,8 +72,8 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let bar = crate::progress::bar(
-        &a.common,
+    let bar = crate::output::progress::bar(
+        &settings,
         (measured.outputs() * measured.inputs()) as u64,
         "figures",
     );
@@ -101,7 +103,7 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         integrations,
         zero_lines
     ));
-    if a.common.json {
+    if settings.json {
         print_json(
             &json!({"out": a.out, "pairs": overlays.len(), "model": a.model, "integrations": integrations, "zero_lines": zero_lines}),
         )?;

@@ -2,8 +2,10 @@
 //! with the thesis settings, without and with noise, beside the exact truth.
 
 use crate::args::DemoArgs;
-use crate::output::{prepare_out_dir, write_identification, write_output, RunInput};
-use crate::report::{parameter_echo, parameters, print_json, timings_table, Human};
+use crate::config::Settings;
+use crate::output::identification::write_identification;
+use crate::output::report::{parameter_echo, parameters, print_json, timings_table, Human};
+use crate::output::{prepare_out_dir, write_output, RunInput};
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
 use era::modal::{modal_parameters, Mode};
@@ -40,8 +42,9 @@ fn cell(mode: Option<&Mode>) -> String {
 }
 
 pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
-    crate::simulate::check_noise(a.noise)?;
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    crate::config::check_noise(a.noise)?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
@@ -147,7 +150,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
     human.print(&t);
 
     let mut timing_json = serde_json::Map::new();
-    if a.common.timings {
+    if settings.timings {
         for (label, found) in [("no_noise", &clean), ("noisy", &noisy)] {
             let map = timings_map(&found.timings);
             human.print(&format!("\n{label}:"));
@@ -215,7 +218,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
                 &parameter_echo(&options),
                 options.states,
                 true,
-                &a.common,
+                &settings,
             )?;
         }
         // Both runs' outputs take their place together, or none does.
@@ -227,7 +230,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
         ));
     }
 
-    if a.common.json {
+    if settings.json {
         let modes = |v: &[Mode]| v.iter().map(ModeJson::from_mode).collect::<Vec<_>>();
         let mut out = json!({
             "truth": modes(&truth),
@@ -245,7 +248,7 @@ pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
             "errors": {"no_noise": e0, "noisy": e1, "refined": e2},
             "parameters": parameters(&options),
         });
-        if a.common.timings {
+        if settings.timings {
             out["timings_s"] = serde_json::Value::Object(timing_json);
         }
         print_json(&out)?;

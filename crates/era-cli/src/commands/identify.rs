@@ -3,36 +3,39 @@
 //! time histories by [`crate::frf`]), and the outputs are written by [`crate::output`].
 
 use crate::args::{IdentifyArgs, QuantityArg};
+use crate::config::Settings;
 use crate::config::{apply_route, era_options, options, route_request, scan_orders};
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
-use crate::output::{pair_fit_table, prepare_out_dir, write_identification, write_output};
-use crate::report::{
+use crate::output::identification::write_identification;
+use crate::output::report::{
     identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
 };
+use crate::output::{pair_fit_table, prepare_out_dir, write_output};
 use anyhow::Context;
 use era::identify::{identify_auto, identify_observed, identify_with_scan, ScanOptions};
 use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::time::Instant;
 
 pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let mut opts = options(a)?;
     let request = route_request(a);
     // Whether to refine does not depend on the data: known before anything is read.
     let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
-    if !refine && crate::refine::any_given(&a.refine_fit) {
-        return crate::usage(
+    if !refine && crate::config::refine_given(&a.refine_fit) {
+        return crate::error::usage(
             "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine or --preset thesis): add --refine",
         );
     }
-    let refine_options = crate::refine::options(&a.refine_fit)?;
+    let refine_options = crate::config::refine_options(&a.refine_fit)?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
     };
     let mut frf_outputs = match &a.save_frf {
-        Some(path) if a.from_time => Some(crate::frf::prepare_estimate(path, false)?),
+        Some(path) if a.from_time => Some(crate::commands::frf::prepare_estimate(path, false)?),
         _ => None,
     };
     let clock = Instant::now();
@@ -42,16 +45,18 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let input = if a.from_time {
         let inputs = a.inputs.as_deref().unwrap_or_default();
         let Some(outputs) = a.outputs.as_deref() else {
-            return crate::usage("--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)");
+            return crate::error::usage(
+                "--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)",
+            );
         };
         let quantity = a.quantity.unwrap_or(QuantityArg::Acceleration);
-        let mut found = crate::frf::estimate_from_time(
+        let mut found = crate::commands::frf::estimate_from_time(
             std::slice::from_ref(&a.file),
             inputs,
             outputs,
             &a.welch,
             quantity,
-            &a.common,
+            &settings,
         )?;
         set_units(&mut found.input, a.facts.units.as_ref());
         human.print(&format!(
@@ -60,7 +65,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             found.summary
         ));
         if let (Some(path), Some(set)) = (&a.save_frf, frf_outputs.take()) {
-            let coherence = crate::frf::write_estimate(set, path, &found, false)?;
+            let coherence = crate::commands::frf::write_estimate(set, path, &found, false)?;
             human.print(&format!(
                 "  wrote {} and {}\n",
                 path.display(),
@@ -83,7 +88,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         let outputs = match a.outputs.as_deref() {
             None => None,
             Some(text) => Some(text.trim().parse::<usize>().map_err(|_| {
-                crate::UsageError(format!(
+                crate::error::UsageError(format!(
                     "--outputs {text}: expected the number of outputs of a MAT FRF matrix (channel lists apply with --from-time)"
                 ))
             })?),
@@ -117,7 +122,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     }
     let frf = &input.file.frf;
     if route.refine {
-        crate::refine::check_shape(&refine_options, frf)?;
+        crate::commands::refine::check_shape(&refine_options, frf)?;
     }
     human.print(&format!("  {}{}\n", shape_line(frf), input.note));
     human.print(&describe_input(&input));
@@ -142,7 +147,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
                 Ok((lo, hi, _)) => format!("{lo}..{hi}"),
                 Err(_) => String::new(),
             });
-            crate::UsageError(format!("--band {text}: {why}"))
+            crate::error::UsageError(format!("--band {text}: {why}"))
         })?;
     match (&band, fit.band_hz) {
         (Ok((_, _, why)), Some((lo, hi))) => {
@@ -158,9 +163,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         ..ScanOptions::default()
     };
     let era_opts = era_options(&opts, &route);
-    let mut found = realize(a, frf, &era_opts, &scan_options, auto, &a.common)?;
+    let mut found = realize(a, frf, &era_opts, &scan_options, auto, &settings)?;
     let channels = input.file.channels.as_ref();
-    crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
+    crate::output::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let states = found.model.states();
     if auto {
         opts.states = states;
@@ -180,10 +185,15 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
                 .noncollocated_mean_relative_error
                 .map_or("-".into(), |v| format!("{v:.3e}"))
         ));
-        found =
-            crate::refine::refine_found(found, frf, &refine_options, Some(route.domain), &a.common)
-                .with_context(|| format!("refining the model of {}", a.file.display()))?;
-        human.print(&crate::refine::summary(&found));
+        found = crate::commands::refine::refine_found(
+            found,
+            frf,
+            &refine_options,
+            Some(route.domain),
+            &settings,
+        )
+        .with_context(|| format!("refining the model of {}", a.file.display()))?;
+        human.print(&crate::commands::refine::summary(&found));
         if a.from_time && auto && !a.no_frame_check {
             let check = Check {
                 band_hz: fit.band_hz,
@@ -253,11 +263,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             &echo,
             states,
             !a.no_figures,
-            &a.common,
+            &settings,
         )?;
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
     }
-    if a.common.timings {
+    if settings.timings {
         human.print(&timings_table(&timings));
         human.print(&svd_path_line(&found.realization));
         model.timings_s = Some(timings);
@@ -271,11 +281,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         let figures = " (singular_values, grid, pairs/)";
         human.print(&format!(
             "\nwrote {}{}\n",
-            crate::output::written_list(dir, !a.no_figures),
+            crate::output::identification::written_list(dir, !a.no_figures),
             if a.no_figures { "" } else { figures }
         ));
     }
-    if a.common.json {
+    if settings.json {
         print_json(&model)?;
     }
     Ok(())
@@ -289,9 +299,9 @@ fn realize(
     era_opts: &era::EraOptions,
     scan_options: &ScanOptions,
     auto: bool,
-    common: &crate::args::CommonArgs,
+    settings: &Settings,
 ) -> anyhow::Result<era::Identification> {
-    let spinner = crate::progress::spinner(common);
+    let spinner = crate::output::progress::spinner(settings);
     let mut on_stage = |stage: era::Stage| spinner.set_message(stage.name());
     let mut on_order = |done: usize, total: usize| {
         spinner.set_message(format!("stabilization: order {done} of {total}"));
@@ -308,9 +318,9 @@ fn realize(
             name,
             value,
             reason,
-        } if name == "orders" || (name == "states" && value == "auto") => {
-            anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}")))
-        }
+        } if name == "orders" || (name == "states" && value == "auto") => anyhow::Error::from(
+            crate::error::UsageError(format!("--{name} {value}: {reason}")),
+        ),
         other => anyhow::Error::from(other),
     })
     .with_context(|| format!("identifying {}", a.file.display()));
@@ -343,11 +353,7 @@ fn frame_check(
     found: &mut era::Identification,
     check: &Check,
 ) -> anyhow::Result<String> {
-    let quiet = crate::args::CommonArgs {
-        quiet: true,
-        json: false,
-        timings: false,
-    };
+    let quiet = Settings::silent();
     let clock = Instant::now();
     // Twice the frame (finer lines, the modes better resolved); half of it when the
     // records are too short for that.
@@ -362,7 +368,7 @@ fn frame_check(
         welch.frame = other;
         // Too few frames for the inputs is one way for these records to be too short
         // at that frame: the check then tries the other.
-        let Ok(estimate) = crate::frf::estimate_from_time(
+        let Ok(estimate) = crate::commands::frf::estimate_from_time(
             std::slice::from_ref(&a.file),
             a.inputs.as_deref().unwrap_or_default(),
             a.outputs.as_deref().unwrap_or_default(),
@@ -405,10 +411,10 @@ fn frame_check(
 /// window-corrected as the first, identified and refined on the same route.
 fn second_identification(
     a: &IdentifyArgs,
-    second: crate::frf::FromTime,
+    second: crate::commands::frf::FromTime,
     other: usize,
     check: &Check,
-    quiet: &crate::args::CommonArgs,
+    quiet: &Settings,
 ) -> anyhow::Result<era::Identification> {
     let mut frf = second.input.file.frf;
     if check.route.window_correction {
@@ -427,7 +433,7 @@ fn second_identification(
     let mut era_opts = check.era_opts.clone();
     era_opts.zero_lines = (era_opts.zero_lines * other).div_ceil(a.welch.frame.max(1));
     let again = realize(a, &frf, &era_opts, check.scan_options, true, quiet)?;
-    crate::refine::refine_found(
+    crate::commands::refine::refine_found(
         again,
         &frf,
         &refine_options,
@@ -465,7 +471,7 @@ fn identify_band(
     {
         // Checked against the data by era::frf::fit_lines.
         let Some((lo, hi)) = crate::config::parse_band(text) else {
-            return crate::usage(format!(
+            return crate::error::usage(format!(
                 "--band {text}: expected LO..HI in Hz, e.g. 60..500, or all"
             ));
         };
@@ -482,13 +488,13 @@ fn identify_band(
                 companion = c;
                 (
                     &companion,
-                    crate::frf::coherence_path(&a.file).display().to_string(),
+                    crate::output::coherence_path(&a.file).display().to_string(),
                 )
             }
             _ => {
                 return Ok(Err(format!(
                 "every line: no coherence (no {} beside the file; --band LO..HI to set the band)",
-                crate::frf::coherence_path(&a.file).display()
+                crate::output::coherence_path(&a.file).display()
             )))
             }
         },

@@ -2,11 +2,12 @@
 //! 5.12): the difference per pair and per band, the modes of their models matched by MAC,
 //! and the fit of each model to its own data.
 
-use crate::args::{CommonArgs, IdentifyArgs};
+use crate::args::{CompareArgs, IdentifyFlags};
+use crate::config::Settings;
+use crate::error::usage;
+use crate::output::report::{finish_output, Human};
 use crate::output::write_output;
-use crate::report::{finish_output, Human};
-use crate::usage;
-use clap::{Args, Parser};
+use clap::Parser;
 use era::modal::modal_parameters;
 use era::response::model_frf;
 use era::stability::mac;
@@ -14,46 +15,8 @@ use era::{Complex64, FrfData, StateSpace};
 use era_io::atomic::OutputSet;
 use era_io::format::{read_frf_file, ReadOptions};
 use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
-
-#[derive(Debug, Args)]
-pub struct CompareArgs {
-    /// First FRF set (CSV, UFF or MAT).
-    pub a: PathBuf,
-    /// Second FRF set, of the same shape and lines.
-    pub b: PathBuf,
-    /// Model of A (model.json), for the modes and the fit.
-    #[arg(long, value_name = "MODEL_JSON", requires = "model_b")]
-    pub model_a: Option<PathBuf>,
-    /// Model of B (model.json).
-    #[arg(long, value_name = "MODEL_JSON", requires = "model_a")]
-    pub model_b: Option<PathBuf>,
-    /// Band edges, Hz, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "0,1,2,5,10,14,20")]
-    pub bands: Vec<f64>,
-    /// Lowest and highest frequency of the fit error, Hz.
-    #[arg(long, value_delimiter = ',', default_value = "0.1,14")]
-    pub fit_band: Vec<f64>,
-    /// Folder for compare.html, compare.json and one PNG per pair.
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub common: CommonArgs,
-    /// Identify both sets with these `era identify` flags (everything after --identify),
-    /// e.g. --identify --states 80 --hankel-factor 5 --integrations 1: plain ERA at that
-    /// order (no refinement), with identify's defaults otherwise (--preset thesis for
-    /// the thesis's).
-    #[arg(long, num_args = 1.., allow_hyphen_values = true, conflicts_with_all = ["model_a", "model_b"])]
-    pub identify: Option<Vec<String>>,
-}
-
-#[derive(Debug, Parser)]
-#[command(name = "--identify", no_binary_name = true)]
-struct IdentifyFlags {
-    #[command(flatten)]
-    args: IdentifyArgs,
-}
 
 /// Relative RMS difference `‖A − B‖ / ‖B‖` over the lines `lo ≤ f < hi` (NaN when B has
 /// no power there).
@@ -119,7 +82,7 @@ fn model_from_json(flag: &str, path: &Path) -> anyhow::Result<Side> {
     let m = era_io::model_json::ModelJson::read(path)?;
     let model = m
         .state_space()
-        .map_err(|e| crate::UsageError(format!("{flag} {}: {e}", path.display())))?;
+        .map_err(|e| crate::error::UsageError(format!("{flag} {}: {e}", path.display())))?;
     let integrations = m
         .parameters
         .get("integrations")
@@ -135,7 +98,7 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
     let mut argv = vec![path.display().to_string()];
     argv.extend(flags.iter().cloned());
     let parsed = IdentifyFlags::try_parse_from(&argv)
-        .map_err(|e| crate::UsageError(format!("--identify: {e}")))?;
+        .map_err(|e| crate::error::UsageError(format!("--identify: {e}")))?;
     if parsed.args.refine || parsed.args.band.is_some() || parsed.args.from_time {
         return usage(
             "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
@@ -159,7 +122,8 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
 }
 
 pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     if a.bands.len() < 2
         || a.bands.iter().any(|b| !b.is_finite() || *b < 0.0)
         || a.bands.windows(2).any(|w| w[1] <= w[0])
@@ -315,10 +279,10 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
         "modes": modes.iter().map(|m| json!({"frequency_a_hz": m.0, "damping_a": m.1, "frequency_b_hz": m.2, "damping_b": m.3, "mac": m.4})).collect::<Vec<_>>(),
     });
     if let Some(set) = set.as_mut() {
-        let bar = crate::progress::bar(&a.common, (q * p) as u64, "figures");
+        let bar = crate::output::progress::bar(&settings, (q * p) as u64, "figures");
         let mut overlays = Vec::new();
         // The first set's units and channel table; the phase wrapped.
-        let view = crate::figures::frf_view(
+        let view = crate::output::figures::frf_view(
             &era_plot::FrfUnits::from_metadata(&fa.metadata),
             ga.quantity(),
             fa.channels.as_ref(),
@@ -362,5 +326,5 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
     if let Some(set) = set {
         set.commit()?;
     }
-    finish_output(&human, &a.common, json_out, &[("compare", compare_s)])
+    finish_output(&human, &settings, json_out, &[("compare", compare_s)])
 }

@@ -2,9 +2,10 @@
 //! `era identify --from-time`.
 
 use crate::args::{DetrendArg, EstimatorArg, FrfArgs, QuantityArg, WelchArgs, WindowArg};
+use crate::config::Settings;
 use crate::input::{shape_line, InputFrf};
+use crate::output::report::{finish_output, Human};
 use crate::output::{output_name, write_output};
-use crate::report::{finish_output, Human};
 use anyhow::Context as _;
 use era::frf::estimate::{self, Detrend, Estimator, FrfEstimate, WelchOptions, Window};
 use era_io::atomic::OutputSet;
@@ -82,7 +83,7 @@ pub fn estimate_from_time(
     outputs: &str,
     welch: &WelchArgs,
     quantity: QuantityArg,
-    common: &crate::args::CommonArgs,
+    settings: &Settings,
 ) -> anyhow::Result<FromTime> {
     let selection = TimeSelection {
         variables: welch.variable.clone(),
@@ -90,13 +91,13 @@ pub fn estimate_from_time(
     };
     if let Some(r) = welch.sample_rate {
         if !(r.is_finite() && r > 0.0) {
-            return crate::usage(format!(
+            return crate::error::usage(format!(
                 "--sample-rate {r}: must be a positive number of samples per second"
             ));
         }
     }
     let est = estimator(welch.estimator);
-    let spinner = crate::progress::spinner(common);
+    let spinner = crate::output::progress::spinner(settings);
     let (mut read_s, mut estimate_s) = (0.0, 0.0);
     let mut records = Vec::new();
     // The first record's table, rate and channels describe the result; later records
@@ -116,7 +117,7 @@ pub fn estimate_from_time(
             (Some(r), _) => (r, "--sample-rate".to_string()),
             (None, Some((f, from))) => (*f, from.clone()),
             (None, None) => {
-                return crate::usage(format!(
+                return crate::error::usage(format!(
                     "{}: this {} file does not give the sample rate: set --sample-rate HZ",
                     path.display(),
                     history.format.name()
@@ -125,15 +126,16 @@ pub fn estimate_from_time(
         };
         if let Some((_, r0, _, _, _)) = &first {
             if (rate - r0).abs() > 1e-9 * r0 {
-                return crate::usage(format!(
+                return crate::error::usage(format!(
                     "{}: sample rate {rate} Hz, the first file's is {r0} Hz: records to average must share it",
                     path.display()
                 ));
             }
         }
         let pick = |flag: &str, spec: &str| {
-            parse_channels(spec, &history)
-                .map_err(|m| crate::UsageError(format!("{flag} {spec}: {m} ({})", path.display())))
+            parse_channels(spec, &history).map_err(|m| {
+                crate::error::UsageError(format!("{flag} {spec}: {m} ({})", path.display()))
+            })
         };
         let input_cols = pick("--inputs", inputs)?;
         let output_cols = pick("--outputs", outputs)?;
@@ -164,7 +166,7 @@ pub fn estimate_from_time(
         }
     }
     let Some((history, rate, rate_from, input_cols, output_cols)) = first else {
-        return crate::usage("no time-history file given");
+        return crate::error::usage("no time-history file given");
     };
     let path = &paths[0];
     let opts = WelchOptions {
@@ -188,7 +190,7 @@ pub fn estimate_from_time(
         let f = found.frf.frequency_hz();
         let top = f[f.len() - 1];
         if !(max.is_finite() && max >= f[1] && max <= top) {
-            return crate::usage(format!(
+            return crate::error::usage(format!(
                 "--max-hz {max}: must lie between the first line above 0 Hz ({} Hz) and the Nyquist frequency ({top} Hz)",
                 f[1]
             ));
@@ -426,15 +428,6 @@ fn describe_estimate_error(
     }
 }
 
-/// `frf.csv` → `frf.coherence.csv`.
-pub fn coherence_path(out: &Path) -> PathBuf {
-    let stem = out
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "frf".into());
-    out.with_file_name(format!("{stem}.coherence.csv"))
-}
-
 /// The coherence as CSV: `frequency_hz`, `coh{i}_{j}` (ordinary), `mcoh{i}` (multiple).
 pub fn write_coherence(path: &Path, est: &FrfEstimate, source: &str) -> anyhow::Result<()> {
     let (q, p, lines) = (est.frf.outputs(), est.frf.inputs(), est.frf.lines());
@@ -474,20 +467,23 @@ pub fn write_coherence(path: &Path, est: &FrfEstimate, source: &str) -> anyhow::
 /// written) and opens the [`OutputSet`] that [`write_estimate`] fills, before the work.
 pub fn prepare_estimate(out: &Path, binary: bool) -> anyhow::Result<OutputSet> {
     let format = FrfFormat::from_extension(out).ok_or_else(|| {
-        crate::UsageError(format!(
+        crate::error::UsageError(format!(
             "--out {}: cannot tell the format from the extension: use .csv, .uff (or .unv) or .mat",
             out.display()
         ))
     })?;
     if binary && format != FrfFormat::Uff {
-        return crate::usage(format!(
+        return crate::error::usage(format!(
             "--binary applies to UFF output, not to {}",
             out.display()
         ));
     }
     let mut set = OutputSet::beside(out)?;
     set.stage(crate::output::output_name("--out", out)?)?;
-    set.stage(crate::output::output_name("--out", &coherence_path(out))?)?;
+    set.stage(crate::output::output_name(
+        "--out",
+        &crate::output::coherence_path(out),
+    )?)?;
     Ok(set)
 }
 
@@ -501,7 +497,7 @@ pub fn write_estimate(
     binary: bool,
 ) -> anyhow::Result<PathBuf> {
     let format = FrfFormat::from_extension(out)
-        .ok_or_else(|| crate::UsageError(format!("--out {}: no format", out.display())))?;
+        .ok_or_else(|| crate::error::UsageError(format!("--out {}: no format", out.display())))?;
     let file = &found.input.file;
     write_output(&mut set, output_name("--out", out)?, |staged| {
         match format {
@@ -518,7 +514,7 @@ pub fn write_estimate(
         }
         Ok(())
     })?;
-    let coherence = coherence_path(out);
+    let coherence = crate::output::coherence_path(out);
     write_output(&mut set, output_name("--out", &coherence)?, |staged| {
         write_coherence(staged, &found.estimate, &out.display().to_string())
     })?;
@@ -528,11 +524,12 @@ pub fn write_estimate(
 
 /// `era frf`.
 pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     // Refuse a bad --out before reading anything.
     let set = prepare_estimate(&a.out, a.binary)?;
     let mut found = estimate_from_time(
-        &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, &a.common,
+        &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, &settings,
     )?;
     // Time files seldom say their units; --units writes them into the FRF file, where
     // identify, plot and the report find them.
@@ -560,7 +557,7 @@ pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
     out["coherence_file"] = json!(coherence);
     finish_output(
         &human,
-        &a.common,
+        &settings,
         out,
         &[
             ("read", found.timings.0),

@@ -3,8 +3,9 @@
 use crate::args::{
     ExcitationArg, ModalArgs, ShakerArgs, SimulateArgs, SimulateCommon, SimulateModel,
 };
-use crate::report::{finish_output, Human};
-use crate::usage;
+use crate::config::Settings;
+use crate::error::usage;
+use crate::output::report::{finish_output, Human};
 use era::params::Naming;
 use era::sim::{add_noise, truth_model_frf, ModalRequest, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
@@ -14,22 +15,6 @@ use era_io::uff::UffWriteOptions;
 use serde_json::json;
 use std::time::Instant;
 
-pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
-    let Some((lo, hi)) = text.split_once("..") else {
-        return usage(format!(
-            "--damping {text}: expected MIN..MAX, e.g. 0.005..0.02"
-        ));
-    };
-    match (lo.trim().parse::<f64>(), hi.trim().parse::<f64>()) {
-        (Ok(lo), Ok(hi)) => Ok((lo, hi)),
-        _ => usage(format!("--damping {text}: MIN and MAX must be numbers")),
-    }
-}
-
-pub fn check_noise(noise: f64) -> anyhow::Result<()> {
-    Ok(era::sim::check_noise(Naming::Flag, noise)?)
-}
-
 fn finish(
     sim: &SimulateCommon,
     frf: &FrfData,
@@ -37,7 +22,8 @@ fn finish(
     summary: serde_json::Value,
     simulate_s: f64,
 ) -> anyhow::Result<()> {
-    let human = Human::new(&sim.common);
+    let settings = Settings::from(&sim.common);
+    let human = Human::new(&settings);
     let clock = Instant::now();
     let seed = sim.seed.to_string();
     let noise = sim.noise.to_string();
@@ -75,7 +61,7 @@ fn finish(
     ));
     finish_output(
         &human,
-        &sim.common,
+        &settings,
         summary,
         &[
             ("simulate", simulate_s),
@@ -85,7 +71,7 @@ fn finish(
 }
 
 fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
-    check_noise(sim.noise)?;
+    crate::config::check_noise(sim.noise)?;
     let clock = Instant::now();
     let noise = (sim.noise > 0.0).then_some((sim.noise, sim.seed));
     let frf = truth_model_frf(noise)?;
@@ -111,8 +97,8 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
 }
 
 fn modal(a: &ModalArgs) -> anyhow::Result<()> {
-    check_noise(a.sim.noise)?;
-    let (damping_min, damping_max) = parse_range(&a.damping)?;
+    crate::config::check_noise(a.sim.noise)?;
+    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
     let request = ModalRequest {
         spec: ModalSpec {
             outputs: a.outputs,
@@ -160,7 +146,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     match &a.model {
         SimulateModel::TruthModel(sim) => truth(sim),
         SimulateModel::Modal(m) => modal(m),
-        SimulateModel::Experiment(e) => crate::experiment::run(e),
+        SimulateModel::Experiment(e) => super::experiment::run(e),
         SimulateModel::Shaker(s) => shaker(s),
     }
 }
@@ -210,9 +196,10 @@ fn shaker_csv(r: &era::sim::shaker::ShakerRecord, quantity: Quantity, header: &s
 
 fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
     use era::sim::shaker::{simulate_shaker_test, Excitation, ShakerTest};
-    let human = Human::new(&a.common);
-    check_noise(a.noise)?;
-    let (damping_min, damping_max) = parse_range(&a.damping)?;
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    crate::config::check_noise(a.noise)?;
+    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
     let band = a.band.as_deref().map(parse_band).transpose()?;
     if band.is_some()
         && !matches!(
@@ -268,7 +255,9 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
             name,
             value,
             reason,
-        } => anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}"))),
+        } => anyhow::Error::from(crate::error::UsageError(format!(
+            "--{name} {value}: {reason}"
+        ))),
         other => anyhow::Error::from(other),
     })?;
     let simulate_s = clock.elapsed().as_secs_f64();
@@ -321,7 +310,7 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
     ));
     finish_output(
         &human,
-        &a.common,
+        &settings,
         summary,
         &[
             ("simulate", simulate_s),
