@@ -71,60 +71,88 @@ fn entity(label: &str) -> String {
     }
 }
 
-/// The first record's table, sample rate (and where it came from) and the selected
-/// input and output columns.
-type FirstRecord = (TimeHistory, f64, String, Vec<usize>, Vec<usize>);
+/// The first record: its table, sample rate (and where it came from) and the selected
+/// input and output columns. It describes the result; later records must agree
+/// (pooling checks lines and channel counts).
+struct FirstRecord {
+    history: TimeHistory,
+    rate: f64,
+    rate_from: String,
+    inputs: Vec<usize>,
+    outputs: Vec<usize>,
+}
 
-/// Reads the time files (records of one test), selects the channels and estimates the
-/// FRFs from their pooled spectra.
-pub fn estimate_from_time(
+/// The spectra of every record, the first record, and the seconds reading and
+/// estimating them.
+struct Records {
+    spectra: Vec<estimate::Spectra>,
+    first: Option<FirstRecord>,
+    read_s: f64,
+    estimate_s: f64,
+}
+
+/// The Welch settings of the flags at `rate` samples per second.
+fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
+    WelchOptions {
+        sample_rate_hz: rate,
+        frame: welch.frame,
+        overlap: welch.overlap,
+        window: window(welch.window),
+        detrend: detrend(welch.detrend),
+    }
+}
+
+/// The sample rate of `history`: `--sample-rate` or the file's, and where it came from.
+fn sample_rate(
+    path: &Path,
+    history: &TimeHistory,
+    given: Option<f64>,
+) -> anyhow::Result<(f64, String)> {
+    Ok(match (given, &history.sample_rate) {
+        (Some(r), Some((f, from))) if (r - f).abs() > 1e-9 * f => (
+            r,
+            format!("--sample-rate (the file says {f} Hz, from {from})"),
+        ),
+        (Some(r), _) => (r, "--sample-rate".to_string()),
+        (None, Some((f, from))) => (*f, from.clone()),
+        (None, None) => {
+            return crate::error::usage(format!(
+                "{}: this {} file does not give the sample rate: set --sample-rate HZ",
+                path.display(),
+                history.format.name()
+            ))
+        }
+    })
+}
+
+/// Reads each time file, selects its channels and computes its spectra.
+fn read_records(
     paths: &[PathBuf],
     inputs: &str,
     outputs: &str,
     welch: &WelchArgs,
-    quantity: QuantityArg,
-    settings: &Settings,
-) -> anyhow::Result<FromTime> {
+    est: Estimator,
+    spinner: &indicatif::ProgressBar,
+) -> anyhow::Result<Records> {
     let selection = TimeSelection {
         variables: welch.variable.clone(),
         datasets: welch.dataset.clone(),
     };
-    if let Some(r) = welch.sample_rate {
-        if !(r.is_finite() && r > 0.0) {
-            return crate::error::usage(format!(
-                "--sample-rate {r}: must be a positive number of samples per second"
-            ));
-        }
-    }
-    let est = estimator(welch.estimator);
-    let spinner = crate::output::progress::spinner(settings);
-    let (mut read_s, mut estimate_s) = (0.0, 0.0);
-    let mut records = Vec::new();
-    // The first record's table, rate and channels describe the result; later records
-    // must agree (pooling checks lines and channel counts).
-    let mut first: Option<FirstRecord> = None;
+    let mut records = Records {
+        spectra: Vec::new(),
+        first: None,
+        read_s: 0.0,
+        estimate_s: 0.0,
+    };
     for path in paths {
         spinner.set_message(format!("reading {}", path.display()));
         let clock = Instant::now();
         let history = read_time_file(path, &selection)
             .with_context(|| format!("reading {}", path.display()))?;
-        read_s += clock.elapsed().as_secs_f64();
-        let (rate, rate_from) = match (welch.sample_rate, &history.sample_rate) {
-            (Some(r), Some((f, from))) if (r - f).abs() > 1e-9 * f => (
-                r,
-                format!("--sample-rate (the file says {f} Hz, from {from})"),
-            ),
-            (Some(r), _) => (r, "--sample-rate".to_string()),
-            (None, Some((f, from))) => (*f, from.clone()),
-            (None, None) => {
-                return crate::error::usage(format!(
-                    "{}: this {} file does not give the sample rate: set --sample-rate HZ",
-                    path.display(),
-                    history.format.name()
-                ))
-            }
-        };
-        if let Some((_, r0, _, _, _)) = &first {
+        records.read_s += clock.elapsed().as_secs_f64();
+        let (rate, rate_from) = sample_rate(path, &history, welch.sample_rate)?;
+        if let Some(first) = &records.first {
+            let r0 = first.rate;
             if (rate - r0).abs() > 1e-9 * r0 {
                 return crate::error::usage(format!(
                     "{}: sample rate {rate} Hz, the first file's is {r0} Hz: records to average must share it",
@@ -139,67 +167,111 @@ pub fn estimate_from_time(
         };
         let input_cols = pick("--inputs", inputs)?;
         let output_cols = pick("--outputs", outputs)?;
-        let opts = WelchOptions {
-            sample_rate_hz: rate,
-            frame: welch.frame,
-            overlap: welch.overlap,
-            window: window(welch.window),
-            detrend: detrend(welch.detrend),
+        let opts = welch_options(welch, rate);
+        let columns = |cols: &[usize]| -> Vec<&[f64]> {
+            cols.iter()
+                .map(|&c| history.columns[c].as_slice())
+                .collect()
         };
-        let xs: Vec<&[f64]> = input_cols
-            .iter()
-            .map(|&c| history.columns[c].as_slice())
-            .collect();
-        let ys: Vec<&[f64]> = output_cols
-            .iter()
-            .map(|&c| history.columns[c].as_slice())
-            .collect();
+        let (xs, ys) = (columns(&input_cols), columns(&output_cols));
         spinner.set_message(format!("spectra of {}", path.display()));
         let clock = Instant::now();
         let spectra = estimate::spectra(&xs, &ys, &opts, est == Estimator::H2)
             .map_err(|e| describe_estimate_error(e, &history, &input_cols, &output_cols))
             .with_context(|| format!("estimating FRFs from {}", path.display()))?;
-        estimate_s += clock.elapsed().as_secs_f64();
-        records.push(spectra);
-        if first.is_none() {
-            first = Some((history, rate, rate_from, input_cols, output_cols));
+        records.estimate_s += clock.elapsed().as_secs_f64();
+        records.spectra.push(spectra);
+        if records.first.is_none() {
+            records.first = Some(FirstRecord {
+                history,
+                rate,
+                rate_from,
+                inputs: input_cols,
+                outputs: output_cols,
+            });
         }
     }
-    let Some((history, rate, rate_from, input_cols, output_cols)) = first else {
+    Ok(records)
+}
+
+/// Keeps the lines of `found` up to `max` Hz (`--max-hz`).
+fn keep_up_to(found: &mut FrfEstimate, max: f64) -> anyhow::Result<()> {
+    let f = found.frf.frequency_hz();
+    let top = f[f.len() - 1];
+    if !(max.is_finite() && max >= f[1] && max <= top) {
+        return crate::error::usage(format!(
+            "--max-hz {max}: must lie between the first line above 0 Hz ({} Hz) and the Nyquist frequency ({top} Hz)",
+            f[1]
+        ));
+    }
+    let keep = f.iter().take_while(|&&v| v <= max * (1.0 + 1e-12)).count();
+    found.truncate(keep)?;
+    Ok(())
+}
+
+/// Reads the time files (records of one test), selects the channels and estimates the
+/// FRFs from their pooled spectra.
+pub fn estimate_from_time(
+    paths: &[PathBuf],
+    inputs: &str,
+    outputs: &str,
+    welch: &WelchArgs,
+    quantity: QuantityArg,
+    settings: &Settings,
+) -> anyhow::Result<FromTime> {
+    if let Some(r) = welch.sample_rate {
+        if !(r.is_finite() && r > 0.0) {
+            return crate::error::usage(format!(
+                "--sample-rate {r}: must be a positive number of samples per second"
+            ));
+        }
+    }
+    let est = estimator(welch.estimator);
+    let spinner = crate::output::progress::spinner(settings);
+    let records = read_records(paths, inputs, outputs, welch, est, &spinner)?;
+    let mut estimate_s = records.estimate_s;
+    let Some(first) = records.first else {
         return crate::error::usage("no time-history file given");
     };
     let path = &paths[0];
-    let opts = WelchOptions {
-        sample_rate_hz: rate,
-        frame: welch.frame,
-        overlap: welch.overlap,
-        window: window(welch.window),
-        detrend: detrend(welch.detrend),
-    };
+    let opts = welch_options(welch, first.rate);
     spinner.set_message("estimating FRFs");
     let clock = Instant::now();
-    let pooled =
-        estimate::Spectra::pool(&records).with_context(|| "averaging the records".to_string())?;
+    let pooled = estimate::Spectra::pool(&records.spectra)
+        .with_context(|| "averaging the records".to_string())?;
     let found = estimate::estimate_from_spectra(pooled, est, quantity.into());
     spinner.finish_and_clear();
     let mut found = found
-        .map_err(|e| describe_estimate_error(e, &history, &input_cols, &output_cols))
+        .map_err(|e| describe_estimate_error(e, &first.history, &first.inputs, &first.outputs))
         .with_context(|| format!("estimating FRFs from {}", path.display()))?;
     estimate_s += clock.elapsed().as_secs_f64();
     if let Some(max) = welch.max_hz {
-        let f = found.frf.frequency_hz();
-        let top = f[f.len() - 1];
-        if !(max.is_finite() && max >= f[1] && max <= top) {
-            return crate::error::usage(format!(
-                "--max-hz {max}: must lie between the first line above 0 Hz ({} Hz) and the Nyquist frequency ({top} Hz)",
-                f[1]
-            ));
-        }
-        let keep = f.iter().take_while(|&&v| v <= max * (1.0 + 1e-12)).count();
-        found.truncate(keep)?;
+        keep_up_to(&mut found, max)?;
     }
+    let file = FrfFile {
+        frf: found.frf.clone(),
+        quantity_given: true,
+        metadata: estimate_metadata(paths, &opts, est, found.spectra.frames(), welch.max_hz),
+        channels: Some(channel_table(&first)),
+    };
+    let (summary, json) = describe_estimate(paths, &first, &found, &opts, est);
+    let note = format!(" [estimated from {}]", first.history.format.name());
+    Ok(FromTime {
+        input: InputFrf {
+            file,
+            format: FrfFormat::Csv,
+            note,
+        },
+        estimate: found,
+        summary,
+        json,
+        timings: (records.read_s, estimate_s),
+    })
+}
 
-    let label = |c: usize| history.label(c);
+/// The channel table of an estimate: node = column, direction 3, the column's name.
+fn channel_table(first: &FirstRecord) -> ChannelTable {
+    let history = &first.history;
     let channel = |c: usize| Channel {
         dof: Dof {
             node: c as i64 + 1,
@@ -210,63 +282,96 @@ pub fn estimate_from_time(
             None => "NONE".into(),
         },
     };
-    let table = ChannelTable {
-        outputs: output_cols.iter().map(|&c| channel(c)).collect(),
-        inputs: input_cols.iter().map(|&c| channel(c)).collect(),
-    };
-    let frames = found.spectra.frames();
+    ChannelTable {
+        outputs: first.outputs.iter().map(|&c| channel(c)).collect(),
+        inputs: first.inputs.iter().map(|&c| channel(c)).collect(),
+    }
+}
+
+/// The estimation settings, kept with the FRFs as metadata (`# key: value` in a CSV).
+fn estimate_metadata(
+    paths: &[PathBuf],
+    opts: &WelchOptions,
+    est: Estimator,
+    frames: usize,
+    max_hz: Option<f64>,
+) -> BTreeMap<String, String> {
     let mut metadata = BTreeMap::new();
     for (k, v) in [
-        (
-            "source",
-            format!(
-                "era frf {}",
-                paths
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            ),
-        ),
+        ("source", format!("era frf {}", joined(paths, " "))),
         ("estimator", est.name().to_string()),
         ("window", opts.window.name().to_string()),
         ("frame", opts.frame.to_string()),
         ("overlap", opts.overlap.to_string()),
         ("detrend", opts.detrend.name().to_string()),
         ("averages", frames.to_string()),
-        ("sample_rate_hz", rate.to_string()),
+        ("sample_rate_hz", opts.sample_rate_hz.to_string()),
         (
             "max_hz",
-            welch.max_hz.map_or("none".to_string(), |m| m.to_string()),
+            max_hz.map_or("none".to_string(), |m| m.to_string()),
         ),
     ] {
         metadata.insert(k.to_string(), v);
     }
-    let file = FrfFile {
-        frf: found.frf.clone(),
-        quantity_given: true,
-        metadata,
-        channels: Some(table),
-    };
+    metadata
+}
 
+/// The paths, `separator`-joined.
+fn joined(paths: &[PathBuf], separator: &str) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(separator)
+}
+
+/// The lines of the excited band: every input within 40 dB of its largest
+/// autospectrum; every line above 0 Hz when none is.
+fn excited_band(found: &FrfEstimate) -> Vec<usize> {
+    let (p, lines) = (found.frf.inputs(), found.frf.lines());
+    let band: Vec<usize> = (1..lines)
+        .filter(|&k| {
+            (0..p).all(|j| {
+                let g = found.spectra.gxx(j, j);
+                let top = g.iter().map(|v| v.re).fold(0.0, f64::max);
+                g[k].re >= 1e-4 * top
+            })
+        })
+        .collect();
+    if band.is_empty() {
+        (1..lines).collect()
+    } else {
+        band
+    }
+}
+
+/// The human summary and the JSON of an estimate.
+fn describe_estimate(
+    paths: &[PathBuf],
+    first: &FirstRecord,
+    found: &FrfEstimate,
+    opts: &WelchOptions,
+    est: Estimator,
+) -> (String, serde_json::Value) {
+    let (history, rate) = (&first.history, first.rate);
+    let (input_cols, output_cols) = (&first.inputs, &first.outputs);
+    let label = |c: usize| history.label(c);
+    let frames = found.spectra.frames();
     let (q, p, lines) = (found.frf.outputs(), found.frf.inputs(), found.frf.lines());
     let mut summary = String::new();
     let _ = writeln!(
         summary,
-        "  time histories: {} ({}), sample rate {rate} Hz from {rate_from}",
+        "  time histories: {} ({}), sample rate {rate} Hz from {}",
         history.description,
-        history.format.name()
+        history.format.name(),
+        first.rate_from
     );
     if paths.len() > 1 {
         let _ = writeln!(
             summary,
             "  averaged over {} records: {} (the channels and description are the first's)",
             paths.len(),
-            paths
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
+            joined(paths, ", ")
         );
     }
     let names = |cols: &[usize]| {
@@ -278,8 +383,8 @@ pub fn estimate_from_time(
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let _ = writeln!(summary, "  inputs: {}", names(&input_cols));
-    let _ = writeln!(summary, "  outputs: {}", names(&output_cols));
+    let _ = writeln!(summary, "  inputs: {}", names(input_cols));
+    let _ = writeln!(summary, "  outputs: {}", names(output_cols));
     let _ = writeln!(
         summary,
         "  {} estimate: {} frames of {} samples ({} window, {} % overlap = {} samples, detrend {}), {lines} lines at {} Hz",
@@ -306,22 +411,9 @@ pub fn estimate_from_time(
             found.frf.frequency_hz()[found.unexcited_lines[0]]
         );
     }
-    // Multiple coherence per output over the excited band (every input within 40 dB of
-    // its largest autospectrum): the median, and the share of lines above 0.9.
-    let band: Vec<usize> = (1..lines)
-        .filter(|&k| {
-            (0..p).all(|j| {
-                let g = found.spectra.gxx(j, j);
-                let top = g.iter().map(|v| v.re).fold(0.0, f64::max);
-                g[k].re >= 1e-4 * top
-            })
-        })
-        .collect();
-    let band = if band.is_empty() {
-        (1..lines).collect()
-    } else {
-        band
-    };
+    // Multiple coherence per output over the excited band: the median, and the share
+    // of lines above 0.9.
+    let band = excited_band(found);
     let f = found.frf.frequency_hz();
     let _ = writeln!(
         summary,
@@ -330,6 +422,30 @@ pub fn estimate_from_time(
         f[band[band.len() - 1]],
         band.len()
     );
+    let per_output = coherence_per_output(found, &band, output_cols, &label);
+    summary.push_str(&coherence_line(&per_output, q, output_cols, &label));
+    let json = json!({
+        "files": paths, "format": history.format.name(), "samples": history.samples(),
+        "sample_rate_hz": rate, "sample_rate_from": first.rate_from,
+        "inputs": input_cols.iter().map(|&c| json!({"column": c + 1, "name": label(c)})).collect::<Vec<_>>(),
+        "outputs": output_cols.iter().map(|&c| json!({"column": c + 1, "name": label(c)})).collect::<Vec<_>>(),
+        "estimator": est.name(), "window": opts.window.name(), "frame": opts.frame,
+        "overlap": opts.overlap, "overlap_samples": opts.overlap_samples(), "detrend": opts.detrend.name(),
+        "averages": frames, "lines": lines, "spacing_hz": found.frf.spacing_hz(),
+        "pairs": q * p, "unexcited_lines": found.unexcited_lines.len(),
+        "excited_band_hz": [f[band[0]], f[band[band.len() - 1]]],
+        "coherence": per_output,
+    });
+    (summary, json)
+}
+
+/// Each output's multiple coherence over `band`: the median and the share above 0.9.
+fn coherence_per_output(
+    found: &FrfEstimate,
+    band: &[usize],
+    output_cols: &[usize],
+    label: &dyn Fn(usize) -> String,
+) -> Vec<serde_json::Value> {
     let mut per_output = Vec::new();
     for (i, &column) in output_cols.iter().enumerate() {
         let all = found.multiple(i);
@@ -340,6 +456,17 @@ pub fn estimate_from_time(
         per_output.push(json!({"output": i + 1, "channel": label(column),
             "median_multiple_coherence": median, "share_above_0_9": good}));
     }
+    per_output
+}
+
+/// The summary line of the medians: every output's (up to 8) or their range, and the
+/// lowest.
+fn coherence_line(
+    per_output: &[serde_json::Value],
+    q: usize,
+    output_cols: &[usize],
+    label: &dyn Fn(usize) -> String,
+) -> String {
     let medians: Vec<f64> = per_output
         .iter()
         .map(|v| v["median_multiple_coherence"].as_f64().unwrap_or(0.0))
@@ -350,9 +477,8 @@ pub fn estimate_from_time(
         .min_by(|a, b| a.1.total_cmp(b.1))
         .map(|(i, v)| (i, *v))
         .unwrap_or((0, 0.0));
-    let _ = writeln!(
-        summary,
-        "  multiple coherence (median over the band): {} per output; lowest output {} ({}) at {:.4}",
+    format!(
+        "  multiple coherence (median over the band): {} per output; lowest output {} ({}) at {:.4}\n",
         if q <= 8 {
             medians
                 .iter()
@@ -367,31 +493,7 @@ pub fn estimate_from_time(
         lowest.0 + 1,
         label(output_cols[lowest.0]),
         lowest.1
-    );
-    let json = json!({
-        "files": paths, "format": history.format.name(), "samples": history.samples(),
-        "sample_rate_hz": rate, "sample_rate_from": rate_from,
-        "inputs": input_cols.iter().map(|&c| json!({"column": c + 1, "name": label(c)})).collect::<Vec<_>>(),
-        "outputs": output_cols.iter().map(|&c| json!({"column": c + 1, "name": label(c)})).collect::<Vec<_>>(),
-        "estimator": est.name(), "window": opts.window.name(), "frame": opts.frame,
-        "overlap": opts.overlap, "overlap_samples": opts.overlap_samples(), "detrend": opts.detrend.name(),
-        "averages": frames, "lines": lines, "spacing_hz": found.frf.spacing_hz(),
-        "pairs": q * p, "unexcited_lines": found.unexcited_lines.len(),
-        "excited_band_hz": [f[band[0]], f[band[band.len() - 1]]],
-        "coherence": per_output,
-    });
-    let note = format!(" [estimated from {}]", history.format.name());
-    Ok(FromTime {
-        input: InputFrf {
-            file,
-            format: FrfFormat::Csv,
-            note,
-        },
-        estimate: found,
-        summary,
-        json,
-        timings: (read_s, estimate_s),
-    })
+    )
 }
 
 /// Names the channels in a singular-input or non-finite error (the library numbers

@@ -5,17 +5,29 @@
 use crate::args::{IdentifyArgs, QuantityArg};
 use crate::config::Settings;
 use crate::config::{apply_route, era_options, options, route_request, scan_orders};
+use crate::input::InputFrf;
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
 use crate::output::identification::write_identification;
 use crate::output::report::{
     identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
 };
-use crate::output::{pair_fit_table, prepare_out_dir, write_output};
+use crate::output::{pair_fit_table, prepare_out_dir, write_output, InputCoherence, RunInput};
 use anyhow::Context;
+use era::identify::route::Route;
 use era::identify::{identify_auto, identify_observed, identify_with_scan, ScanOptions};
+use era_io::atomic::OutputSet;
 use era_io::model_json::{timings_map, FitJson, ModelJson};
 use std::time::Instant;
+
+/// What `identify` read: the FRFs (from a file, or estimated from time histories), and
+/// with `--from-time` the estimate's seconds, coherence and description.
+struct Source {
+    input: InputFrf,
+    estimate_s: Option<f64>,
+    coherence: Option<InputCoherence>,
+    time_format: Option<String>,
+}
 
 pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let settings = Settings::from(&a.common);
@@ -34,92 +46,17 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
     };
-    let mut frf_outputs = match &a.save_frf {
+    let frf_outputs = match &a.save_frf {
         Some(path) if a.from_time => Some(crate::commands::frf::prepare_estimate(path, false)?),
         _ => None,
     };
     let clock = Instant::now();
-    let mut estimate_s = None;
-    let mut coherence = None;
-    let mut time_format = None;
-    let input = if a.from_time {
-        let inputs = a.inputs.as_deref().unwrap_or_default();
-        let Some(outputs) = a.outputs.as_deref() else {
-            return crate::error::usage(
-                "--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)",
-            );
-        };
-        let quantity = a.quantity.unwrap_or(QuantityArg::Acceleration);
-        let mut found = crate::commands::frf::estimate_from_time(
-            std::slice::from_ref(&a.file),
-            inputs,
-            outputs,
-            &a.welch,
-            quantity,
-            &settings,
-        )?;
-        set_units(&mut found.input, a.facts.units.as_ref());
-        human.print(&format!(
-            "era identify --from-time {}\n{}",
-            a.file.display(),
-            found.summary
-        ));
-        if let (Some(path), Some(set)) = (&a.save_frf, frf_outputs.take()) {
-            let coherence = crate::commands::frf::write_estimate(set, path, &found, false)?;
-            human.print(&format!(
-                "  wrote {} and {}\n",
-                path.display(),
-                coherence.display()
-            ));
-        }
-        estimate_s = Some(found.timings.1);
-        coherence = Some(crate::output::InputCoherence::multiple(&found.estimate));
-        let text = |key: &str| found.json[key].to_string().replace('"', "");
-        time_format = Some(format!(
-            "time histories ({}); FRFs estimated here: {} estimator, {} window, frame {}, {} averages",
-            text("format"),
-            text("estimator"),
-            text("window"),
-            text("frame"),
-            text("averages")
-        ));
-        found.input
-    } else {
-        let outputs = match a.outputs.as_deref() {
-            None => None,
-            Some(text) => Some(text.trim().parse::<usize>().map_err(|_| {
-                crate::error::UsageError(format!(
-                    "--outputs {text}: expected the number of outputs of a MAT FRF matrix (channel lists apply with --from-time)"
-                ))
-            })?),
-        };
-        let input = read_frf_with(
-            &a.file,
-            &FrfFlags {
-                quantity: a.quantity,
-                outputs,
-                units: a.facts.units.as_ref(),
-                frequency_variable: a.facts.freq_variable.as_deref(),
-            },
-        )?;
-        human.print(&format!("era identify {}\n", a.file.display()));
-        input
-    };
-    let read_s = clock.elapsed().as_secs_f64() - estimate_s.unwrap_or(0.0);
-    let mut input = input;
+    let source = read_source(a, frf_outputs, &human, &settings)?;
+    let read_s = clock.elapsed().as_secs_f64() - source.estimate_s.unwrap_or(0.0);
+    let mut input = source.input;
     let route = request.resolve(input.file.frf.quantity(), a.integrations);
     apply_route(&mut opts, &route);
-    if route.window_correction {
-        if let Some((corrected, why)) =
-            crate::config::window_corrected(&input.file.frf, &input.file.metadata)
-                .with_context(|| format!("correcting the window of {}", a.file.display()))?
-        {
-            input.file.frf = corrected;
-            human.print(&format!(
-                "  window correction: {why} (--no-window-correction: off)\n"
-            ));
-        }
-    }
+    correct_window(a, &route, &mut input, &human)?;
     let frf = &input.file.frf;
     if route.refine {
         crate::commands::refine::check_shape(&refine_options, frf)?;
@@ -137,24 +74,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         )
     );
     human.print(&echo);
-
-    let band = identify_band(a, frf, coherence.as_ref(), route.coherence_band)?;
-    // The refinement fits measured lines only (never the zero lines a late start was
-    // padded with, or --zero-lines zeroed), inside the band when there is one.
-    let fit = era::frf::fit_lines(frf, a.zero_lines, band.as_ref().ok().map(|b| (b.0, b.1)))
-        .map_err(|why| {
-            let text = a.band.clone().unwrap_or_else(|| match &band {
-                Ok((lo, hi, _)) => format!("{lo}..{hi}"),
-                Err(_) => String::new(),
-            });
-            crate::error::UsageError(format!("--band {text}: {why}"))
-        })?;
-    match (&band, fit.band_hz) {
-        (Ok((_, _, why)), Some((lo, hi))) => {
-            human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"))
-        }
-        (Err(why), _) | (Ok((_, _, why)), None) => human.print(&format!("  band: {why}\n")),
-    }
+    let fit = fit_lines(a, frf, source.coherence.as_ref(), &route, &human)?;
     let mut refine_options = refine_options;
     refine_options.band = fit.lines;
     let scan_options = ScanOptions {
@@ -173,37 +93,14 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     // What the data's zeroed start does to ERA's modes, measured on this model.
     let zero_start = era::suspect::zero_start(&found, &era_opts, route.refine);
     if route.refine {
-        let era_fit = &found.fit;
-        human.print(&format!(
-            "\nERA model: {} states, {} modes; fit collocated {}, non-collocated {}\n",
-            states,
-            found.modal.modes.len(),
-            era_fit
-                .collocated_mean_relative_error
-                .map_or("-".into(), |v| format!("{v:.3e}")),
-            era_fit
-                .noncollocated_mean_relative_error
-                .map_or("-".into(), |v| format!("{v:.3e}"))
-        ));
-        found = crate::commands::refine::refine_found(
-            found,
-            frf,
-            &refine_options,
-            Some(route.domain),
-            &settings,
-        )
-        .with_context(|| format!("refining the model of {}", a.file.display()))?;
-        human.print(&crate::commands::refine::summary(&found));
-        if a.from_time && auto && !a.no_frame_check {
-            let check = Check {
-                band_hz: fit.band_hz,
-                era_opts: &era_opts,
-                scan_options: &scan_options,
-                refine_options: &refine_options,
-                route: &route,
-            };
-            human.print(&frame_check(a, &mut found, &check)?);
-        }
+        let check = Check {
+            band_hz: fit.band_hz,
+            era_opts: &era_opts,
+            scan_options: &scan_options,
+            refine_options: &refine_options,
+            route: &route,
+        };
+        found = refine_route(a, found, frf, &check, auto, &human, &settings)?;
     }
     found.suspects.extend(zero_start);
     found
@@ -214,69 +111,42 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if let Some(st) = &found.stabilization {
         human.print(&stabilization_summary(st));
     }
-
     let mut timings = timings_map(&found.timings);
     timings.insert("read".into(), read_s);
-    if let Some(t) = estimate_s {
+    if let Some(t) = source.estimate_s {
         timings.insert("frf_estimate".into(), t);
     }
-    let mut params = parameters(&opts);
-    if auto {
-        params.insert("states".into(), serde_json::json!("auto"));
-        params.insert("model_states".into(), serde_json::json!(states));
-    }
-    if let Some(st) = &found.stabilization {
-        params.insert("orders".into(), serde_json::json!(st.range.to_string()));
-    }
-    params.insert("preset".into(), serde_json::json!(route.preset.name()));
     if route.refine {
         timings.insert("refine".into(), found.timings.refine);
-        era_io::model_json::refine_parameters(&refine_options, &mut params);
-        params.insert(
-            "model_states".into(),
-            serde_json::json!(found.model.states()),
-        );
     }
-    let mut model = ModelJson::from_identification(&found, params, None);
-    // The route's cautions lead the warnings, as they led the echo.
-    model.warnings.splice(0..0, route.cautions.iter().cloned());
-    let fit = FitJson::from_report(&found.fit);
-    if let Some(set) = outputs.as_mut() {
-        let clock = Instant::now();
-        let title = format!("era identify {}", a.file.display());
-        let mut source = crate::output::RunInput::from_file(&a.file, &input);
+    let model = model_json(&found, &opts, &route, &refine_options, auto, states);
+    let written = Written {
+        model,
+        timings,
+        echo,
+        states,
+    };
+    let run_input = outputs.as_ref().map(|_| {
+        let mut run_input = RunInput::from_file(&a.file, &input);
         if a.from_time {
-            source.section.format = time_format.take().unwrap_or_default();
+            run_input.section.format = source.time_format.unwrap_or_default();
         }
-        if coherence.is_some() {
-            source.coherence = coherence;
+        if source.coherence.is_some() {
+            run_input.coherence = source.coherence;
         }
-        source.phase = a.phase.into();
-        write_identification(
-            set,
-            std::path::Path::new(""),
-            &found,
-            &model,
-            &fit,
-            &source,
-            &title,
-            &echo,
-            states,
-            !a.no_figures,
-            &settings,
-        )?;
-        timings.insert("write".into(), clock.elapsed().as_secs_f64());
-    }
-    if settings.timings {
-        human.print(&timings_table(&timings));
-        human.print(&svd_path_line(&found.realization));
-        model.timings_s = Some(timings);
-        if let Some(set) = outputs.as_mut() {
-            write_output(set, "model.json", |p| Ok(model.write(p)?))?;
-        }
-    }
-    // Every output is in the staging folder: they all take their place now, or none.
+        run_input.phase = a.phase.into();
+        run_input
+    });
+    let model = write(
+        a,
+        outputs.as_mut().zip(run_input.as_ref()),
+        &found,
+        written,
+        &human,
+        &settings,
+    )?;
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
+        // Every output is in the staging folder: they all take their place now, or none.
         set.commit()?;
         let figures = " (singular_values, grid, pairs/)";
         human.print(&format!(
@@ -289,6 +159,259 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         print_json(&model)?;
     }
     Ok(())
+}
+
+/// The FRFs to identify: estimated from time histories with `--from-time` (and saved
+/// with `--save-frf`), read from the FRF file otherwise.
+fn read_source(
+    a: &IdentifyArgs,
+    frf_outputs: Option<OutputSet>,
+    human: &Human,
+    settings: &Settings,
+) -> anyhow::Result<Source> {
+    if !a.from_time {
+        let outputs = match a.outputs.as_deref() {
+            None => None,
+            Some(text) => Some(text.trim().parse::<usize>().map_err(|_| {
+                crate::error::UsageError(format!(
+                    "--outputs {text}: expected the number of outputs of a MAT FRF matrix (channel lists apply with --from-time)"
+                ))
+            })?),
+        };
+        let input = read_frf_with(
+            &a.file,
+            &FrfFlags {
+                quantity: a.quantity,
+                outputs,
+                units: a.facts.units.as_ref(),
+                frequency_variable: a.facts.freq_variable.as_deref(),
+            },
+        )?;
+        human.print(&format!("era identify {}\n", a.file.display()));
+        return Ok(Source {
+            input,
+            estimate_s: None,
+            coherence: None,
+            time_format: None,
+        });
+    }
+    let inputs = a.inputs.as_deref().unwrap_or_default();
+    let Some(outputs) = a.outputs.as_deref() else {
+        return crate::error::usage("--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)");
+    };
+    let quantity = a.quantity.unwrap_or(QuantityArg::Acceleration);
+    let mut found = crate::commands::frf::estimate_from_time(
+        std::slice::from_ref(&a.file),
+        inputs,
+        outputs,
+        &a.welch,
+        quantity,
+        settings,
+    )?;
+    set_units(&mut found.input, a.facts.units.as_ref());
+    human.print(&format!(
+        "era identify --from-time {}\n{}",
+        a.file.display(),
+        found.summary
+    ));
+    if let (Some(path), Some(set)) = (&a.save_frf, frf_outputs) {
+        let coherence = crate::commands::frf::write_estimate(set, path, &found, false)?;
+        human.print(&format!(
+            "  wrote {} and {}\n",
+            path.display(),
+            coherence.display()
+        ));
+    }
+    let text = |key: &str| found.json[key].to_string().replace('"', "");
+    let time_format = format!(
+        "time histories ({}); FRFs estimated here: {} estimator, {} window, frame {}, {} averages",
+        text("format"),
+        text("estimator"),
+        text("window"),
+        text("frame"),
+        text("averages")
+    );
+    Ok(Source {
+        estimate_s: Some(found.timings.1),
+        coherence: Some(InputCoherence::multiple(&found.estimate)),
+        time_format: Some(time_format),
+        input: found.input,
+    })
+}
+
+/// The route's window correction of `input` (a Welch estimate's lag window divided
+/// out), said on the terminal.
+fn correct_window(
+    a: &IdentifyArgs,
+    route: &Route,
+    input: &mut InputFrf,
+    human: &Human,
+) -> anyhow::Result<()> {
+    if !route.window_correction {
+        return Ok(());
+    }
+    if let Some((corrected, why)) =
+        crate::config::window_corrected(&input.file.frf, &input.file.metadata)
+            .with_context(|| format!("correcting the window of {}", a.file.display()))?
+    {
+        input.file.frf = corrected;
+        human.print(&format!(
+            "  window correction: {why} (--no-window-correction: off)\n"
+        ));
+    }
+    Ok(())
+}
+
+/// The lines the refinement fits and the scan judges: measured lines only (never the
+/// zero lines a late start was padded with, or --zero-lines zeroed), inside the band
+/// when there is one; the band said on the terminal.
+fn fit_lines(
+    a: &IdentifyArgs,
+    frf: &era::FrfData,
+    coherence: Option<&InputCoherence>,
+    route: &Route,
+    human: &Human,
+) -> anyhow::Result<era::frf::FitLines> {
+    let band = identify_band(a, frf, coherence, route.coherence_band)?;
+    let fit = era::frf::fit_lines(frf, a.zero_lines, band.as_ref().ok().map(|b| (b.0, b.1)))
+        .map_err(|why| {
+            let text = a.band.clone().unwrap_or_else(|| match &band {
+                Ok((lo, hi, _)) => format!("{lo}..{hi}"),
+                Err(_) => String::new(),
+            });
+            crate::error::UsageError(format!("--band {text}: {why}"))
+        })?;
+    match (&band, fit.band_hz) {
+        (Ok((_, _, why)), Some((lo, hi))) => {
+            human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"))
+        }
+        (Err(why), _) | (Ok((_, _, why)), None) => human.print(&format!("  band: {why}\n")),
+    }
+    Ok(fit)
+}
+
+/// The refinement of ERA's model on the route, and with `--from-time` and the automatic
+/// order the frame check.
+fn refine_route(
+    a: &IdentifyArgs,
+    found: era::Identification,
+    frf: &era::FrfData,
+    check: &Check,
+    auto: bool,
+    human: &Human,
+    settings: &Settings,
+) -> anyhow::Result<era::Identification> {
+    let era_fit = &found.fit;
+    human.print(&format!(
+        "\nERA model: {} states, {} modes; fit collocated {}, non-collocated {}\n",
+        found.model.states(),
+        found.modal.modes.len(),
+        era_fit
+            .collocated_mean_relative_error
+            .map_or("-".into(), |v| format!("{v:.3e}")),
+        era_fit
+            .noncollocated_mean_relative_error
+            .map_or("-".into(), |v| format!("{v:.3e}"))
+    ));
+    let mut found = crate::commands::refine::refine_found(
+        found,
+        frf,
+        check.refine_options,
+        Some(check.route.domain),
+        settings,
+    )
+    .with_context(|| format!("refining the model of {}", a.file.display()))?;
+    human.print(&crate::commands::refine::summary(&found));
+    if a.from_time && auto && !a.no_frame_check {
+        human.print(&frame_check(a, &mut found, check)?);
+    }
+    Ok(found)
+}
+
+/// model.json of the run: the identification, the parameters as run (the automatic
+/// order, the scan's orders, the preset, the refinement's), and the route's cautions
+/// before the warnings, as they led the echo.
+fn model_json(
+    found: &era::Identification,
+    opts: &era::EraOptions,
+    route: &Route,
+    refine_options: &era::refine::RefineOptions,
+    auto: bool,
+    states: usize,
+) -> ModelJson {
+    let mut params = parameters(opts);
+    if auto {
+        params.insert("states".into(), serde_json::json!("auto"));
+        params.insert("model_states".into(), serde_json::json!(states));
+    }
+    if let Some(st) = &found.stabilization {
+        params.insert("orders".into(), serde_json::json!(st.range.to_string()));
+    }
+    params.insert("preset".into(), serde_json::json!(route.preset.name()));
+    if route.refine {
+        era_io::model_json::refine_parameters(refine_options, &mut params);
+        params.insert(
+            "model_states".into(),
+            serde_json::json!(found.model.states()),
+        );
+    }
+    let mut model = ModelJson::from_identification(found, params, None);
+    model.warnings.splice(0..0, route.cautions.iter().cloned());
+    model
+}
+
+/// What a run hands to its outputs besides the identification.
+struct Written {
+    model: ModelJson,
+    timings: std::collections::BTreeMap<String, f64>,
+    echo: String,
+    states: usize,
+}
+
+/// The run's files into `out` (staged, not yet committed) and the timings; returns
+/// model.json as written.
+fn write(
+    a: &IdentifyArgs,
+    mut out: Option<(&mut OutputSet, &RunInput)>,
+    found: &era::Identification,
+    written: Written,
+    human: &Human,
+    settings: &Settings,
+) -> anyhow::Result<ModelJson> {
+    let Written {
+        mut model,
+        mut timings,
+        echo,
+        states,
+    } = written;
+    let fit = FitJson::from_report(&found.fit);
+    if let Some((set, source)) = out.as_mut() {
+        let clock = Instant::now();
+        let title = format!("era identify {}", a.file.display());
+        write_identification(
+            set,
+            std::path::Path::new(""),
+            found,
+            &model,
+            &fit,
+            source,
+            &title,
+            &echo,
+            states,
+            !a.no_figures,
+            settings,
+        )?;
+        timings.insert("write".into(), clock.elapsed().as_secs_f64());
+    }
+    if settings.timings {
+        human.print(&timings_table(&timings));
+        human.print(&svd_path_line(&found.realization));
+        model.timings_s = Some(timings);
+        if let Some((set, _)) = out.as_mut() {
+            write_output(set, "model.json", |p| Ok(model.write(p)?))?;
+        }
+    }
+    Ok(model)
 }
 
 /// ERA on `frf` as the flags ask: the automatic order, a fixed order judged against a
