@@ -13,6 +13,7 @@ use era::response::model_frf;
 use era::stability::mac;
 use era::{Complex64, FrfData, StateSpace};
 use era_io::atomic::OutputSet;
+use era_io::csv::FrfFile;
 use era_io::format::{read_frf_file, ReadOptions};
 use serde_json::json;
 use std::path::Path;
@@ -121,9 +122,71 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
     })
 }
 
+/// What `compare` found: the difference of each pair per band, the median and worst
+/// over pairs, the matched modes (A's frequency and damping, B's, the MAC) and each
+/// model's fit to its own data, percent.
+struct Comparison {
+    differences: Vec<(String, Vec<f64>)>,
+    median_band: Vec<f64>,
+    worst: Vec<f64>,
+    modes: Vec<(f64, f64, f64, f64, f64)>,
+    fit: Option<(f64, f64)>,
+}
+
 pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
     let settings = Settings::from(&a.common);
     let human = Human::new(&settings);
+    check_bands(a)?;
+    let mut set = match &a.out {
+        Some(dir) => Some(OutputSet::new(dir)?),
+        None => None,
+    };
+    let (fa, fb) = read_both(a)?;
+    let (ga, gb) = (&fa.frf, &fb.frf);
+    let clock = Instant::now();
+    let (differences, median_band, worst) = band_differences(ga, gb, &a.bands);
+    // Models: given or identified.
+    let sides = match (&a.model_a, &a.model_b, &a.identify) {
+        (Some(ma), Some(mb), _) => Some((
+            model_from_json("--model-a", ma)?,
+            model_from_json("--model-b", mb)?,
+        )),
+        (_, _, Some(flags)) => Some((identified(flags, &a.a, ga)?, identified(flags, &a.b, gb)?)),
+        _ => None,
+    };
+    let (modes, fit) = match &sides {
+        Some(sides) => compare_models(sides, ga, gb, (a.fit_band[0], a.fit_band[1]))?,
+        None => (Vec::new(), None),
+    };
+    let found = Comparison {
+        differences,
+        median_band,
+        worst,
+        modes,
+        fit,
+    };
+    let compare_s = clock.elapsed().as_secs_f64();
+    let (la, lb) = (label(&a.a), label(&a.b));
+    let text = summary(a, &found, (&la, &lb));
+    human.print(&text);
+    let json_out = json!({
+        "a": a.a, "b": a.b, "bands_hz": a.bands,
+        "median_difference_percent": found.median_band, "worst_difference_percent": found.worst,
+        "pairs": found.differences.iter().map(|(l, r)| json!({"pair": l, "difference_percent": r})).collect::<Vec<_>>(),
+        "fit_percent": found.fit.map(|(x, y)| json!({"a": x, "b": y, "band_hz": a.fit_band})),
+        "modes": found.modes.iter().map(|m| json!({"frequency_a_hz": m.0, "damping_a": m.1, "frequency_b_hz": m.2, "damping_b": m.3, "mac": m.4})).collect::<Vec<_>>(),
+    });
+    if let Some(set) = set.as_mut() {
+        write_files(set, a, (&fa, &fb), &found, &text, &json_out, &settings)?;
+    }
+    if let Some(set) = set {
+        set.commit()?;
+    }
+    finish_output(&human, &settings, json_out, &[("compare", compare_s)])
+}
+
+/// `--bands` and `--fit-band` checked before anything is read.
+fn check_bands(a: &CompareArgs) -> anyhow::Result<()> {
     if a.bands.len() < 2
         || a.bands.iter().any(|b| !b.is_finite() || *b < 0.0)
         || a.bands.windows(2).any(|w| w[1] <= w[0])
@@ -139,10 +202,11 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
             a.fit_band
         ));
     }
-    let mut set = match &a.out {
-        Some(dir) => Some(OutputSet::new(dir)?),
-        None => None,
-    };
+    Ok(())
+}
+
+/// Both FRF files, refused unless they hold the same pairs on the same lines.
+fn read_both(a: &CompareArgs) -> anyhow::Result<(FrfFile, FrfFile)> {
     let opts = ReadOptions::default();
     let (fa, _) = read_frf_file(&a.a, &opts)?;
     let (fb, _) = read_frf_file(&a.b, &opts)?;
@@ -166,20 +230,30 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
             gb.lines()
         ));
     }
-    let clock = Instant::now();
+    Ok((fa, fb))
+}
+
+/// A file's name for the tables and figures.
+fn label(s: &Path) -> String {
+    s.file_name()
+        .map_or("?".into(), |n| n.to_string_lossy().into_owned())
+}
+
+/// The difference of each pair in each band, percent; the median over pairs and the
+/// worst pair per band.
+#[allow(clippy::type_complexity)]
+fn band_differences(
+    ga: &FrfData,
+    gb: &FrfData,
+    bands: &[f64],
+) -> (Vec<(String, Vec<f64>)>, Vec<f64>, Vec<f64>) {
     let (q, p) = (ga.outputs(), ga.inputs());
     let f = ga.frequency_hz();
-    let label = |s: &Path| {
-        s.file_name()
-            .map_or("?".into(), |n| n.to_string_lossy().into_owned())
-    };
-    let (la, lb) = (label(&a.a), label(&a.b));
     let mut differences = Vec::new();
-    let mut worst: Vec<f64> = vec![0.0; a.bands.len() - 1];
+    let mut worst: Vec<f64> = vec![0.0; bands.len() - 1];
     for i in 0..q {
         for j in 0..p {
-            let row: Vec<f64> = a
-                .bands
+            let row: Vec<f64> = bands
                 .windows(2)
                 .map(|w| 100.0 * band_difference(ga.pair(i, j), gb.pair(i, j), f, w[0], w[1]))
                 .collect();
@@ -191,7 +265,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
             differences.push((format!("{}/{}", i + 1, j + 1), row));
         }
     }
-    let median_band: Vec<f64> = (0..a.bands.len() - 1)
+    let median_band: Vec<f64> = (0..bands.len() - 1)
         .map(|b| {
             let mut v: Vec<f64> = differences
                 .iter()
@@ -202,50 +276,51 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
             v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
         })
         .collect();
-    // Models: given or identified.
-    let sides = match (&a.model_a, &a.model_b, &a.identify) {
-        (Some(ma), Some(mb), _) => Some((
-            model_from_json("--model-a", ma)?,
-            model_from_json("--model-b", mb)?,
-        )),
-        (_, _, Some(flags)) => Some((identified(flags, &a.a, ga)?, identified(flags, &a.b, gb)?)),
-        _ => None,
-    };
+    (differences, median_band, worst)
+}
+
+/// Each model's fit to its own data over `band` (percent), and A's modes matched to
+/// B's: among B's modes within 10 % in frequency, the one with the highest MAC.
+#[allow(clippy::type_complexity)]
+fn compare_models(
+    (sa, sb): &(Side, Side),
+    ga: &FrfData,
+    gb: &FrfData,
+    band: (f64, f64),
+) -> anyhow::Result<(Vec<(f64, f64, f64, f64, f64)>, Option<(f64, f64)>)> {
+    let da = integrate(ga, sa.integrations)?;
+    let db = integrate(gb, sb.integrations)?;
+    let ma = model_frf(&sa.model, &da)?;
+    let mb = model_frf(&sb.model, &db)?;
+    let fit = Some((
+        100.0 * fit_error(&da, &ma, band),
+        100.0 * fit_error(&db, &mb, band),
+    ));
+    let pa = modal_parameters(&sa.model)?;
+    let pb = modal_parameters(&sb.model)?;
     let mut modes = Vec::new();
-    let mut fit = None;
-    if let Some((sa, sb)) = &sides {
-        let band = (a.fit_band[0], a.fit_band[1]);
-        let da = integrate(ga, sa.integrations)?;
-        let db = integrate(gb, sb.integrations)?;
-        let ma = model_frf(&sa.model, &da)?;
-        let mb = model_frf(&sb.model, &db)?;
-        fit = Some((
-            100.0 * fit_error(&da, &ma, band),
-            100.0 * fit_error(&db, &mb, band),
-        ));
-        let pa = modal_parameters(&sa.model)?;
-        let pb = modal_parameters(&sb.model)?;
-        for m in &pa.modes {
-            // The mode of B with the highest MAC among those within 10 % in frequency.
-            let best = pb
-                .modes
-                .iter()
-                .filter(|n| (n.frequency_hz - m.frequency_hz).abs() <= 0.1 * m.frequency_hz)
-                .map(|n| (mac(&m.shape, &n.shape), n))
-                .max_by(|x, y| x.0.total_cmp(&y.0));
-            if let Some((value, n)) = best {
-                modes.push((
-                    m.frequency_hz,
-                    m.damping_ratio,
-                    n.frequency_hz,
-                    n.damping_ratio,
-                    value,
-                ));
-            }
+    for m in &pa.modes {
+        let best = pb
+            .modes
+            .iter()
+            .filter(|n| (n.frequency_hz - m.frequency_hz).abs() <= 0.1 * m.frequency_hz)
+            .map(|n| (mac(&m.shape, &n.shape), n))
+            .max_by(|x, y| x.0.total_cmp(&y.0));
+        if let Some((value, n)) = best {
+            modes.push((
+                m.frequency_hz,
+                m.damping_ratio,
+                n.frequency_hz,
+                n.damping_ratio,
+                value,
+            ));
         }
     }
-    let compare_s = clock.elapsed().as_secs_f64();
-    // Human summary.
+    Ok((modes, fit))
+}
+
+/// The human summary: the differences by band, the fits and the modes matched.
+fn summary(a: &CompareArgs, found: &Comparison, (la, lb): (&str, &str)) -> String {
     let mut text = format!(
         "era compare {} {}\n  differences by band (median over pairs, worst pair), ‖A − B‖/‖B‖:\n",
         a.a.display(),
@@ -254,77 +329,80 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
     for (k, w) in a.bands.windows(2).enumerate() {
         text.push_str(&format!(
             "    {:>5}–{:<5} Hz  {:8.2} %  {:8.2} %\n",
-            w[0], w[1], median_band[k], worst[k]
+            w[0], w[1], found.median_band[k], found.worst[k]
         ));
     }
-    if let Some((x, y)) = fit {
+    if let Some((x, y)) = found.fit {
         text.push_str(&format!(
             "  fit of each model to its own data, {}–{} Hz (mean relative error): {la} {x:.2} %, {lb} {y:.2} %\n",
             a.fit_band[0], a.fit_band[1]
         ));
     }
-    if !modes.is_empty() {
+    if !found.modes.is_empty() {
+        let modes = &found.modes;
         let mean_mac = modes.iter().map(|m| m.4).sum::<f64>() / modes.len() as f64;
         text.push_str(&format!(
             "  modes matched: {} of the first model's, mean MAC {mean_mac:.4}\n",
             modes.len()
         ));
     }
-    human.print(&text);
-    let json_out = json!({
-        "a": a.a, "b": a.b, "bands_hz": a.bands,
-        "median_difference_percent": median_band, "worst_difference_percent": worst,
-        "pairs": differences.iter().map(|(l, r)| json!({"pair": l, "difference_percent": r})).collect::<Vec<_>>(),
-        "fit_percent": fit.map(|(x, y)| json!({"a": x, "b": y, "band_hz": a.fit_band})),
-        "modes": modes.iter().map(|m| json!({"frequency_a_hz": m.0, "damping_a": m.1, "frequency_b_hz": m.2, "damping_b": m.3, "mac": m.4})).collect::<Vec<_>>(),
-    });
-    if let Some(set) = set.as_mut() {
-        let bar = crate::output::progress::bar(&settings, (q * p) as u64, "figures");
-        let mut overlays = Vec::new();
-        // The first set's units and channel table; the phase wrapped.
-        let view = crate::output::figures::frf_view(
-            &era_plot::FrfUnits::from_metadata(&fa.metadata),
-            ga.quantity(),
-            fa.channels.as_ref(),
-            ga,
-            era_plot::PhaseView::Wrapped,
-        );
-        for i in 0..q {
-            for j in 0..p {
-                let fig = era_plot::compare::compare_overlay(ga, gb, (&la, &lb), i, j, &view);
-                overlays.push((fig.title.clone(), era_plot::render_svg(&fig)?));
-                let name = format!("pair_{}_{}.png", i + 1, j + 1);
-                write_output(set, &name, |staged| {
-                    era_plot::render_png(&fig, staged)?;
-                    Ok(())
-                })?;
-                bar.inc(1);
-            }
+    text
+}
+
+/// One PNG per pair, compare.html and compare.json into `set`.
+fn write_files(
+    set: &mut OutputSet,
+    a: &CompareArgs,
+    (fa, fb): (&FrfFile, &FrfFile),
+    found: &Comparison,
+    notes: &str,
+    json_out: &serde_json::Value,
+    settings: &Settings,
+) -> anyhow::Result<()> {
+    let (ga, gb) = (&fa.frf, &fb.frf);
+    let (q, p) = (ga.outputs(), ga.inputs());
+    let (la, lb) = (label(&a.a), label(&a.b));
+    let bar = crate::output::progress::bar(settings, (q * p) as u64, "figures");
+    let mut overlays = Vec::new();
+    // The first set's units and channel table; the phase wrapped.
+    let view = crate::output::figures::frf_view(
+        &era_plot::FrfUnits::from_metadata(&fa.metadata),
+        ga.quantity(),
+        fa.channels.as_ref(),
+        ga,
+        era_plot::PhaseView::Wrapped,
+    );
+    for i in 0..q {
+        for j in 0..p {
+            let fig = era_plot::compare::compare_overlay(ga, gb, (&la, &lb), i, j, &view);
+            overlays.push((fig.title.clone(), era_plot::render_svg(&fig)?));
+            let name = format!("pair_{}_{}.png", i + 1, j + 1);
+            write_output(set, &name, |staged| {
+                era_plot::render_png(&fig, staged)?;
+                Ok(())
+            })?;
+            bar.inc(1);
         }
-        bar.finish_and_clear();
-        let notes = text.clone();
-        let page = era_plot::compare::compare_html(&era_plot::compare::ComparePage {
-            title: &format!("era compare: {la} and {lb}"),
-            labels: (&la, &lb),
-            bands: &a.bands,
-            differences: &differences,
-            modes: &modes,
-            fit,
-            notes: &notes,
-            overlays: &overlays,
-        });
-        write_output(set, "compare.html", |staged| {
-            era_io::atomic::write_atomic(staged, page.as_bytes())?;
-            Ok(())
-        })?;
-        let js = serde_json::to_string_pretty(&json_out)?;
-        write_output(set, "compare.json", |staged| {
-            era_io::atomic::write_atomic(staged, js.as_bytes())?;
-            Ok(())
-        })?;
     }
-    if let Some(set) = set {
-        set.commit()?;
-    }
-    finish_output(&human, &settings, json_out, &[("compare", compare_s)])
+    bar.finish_and_clear();
+    let page = era_plot::compare::compare_html(&era_plot::compare::ComparePage {
+        title: &format!("era compare: {la} and {lb}"),
+        labels: (&la, &lb),
+        bands: &a.bands,
+        differences: &found.differences,
+        modes: &found.modes,
+        fit: found.fit,
+        notes,
+        overlays: &overlays,
+    });
+    write_output(set, "compare.html", |staged| {
+        era_io::atomic::write_atomic(staged, page.as_bytes())?;
+        Ok(())
+    })?;
+    let js = serde_json::to_string_pretty(json_out)?;
+    write_output(set, "compare.json", |staged| {
+        era_io::atomic::write_atomic(staged, js.as_bytes())?;
+        Ok(())
+    })?;
+    Ok(())
 }
