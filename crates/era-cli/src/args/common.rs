@@ -167,7 +167,9 @@ pub enum DetrendArg {
 /// How a refinement fits (docs: README "Refinement").
 #[derive(Debug, Args, Clone)]
 pub struct RefineFitArgs {
-    /// Residual terms of the refined model (default both).
+    /// Residual terms of the refined model: none (modes only), lower (L/(jω)² in
+    /// displacement: modes below the band), upper (a constant in the data's quantity:
+    /// modes above the band, or D) or both (the default).
     #[arg(long, value_enum, value_name = "none|lower|upper|both")]
     pub residuals: Option<ResidualsArg>,
     /// Reciprocity: symmetric residues and residuals (square, collocated sets); with
@@ -186,7 +188,9 @@ pub struct RefineFitArgs {
     /// Levenberg–Marquardt iterations of the refinement at most (default 100).
     #[arg(long, value_name = "N")]
     pub max_iterations: Option<usize>,
-    /// Weights of the refinement's cost (default pair-noise).
+    /// Weights of the refinement's cost: uniform (every pair and line alike) or
+    /// pair-noise (the default: each pair by the inverse of its noise variance, estimated
+    /// from a first uniform fit's residual).
     #[arg(long, value_enum, value_name = "uniform|pair-noise")]
     pub weighting: Option<WeightingArg>,
 }
@@ -194,13 +198,13 @@ pub struct RefineFitArgs {
 /// The residual terms of a refined model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ResidualsArg {
-    /// Modes only.
+    // Modes only.
     None,
-    /// L/(jω)² in displacement: modes below the band.
+    // L/(jω)² in displacement: modes below the band.
     Lower,
-    /// A constant in the data's quantity: modes above the band, or D.
+    // A constant in the data's quantity: modes above the band, or D.
     Upper,
-    /// Both.
+    // Both.
     Both,
 }
 
@@ -218,20 +222,20 @@ impl From<ResidualsArg> for era::refine::Residuals {
 /// How the refinement weights the pairs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum WeightingArg {
-    /// Every pair and line alike.
+    // Every pair and line alike.
     Uniform,
-    /// Each pair by the inverse of its noise variance, estimated from a first uniform
-    /// fit's residual (maximum likelihood when the pairs' noise levels differ).
+    // Each pair by the inverse of its noise variance, estimated from a first uniform
+    // fit's residual (maximum likelihood when the pairs' noise levels differ).
     PairNoise,
 }
 
 /// How the figures draw the phase.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
 pub enum PhaseArg {
-    /// −180° … 180°: each line's own phase, nothing inferred (the default).
+    // −180° … 180°: each line's own phase, nothing inferred (the default).
     #[default]
     Wrapped,
-    /// Unwrapped where unambiguous: the model's phase, the measurement on its branch.
+    // Unwrapped where unambiguous: the model's phase, the measurement on its branch.
     Unwrapped,
 }
 

@@ -47,9 +47,9 @@ pub enum Command {
     /// The thesis's truth-model validation (Table 5.2): truth, ERA without noise, ERA with
     /// noise, side by side.
     Demo(DemoArgs),
-    /// Identify a model from an FRF file (docs/design.md §1), or from time histories with
-    /// --from-time. By default on the route measured data need (automatic order,
-    /// refinement, continuous time); --preset thesis for plain ERA as the thesis runs it.
+    /// Identify a model from an FRF file, or from time histories with --from-time: by
+    /// default the automatic order, refined, in continuous time; --preset thesis for the
+    /// thesis's plain ERA.
     Identify(Box<IdentifyArgs>),
     /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
     /// HDF5): Welch-averaged spectra, H1, H2 or Hv.
