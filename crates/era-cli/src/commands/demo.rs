@@ -3,7 +3,7 @@
 
 use crate::args::DemoArgs;
 use crate::config::Settings;
-use crate::output::identification::write_identification;
+use crate::output::identification::{write_identification, Bundle};
 use crate::output::report::{parameter_echo, parameters, print_json, timings_table, Human};
 use crate::output::{prepare_out_dir, write_output, RunInput};
 use anyhow::Context;
@@ -265,19 +265,18 @@ fn write_files(
                 force: Some("lbf".into()),
             },
         );
-        write_identification(
-            &mut set,
-            Path::new(label),
+        let fit = FitJson::from_report(&found.fit);
+        let echo = parameter_echo(options);
+        let bundle = Bundle {
             found,
-            &model,
-            &FitJson::from_report(&found.fit),
-            &source,
-            &title,
-            &parameter_echo(options),
-            options.states,
-            true,
-            settings,
-        )?;
+            fit: &fit,
+            source: &source,
+            title: &title,
+            echo: &echo,
+            states: options.states,
+            figures: true,
+        };
+        write_identification(&mut set, Path::new(label), &model, &bundle, settings)?;
     }
     set.commit()?;
     Ok(())

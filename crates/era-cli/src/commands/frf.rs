@@ -29,8 +29,25 @@ pub struct FromTime {
     pub summary: String,
     /// JSON summary.
     pub json: serde_json::Value,
+    /// How the estimate was made.
+    pub facts: EstimateFacts,
     /// Seconds reading and estimating.
     pub timings: (f64, f64),
+}
+
+/// How FRFs were estimated from time histories: the file format, the estimator, the
+/// window, the frame and the number of averages.
+pub struct EstimateFacts {
+    /// The time file's format.
+    pub format: String,
+    /// `h1`, `h2` or `hv`.
+    pub estimator: String,
+    /// The window's name.
+    pub window: String,
+    /// Samples per frame.
+    pub frame: usize,
+    /// Frames averaged.
+    pub averages: usize,
 }
 
 fn window(w: WindowArg) -> Window {
@@ -256,6 +273,13 @@ pub fn estimate_from_time(
     };
     let (summary, json) = describe_estimate(paths, &first, &found, &opts, est);
     let note = format!(" [estimated from {}]", first.history.format.name());
+    let facts = EstimateFacts {
+        format: first.history.format.name().to_string(),
+        estimator: est.name().to_string(),
+        window: opts.window.name().to_string(),
+        frame: opts.frame,
+        averages: found.spectra.frames(),
+    };
     Ok(FromTime {
         input: InputFrf {
             file,
@@ -265,6 +289,7 @@ pub fn estimate_from_time(
         estimate: found,
         summary,
         json,
+        facts,
         timings: (records.read_s, estimate_s),
     })
 }

@@ -7,7 +7,7 @@ use crate::config::Settings;
 use crate::config::{apply_route, era_options, options, route_request, scan_orders};
 use crate::input::InputFrf;
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
-use crate::output::identification::write_identification;
+use crate::output::identification::{write_bundle, Bundle};
 use crate::output::report::{
     identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
@@ -222,14 +222,10 @@ fn read_source(
             coherence.display()
         ));
     }
-    let text = |key: &str| found.json[key].to_string().replace('"', "");
+    let facts = &found.facts;
     let time_format = format!(
         "time histories ({}); FRFs estimated here: {} estimator, {} window, frame {}, {} averages",
-        text("format"),
-        text("estimator"),
-        text("window"),
-        text("frame"),
-        text("averages")
+        facts.format, facts.estimator, facts.window, facts.frame, facts.averages
     );
     Ok(Source {
         estimate_s: Some(found.timings.1),
@@ -368,8 +364,8 @@ struct Written {
     states: usize,
 }
 
-/// The run's files into `out` (staged, not yet committed) and the timings; returns
-/// model.json as written.
+/// The run's files into `out` (staged, not yet committed), model.json last and once
+/// (with the timings when asked for, the write's among them); returns model.json.
 fn write(
     a: &IdentifyArgs,
     mut out: Option<(&mut OutputSet, &RunInput)>,
@@ -388,28 +384,26 @@ fn write(
     if let Some((set, source)) = out.as_mut() {
         let clock = Instant::now();
         let title = format!("era identify {}", a.file.display());
-        write_identification(
-            set,
-            std::path::Path::new(""),
+        let bundle = Bundle {
             found,
-            &model,
-            &fit,
+            fit: &fit,
             source,
-            &title,
-            &echo,
+            title: &title,
+            echo: &echo,
             states,
-            !a.no_figures,
-            settings,
-        )?;
+            figures: !a.no_figures,
+        };
+        write_bundle(set, std::path::Path::new(""), &bundle, settings)?;
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
     }
     if settings.timings {
         human.print(&timings_table(&timings));
         human.print(&svd_path_line(&found.realization));
         model.timings_s = Some(timings);
-        if let Some((set, _)) = out.as_mut() {
-            write_output(set, "model.json", |p| Ok(model.write(p)?))?;
-        }
+    }
+    // model.json once, with the timings when they were asked for.
+    if let Some((set, _)) = out.as_mut() {
+        write_output(set, "model.json", |p| Ok(model.write(p)?))?;
     }
     Ok(model)
 }
@@ -502,7 +496,7 @@ fn frame_check(
             tried.push(format!("{other} samples give no estimate"));
             continue;
         };
-        let averages = estimate.json["averages"].as_u64().unwrap_or(0);
+        let averages = estimate.facts.averages as u64;
         if averages >= CHECK_AVERAGES {
             second = Some((estimate, other, averages));
             break;

@@ -5,7 +5,7 @@
 use crate::args::RefineArgs;
 use crate::config::Settings;
 use crate::input::{read_frf_with, shape_line};
-use crate::output::identification::write_identification;
+use crate::output::identification::{write_identification, Bundle};
 use crate::output::prepare_out_dir;
 use crate::output::report::{identification_summary, print_json, Human};
 use anyhow::Context;
@@ -171,19 +171,18 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
     if let Some(set) = outputs.as_mut() {
         let fit = FitJson::from_report(&found.fit);
         let title = format!("era refine {} {}", a.model.display(), a.file.display());
-        write_identification(
-            set,
-            std::path::Path::new(""),
-            &found,
-            &json,
-            &fit,
-            &crate::output::RunInput::from_file(&a.file, &input),
-            &title,
-            &format!("refined from {}\n", a.model.display()),
+        let source = crate::output::RunInput::from_file(&a.file, &input);
+        let echo = format!("refined from {}\n", a.model.display());
+        let bundle = Bundle {
+            found: &found,
+            fit: &fit,
+            source: &source,
+            title: &title,
+            echo: &echo,
             states,
-            !a.no_figures,
-            &settings,
-        )?;
+            figures: !a.no_figures,
+        };
+        write_identification(set, std::path::Path::new(""), &json, &bundle, &settings)?;
     }
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
         set.commit()?;

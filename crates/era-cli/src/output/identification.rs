@@ -6,26 +6,60 @@ use era_io::atomic::OutputSet;
 use era_io::model_json::{FitJson, ModelJson};
 use std::path::Path;
 
+/// What an identification's files show: the identification (refined or not, with
+/// the compared data it keeps), its fit.json, what went into the run, the report's
+/// title and parameter echo, the states of the singular-value figure, and whether to
+/// draw the figures and the report.
+pub struct Bundle<'a> {
+    /// The identification.
+    pub found: &'a era::Identification,
+    /// Its fit.json.
+    pub fit: &'a FitJson,
+    /// What went into the run.
+    pub source: &'a RunInput,
+    /// The report's title.
+    pub title: &'a str,
+    /// The report's Parameters.
+    pub echo: &'a str,
+    /// The order marked in the singular-value figure.
+    pub states: usize,
+    /// The figures and report.html, or neither.
+    pub figures: bool,
+}
+
 /// Every output of one identification into the folder `sub` of `set` (`""` for its
-/// top): model.json, fit.json, model.mat,
-/// model_frf.uff (the model's FRFs on the measurement's lines, after the same
-/// integrations), modes.uff, and with `figures` the figures and report.html. All of them
-/// show `found.model`, refined or not, and use the compared data kept in `found`.
-#[allow(clippy::too_many_arguments)]
+/// top): model.json and the rest of the [`Bundle`] ([`write_bundle`]).
 pub fn write_identification(
     set: &mut OutputSet,
     sub: &Path,
-    found: &era::Identification,
     model: &ModelJson,
-    fit: &FitJson,
-    source: &RunInput,
-    title: &str,
-    echo: &str,
-    states: usize,
-    figures: bool,
+    bundle: &Bundle,
     settings: &crate::config::Settings,
 ) -> anyhow::Result<()> {
     write_output(set, sub.join("model.json"), |p| Ok(model.write(p)?))?;
+    write_bundle(set, sub, bundle, settings)
+}
+
+/// Every output of one identification but model.json into the folder `sub` of `set`:
+/// fit.json, model.mat, model_frf.uff (the model's FRFs on the measurement's lines,
+/// after the same integrations), modes.uff, and with `figures` the figures and
+/// report.html. All of them show `found.model`, refined or not, and use the compared
+/// data kept in `found`.
+pub fn write_bundle(
+    set: &mut OutputSet,
+    sub: &Path,
+    bundle: &Bundle,
+    settings: &crate::config::Settings,
+) -> anyhow::Result<()> {
+    let Bundle {
+        found,
+        fit,
+        source,
+        title,
+        echo,
+        states,
+        figures,
+    } = *bundle;
     write_output(set, sub.join("fit.json"), |p| Ok(fit.write(p)?))?;
     write_output(set, sub.join("model.mat"), |p| {
         Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
