@@ -4,7 +4,7 @@
 use crate::args::DemoArgs;
 use crate::config::Settings;
 use crate::output::identification::{write_identification, Bundle};
-use crate::output::report::{parameter_echo, parameters, print_json, timings_table, Human};
+use crate::output::report::{parameter_echo, print_json, timings_table, Human};
 use crate::output::{prepare_out_dir, write_output, RunInput};
 use anyhow::Context;
 use era::identify::{identify, EraOptions, Identification};
@@ -12,7 +12,7 @@ use era::modal::{modal_parameters, Mode};
 use era::sim::{truth_model, truth_model_frf, TABLE_5_2_ERA_NOISY};
 use era_io::atomic::OutputSet;
 use era_io::csv::write_frf_csv;
-use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson};
+use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson, ModelParameters};
 use era_plot::FrfUnits;
 use serde_json::json;
 use std::fmt::Write as _;
@@ -248,7 +248,7 @@ fn write_files(
     })?;
     for (label, found) in [("no_noise", &runs.clean), ("noisy", &runs.noisy)] {
         let title = format!("era demo: the truth model, {}", label.replace('_', " "));
-        let model = ModelJson::from_identification(found, parameters(options), None);
+        let model = ModelJson::from_run(found, &ModelParameters::new(options));
         // The truth model is in inches and pounds-force (thesis section 4.2).
         let source = RunInput::synthetic(
             &format!(
@@ -307,6 +307,6 @@ fn demo_json(
         "refinement": refined.refinement.as_ref().map(era_io::model_json::RefinementJson::of),
         "noise": {"fraction": a.noise, "seed": a.seed},
         "errors": {"no_noise": e0, "noisy": e1, "refined": e2},
-        "parameters": parameters(options),
+        "parameters": ModelParameters::new(options).to_map(),
     })
 }

@@ -9,7 +9,7 @@ use crate::input::InputFrf;
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
 use crate::output::identification::{write_bundle, Bundle};
 use crate::output::report::{
-    identification_summary, parameter_echo_states, parameters, print_json, stabilization_summary,
+    identification_summary, parameter_echo_states, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
 };
 use crate::output::{pair_fit_table, prepare_out_dir, write_output, InputCoherence, RunInput};
@@ -17,7 +17,7 @@ use anyhow::Context;
 use era::identify::route::Route;
 use era::identify::{identify_auto, identify_observed, identify_with_scan, ScanOptions};
 use era_io::atomic::OutputSet;
-use era_io::model_json::{timings_map, FitJson, ModelJson};
+use era_io::model_json::{timings_map, FitJson, ModelJson, ModelParameters};
 use std::time::Instant;
 
 /// What `identify` read: the FRFs (from a file, or estimated from time histories), and
@@ -335,23 +335,18 @@ fn model_json(
     auto: bool,
     states: usize,
 ) -> ModelJson {
-    let mut params = parameters(opts);
+    let mut params = ModelParameters::new(opts);
     if auto {
-        params.insert("states".into(), serde_json::json!("auto"));
-        params.insert("model_states".into(), serde_json::json!(states));
+        params.automatic_order = true;
+        params.model_states = Some(states);
     }
-    if let Some(st) = &found.stabilization {
-        params.insert("orders".into(), serde_json::json!(st.range.to_string()));
-    }
-    params.insert("preset".into(), serde_json::json!(route.preset.name()));
+    params.orders = found.stabilization.as_ref().map(|st| st.range.to_string());
+    params.preset = Some(route.preset.name().to_string());
     if route.refine {
-        era_io::model_json::refine_parameters(refine_options, &mut params);
-        params.insert(
-            "model_states".into(),
-            serde_json::json!(found.model.states()),
-        );
+        params.refinement = Some(refine_options.clone());
+        params.model_states = Some(found.model.states());
     }
-    let mut model = ModelJson::from_identification(found, params, None);
+    let mut model = ModelJson::from_run(found, &params);
     model.warnings.splice(0..0, route.cautions.iter().cloned());
     model
 }

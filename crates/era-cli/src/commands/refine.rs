@@ -12,7 +12,7 @@ use anyhow::Context;
 use era::identify::{assess_model, refine_identification_in, EraOptions, Identification};
 use era::realize::SvdPath;
 use era::refine::RefineOptions;
-use era_io::model_json::{FitJson, ModelJson};
+use era_io::model_json::{FitJson, ModelJson, ModelParameters};
 use std::fmt::Write as _;
 
 /// `--reciprocal` needs a square set: said before the identification runs.
@@ -157,14 +157,11 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         .min(found.realization.singular_values.len())
         .max(1);
     human.print(&identification_summary(&found, states));
-    let mut params = model.parameters.clone();
-    era_io::model_json::refine_parameters(&ropts, &mut params);
-    params.insert("refined_from".into(), serde_json::json!(a.model));
-    params.insert(
-        "model_states".into(),
-        serde_json::json!(found.model.states()),
-    );
-    let mut json = ModelJson::from_identification(&found, params, None);
+    let mut params = ModelParameters::refining(model.parameters.clone());
+    params.refinement = Some(ropts.clone());
+    params.refined_from = Some(a.model.clone());
+    params.model_states = Some(found.model.states());
+    let mut json = ModelJson::from_run(&found, &params);
     if json.singular_values.is_empty() {
         json.singular_values = model.singular_values.clone();
     }

@@ -49,8 +49,6 @@ pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
     }
 }
 
-pub use era_io::model_json::parameters;
-
 /// The modal table: frequency, damping, the indicators and whether to trust each mode
 /// (docs/design.md §10). Suspect modes are marked `?` with the reason below the table;
 /// negative damping is always called out.
