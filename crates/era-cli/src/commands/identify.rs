@@ -34,14 +34,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let human = Human::new(&settings);
     let mut opts = options(a)?;
     let request = route_request(a);
-    // Whether to refine does not depend on the data: known before anything is read.
-    let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
-    if !refine && crate::config::refine_given(&a.refine_fit) {
-        return crate::error::usage(
-            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine or --preset thesis): add --refine",
-        );
-    }
-    let refine_options = crate::config::refine_options(&a.refine_fit)?;
+    let refine_options = refine_settings(a, &request)?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
@@ -106,37 +99,17 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     found
         .suspects
         .extend(era::suspect::band_edges(&found, fit.fitted_hz));
-    human.print(&identification_summary(&found, states));
-    human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
-    if let Some(st) = &found.stabilization {
-        human.print(&stabilization_summary(st));
-    }
-    let mut timings = timings_map(&found.timings);
-    timings.insert("read".into(), read_s);
-    if let Some(t) = source.estimate_s {
-        timings.insert("frf_estimate".into(), t);
-    }
-    if route.refine {
-        timings.insert("refine".into(), found.timings.refine);
-    }
-    let model = model_json(&found, &opts, &route, &refine_options, auto, states);
+    print_found(&found, frf, states, &human);
     let written = Written {
-        model,
-        timings,
+        model: model_json(&found, &opts, &route, &refine_options, auto, states),
+        timings: timings(&found, read_s, source.estimate_s, route.refine),
         echo,
         states,
     };
-    let run_input = outputs.as_ref().map(|_| {
-        let mut run_input = RunInput::from_file(&a.file, &input);
-        if a.from_time {
-            run_input.section.format = source.time_format.unwrap_or_default();
-        }
-        if source.coherence.is_some() {
-            run_input.coherence = source.coherence;
-        }
-        run_input.phase = a.phase.into();
-        run_input
-    });
+    let (time_format, coherence) = (source.time_format, source.coherence);
+    let run_input = outputs
+        .as_ref()
+        .map(|_| run_input(a, &input, time_format, coherence));
     let model = write(
         a,
         outputs.as_mut().zip(run_input.as_ref()),
@@ -148,17 +121,83 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
         // Every output is in the staging folder: they all take their place now, or none.
         set.commit()?;
-        let figures = " (singular_values, grid, pairs/)";
-        human.print(&format!(
-            "\nwrote {}{}\n",
-            crate::output::identification::written_list(dir, !a.no_figures),
-            if a.no_figures { "" } else { figures }
-        ));
+        human.print(&written_line(a, dir));
     }
     if settings.json {
         print_json(&model)?;
     }
     Ok(())
+}
+
+/// The refinement's settings, refused when the route does not refine: whether it does
+/// is known before anything is read.
+fn refine_settings(
+    a: &IdentifyArgs,
+    request: &era::identify::route::RouteRequest,
+) -> anyhow::Result<era::refine::RefineOptions> {
+    let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
+    if !refine && crate::config::refine_given(&a.refine_fit) {
+        return crate::error::usage(
+            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine or --preset thesis): add --refine",
+        );
+    }
+    crate::config::refine_options(&a.refine_fit)
+}
+
+/// The summary of the identification, the fit per pair and the scan.
+fn print_found(found: &era::Identification, frf: &era::FrfData, states: usize, human: &Human) {
+    human.print(&identification_summary(found, states));
+    human.print(&pair_fit_table(&found.fit, frf.outputs(), frf.inputs()));
+    if let Some(st) = &found.stabilization {
+        human.print(&stabilization_summary(st));
+    }
+}
+
+/// The stages' seconds: the pipeline's, reading, the estimate and the refinement.
+fn timings(
+    found: &era::Identification,
+    read_s: f64,
+    estimate_s: Option<f64>,
+    refined: bool,
+) -> std::collections::BTreeMap<String, f64> {
+    let mut timings = timings_map(&found.timings);
+    timings.insert("read".into(), read_s);
+    if let Some(t) = estimate_s {
+        timings.insert("frf_estimate".into(), t);
+    }
+    if refined {
+        timings.insert("refine".into(), found.timings.refine);
+    }
+    timings
+}
+
+/// What went into the run, for the report: the file (or the time histories and how
+/// their FRFs were estimated), the coherence when there is one, the phase view.
+fn run_input(
+    a: &IdentifyArgs,
+    input: &InputFrf,
+    time_format: Option<String>,
+    coherence: Option<InputCoherence>,
+) -> RunInput {
+    let mut run_input = RunInput::from_file(&a.file, input);
+    if a.from_time {
+        run_input.section.format = time_format.unwrap_or_default();
+    }
+    if coherence.is_some() {
+        run_input.coherence = coherence;
+    }
+    run_input.phase = a.phase.into();
+    run_input
+}
+
+/// The closing line: what the run wrote in `dir`.
+fn written_line(a: &IdentifyArgs, dir: &std::path::Path) -> String {
+    let figures = " (singular_values, grid, pairs/)";
+    format!(
+        "\nwrote {}{}\n",
+        crate::output::identification::written_list(dir, !a.no_figures),
+        if a.no_figures { "" } else { figures }
+    )
 }
 
 /// The FRFs to identify: estimated from time histories with `--from-time` (and saved
