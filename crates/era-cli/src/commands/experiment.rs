@@ -378,19 +378,25 @@ fn motion_shares(e: &Experiment, dead_zone: f64) -> (f64, f64) {
     (stuck as f64 / total, above as f64 / total)
 }
 
-pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
-    let human = Human::new(&settings);
+/// The output sets of `simulate experiment`, opened before the work so that a bad
+/// output is refused first: the FRFs and their coherence, the exact FRFs, the time
+/// histories.
+struct Sets {
+    frf: OutputSet,
+    exact: Option<OutputSet>,
+    time_histories: Option<OutputSet>,
+}
+
+fn prepare(a: &ExperimentArgs) -> anyhow::Result<Sets> {
     frf_format("--out", &a.out)?;
     if let Some(p) = &a.exact_out {
         frf_format("--exact-out", p)?;
     }
-    // Refuse bad outputs before the work.
-    let mut set = OutputSet::beside(&a.out)?;
-    set.stage(output_name("--out", &a.out)?)?;
+    let mut frf = OutputSet::beside(&a.out)?;
+    frf.stage(output_name("--out", &a.out)?)?;
     let coherence = crate::output::coherence_path(&a.out);
-    set.stage(output_name("--out", &coherence)?)?;
-    let mut exact_set = match &a.exact_out {
+    frf.stage(output_name("--out", &coherence)?)?;
+    let exact = match &a.exact_out {
         Some(p) => {
             let mut s = OutputSet::beside(p)?;
             s.stage(output_name("--exact-out", p)?)?;
@@ -398,12 +404,25 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let mut th_set = match &a.time_histories {
+    let time_histories = match &a.time_histories {
         Some(dir) => Some(OutputSet::new(dir).map_err(|e| {
             crate::error::UsageError(format!("--time-histories {}: {e}", dir.display()))
         })?),
         None => None,
     };
+    Ok(Sets {
+        frf,
+        exact,
+        time_histories,
+    })
+}
+
+pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    // Refuse bad outputs before the work.
+    let sets = prepare(a)?;
+    let coherence = crate::output::coherence_path(&a.out);
     let spec = spec(a)?;
     let runs = match spec.drive {
         Drive::OneAtATime => spec.actuators.len(),
@@ -417,6 +436,58 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
+    write_frfs(a, sets.frf, sets.exact, &found, &spec)?;
+    let dead_zone = spec
+        .compensation
+        .as_ref()
+        .map_or(Compensation::thesis().dead_zone, |c| c.dead_zone);
+    let shares = a
+        .time_histories
+        .as_ref()
+        .map(|dir| (dir, motion_shares(&found, dead_zone)));
+    if let Some(s) = sets.time_histories {
+        write_time_histories(s, &found, spec.analyzer_rate_hz, dead_zone)?;
+    }
+    let write_s = clock.elapsed().as_secs_f64();
+    human.print(&summary_line(a, &found, &spec, runs));
+    if let Some((dir, (stuck, above))) = shares {
+        human.print(&format!(
+            "  excited actuators: stuck {:.1} % of the time, faster than the {dead_zone} in/s dead zone {:.1} % (time histories and figures in {})\n",
+            100.0 * stuck,
+            100.0 * above,
+            dir.display()
+        ));
+    }
+    let c = found.counts;
+    let summary = json!({
+        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
+        "time_histories": a.time_histories,
+        "outputs": found.frf.outputs(), "inputs": found.frf.inputs(), "lines": found.frf.lines(),
+        "spacing_hz": found.frf.spacing_hz(), "compensation": spec.compensation.is_some(),
+        "averages": a.averages, "seed": a.seed, "friction_scale": a.friction_scale,
+        "excitation_rms_v": spec.excitation_rms_v,
+        "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
+        "max_stroke_in": found.max_stroke,
+        "excited_stuck_fraction": shares.map(|(_, s)| s.0),
+        "excited_above_dead_zone_fraction": shares.map(|(_, s)| s.1),
+    });
+    finish_output(
+        &human,
+        &settings,
+        summary,
+        &[("simulate", simulate_s), ("write", write_s)],
+    )
+}
+
+/// The FRFs and their coherence (committed together), then the exact FRFs.
+fn write_frfs(
+    a: &ExperimentArgs,
+    mut set: OutputSet,
+    exact_set: Option<OutputSet>,
+    found: &Experiment,
+    spec: &ExperimentSpec,
+) -> anyhow::Result<()> {
+    let coherence = crate::output::coherence_path(&a.out);
     let mut meta = vec![
         ("source", "era simulate experiment".to_string()),
         (
@@ -434,13 +505,13 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     write_output(&mut set, output_name("--out", &a.out)?, |staged| {
         write_frf(staged, &file)
     })?;
-    let text = coherence_csv(&found, &a.out.display().to_string());
+    let text = coherence_csv(found, &a.out.display().to_string());
     write_output(&mut set, output_name("--out", &coherence)?, |staged| {
         era_io::atomic::write_atomic(staged, text.as_bytes())?;
         Ok(())
     })?;
     set.commit()?;
-    if let (Some(mut s), Some(p)) = (exact_set.take(), &a.exact_out) {
+    if let (Some(mut s), Some(p)) = (exact_set, &a.exact_out) {
         meta[0].1 = "era simulate experiment (exact FRFs of the linear system)".into();
         let exact = frf_file(&found.exact, &meta);
         write_output(&mut s, output_name("--exact-out", p)?, |staged| {
@@ -448,34 +519,43 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         })?;
         s.commit()?;
     }
-    let dead_zone = spec
-        .compensation
-        .as_ref()
-        .map_or(Compensation::thesis().dead_zone, |c| c.dead_zone);
-    let shares = a
-        .time_histories
-        .as_ref()
-        .map(|dir| (dir, motion_shares(&found, dead_zone)));
-    if let Some(mut s) = th_set.take() {
-        for r in 0..found.records.len() {
-            let text = time_csv(&found, r, spec.analyzer_rate_hz);
-            write_output(&mut s, format!("run{}.csv", r + 1), |staged| {
-                era_io::atomic::write_atomic(staged, text.as_bytes())?;
-                Ok(())
-            })?;
-            let figure = time_figure(&found, r, spec.analyzer_rate_hz, dead_zone);
-            write_figure(&mut s, Path::new(""), &format!("run{}", r + 1), &figure)?;
-        }
-        s.commit()?;
+    Ok(())
+}
+
+/// One CSV and one figure per run into the `--time-histories` folder.
+fn write_time_histories(
+    mut s: OutputSet,
+    found: &Experiment,
+    rate_hz: f64,
+    dead_zone: f64,
+) -> anyhow::Result<()> {
+    for r in 0..found.records.len() {
+        let text = time_csv(found, r, rate_hz);
+        write_output(&mut s, format!("run{}.csv", r + 1), |staged| {
+            era_io::atomic::write_atomic(staged, text.as_bytes())?;
+            Ok(())
+        })?;
+        let figure = time_figure(found, r, rate_hz, dead_zone);
+        write_figure(&mut s, Path::new(""), &format!("run{}", r + 1), &figure)?;
     }
-    let write_s = clock.elapsed().as_secs_f64();
+    s.commit()?;
+    Ok(())
+}
+
+/// What was written and what happened in the actuators.
+fn summary_line(
+    a: &ExperimentArgs,
+    found: &Experiment,
+    spec: &ExperimentSpec,
+    runs: usize,
+) -> String {
     let c = found.counts;
-    human.print(&format!(
+    format!(
         "wrote {} and {}: {} outputs x {} inputs, {} lines at {} Hz (acceleration per volt)\n  \
          {} run(s) of {} x 40 s, compensation {}, friction x{}: {} reversals, {} sticks, {} break-aways, {} end-stop impacts\n  \
          largest stroke per actuator (in): {}\n",
         a.out.display(),
-        coherence.display(),
+        crate::output::coherence_path(&a.out).display(),
         found.frf.outputs(),
         found.frf.inputs(),
         found.frf.lines(),
@@ -494,31 +574,5 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
             .map(|s| format!("{s:.3}"))
             .collect::<Vec<_>>()
             .join(" ")
-    ));
-    if let Some((dir, (stuck, above))) = shares {
-        human.print(&format!(
-            "  excited actuators: stuck {:.1} % of the time, faster than the {dead_zone} in/s dead zone {:.1} % (time histories and figures in {})\n",
-            100.0 * stuck,
-            100.0 * above,
-            dir.display()
-        ));
-    }
-    let summary = json!({
-        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
-        "time_histories": a.time_histories,
-        "outputs": found.frf.outputs(), "inputs": found.frf.inputs(), "lines": found.frf.lines(),
-        "spacing_hz": found.frf.spacing_hz(), "compensation": spec.compensation.is_some(),
-        "averages": a.averages, "seed": a.seed, "friction_scale": a.friction_scale,
-        "excitation_rms_v": spec.excitation_rms_v,
-        "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
-        "max_stroke_in": found.max_stroke,
-        "excited_stuck_fraction": shares.map(|(_, s)| s.0),
-        "excited_above_dead_zone_fraction": shares.map(|(_, s)| s.1),
-    });
-    finish_output(
-        &human,
-        &settings,
-        summary,
-        &[("simulate", simulate_s), ("write", write_s)],
     )
 }
