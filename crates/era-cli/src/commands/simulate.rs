@@ -194,12 +194,9 @@ fn shaker_csv(r: &era::sim::shaker::ShakerRecord, quantity: Quantity, header: &s
     out
 }
 
-fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
-    use era::sim::shaker::{simulate_shaker_test, Excitation, ShakerTest};
-    let settings = Settings::from(&a.common);
-    let human = Human::new(&settings);
-    crate::config::check_noise(a.noise)?;
-    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
+/// The shakers' signal the flags ask for, `--band` checked against it.
+fn shaker_excitation(a: &ShakerArgs) -> anyhow::Result<era::sim::shaker::Excitation> {
+    use era::sim::shaker::Excitation;
     let band = a.band.as_deref().map(parse_band).transpose()?;
     if band.is_some()
         && !matches!(
@@ -231,6 +228,40 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
             width_s: a.pulse_width,
         },
     };
+    Ok(excitation)
+}
+
+/// The truth beside a shaker test's CSV (and its JSON summary): the settings, the
+/// columns, and each mode's frequency, damping and shape.
+fn shaker_truth(
+    a: &ShakerArgs,
+    record: &era::sim::shaker::ShakerRecord,
+    excitation: era::sim::shaker::Excitation,
+    quantity: Quantity,
+    outputs_columns: &str,
+) -> serde_json::Value {
+    let truth = &record.truth;
+    let modes: Vec<_> = truth
+        .frequencies_hz
+        .iter()
+        .zip(&truth.damping_ratios)
+        .zip(&truth.output_shapes)
+        .map(|((f, z), shape)| json!({"frequency_hz": f, "damping_ratio": z, "shape": shape}))
+        .collect();
+    json!({"file": a.out, "model": "shaker", "outputs": a.outputs, "inputs": a.inputs,
+        "sample_rate_hz": a.sample_rate, "duration_s": a.duration, "samples": record.outputs[0].len(),
+        "excitation": excitation.name(), "quantity": quantity.name(), "noise": a.noise, "seed": a.seed,
+        "inputs_columns": format!("1-{}", a.inputs), "outputs_columns": outputs_columns,
+        "modes": modes})
+}
+
+fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
+    use era::sim::shaker::{simulate_shaker_test, ShakerTest};
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    crate::config::check_noise(a.noise)?;
+    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
+    let excitation = shaker_excitation(a)?;
     // The structure's sizes and ranges are checked, against their limits, before
     // anything is allocated (ModalStructure::random, inside the simulation).
     let spec = ModalSpec {
@@ -262,19 +293,8 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
     })?;
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let truth = &record.truth;
-    let modes: Vec<_> = truth
-        .frequencies_hz
-        .iter()
-        .zip(&truth.damping_ratios)
-        .zip(&truth.output_shapes)
-        .map(|((f, z), shape)| json!({"frequency_hz": f, "damping_ratio": z, "shape": shape}))
-        .collect();
-    let summary = json!({"file": a.out, "model": "shaker", "outputs": a.outputs, "inputs": a.inputs,
-        "sample_rate_hz": a.sample_rate, "duration_s": a.duration, "samples": record.outputs[0].len(),
-        "excitation": excitation.name(), "quantity": quantity.name(), "noise": a.noise, "seed": a.seed,
-        "inputs_columns": format!("1-{}", a.inputs), "outputs_columns": format!("{}-{}", a.inputs + 1, a.inputs + a.outputs),
-        "modes": modes});
+    let outputs_columns = format!("{}-{}", a.inputs + 1, a.inputs + a.outputs);
+    let summary = shaker_truth(a, &record, excitation, quantity, &outputs_columns);
     let header = format!(
         "era simulate shaker: {} modes {}..{} Hz, {} excitation, {} % sensor noise, seed {}",
         a.modes,
@@ -305,7 +325,7 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
         a.sample_rate,
         a.inputs,
         a.outputs,
-        summary["outputs_columns"].as_str().unwrap_or_default(),
+        outputs_columns,
         truth_path.display()
     ));
     finish_output(
