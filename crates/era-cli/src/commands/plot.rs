@@ -22,40 +22,7 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
     let mut set = prepare_out_dir(&a.out)?;
     let input = read_frf_with(&a.file, &crate::input::FrfFlags::from(&a.read))?;
     let frf = input.file.frf.clone();
-    let model = match &a.model {
-        Some(path) => {
-            Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
-        }
-        None => None,
-    };
-    let from_model = |key: &str| {
-        model
-            .as_ref()
-            .and_then(|m| m.parameters.get(key))
-            .and_then(|v| v.as_u64())
-            .map(|v| v as usize)
-    };
-    let integrations = a
-        .integrations
-        .or_else(|| from_model("integrations"))
-        .unwrap_or(0);
-    let zero_lines = a
-        .zero_lines
-        .or_else(|| from_model("zero_lines"))
-        .unwrap_or(0);
-    if let Some(m) = &model {
-        if (m.outputs, m.inputs) != (frf.outputs(), frf.inputs()) {
-            return usage(format!(
-                "--model {}: the model has {} outputs x {} inputs, {} has {} x {}",
-                a.model.as_ref().unwrap().display(),
-                m.outputs,
-                m.inputs,
-                a.file.display(),
-                frf.outputs(),
-                frf.inputs()
-            ));
-        }
-    }
+    let (model, integrations, zero_lines) = overlay_model(a, &frf)?;
     let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
     let model_frf = match &model {
         Some(m) => {
@@ -109,4 +76,47 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// The model to overlay (`--model`), refused when its shape is not the FRFs', and the
+/// integrations and zeroed lines to plot with: the flags', else the model's, else none.
+fn overlay_model(
+    a: &PlotArgs,
+    frf: &era::FrfData,
+) -> anyhow::Result<(Option<ModelJson>, usize, usize)> {
+    let model = match &a.model {
+        Some(path) => {
+            Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
+        }
+        None => None,
+    };
+    let from_model = |key: &str| {
+        model
+            .as_ref()
+            .and_then(|m| m.parameters.get(key))
+            .and_then(|v| v.as_u64())
+            .map(|v| v as usize)
+    };
+    let integrations = a
+        .integrations
+        .or_else(|| from_model("integrations"))
+        .unwrap_or(0);
+    let zero_lines = a
+        .zero_lines
+        .or_else(|| from_model("zero_lines"))
+        .unwrap_or(0);
+    if let Some(m) = &model {
+        if (m.outputs, m.inputs) != (frf.outputs(), frf.inputs()) {
+            return usage(format!(
+                "--model {}: the model has {} outputs x {} inputs, {} has {} x {}",
+                a.model.as_ref().unwrap().display(),
+                m.outputs,
+                m.inputs,
+                a.file.display(),
+                frf.outputs(),
+                frf.inputs()
+            ));
+        }
+    }
+    Ok((model, integrations, zero_lines))
 }
