@@ -7,12 +7,12 @@ use crate::config::Settings;
 use crate::config::{apply_route, era_options, options, route_request, scan_orders};
 use crate::input::InputFrf;
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
-use crate::output::identification::{write_bundle, Bundle};
+use crate::output::identification::{write_bundle, write_model, Bundle};
 use crate::output::report::{
     identification_summary, parameter_echo_states, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
 };
-use crate::output::{pair_fit_table, prepare_out_dir, write_output, InputCoherence, RunInput};
+use crate::output::{pair_fit_table, prepare_out_dir, InputCoherence, RunInput};
 use anyhow::Context;
 use era::identify::route::Route;
 use era::identify::{identify_auto, identify_observed, identify_with_scan, ScanOptions};
@@ -40,7 +40,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         None => None,
     };
     let frf_outputs = match &a.save_frf {
-        Some(path) if a.from_time => Some(crate::commands::frf::prepare_estimate(path, false)?),
+        Some(path) if a.from_time => Some(crate::output::estimate::prepare_estimate(path, false)?),
         _ => None,
     };
     let clock = Instant::now();
@@ -254,7 +254,13 @@ fn read_source(
         found.summary
     ));
     if let (Some(path), Some(set)) = (&a.save_frf, frf_outputs) {
-        let coherence = crate::commands::frf::write_estimate(set, path, &found, false)?;
+        let coherence = crate::output::estimate::write_estimate(
+            set,
+            path,
+            &found.input.file,
+            &found.estimate,
+            false,
+        )?;
         human.print(&format!(
             "  wrote {} and {}\n",
             path.display(),
@@ -437,7 +443,7 @@ fn write(
     }
     // model.json once, with the timings when they were asked for.
     if let Some((set, _)) = out.as_mut() {
-        write_output(set, "model.json", |p| Ok(model.write(p)?))?;
+        write_model(set, std::path::Path::new(""), &model)?;
     }
     Ok(model)
 }

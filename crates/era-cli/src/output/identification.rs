@@ -36,8 +36,13 @@ pub fn write_identification(
     bundle: &Bundle,
     settings: &crate::config::Settings,
 ) -> anyhow::Result<()> {
-    write_output(set, sub.join("model.json"), |p| Ok(model.write(p)?))?;
+    write_model(set, sub, model)?;
     write_bundle(set, sub, bundle, settings)
+}
+
+/// model.json into the folder `sub` of `set`.
+pub fn write_model(set: &mut OutputSet, sub: &Path, model: &ModelJson) -> anyhow::Result<()> {
+    write_output(set, sub.join("model.json"), |p| Ok(model.write(p)?))
 }
 
 /// Every output of one identification but model.json into the folder `sub` of `set`:
