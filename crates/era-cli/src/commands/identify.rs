@@ -1,6 +1,7 @@
 //! `era identify FILE`: the pipeline of docs/design.md §1 on an FRF file. Flags become
-//! options in [`crate::config`], the file is read by [`crate::input`] (or estimated from
-//! time histories by [`crate::frf`]), and the outputs are written by [`crate::output`].
+//! options in [`crate::config`], the file is read by [`crate::input`] (or estimated
+//! from time histories by [`crate::commands::frf`]), and the outputs are written by
+//! [`crate::output`].
 
 use crate::args::{IdentifyArgs, QuantityArg};
 use crate::config::Settings;

@@ -166,7 +166,7 @@ pub struct RunInput {
 }
 
 impl RunInput {
-    /// An FRF file as read by [`crate::input::read_frf`].
+    /// An FRF file as read by [`crate::input::read_frf_with`].
     pub fn from_file(path: &Path, input: &crate::input::InputFrf) -> Self {
         let file = &input.file;
         let units = FrfUnits::from_metadata(&file.metadata);
