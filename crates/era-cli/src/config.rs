@@ -3,12 +3,66 @@
 //! read. The core names option fields ([`Naming`]); this module adds the flag names, so
 //! other front ends (Python) can word the same checks their own way.
 
-use crate::args::{DirectTermArg, IdentifyArgs, StatesArg, SvdArg, TimeDomainArg};
+use crate::args::{
+    CommonArgs, DirectTermArg, IdentifyArgs, RefineFitArgs, StatesArg, SvdArg, TimeDomainArg,
+    WeightingArg,
+};
 use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
 use era::modal::stabilization::OrderRange;
 use era::params::Naming;
 use era::realize::{DirectTerm, SvdPath};
+use era::refine::RefineOptions;
+
+/// How much a verb says on the terminal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verbosity {
+    /// Nothing but errors (and the JSON with `--json`).
+    Quiet,
+    /// The human summary.
+    Normal,
+}
+
+/// What every verb's output switches say: how much to print, whether to draw progress
+/// on stderr, whether JSON owns stdout, and whether to time the stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Settings {
+    /// Human text or none.
+    pub verbosity: Verbosity,
+    /// Spinners and bars on stderr (indicatif hides them when stderr is no terminal).
+    pub progress: bool,
+    /// JSON on stdout, human text on stderr.
+    pub json: bool,
+    /// The wall time of each stage.
+    pub timings: bool,
+}
+
+impl Settings {
+    /// Nothing printed, nothing drawn: for a run inside a run (the frame check).
+    pub fn silent() -> Self {
+        Settings {
+            verbosity: Verbosity::Quiet,
+            progress: false,
+            json: false,
+            timings: false,
+        }
+    }
+}
+
+impl From<&CommonArgs> for Settings {
+    fn from(a: &CommonArgs) -> Self {
+        Settings {
+            verbosity: if a.quiet {
+                Verbosity::Quiet
+            } else {
+                Verbosity::Normal
+            },
+            progress: !a.quiet,
+            json: a.json,
+            timings: a.timings,
+        }
+    }
+}
 
 /// The route the flags ask for: the preset, and every choice given explicitly
 /// (era::identify::route resolves the rest once the data's quantity is known).
@@ -119,9 +173,9 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
 pub fn scan_orders(a: &IdentifyArgs) -> anyhow::Result<Option<OrderRange>> {
     match &a.orders {
         None => Ok(None),
-        Some(text) => OrderRange::parse(text)
-            .map(Some)
-            .map_err(|e| crate::UsageError(format!("--orders {text}: {}", reason_of(&e))).into()),
+        Some(text) => OrderRange::parse(text).map(Some).map_err(|e| {
+            crate::error::UsageError(format!("--orders {text}: {}", reason_of(&e))).into()
+        }),
     }
 }
 
@@ -176,4 +230,57 @@ pub fn lag_window(
             window.name()
         ),
     ))
+}
+
+/// The refinement options of the flags, checked before anything is read: at least one
+/// iteration, and no more than [`era::limits::ITERATIONS`].
+pub fn refine_options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
+    let mut o = RefineOptions::default();
+    if let Some(r) = fit.residuals {
+        o.residuals = r.into();
+    }
+    o.reciprocal = fit.reciprocal;
+    o.rank_one = !fit.free_residues;
+    o.add_missed = !fit.no_added_modes;
+    o.weighting = match fit.weighting {
+        Some(WeightingArg::Uniform) => era::refine::Weighting::Uniform,
+        Some(WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
+    };
+    if let Some(n) = fit.max_iterations {
+        if n == 0 {
+            return crate::error::usage(
+                "--max-iterations 0: the refinement needs at least one iteration",
+            );
+        }
+        era::limits::ITERATIONS.check("--max-iterations", n as u64)?;
+        o.max_iterations = n;
+    }
+    Ok(o)
+}
+
+/// Whether any refinement flag was given (they need `--refine` on `era identify`).
+pub fn refine_given(fit: &RefineFitArgs) -> bool {
+    fit.residuals.is_some()
+        || fit.reciprocal
+        || fit.free_residues
+        || fit.no_added_modes
+        || fit.max_iterations.is_some()
+        || fit.weighting.is_some()
+}
+
+pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
+    let Some((lo, hi)) = text.split_once("..") else {
+        return crate::error::usage(format!(
+            "--damping {text}: expected MIN..MAX, e.g. 0.005..0.02"
+        ));
+    };
+    match (lo.trim().parse::<f64>(), hi.trim().parse::<f64>()) {
+        (Ok(lo), Ok(hi)) => Ok((lo, hi)),
+        _ => crate::error::usage(format!("--damping {text}: MIN and MAX must be numbers")),
+    }
+}
+
+/// `--noise`, checked by the simulator's rule.
+pub fn check_noise(noise: f64) -> anyhow::Result<()> {
+    Ok(era::sim::check_noise(era::params::Naming::Flag, noise)?)
 }

@@ -2,7 +2,7 @@
 //! quantity and layout notes the summaries print. `identify`, `plot`, `refine`, `info`
 //! and `convert` read through here; time histories go through `frf`.
 
-use crate::args::{QuantityArg, UnitsArg};
+use crate::args::{FrfReadArgs, QuantityArg, UnitsArg};
 use era::Quantity;
 use era_io::format::{parse_frf_bytes, FrfFormat, ReadOptions};
 
@@ -28,6 +28,18 @@ pub struct FrfFlags<'a> {
     pub units: Option<&'a UnitsArg>,
     /// `--freq-variable`: the MAT variable of the frequencies.
     pub frequency_variable: Option<&'a str>,
+}
+
+impl<'a> From<&'a FrfReadArgs> for FrfFlags<'a> {
+    /// The flags of plot, convert and refine.
+    fn from(a: &'a FrfReadArgs) -> Self {
+        FrfFlags {
+            quantity: a.quantity,
+            outputs: a.outputs,
+            units: a.facts.units.as_ref(),
+            frequency_variable: a.facts.freq_variable.as_deref(),
+        }
+    }
 }
 
 /// Reads an FRF file in any format, told apart by content (the extension is a hint).

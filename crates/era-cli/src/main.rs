@@ -1,46 +1,21 @@
-//! The `era` command line: arguments → validated options → library calls → output.
+//! The `era` command line. One direction: [`args`] (clap) → [`config`] (typed settings)
+//! → [`commands`] (one verb each: read, call the library, hand the result on) →
+//! [`output`] (every file written, the figures, the report, the terminal).
 //!
 //! Exit codes: 0 success, 2 bad input or usage (the message names the file, line,
 //! flag or value), 1 internal failure. No panic reaches the user: one is caught and
 //! reported as an internal error.
 
 mod args;
-mod compare;
+mod commands;
 mod config;
-mod demo;
-mod experiment;
-mod figures;
-mod files;
-mod frf;
-mod friction;
-mod identify;
+mod error;
 mod input;
 mod output;
-mod plot;
-mod progress;
-mod refine;
-mod report;
-mod simulate;
 
 use clap::Parser;
+use error::UsageError;
 use std::process::ExitCode;
-
-/// A problem with what the user asked for (a flag, a value, a path): exit code 2.
-#[derive(Debug)]
-pub struct UsageError(pub String);
-
-impl std::fmt::Display for UsageError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for UsageError {}
-
-/// Shorthand for returning a [`UsageError`].
-pub fn usage<T>(message: impl Into<String>) -> anyhow::Result<T> {
-    Err(UsageError(message.into()).into())
-}
 
 /// 2 when any cause is the user's (bad data, bad flag, unreadable or unwritable file),
 /// 1 otherwise.
@@ -96,16 +71,16 @@ fn main() -> ExitCode {
         }
     }));
     let run = || match &cli.command {
-        args::Command::Demo(a) => demo::run(a),
-        args::Command::Identify(a) => identify::run(a),
-        args::Command::Frf(a) => frf::run(a),
-        args::Command::Simulate(a) => simulate::run(a),
-        args::Command::Friction(a) => friction::run(a),
-        args::Command::Plot(a) => plot::run(a),
-        args::Command::Info(a) => files::run_info(a),
-        args::Command::Convert(a) => files::run_convert(a),
-        args::Command::Compare(a) => compare::run(a),
-        args::Command::Refine(a) => refine::run(a),
+        args::Command::Demo(a) => commands::demo::run(a),
+        args::Command::Identify(a) => commands::identify::run(a),
+        args::Command::Frf(a) => commands::frf::run(a),
+        args::Command::Simulate(a) => commands::simulate::run(a),
+        args::Command::Friction(a) => commands::friction::run(a),
+        args::Command::Plot(a) => commands::plot::run(a),
+        args::Command::Info(a) => commands::files::run_info(a),
+        args::Command::Convert(a) => commands::files::run_convert(a),
+        args::Command::Compare(a) => commands::compare::run(a),
+        args::Command::Refine(a) => commands::refine::run(a),
     };
     // One thread setting for rayon and faer (era::parallel); a refused count is a usage
     // error like any flag's.

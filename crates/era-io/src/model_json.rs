@@ -396,6 +396,76 @@ pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     m
 }
 
+/// model.json's `parameters`, typed: what a run sets, written as the flat map of
+/// [`parameters`] and [`refine_parameters`] (the names are the flags').
+#[derive(Debug, Clone, Default)]
+#[non_exhaustive]
+pub struct ModelParameters {
+    /// The parameters of the model a refinement started from, as its model.json gives
+    /// them (`era refine`); the settings below are written over them.
+    pub earlier: BTreeMap<String, serde_json::Value>,
+    /// ERA's options as run.
+    pub era: Option<EraOptions>,
+    /// The order was chosen from a stabilization diagram: `states` is `"auto"`.
+    pub automatic_order: bool,
+    /// The orders scanned, `MIN..MAX:STEP` or a list.
+    pub orders: Option<String>,
+    /// The route's preset.
+    pub preset: Option<String>,
+    /// The refinement's settings, when the model is refined.
+    pub refinement: Option<era::refine::RefineOptions>,
+    /// The model.json a refinement started from (`era refine`).
+    pub refined_from: Option<std::path::PathBuf>,
+    /// The states of the model written, when they are not ERA's `states`.
+    pub model_states: Option<usize>,
+}
+
+impl ModelParameters {
+    /// The parameters of a run of ERA with `options`.
+    pub fn new(options: &EraOptions) -> Self {
+        ModelParameters {
+            era: Some(options.clone()),
+            ..ModelParameters::default()
+        }
+    }
+
+    /// The parameters of a refinement of a model whose model.json gave `earlier`.
+    pub fn refining(earlier: BTreeMap<String, serde_json::Value>) -> Self {
+        ModelParameters {
+            earlier,
+            ..ModelParameters::default()
+        }
+    }
+
+    /// The flat map model.json stores.
+    pub fn to_map(&self) -> BTreeMap<String, serde_json::Value> {
+        use serde_json::json;
+        let mut m = self.earlier.clone();
+        if let Some(o) = &self.era {
+            m.extend(parameters(o));
+        }
+        if self.automatic_order {
+            m.insert("states".into(), json!("auto"));
+        }
+        if let Some(orders) = &self.orders {
+            m.insert("orders".into(), json!(orders));
+        }
+        if let Some(preset) = &self.preset {
+            m.insert("preset".into(), json!(preset));
+        }
+        if let Some(r) = &self.refinement {
+            refine_parameters(r, &mut m);
+        }
+        if let Some(path) = &self.refined_from {
+            m.insert("refined_from".into(), json!(path));
+        }
+        if let Some(n) = self.model_states {
+            m.insert("model_states".into(), json!(n));
+        }
+        m
+    }
+}
+
 /// Stage timings by name (`read` and `write` are added by the caller).
 pub fn timings_map(t: &StageTimings) -> BTreeMap<String, f64> {
     [
@@ -460,6 +530,11 @@ impl ModelJson {
             refinement: found.refinement.as_ref().map(RefinementJson::of),
             frf_lines: Some(FrfLinesJson::of(&found.processed)),
         }
+    }
+
+    /// From an identification and the typed parameters of its run.
+    pub fn from_run(found: &Identification, parameters: &ModelParameters) -> Self {
+        Self::from_identification(found, parameters.to_map(), None)
     }
 
     /// The state-space model stored.

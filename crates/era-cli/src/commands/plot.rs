@@ -2,11 +2,12 @@
 //! model of the same shape.
 
 use crate::args::PlotArgs;
-use crate::figures::{frf_view, write_figure, write_frf_figures};
+use crate::config::Settings;
+use crate::error::usage;
 use crate::input::read_frf_with;
+use crate::output::figures::{frf_view, write_figure, write_frf_figures};
 use crate::output::prepare_out_dir;
-use crate::report::{print_json, Human};
-use crate::usage;
+use crate::output::report::{print_json, Human};
 use anyhow::Context;
 use era::preprocess::{integrate, zero_leading_lines};
 use era::response::model_frf;
@@ -16,10 +17,73 @@ use serde_json::json;
 use std::path::Path;
 
 pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let mut set = prepare_out_dir(&a.out)?;
-    let input = read_frf_with(&a.file, &a.read.flags())?;
+    let input = read_frf_with(&a.file, &crate::input::FrfFlags::from(&a.read))?;
     let frf = input.file.frf.clone();
+    let (model, integrations, zero_lines) = overlay_model(a, &frf)?;
+    let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
+    let model_frf = match &model {
+        Some(m) => {
+            let ss = m.state_space().map_err(crate::error::UsageError)?;
+            if m.states > 0 {
+                write_figure(
+                    &mut set,
+                    Path::new(""),
+                    "singular_values",
+                    &singular_value_figure(&m.singular_values, m.states),
+                )?;
+            }
+            Some(model_frf(&ss, &measured)?)
+        }
+        None => None,
+    };
+    let bar = crate::output::progress::bar(
+        &settings,
+        (measured.outputs() * measured.inputs()) as u64,
+        "figures",
+    );
+    let view = frf_view(
+        &FrfUnits::from_metadata(&input.file.metadata),
+        frf.quantity(),
+        input.file.channels.as_ref(),
+        &measured,
+        a.phase.into(),
+    );
+    let (_, overlays) = write_frf_figures(
+        &mut set,
+        Path::new(""),
+        &measured,
+        model_frf.as_ref(),
+        &view,
+        &bar,
+    )?;
+    bar.finish_and_clear();
+    set.commit()?;
+    human.print(&format!(
+        "wrote {0}/grid.{{svg,png}} and {1} pair overlays in {0}/pairs{2} ({3} FRFs, {4} integration(s), {5} zeroed line(s))\n",
+        a.out.display(),
+        overlays.len(),
+        if model.is_some() { format!(", and {}/singular_values.{{svg,png}}", a.out.display()) } else { String::new() },
+        measured.quantity(),
+        integrations,
+        zero_lines
+    ));
+    if settings.json {
+        print_json(
+            &json!({"out": a.out, "pairs": overlays.len(), "model": a.model, "integrations": integrations, "zero_lines": zero_lines}),
+        )?;
+    }
+    Ok(())
+}
+
+/// The model to overlay (`--model`), refused when its shape is not the FRFs', and the
+/// integrations and zeroed lines to plot with: the flags', else the model's, else none.
+fn overlay_model(
+    a: &PlotArgs,
+    frf: &era::FrfData,
+) -> anyhow::Result<(Option<ModelJson>, usize, usize)> {
     let model = match &a.model {
         Some(path) => {
             Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
@@ -54,57 +118,5 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
             ));
         }
     }
-    let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
-    let model_frf = match &model {
-        Some(m) => {
-            let ss = m.state_space().map_err(crate::UsageError)?;
-            if m.states > 0 {
-                write_figure(
-                    &mut set,
-                    Path::new(""),
-                    "singular_values",
-                    &singular_value_figure(&m.singular_values, m.states),
-                )?;
-            }
-            Some(model_frf(&ss, &measured)?)
-        }
-        None => None,
-    };
-    let bar = crate::progress::bar(
-        &a.common,
-        (measured.outputs() * measured.inputs()) as u64,
-        "figures",
-    );
-    let view = frf_view(
-        &FrfUnits::from_metadata(&input.file.metadata),
-        frf.quantity(),
-        input.file.channels.as_ref(),
-        &measured,
-        a.phase.into(),
-    );
-    let (_, overlays) = write_frf_figures(
-        &mut set,
-        Path::new(""),
-        &measured,
-        model_frf.as_ref(),
-        &view,
-        &bar,
-    )?;
-    bar.finish_and_clear();
-    set.commit()?;
-    human.print(&format!(
-        "wrote {0}/grid.{{svg,png}} and {1} pair overlays in {0}/pairs{2} ({3} FRFs, {4} integration(s), {5} zeroed line(s))\n",
-        a.out.display(),
-        overlays.len(),
-        if model.is_some() { format!(", and {}/singular_values.{{svg,png}}", a.out.display()) } else { String::new() },
-        measured.quantity(),
-        integrations,
-        zero_lines
-    ));
-    if a.common.json {
-        print_json(
-            &json!({"out": a.out, "pairs": overlays.len(), "model": a.model, "integrations": integrations, "zero_lines": zero_lines}),
-        )?;
-    }
-    Ok(())
+    Ok((model, integrations, zero_lines))
 }

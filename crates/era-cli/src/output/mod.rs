@@ -1,12 +1,17 @@
-//! Writing a run's outputs: the `--out` folder as one [`OutputSet`] (every file staged
-//! and committed together, `era_io::atomic`), and the one bundle writer of an
-//! identification (model, fit, MAT, UFF, figures, report) that `identify`, `demo` and
-//! `refine` share.
+//! Everything a run writes: the `--out` folder as one [`OutputSet`] (every file staged
+//! and committed together, `era_io::atomic`), the names of the files, what went into a
+//! run ([`RunInput`]), the bundle of an identification ([`identification`]), the figures
+//! ([`figures`], drawn by era-plot) and the terminal ([`report`], [`progress`]).
+
+pub mod estimate;
+pub mod figures;
+pub mod identification;
+pub mod progress;
+pub mod report;
 
 use anyhow::Context;
 use era::Quantity;
 use era_io::atomic::OutputSet;
-use era_io::model_json::{FitJson, ModelJson};
 use era_io::uff::ChannelTable;
 use era_plot::report::{ChannelRow, InputSection};
 use era_plot::{FrfUnits, PhaseView};
@@ -50,7 +55,7 @@ impl InputCoherence {
     /// (`coh<i>_<j>`). `Ok(None)` without such a file; `Err` (a note for the report)
     /// when it does not fit `frf`: other lines, other outputs, unreadable values.
     pub fn companion(frf_path: &Path, frf: &era::FrfData) -> Result<Option<Self>, String> {
-        let path = crate::frf::coherence_path(frf_path);
+        let path = crate::output::coherence_path(frf_path);
         if !path.is_file() {
             return Ok(None);
         }
@@ -133,6 +138,15 @@ impl InputCoherence {
     }
 }
 
+/// `frf.csv` → `frf.coherence.csv`.
+pub fn coherence_path(out: &Path) -> std::path::PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "frf".into());
+    out.with_file_name(format!("{stem}.coherence.csv"))
+}
+
 /// What went into a run, as the report and the figures need it: the input section,
 /// the FRFs' quantity and units as read, the channel table, the coherence and how to
 /// draw the phase.
@@ -152,7 +166,7 @@ pub struct RunInput {
 }
 
 impl RunInput {
-    /// An FRF file as read by [`crate::input::read_frf`].
+    /// An FRF file as read by [`crate::input::read_frf_with`].
     pub fn from_file(path: &Path, input: &crate::input::InputFrf) -> Self {
         let file = &input.file;
         let units = FrfUnits::from_metadata(&file.metadata);
@@ -285,13 +299,13 @@ pub fn utc_string(seconds: u64) -> String {
 /// folder), before any long work: a folder that cannot take files is refused now.
 pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<OutputSet> {
     std::fs::create_dir_all(dir).map_err(|e| {
-        crate::UsageError(format!(
+        crate::error::UsageError(format!(
             "--out {}: cannot create the folder: {e}",
             dir.display()
         ))
     })?;
     OutputSet::new(dir).map_err(|e| {
-        crate::UsageError(format!("--out {}: cannot write there: {e}", dir.display())).into()
+        crate::error::UsageError(format!("--out {}: cannot write there: {e}", dir.display())).into()
     })
 }
 
@@ -310,83 +324,8 @@ pub fn write_output(
 /// The file name of an output file given on the command line, for [`OutputSet::stage`].
 pub fn output_name<'a>(flag: &str, path: &'a Path) -> anyhow::Result<&'a std::ffi::OsStr> {
     path.file_name().ok_or_else(|| {
-        crate::UsageError(format!("{flag} {}: not a file name", path.display())).into()
+        crate::error::UsageError(format!("{flag} {}: not a file name", path.display())).into()
     })
-}
-
-/// Every output of one identification into the folder `sub` of `set` (`""` for its
-/// top): model.json, fit.json, model.mat,
-/// model_frf.uff (the model's FRFs on the measurement's lines, after the same
-/// integrations), modes.uff, and with `figures` the figures and report.html. All of them
-/// show `found.model`, refined or not, and use the compared data kept in `found`.
-#[allow(clippy::too_many_arguments)]
-pub fn write_identification(
-    set: &mut OutputSet,
-    sub: &Path,
-    found: &era::Identification,
-    model: &ModelJson,
-    fit: &FitJson,
-    source: &RunInput,
-    title: &str,
-    echo: &str,
-    states: usize,
-    figures: bool,
-    common: &crate::args::CommonArgs,
-) -> anyhow::Result<()> {
-    write_output(set, sub.join("model.json"), |p| Ok(model.write(p)?))?;
-    write_output(set, sub.join("fit.json"), |p| Ok(fit.write(p)?))?;
-    write_output(set, sub.join("model.mat"), |p| {
-        Ok(era_io::mat::write_model_mat(p, &found.model, &found.modal)?)
-    })?;
-    let synthesised = found.model_frf()?;
-    let channels = source.channels.as_ref();
-    write_output(set, sub.join("model_frf.uff"), |p| {
-        Ok(era_io::uff::write_uff58(
-            p,
-            &synthesised,
-            channels,
-            (None, None),
-            era_io::uff::UffWriteOptions {
-                binary: true,
-                single: false,
-            },
-        )?)
-    })?;
-    write_output(set, sub.join("modes.uff"), |p| {
-        Ok(era_io::uff::write_uff55(
-            p,
-            &found.modal,
-            channels,
-            // The shapes are of the integrated quantity, as the model is.
-            found.processed.quantity(),
-        )?)
-    })?;
-    if !figures {
-        return Ok(());
-    }
-    let q = found.measured.outputs() * found.measured.inputs();
-    let bar = crate::progress::bar(common, q as u64, "figures");
-    crate::figures::write_all(set, sub, title, echo, found, source, states, &bar)?;
-    bar.finish_and_clear();
-    Ok(())
-}
-
-/// What `write_identification` wrote, for the closing line.
-pub fn written_list(dir: &Path, figures: bool) -> String {
-    let files = format!(
-        "{0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json",
-        dir.display()
-    );
-    if figures {
-        format!("{files}, {}/report.html and figures", dir.display())
-    } else if dir.join("report.html").exists() {
-        format!(
-            "{files} (no figures; {}/report.html and the figures are an earlier run's)",
-            dir.display()
-        )
-    } else {
-        format!("{files} (no figures)")
-    }
 }
 
 /// Per-pair relative fit error as an outputs × inputs grid (up to 64 pairs).

@@ -2,55 +2,23 @@
 //! (the core is [`era::refine`], wired into the pipeline by
 //! [`era::identify::refine_identification`]).
 
-use crate::args::{RefineArgs, RefineFitArgs};
+use crate::args::RefineArgs;
+use crate::config::Settings;
 use crate::input::{read_frf_with, shape_line};
-use crate::output::{prepare_out_dir, write_identification};
-use crate::report::{identification_summary, print_json, Human};
+use crate::output::identification::{write_identification, Bundle};
+use crate::output::prepare_out_dir;
+use crate::output::report::{identification_summary, print_json, Human};
 use anyhow::Context;
 use era::identify::{assess_model, refine_identification_in, EraOptions, Identification};
 use era::realize::SvdPath;
 use era::refine::RefineOptions;
-use era_io::model_json::{FitJson, ModelJson};
+use era_io::model_json::{FitJson, ModelJson, ModelParameters};
 use std::fmt::Write as _;
-
-/// The refinement options of the flags, checked before anything is read: at least one
-/// iteration, and no more than [`era::limits::ITERATIONS`].
-pub fn options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
-    let mut o = RefineOptions::default();
-    if let Some(r) = fit.residuals {
-        o.residuals = r.into();
-    }
-    o.reciprocal = fit.reciprocal;
-    o.rank_one = !fit.free_residues;
-    o.add_missed = !fit.no_added_modes;
-    o.weighting = match fit.weighting {
-        Some(crate::args::WeightingArg::Uniform) => era::refine::Weighting::Uniform,
-        Some(crate::args::WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
-    };
-    if let Some(n) = fit.max_iterations {
-        if n == 0 {
-            return crate::usage("--max-iterations 0: the refinement needs at least one iteration");
-        }
-        era::limits::ITERATIONS.check("--max-iterations", n as u64)?;
-        o.max_iterations = n;
-    }
-    Ok(o)
-}
-
-/// Whether any refinement flag was given (they need `--refine` on `era identify`).
-pub fn any_given(fit: &RefineFitArgs) -> bool {
-    fit.residuals.is_some()
-        || fit.reciprocal
-        || fit.free_residues
-        || fit.no_added_modes
-        || fit.max_iterations.is_some()
-        || fit.weighting.is_some()
-}
 
 /// `--reciprocal` needs a square set: said before the identification runs.
 pub fn check_shape(options: &RefineOptions, frf: &era::FrfData) -> anyhow::Result<()> {
     if options.reciprocal && frf.outputs() != frf.inputs() {
-        return crate::usage(format!(
+        return crate::error::usage(format!(
             "--reciprocal: the set has {} outputs x {} inputs; reciprocity needs a square (collocated) set",
             frf.outputs(),
             frf.inputs()
@@ -65,9 +33,9 @@ pub fn refine_found(
     frf: &era::FrfData,
     options: &RefineOptions,
     domain: Option<era::ModelDomain>,
-    common: &crate::args::CommonArgs,
+    settings: &Settings,
 ) -> anyhow::Result<Identification> {
-    let spinner = crate::progress::spinner(common);
+    let spinner = crate::output::progress::spinner(settings);
     spinner.set_message("refinement");
     let mut on_stage = |_: era::Stage| {};
     let mut on_step = |iteration: usize, cost: f64| {
@@ -82,7 +50,7 @@ pub fn refine_found(
                     name: "max-iterations",
                     value,
                     reason,
-                } => anyhow::Error::from(crate::UsageError(format!(
+                } => anyhow::Error::from(crate::error::UsageError(format!(
                     "--max-iterations {value}: {reason}"
                 ))),
                 other => anyhow::Error::from(other),
@@ -150,18 +118,87 @@ fn count(model: &ModelJson, key: &str) -> usize {
 
 /// `era refine MODEL.json FRF_FILE`.
 pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
-    let ropts = options(&a.fit)?;
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    let ropts = crate::config::refine_options(&a.fit)?;
     let model =
         ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
     };
-    let input = read_frf_with(&a.file, &a.read.flags())?;
+    let input = read_frf_with(&a.file, &crate::input::FrfFlags::from(&a.read))?;
     let frf = &input.file.frf;
+    check_model_fits(a, &model, frf)?;
+    check_shape(&ropts, frf)?;
+    human.print(&format!(
+        "era refine {} {}\n  {}{}\n",
+        a.model.display(),
+        a.file.display(),
+        shape_line(frf),
+        input.note
+    ));
+    let found = start(a, &model, frf, input.file.channels.as_ref())?;
+    let before = found.fit.clone();
+    let found = refine_found(found, frf, &ropts, None, &settings)
+        .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
+    human.print(&format!(
+        "  the model as given: fit collocated {}, non-collocated {}\n",
+        before
+            .collocated_mean_relative_error
+            .map_or("-".into(), |v| format!("{v:.3e}")),
+        before
+            .noncollocated_mean_relative_error
+            .map_or("-".into(), |v| format!("{v:.3e}"))
+    ));
+    human.print(&summary(&found));
+    let states = model
+        .states
+        .min(found.realization.singular_values.len())
+        .max(1);
+    human.print(&identification_summary(&found, states));
+    let mut params = ModelParameters::refining(model.parameters.clone());
+    params.refinement = Some(ropts.clone());
+    params.refined_from = Some(a.model.clone());
+    params.model_states = Some(found.model.states());
+    let mut json = ModelJson::from_run(&found, &params);
+    if json.singular_values.is_empty() {
+        json.singular_values = model.singular_values.clone();
+    }
+    if let Some(set) = outputs.as_mut() {
+        let fit = FitJson::from_report(&found.fit);
+        let title = format!("era refine {} {}", a.model.display(), a.file.display());
+        let source = crate::output::RunInput::from_file(&a.file, &input);
+        let echo = format!("refined from {}\n", a.model.display());
+        let bundle = Bundle {
+            found: &found,
+            fit: &fit,
+            source: &source,
+            title: &title,
+            echo: &echo,
+            states,
+            figures: !a.no_figures,
+        };
+        write_identification(set, std::path::Path::new(""), &json, &bundle, &settings)?;
+    }
+    if let (Some(dir), Some(set)) = (&a.out, outputs) {
+        set.commit()?;
+        human.print(&format!(
+            "\nwrote {}\n",
+            crate::output::identification::written_list(dir, !a.no_figures)
+        ));
+    }
+    if settings.json {
+        print_json(&json)?;
+    }
+    Ok(())
+}
+
+/// The model and the FRF file must be of one set: the same outputs and inputs, and
+/// the FRF lines the model was identified from when model.json records them.
+fn check_model_fits(a: &RefineArgs, model: &ModelJson, frf: &era::FrfData) -> anyhow::Result<()> {
     if (model.outputs, model.inputs) != (frf.outputs(), frf.inputs()) {
-        return crate::usage(format!(
+        return crate::error::usage(format!(
             "{}: the model has {} outputs x {} inputs, {} has {} x {}",
             a.model.display(),
             model.outputs,
@@ -173,30 +210,34 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
     }
     if let Some(lines) = &model.frf_lines {
         if let Some(why) = lines.differs_from(frf) {
-            return crate::usage(format!(
+            return crate::error::usage(format!(
                 "{}: not the FRF lines of {}: {why}",
                 a.file.display(),
                 a.model.display()
             ));
         }
     }
-    check_shape(&ropts, frf)?;
-    human.print(&format!(
-        "era refine {} {}\n  {}{}\n",
-        a.model.display(),
-        a.file.display(),
-        shape_line(frf),
-        input.note
-    ));
+    Ok(())
+}
+
+/// The given model assessed on `frf` as an identification would have it: its modes
+/// marked physical or not as model.json says, only the physical ones kept for an
+/// automatic model, collocation from the channel table.
+fn start(
+    a: &RefineArgs,
+    model: &ModelJson,
+    frf: &era::FrfData,
+    channels: Option<&era_io::uff::ChannelTable>,
+) -> anyhow::Result<Identification> {
     let options = EraOptions {
-        integrations: count(&model, "integrations"),
-        zero_lines: count(&model, "zero_lines"),
-        pad_to: count(&model, "pad_to"),
+        integrations: count(model, "integrations"),
+        zero_lines: count(model, "zero_lines"),
+        pad_to: count(model, "pad_to"),
         ..EraOptions::new(model.states.max(1), 1)
     };
     let state_space = model
         .state_space()
-        .map_err(|e| crate::UsageError(format!("{}: {e}", a.model.display())))?;
+        .map_err(|e| crate::error::UsageError(format!("{}: {e}", a.model.display())))?;
     // The sample time of the identification: the model's own when discrete, else that
     // of the (padded) lines, as the pipeline computes it.
     let padded_lines = if options.pad_to > 0 {
@@ -243,63 +284,6 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         found.quality.retain(|q| q.physical);
     }
     // Collocation from the channel table; the refinement keeps it.
-    let channels = input.file.channels.as_ref();
-    crate::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
-    let before = found.fit.clone();
-    let found = refine_found(found, frf, &ropts, None, &a.common)
-        .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
-    human.print(&format!(
-        "  the model as given: fit collocated {}, non-collocated {}\n",
-        before
-            .collocated_mean_relative_error
-            .map_or("-".into(), |v| format!("{v:.3e}")),
-        before
-            .noncollocated_mean_relative_error
-            .map_or("-".into(), |v| format!("{v:.3e}"))
-    ));
-    human.print(&summary(&found));
-    let states = model
-        .states
-        .min(found.realization.singular_values.len())
-        .max(1);
-    human.print(&identification_summary(&found, states));
-    let mut params = model.parameters.clone();
-    era_io::model_json::refine_parameters(&ropts, &mut params);
-    params.insert("refined_from".into(), serde_json::json!(a.model));
-    params.insert(
-        "model_states".into(),
-        serde_json::json!(found.model.states()),
-    );
-    let mut json = ModelJson::from_identification(&found, params, None);
-    if json.singular_values.is_empty() {
-        json.singular_values = model.singular_values.clone();
-    }
-    if let Some(set) = outputs.as_mut() {
-        let fit = FitJson::from_report(&found.fit);
-        let title = format!("era refine {} {}", a.model.display(), a.file.display());
-        write_identification(
-            set,
-            std::path::Path::new(""),
-            &found,
-            &json,
-            &fit,
-            &crate::output::RunInput::from_file(&a.file, &input),
-            &title,
-            &format!("refined from {}\n", a.model.display()),
-            states,
-            !a.no_figures,
-            &a.common,
-        )?;
-    }
-    if let (Some(dir), Some(set)) = (&a.out, outputs) {
-        set.commit()?;
-        human.print(&format!(
-            "\nwrote {}\n",
-            crate::output::written_list(dir, !a.no_figures)
-        ));
-    }
-    if a.common.json {
-        print_json(&json)?;
-    }
-    Ok(())
+    crate::output::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
+    Ok(found)
 }

@@ -2,8 +2,9 @@
 //! in another format.
 
 use crate::args::{ConvertArgs, InfoArgs};
+use crate::config::Settings;
 use crate::input::{describe_input, read_frf_bytes, read_frf_with, shape_line, FrfFlags};
-use crate::report::{finish_output, Human};
+use crate::output::report::{finish_output, Human};
 use anyhow::Context;
 use era_io::format::{write_frf_file, FrfFormat};
 use era_io::uff::{function_type_name, listed, quantity_of, FrfLayout, UffWriteOptions};
@@ -13,21 +14,22 @@ use std::time::Instant;
 
 /// `era convert`.
 pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let target = FrfFormat::from_extension(&a.output).ok_or_else(|| {
-        crate::UsageError(format!(
+        crate::error::UsageError(format!(
             "{}: cannot tell the output format from the extension: use .csv, .uff (or .unv) or .mat",
             a.output.display()
         ))
     })?;
     if (a.binary || a.single) && target != FrfFormat::Uff {
-        return crate::usage(format!(
+        return crate::error::usage(format!(
             "--binary and --single apply to UFF output, not to {}",
             a.output.display()
         ));
     }
     let clock = Instant::now();
-    let input = read_frf_with(&a.input, &a.read.flags())?;
+    let input = read_frf_with(&a.input, &crate::input::FrfFlags::from(&a.read))?;
     let read_s = clock.elapsed().as_secs_f64();
     let frf = &input.file.frf;
     let clock = Instant::now();
@@ -56,7 +58,7 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
     ));
     finish_output(
         &human,
-        &a.common,
+        &settings,
         json!({
             "input": a.input, "input_format": input.format.name(),
             "output": a.output, "output_format": kind,
@@ -69,7 +71,8 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
 
 /// `era info`.
 pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let clock = Instant::now();
     // Read once: a pipe or `/dev/stdin` cannot be read a second time.
     // The file's errors name it: no "reading FILE" context to say it twice.
@@ -83,7 +86,7 @@ pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
     human.print(&text);
     finish_output(
         &human,
-        &a.common,
+        &settings,
         summary,
         &[("info", clock.elapsed().as_secs_f64())],
     )

@@ -4,8 +4,9 @@ use crate::args::{
     DecayMethodArg, FrictionAction, FrictionArgs, FrictionEstimateArgs, FrictionSimulateArgs,
     FrictionTuneArgs, OscillatorArgs,
 };
-use crate::report::{finish_output, Human};
-use crate::usage;
+use crate::config::Settings;
+use crate::error::usage;
+use crate::output::report::{finish_output, Human};
 use anyhow::Context;
 use era::friction::estimate::{estimate_displacement, estimate_velocity, summarize, DecayEstimate};
 use era::friction::simulate::{free_decay_record, DecaySpec, Method};
@@ -41,7 +42,8 @@ fn check_stiffness(k: f64) -> anyhow::Result<()> {
 }
 
 fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     check_stiffness(a.stiffness)?;
     let clock = Instant::now();
     let mut estimates = Vec::new();
@@ -98,7 +100,7 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
     });
     finish_output(
         &human,
-        &a.common,
+        &settings,
         out,
         &[("estimate", clock.elapsed().as_secs_f64())],
     )
@@ -117,7 +119,8 @@ fn oscillator(m: &OscillatorArgs, coulomb_force: f64) -> anyhow::Result<Oscillat
 }
 
 fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let clock = Instant::now();
     let osc = oscillator(&a.model, a.coulomb_force)?;
     let method = match a.method {
@@ -178,7 +181,7 @@ fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
     let out = json!({"file": a.out, "samples": record.time_s.len(), "method": format!("{method:?}").to_lowercase()});
     finish_output(
         &human,
-        &a.common,
+        &settings,
         out,
         &[
             ("simulate", simulate_s),
@@ -188,7 +191,8 @@ fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
 }
 
 fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
     let clock = Instant::now();
     check_stiffness(a.model.stiffness)?;
     // The actuator: from records, or from the flags.
@@ -270,7 +274,7 @@ fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
     human.print(&text);
     finish_output(
         &human,
-        &a.common,
+        &settings,
         out,
         &[("tune", clock.elapsed().as_secs_f64())],
     )

@@ -1,12 +1,12 @@
 //! `era simulate experiment`: the thesis's FRF test (§4.5) simulated in the time domain
 //! (`era::sim::experiment`), written as an FRF file with its coherence beside it.
 
-use crate::args::CommonArgs;
-use crate::figures::write_figure;
+use crate::args::{ExperimentArgs, OnOff, StructureQuantity};
+use crate::config::Settings;
+use crate::error::usage;
+use crate::output::figures::write_figure;
+use crate::output::report::{finish_output, Human};
 use crate::output::{output_name, write_output};
-use crate::report::{finish_output, Human};
-use crate::usage;
-use clap::{Args, ValueEnum};
 use era::sim::experiment::{
     dta_like_structure, run_experiment, thesis_actuators, Compensation, Drive, Experiment,
     ExperimentSpec, Structure, TABLE_5_1,
@@ -21,93 +21,8 @@ use era_plot::{Figure, Panel, Series, SeriesKind, YScale};
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum OnOff {
-    On,
-    Off,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum StructureQuantity {
-    Velocity,
-    Acceleration,
-}
-
-#[derive(Debug, Args)]
-pub struct ExperimentArgs {
-    /// Friction compensation in the actuators (thesis §4.4: 200 Hz, dead zone 0.2 in/s,
-    /// 85 % of the coefficient).
-    #[arg(long, value_enum, default_value_t = OnOff::Off)]
-    pub compensation: OnOff,
-    /// Frames of 2048 samples (40 s) averaged per excited actuator.
-    #[arg(long, default_value_t = 20)]
-    pub averages: usize,
-    /// Seed of the excitation and the sensor noise (and of a --modes structure).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Multiplies every actuator's true Coulomb force (Table 5.1); 0 gives the linear
-    /// system.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    pub friction_scale: f64,
-    /// Compensator coefficients, lbf, one per actuator (e.g. from `era friction tune`);
-    /// default: the adjusted coefficients of Table 5.1 times --friction-scale.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    pub coefficients: Option<Vec<f64>>,
-    /// Excitation RMS voltage, V; default 0.6 without compensation, 0.3 with (§4.5).
-    #[arg(long, allow_negative_numbers = true)]
-    pub excitation: Option<f64>,
-    /// Drive every actuator at once with uncorrelated noise (one run), instead of one
-    /// at a time.
-    #[arg(long)]
-    pub simultaneous: bool,
-    /// Number of actuators, on structure inputs 1, 2, … (at most 8: Table 5.1 has 8).
-    #[arg(long, default_value_t = 8)]
-    pub actuators: usize,
-    /// Accelerometer noise RMS, in/s².
-    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
-    pub accel_noise: f64,
-    /// LVT (relative velocity) noise RMS, in/s.
-    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
-    pub lvt_noise: f64,
-    /// Structure: a model.json (square, outputs collocated with the inputs); default: the
-    /// DTA-like modal structure (40 modes under 14 Hz and 4 up to 20 Hz).
-    #[arg(long, value_name = "MODEL_JSON", conflicts_with_all = ["modes", "fmin", "fmax", "damping", "dofs"])]
-    pub structure: Option<PathBuf>,
-    /// What the --structure model's outputs measure.
-    #[arg(long, value_enum, default_value_t = StructureQuantity::Velocity)]
-    pub structure_quantity: StructureQuantity,
-    /// A seeded modal structure (as `simulate modal`, collocated): number of modes.
-    #[arg(long)]
-    pub modes: Option<usize>,
-    /// Its DOFs (inputs = outputs).
-    #[arg(long)]
-    pub dofs: Option<usize>,
-    /// Its lowest natural frequency, Hz.
-    #[arg(long, allow_negative_numbers = true)]
-    pub fmin: Option<f64>,
-    /// Its highest natural frequency, Hz.
-    #[arg(long, allow_negative_numbers = true)]
-    pub fmax: Option<f64>,
-    /// Its damping ratio range MIN..MAX (fractions).
-    #[arg(long)]
-    pub damping: Option<String>,
-    /// FRF file to write: .csv, .uff/.unv or .mat; the coherence goes beside it, to
-    /// <name>.coherence.csv.
-    #[arg(long, value_name = "FILE")]
-    pub out: PathBuf,
-    /// Also write the exact FRFs of the linear system (no friction) on the same lines.
-    #[arg(long, value_name = "FILE")]
-    pub exact_out: Option<PathBuf>,
-    /// Write the analyzer's time histories, one CSV per run (time_s, voltages,
-    /// accelerations, strokes, LVT velocities, compensation voltages), into DIR.
-    #[arg(long, value_name = "DIR")]
-    pub time_histories: Option<PathBuf>,
-    #[command(flatten)]
-    pub common: CommonArgs,
-}
 
 fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
     if !(v.is_finite() && v >= 0.0) {
@@ -120,15 +35,15 @@ fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
 fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
     if let Some(path) = &a.structure {
         let model = era_io::model_json::ModelJson::read(path)?;
-        let ss = model
-            .state_space()
-            .map_err(|e| crate::UsageError(format!("--structure {}: {e}", path.display())))?;
+        let ss = model.state_space().map_err(|e| {
+            crate::error::UsageError(format!("--structure {}: {e}", path.display()))
+        })?;
         let quantity = match a.structure_quantity {
             StructureQuantity::Velocity => Quantity::Velocity,
             StructureQuantity::Acceleration => Quantity::Acceleration,
         };
         return Structure::from_state_space(&ss, quantity).map_err(|e| {
-            crate::UsageError(format!(
+            crate::error::UsageError(format!(
                 "--structure {}: {e} (the structure needs one output collocated with each input)",
                 path.display()
             ))
@@ -145,7 +60,7 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
     }
     let d = ModalSpec::default();
     let (damping_min, damping_max) = match &a.damping {
-        Some(text) => crate::simulate::parse_range(text)?,
+        Some(text) => crate::config::parse_range(text)?,
         None => (d.damping_min, d.damping_max),
     };
     let dofs = a.dofs.unwrap_or(8);
@@ -163,7 +78,7 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
         collocated: true,
         seed: a.seed,
     };
-    let s = ModalStructure::random(&spec).map_err(|e| crate::UsageError(e.to_string()))?;
+    let s = ModalStructure::random(&spec).map_err(|e| crate::error::UsageError(e.to_string()))?;
     Ok(Structure::from_modal(&s))
 }
 
@@ -249,7 +164,7 @@ fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
         Drive::OneAtATime
     };
     spec.validate()
-        .map_err(|e| crate::UsageError(format!("era simulate experiment: {e}")))?;
+        .map_err(|e| crate::error::UsageError(format!("era simulate experiment: {e}")))?;
     Ok(spec)
 }
 
@@ -463,18 +378,25 @@ fn motion_shares(e: &Experiment, dead_zone: f64) -> (f64, f64) {
     (stuck as f64 / total, above as f64 / total)
 }
 
-pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
-    let human = Human::new(&a.common);
+/// The output sets of `simulate experiment`, opened before the work so that a bad
+/// output is refused first: the FRFs and their coherence, the exact FRFs, the time
+/// histories.
+struct Sets {
+    frf: OutputSet,
+    exact: Option<OutputSet>,
+    time_histories: Option<OutputSet>,
+}
+
+fn prepare(a: &ExperimentArgs) -> anyhow::Result<Sets> {
     frf_format("--out", &a.out)?;
     if let Some(p) = &a.exact_out {
         frf_format("--exact-out", p)?;
     }
-    // Refuse bad outputs before the work.
-    let mut set = OutputSet::beside(&a.out)?;
-    set.stage(output_name("--out", &a.out)?)?;
-    let coherence = crate::frf::coherence_path(&a.out);
-    set.stage(output_name("--out", &coherence)?)?;
-    let mut exact_set = match &a.exact_out {
+    let mut frf = OutputSet::beside(&a.out)?;
+    frf.stage(output_name("--out", &a.out)?)?;
+    let coherence = crate::output::coherence_path(&a.out);
+    frf.stage(output_name("--out", &coherence)?)?;
+    let exact = match &a.exact_out {
         Some(p) => {
             let mut s = OutputSet::beside(p)?;
             s.stage(output_name("--exact-out", p)?)?;
@@ -482,26 +404,90 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let mut th_set =
-        match &a.time_histories {
-            Some(dir) => Some(OutputSet::new(dir).map_err(|e| {
-                crate::UsageError(format!("--time-histories {}: {e}", dir.display()))
-            })?),
-            None => None,
-        };
+    let time_histories = match &a.time_histories {
+        Some(dir) => Some(OutputSet::new(dir).map_err(|e| {
+            crate::error::UsageError(format!("--time-histories {}: {e}", dir.display()))
+        })?),
+        None => None,
+    };
+    Ok(Sets {
+        frf,
+        exact,
+        time_histories,
+    })
+}
+
+pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    // Refuse bad outputs before the work.
+    let sets = prepare(a)?;
+    let coherence = crate::output::coherence_path(&a.out);
     let spec = spec(a)?;
     let runs = match spec.drive {
         Drive::OneAtATime => spec.actuators.len(),
         Drive::Simultaneous => 1,
     };
     let clock = Instant::now();
-    let bar = crate::progress::bar(&a.common, runs as u64, "simulating runs");
+    let bar = crate::output::progress::bar(&settings, runs as u64, "simulating runs");
     let found = run_experiment(&spec, a.time_histories.is_some(), &|done| {
         bar.set_position(done as u64)
     })?;
     bar.finish_and_clear();
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
+    write_frfs(a, sets.frf, sets.exact, &found, &spec)?;
+    let dead_zone = spec
+        .compensation
+        .as_ref()
+        .map_or(Compensation::thesis().dead_zone, |c| c.dead_zone);
+    let shares = a
+        .time_histories
+        .as_ref()
+        .map(|dir| (dir, motion_shares(&found, dead_zone)));
+    if let Some(s) = sets.time_histories {
+        write_time_histories(s, &found, spec.analyzer_rate_hz, dead_zone)?;
+    }
+    let write_s = clock.elapsed().as_secs_f64();
+    human.print(&summary_line(a, &found, &spec, runs));
+    if let Some((dir, (stuck, above))) = shares {
+        human.print(&format!(
+            "  excited actuators: stuck {:.1} % of the time, faster than the {dead_zone} in/s dead zone {:.1} % (time histories and figures in {})\n",
+            100.0 * stuck,
+            100.0 * above,
+            dir.display()
+        ));
+    }
+    let c = found.counts;
+    let summary = json!({
+        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
+        "time_histories": a.time_histories,
+        "outputs": found.frf.outputs(), "inputs": found.frf.inputs(), "lines": found.frf.lines(),
+        "spacing_hz": found.frf.spacing_hz(), "compensation": spec.compensation.is_some(),
+        "averages": a.averages, "seed": a.seed, "friction_scale": a.friction_scale,
+        "excitation_rms_v": spec.excitation_rms_v,
+        "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
+        "max_stroke_in": found.max_stroke,
+        "excited_stuck_fraction": shares.map(|(_, s)| s.0),
+        "excited_above_dead_zone_fraction": shares.map(|(_, s)| s.1),
+    });
+    finish_output(
+        &human,
+        &settings,
+        summary,
+        &[("simulate", simulate_s), ("write", write_s)],
+    )
+}
+
+/// The FRFs and their coherence (committed together), then the exact FRFs.
+fn write_frfs(
+    a: &ExperimentArgs,
+    mut set: OutputSet,
+    exact_set: Option<OutputSet>,
+    found: &Experiment,
+    spec: &ExperimentSpec,
+) -> anyhow::Result<()> {
+    let coherence = crate::output::coherence_path(&a.out);
     let mut meta = vec![
         ("source", "era simulate experiment".to_string()),
         (
@@ -519,13 +505,13 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
     write_output(&mut set, output_name("--out", &a.out)?, |staged| {
         write_frf(staged, &file)
     })?;
-    let text = coherence_csv(&found, &a.out.display().to_string());
+    let text = coherence_csv(found, &a.out.display().to_string());
     write_output(&mut set, output_name("--out", &coherence)?, |staged| {
         era_io::atomic::write_atomic(staged, text.as_bytes())?;
         Ok(())
     })?;
     set.commit()?;
-    if let (Some(mut s), Some(p)) = (exact_set.take(), &a.exact_out) {
+    if let (Some(mut s), Some(p)) = (exact_set, &a.exact_out) {
         meta[0].1 = "era simulate experiment (exact FRFs of the linear system)".into();
         let exact = frf_file(&found.exact, &meta);
         write_output(&mut s, output_name("--exact-out", p)?, |staged| {
@@ -533,34 +519,43 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
         })?;
         s.commit()?;
     }
-    let dead_zone = spec
-        .compensation
-        .as_ref()
-        .map_or(Compensation::thesis().dead_zone, |c| c.dead_zone);
-    let shares = a
-        .time_histories
-        .as_ref()
-        .map(|dir| (dir, motion_shares(&found, dead_zone)));
-    if let Some(mut s) = th_set.take() {
-        for r in 0..found.records.len() {
-            let text = time_csv(&found, r, spec.analyzer_rate_hz);
-            write_output(&mut s, format!("run{}.csv", r + 1), |staged| {
-                era_io::atomic::write_atomic(staged, text.as_bytes())?;
-                Ok(())
-            })?;
-            let figure = time_figure(&found, r, spec.analyzer_rate_hz, dead_zone);
-            write_figure(&mut s, Path::new(""), &format!("run{}", r + 1), &figure)?;
-        }
-        s.commit()?;
+    Ok(())
+}
+
+/// One CSV and one figure per run into the `--time-histories` folder.
+fn write_time_histories(
+    mut s: OutputSet,
+    found: &Experiment,
+    rate_hz: f64,
+    dead_zone: f64,
+) -> anyhow::Result<()> {
+    for r in 0..found.records.len() {
+        let text = time_csv(found, r, rate_hz);
+        write_output(&mut s, format!("run{}.csv", r + 1), |staged| {
+            era_io::atomic::write_atomic(staged, text.as_bytes())?;
+            Ok(())
+        })?;
+        let figure = time_figure(found, r, rate_hz, dead_zone);
+        write_figure(&mut s, Path::new(""), &format!("run{}", r + 1), &figure)?;
     }
-    let write_s = clock.elapsed().as_secs_f64();
+    s.commit()?;
+    Ok(())
+}
+
+/// What was written and what happened in the actuators.
+fn summary_line(
+    a: &ExperimentArgs,
+    found: &Experiment,
+    spec: &ExperimentSpec,
+    runs: usize,
+) -> String {
     let c = found.counts;
-    human.print(&format!(
+    format!(
         "wrote {} and {}: {} outputs x {} inputs, {} lines at {} Hz (acceleration per volt)\n  \
          {} run(s) of {} x 40 s, compensation {}, friction x{}: {} reversals, {} sticks, {} break-aways, {} end-stop impacts\n  \
          largest stroke per actuator (in): {}\n",
         a.out.display(),
-        coherence.display(),
+        crate::output::coherence_path(&a.out).display(),
         found.frf.outputs(),
         found.frf.inputs(),
         found.frf.lines(),
@@ -579,31 +574,5 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
             .map(|s| format!("{s:.3}"))
             .collect::<Vec<_>>()
             .join(" ")
-    ));
-    if let Some((dir, (stuck, above))) = shares {
-        human.print(&format!(
-            "  excited actuators: stuck {:.1} % of the time, faster than the {dead_zone} in/s dead zone {:.1} % (time histories and figures in {})\n",
-            100.0 * stuck,
-            100.0 * above,
-            dir.display()
-        ));
-    }
-    let summary = json!({
-        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
-        "time_histories": a.time_histories,
-        "outputs": found.frf.outputs(), "inputs": found.frf.inputs(), "lines": found.frf.lines(),
-        "spacing_hz": found.frf.spacing_hz(), "compensation": spec.compensation.is_some(),
-        "averages": a.averages, "seed": a.seed, "friction_scale": a.friction_scale,
-        "excitation_rms_v": spec.excitation_rms_v,
-        "events": {"reversals": c.reversals, "sticks": c.sticks, "breakaways": c.breakaways, "impacts": c.impacts},
-        "max_stroke_in": found.max_stroke,
-        "excited_stuck_fraction": shares.map(|(_, s)| s.0),
-        "excited_above_dead_zone_fraction": shares.map(|(_, s)| s.1),
-    });
-    finish_output(
-        &human,
-        &a.common,
-        summary,
-        &[("simulate", simulate_s), ("write", write_s)],
     )
 }

@@ -3,8 +3,9 @@
 use crate::args::{
     ExcitationArg, ModalArgs, ShakerArgs, SimulateArgs, SimulateCommon, SimulateModel,
 };
-use crate::report::{finish_output, Human};
-use crate::usage;
+use crate::config::Settings;
+use crate::error::usage;
+use crate::output::report::{finish_output, Human};
 use era::params::Naming;
 use era::sim::{add_noise, truth_model_frf, ModalRequest, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
@@ -14,22 +15,6 @@ use era_io::uff::UffWriteOptions;
 use serde_json::json;
 use std::time::Instant;
 
-pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
-    let Some((lo, hi)) = text.split_once("..") else {
-        return usage(format!(
-            "--damping {text}: expected MIN..MAX, e.g. 0.005..0.02"
-        ));
-    };
-    match (lo.trim().parse::<f64>(), hi.trim().parse::<f64>()) {
-        (Ok(lo), Ok(hi)) => Ok((lo, hi)),
-        _ => usage(format!("--damping {text}: MIN and MAX must be numbers")),
-    }
-}
-
-pub fn check_noise(noise: f64) -> anyhow::Result<()> {
-    Ok(era::sim::check_noise(Naming::Flag, noise)?)
-}
-
 fn finish(
     sim: &SimulateCommon,
     frf: &FrfData,
@@ -37,7 +22,8 @@ fn finish(
     summary: serde_json::Value,
     simulate_s: f64,
 ) -> anyhow::Result<()> {
-    let human = Human::new(&sim.common);
+    let settings = Settings::from(&sim.common);
+    let human = Human::new(&settings);
     let clock = Instant::now();
     let seed = sim.seed.to_string();
     let noise = sim.noise.to_string();
@@ -75,7 +61,7 @@ fn finish(
     ));
     finish_output(
         &human,
-        &sim.common,
+        &settings,
         summary,
         &[
             ("simulate", simulate_s),
@@ -85,7 +71,7 @@ fn finish(
 }
 
 fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
-    check_noise(sim.noise)?;
+    crate::config::check_noise(sim.noise)?;
     let clock = Instant::now();
     let noise = (sim.noise > 0.0).then_some((sim.noise, sim.seed));
     let frf = truth_model_frf(noise)?;
@@ -111,8 +97,8 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
 }
 
 fn modal(a: &ModalArgs) -> anyhow::Result<()> {
-    check_noise(a.sim.noise)?;
-    let (damping_min, damping_max) = parse_range(&a.damping)?;
+    crate::config::check_noise(a.sim.noise)?;
+    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
     let request = ModalRequest {
         spec: ModalSpec {
             outputs: a.outputs,
@@ -160,7 +146,7 @@ pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
     match &a.model {
         SimulateModel::TruthModel(sim) => truth(sim),
         SimulateModel::Modal(m) => modal(m),
-        SimulateModel::Experiment(e) => crate::experiment::run(e),
+        SimulateModel::Experiment(e) => super::experiment::run(e),
         SimulateModel::Shaker(s) => shaker(s),
     }
 }
@@ -208,11 +194,9 @@ fn shaker_csv(r: &era::sim::shaker::ShakerRecord, quantity: Quantity, header: &s
     out
 }
 
-fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
-    use era::sim::shaker::{simulate_shaker_test, Excitation, ShakerTest};
-    let human = Human::new(&a.common);
-    check_noise(a.noise)?;
-    let (damping_min, damping_max) = parse_range(&a.damping)?;
+/// The shakers' signal the flags ask for, `--band` checked against it.
+fn shaker_excitation(a: &ShakerArgs) -> anyhow::Result<era::sim::shaker::Excitation> {
+    use era::sim::shaker::Excitation;
     let band = a.band.as_deref().map(parse_band).transpose()?;
     if band.is_some()
         && !matches!(
@@ -244,6 +228,40 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
             width_s: a.pulse_width,
         },
     };
+    Ok(excitation)
+}
+
+/// The truth beside a shaker test's CSV (and its JSON summary): the settings, the
+/// columns, and each mode's frequency, damping and shape.
+fn shaker_truth(
+    a: &ShakerArgs,
+    record: &era::sim::shaker::ShakerRecord,
+    excitation: era::sim::shaker::Excitation,
+    quantity: Quantity,
+    outputs_columns: &str,
+) -> serde_json::Value {
+    let truth = &record.truth;
+    let modes: Vec<_> = truth
+        .frequencies_hz
+        .iter()
+        .zip(&truth.damping_ratios)
+        .zip(&truth.output_shapes)
+        .map(|((f, z), shape)| json!({"frequency_hz": f, "damping_ratio": z, "shape": shape}))
+        .collect();
+    json!({"file": a.out, "model": "shaker", "outputs": a.outputs, "inputs": a.inputs,
+        "sample_rate_hz": a.sample_rate, "duration_s": a.duration, "samples": record.outputs[0].len(),
+        "excitation": excitation.name(), "quantity": quantity.name(), "noise": a.noise, "seed": a.seed,
+        "inputs_columns": format!("1-{}", a.inputs), "outputs_columns": outputs_columns,
+        "modes": modes})
+}
+
+fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
+    use era::sim::shaker::{simulate_shaker_test, ShakerTest};
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    crate::config::check_noise(a.noise)?;
+    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
+    let excitation = shaker_excitation(a)?;
     // The structure's sizes and ranges are checked, against their limits, before
     // anything is allocated (ModalStructure::random, inside the simulation).
     let spec = ModalSpec {
@@ -268,24 +286,15 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
             name,
             value,
             reason,
-        } => anyhow::Error::from(crate::UsageError(format!("--{name} {value}: {reason}"))),
+        } => anyhow::Error::from(crate::error::UsageError(format!(
+            "--{name} {value}: {reason}"
+        ))),
         other => anyhow::Error::from(other),
     })?;
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let truth = &record.truth;
-    let modes: Vec<_> = truth
-        .frequencies_hz
-        .iter()
-        .zip(&truth.damping_ratios)
-        .zip(&truth.output_shapes)
-        .map(|((f, z), shape)| json!({"frequency_hz": f, "damping_ratio": z, "shape": shape}))
-        .collect();
-    let summary = json!({"file": a.out, "model": "shaker", "outputs": a.outputs, "inputs": a.inputs,
-        "sample_rate_hz": a.sample_rate, "duration_s": a.duration, "samples": record.outputs[0].len(),
-        "excitation": excitation.name(), "quantity": quantity.name(), "noise": a.noise, "seed": a.seed,
-        "inputs_columns": format!("1-{}", a.inputs), "outputs_columns": format!("{}-{}", a.inputs + 1, a.inputs + a.outputs),
-        "modes": modes});
+    let outputs_columns = format!("{}-{}", a.inputs + 1, a.inputs + a.outputs);
+    let summary = shaker_truth(a, &record, excitation, quantity, &outputs_columns);
     let header = format!(
         "era simulate shaker: {} modes {}..{} Hz, {} excitation, {} % sensor noise, seed {}",
         a.modes,
@@ -316,12 +325,12 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
         a.sample_rate,
         a.inputs,
         a.outputs,
-        summary["outputs_columns"].as_str().unwrap_or_default(),
+        outputs_columns,
         truth_path.display()
     ));
     finish_output(
         &human,
-        &a.common,
+        &settings,
         summary,
         &[
             ("simulate", simulate_s),

@@ -2,7 +2,7 @@
 //! tables, timings. Human text goes to stdout, or to stderr when `--json` owns stdout;
 //! `--quiet` silences it.
 
-use crate::args::CommonArgs;
+use crate::config::{Settings, Verbosity};
 use era::identify::{EraOptions, Identification, ModelDomain};
 use era::realize::DirectTerm;
 use std::collections::BTreeMap;
@@ -16,10 +16,10 @@ pub struct Human {
 }
 
 impl Human {
-    pub fn new(common: &CommonArgs) -> Self {
+    pub fn new(settings: &Settings) -> Self {
         Human {
-            to_stderr: common.json,
-            quiet: common.quiet,
+            to_stderr: settings.json,
+            quiet: settings.verbosity == Verbosity::Quiet,
         }
     }
     pub fn print(&self, text: &str) {
@@ -48,8 +48,6 @@ pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
         _ => Ok(()),
     }
 }
-
-pub use era_io::model_json::parameters;
 
 /// The modal table: frequency, damping, the indicators and whether to trust each mode
 /// (docs/design.md §10). Suspect modes are marked `?` with the reason below the table;
@@ -337,16 +335,16 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
 /// `--json`, the JSON on stdout.
 pub fn finish_output(
     human: &Human,
-    common: &CommonArgs,
+    settings: &Settings,
     mut out: serde_json::Value,
     timings: &[(&str, f64)],
 ) -> anyhow::Result<()> {
-    if common.timings {
+    if settings.timings {
         let t: BTreeMap<String, f64> = timings.iter().map(|(k, v)| (k.to_string(), *v)).collect();
         human.print(&timings_table(&t));
         out["timings_s"] = serde_json::json!(t);
     }
-    if common.json {
+    if settings.json {
         print_json(&out)?;
     }
     Ok(())

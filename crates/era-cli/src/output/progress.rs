@@ -2,12 +2,12 @@
 //! pair figures. Hidden with `--quiet` and whenever stderr is not a terminal (indicatif
 //! draws nothing then), so pipes, files and CI logs stay clean.
 
-use crate::args::CommonArgs;
+use crate::config::Settings;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::time::Duration;
 
-fn target(common: &CommonArgs) -> ProgressDrawTarget {
-    if common.quiet {
+fn target(settings: &Settings) -> ProgressDrawTarget {
+    if !settings.progress {
         ProgressDrawTarget::hidden()
     } else {
         ProgressDrawTarget::stderr()
@@ -15,8 +15,8 @@ fn target(common: &CommonArgs) -> ProgressDrawTarget {
 }
 
 /// A spinner whose message names the current stage.
-pub fn spinner(common: &CommonArgs) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(None, target(common));
+pub fn spinner(settings: &Settings) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(None, target(settings));
     bar.set_style(
         ProgressStyle::with_template("{spinner} {msg} [{elapsed}]").expect("static template"),
     );
@@ -25,8 +25,8 @@ pub fn spinner(common: &CommonArgs) -> ProgressBar {
 }
 
 /// A bar over `len` items.
-pub fn bar(common: &CommonArgs, len: u64, message: &str) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(Some(len), target(common));
+pub fn bar(settings: &Settings, len: u64, message: &str) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(len), target(settings));
     bar.set_style(
         ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed}]")
             .expect("static template"),

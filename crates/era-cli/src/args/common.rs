@@ -1,0 +1,249 @@
+//! Flag groups that several verbs share: the output switches every verb has, how an FRF
+//! file is read, how FRFs are estimated from time histories, how a refinement fits, and
+//! how figures draw the phase.
+
+use clap::{Args, ValueEnum};
+
+/// Flags every verb has.
+#[derive(Debug, Args, Clone)]
+pub struct CommonArgs {
+    /// Print machine-readable JSON on stdout (human text then goes to stderr).
+    #[arg(long)]
+    pub json: bool,
+    /// Print the wall time of each stage (also in the JSON, under timings_s).
+    #[arg(long)]
+    pub timings: bool,
+    /// Print nothing but errors (and the JSON with --json).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum QuantityArg {
+    Acceleration,
+    Velocity,
+    Displacement,
+}
+
+impl From<QuantityArg> for era::Quantity {
+    fn from(q: QuantityArg) -> Self {
+        match q {
+            QuantityArg::Acceleration => era::Quantity::Acceleration,
+            QuantityArg::Velocity => era::Quantity::Velocity,
+            QuantityArg::Displacement => era::Quantity::Displacement,
+        }
+    }
+}
+
+/// What an FRF file may not say about itself, given on the command line (identify,
+/// plot, convert, refine).
+#[derive(Debug, Args)]
+pub struct FrfFactsArgs {
+    /// Units of the FRFs, RESPONSE,FORCE (e.g. m/s^2,N or in,lbf); overrides the file's.
+    /// Plots, tables and the report show them; files written carry them.
+    #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]
+    pub units: Option<UnitsArg>,
+    /// MAT files: the variable holding the frequencies in Hz, when not FreqV.
+    #[arg(long, value_name = "NAME")]
+    pub freq_variable: Option<String>,
+}
+
+/// How plot, convert and refine read an FRF file beyond its name (identify's
+/// `--outputs` also takes time-history channels, so it has its own).
+#[derive(Debug, Args)]
+pub struct FrfReadArgs {
+    /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration is
+    /// assumed when neither says).
+    #[arg(long, value_enum)]
+    pub quantity: Option<QuantityArg>,
+    /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
+    /// set is not square.
+    #[arg(long, value_name = "N")]
+    pub outputs: Option<usize>,
+    #[command(flatten)]
+    pub facts: FrfFactsArgs,
+}
+
+/// `--units RESPONSE,FORCE`: the FRFs' units, e.g. `m/s^2,N` or `in,lbf`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnitsArg {
+    /// The response's unit (`m/s^2`).
+    pub response: String,
+    /// The force's (reference's) unit (`N`).
+    pub force: String,
+}
+
+/// The UFF units field is 20 characters; a longer unit would be cut when written.
+const UNIT_CHARS: usize = 20;
+
+/// Parses `RESPONSE,FORCE`. A comma, not a slash, separates them: units themselves
+/// have slashes (`m/s^2/N` could be `m` per `s^2/N`).
+pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
+    let expected = "expected RESPONSE,FORCE, e.g. m/s^2,N or m/s,N or in,lbf";
+    let (response, force) = text
+        .split_once(',')
+        .ok_or_else(|| format!("no ',' in '{text}': {expected}"))?;
+    let (response, force) = (response.trim(), force.trim());
+    for (part, what) in [(response, "response"), (force, "force")] {
+        if part.is_empty() {
+            return Err(format!("the {what} unit is empty in '{text}': {expected}"));
+        }
+        if part.contains(',') || part.chars().any(char::is_control) {
+            return Err(format!(
+                "the {what} unit '{}' has a comma or a control character: {expected}",
+                part.escape_default()
+            ));
+        }
+        if part.chars().count() > UNIT_CHARS {
+            return Err(format!(
+                "the {what} unit '{part}' is longer than {UNIT_CHARS} characters (the UFF units field)"
+            ));
+        }
+    }
+    Ok(UnitsArg {
+        response: response.to_string(),
+        force: force.to_string(),
+    })
+}
+
+/// How FRFs are estimated from time histories (era frf, era identify --from-time).
+#[derive(Debug, Args, Clone)]
+pub struct WelchArgs {
+    /// Samples per frame (FFT length): lines are frame/2 + 1, spaced fs/frame.
+    #[arg(long, default_value_t = 2048)]
+    pub frame: usize,
+    /// Window of each frame.
+    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
+    pub window: WindowArg,
+    /// Overlap of consecutive frames, as a fraction of the frame (0 ≤ overlap < 1).
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub overlap: f64,
+    /// FRF estimator: h1 (noise on the outputs), h2 (noise on the inputs), hv (total
+    /// least squares).
+    #[arg(long, value_enum, default_value_t = EstimatorArg::H1)]
+    pub estimator: EstimatorArg,
+    /// Trend removed from each frame before windowing.
+    #[arg(long, value_enum, default_value_t = DetrendArg::Mean)]
+    pub detrend: DetrendArg,
+    /// Keep the lines up to this frequency (the analyzer's span). ERA then sees a
+    /// Nyquist frequency of max-hz, as after decimation: use it when the modes lie far
+    /// below fs/2.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub max_hz: Option<f64>,
+    /// Sample rate, Hz: needed for MAT files, and overrides what a CSV or HDF5 file
+    /// says.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub sample_rate: Option<f64>,
+    /// MAT input: the matrix to read (repeat to place several side by side).
+    #[arg(long, value_name = "NAME")]
+    pub variable: Vec<String>,
+    /// HDF5 input: a 2-D dataset (columns are channels), or 1-D datasets, one per
+    /// channel (repeat the flag).
+    #[arg(long, value_name = "PATH")]
+    pub dataset: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WindowArg {
+    Rectangular,
+    Hann,
+    FlatTop,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EstimatorArg {
+    H1,
+    H2,
+    Hv,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DetrendArg {
+    None,
+    Mean,
+    Linear,
+}
+
+/// How a refinement fits (docs: README "Refinement").
+#[derive(Debug, Args, Clone)]
+pub struct RefineFitArgs {
+    /// Residual terms of the refined model: none (modes only), lower (L/(jω)² in
+    /// displacement: modes below the band), upper (a constant in the data's quantity:
+    /// modes above the band, or D) or both (the default).
+    #[arg(long, value_enum, value_name = "none|lower|upper|both")]
+    pub residuals: Option<ResidualsArg>,
+    /// Reciprocity: symmetric residues and residuals (square, collocated sets); with
+    /// rank-one residues each is `ψψᵀ`.
+    #[arg(long)]
+    pub reciprocal: bool,
+    /// Keep a free residue matrix per pole instead of a mode shape times a
+    /// participation (rank one, the default): faster, but a pole may then stand in for
+    /// several modes, and the model has up to 2·min(outputs, inputs) states per mode.
+    #[arg(long)]
+    pub free_residues: bool,
+    /// Fit the start's modes only: do not look in the residual for modes the start
+    /// missed (by default their poles are added and the fit repeated).
+    #[arg(long)]
+    pub no_added_modes: bool,
+    /// Levenberg–Marquardt iterations of the refinement at most (default 100).
+    #[arg(long, value_name = "N")]
+    pub max_iterations: Option<usize>,
+    /// Weights of the refinement's cost: uniform (every pair and line alike) or
+    /// pair-noise (the default: each pair by the inverse of its noise variance, estimated
+    /// from a first uniform fit's residual).
+    #[arg(long, value_enum, value_name = "uniform|pair-noise")]
+    pub weighting: Option<WeightingArg>,
+}
+
+/// The residual terms of a refined model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ResidualsArg {
+    // Modes only.
+    None,
+    // L/(jω)² in displacement: modes below the band.
+    Lower,
+    // A constant in the data's quantity: modes above the band, or D.
+    Upper,
+    // Both.
+    Both,
+}
+
+impl From<ResidualsArg> for era::refine::Residuals {
+    fn from(r: ResidualsArg) -> Self {
+        match r {
+            ResidualsArg::None => era::refine::Residuals::None,
+            ResidualsArg::Lower => era::refine::Residuals::Lower,
+            ResidualsArg::Upper => era::refine::Residuals::Upper,
+            ResidualsArg::Both => era::refine::Residuals::Both,
+        }
+    }
+}
+
+/// How the refinement weights the pairs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum WeightingArg {
+    // Every pair and line alike.
+    Uniform,
+    // Each pair by the inverse of its noise variance, estimated from a first uniform
+    // fit's residual (maximum likelihood when the pairs' noise levels differ).
+    PairNoise,
+}
+
+/// How the figures draw the phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum PhaseArg {
+    // −180° … 180°: each line's own phase, nothing inferred (the default).
+    #[default]
+    Wrapped,
+    // Unwrapped where unambiguous: the model's phase, the measurement on its branch.
+    Unwrapped,
+}
+
+impl From<PhaseArg> for era_plot::PhaseView {
+    fn from(p: PhaseArg) -> Self {
+        match p {
+            PhaseArg::Wrapped => era_plot::PhaseView::Wrapped,
+            PhaseArg::Unwrapped => era_plot::PhaseView::Unwrapped,
+        }
+    }
+}

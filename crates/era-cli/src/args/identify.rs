@@ -1,0 +1,228 @@
+//! `era identify FILE`.
+
+use super::common::{CommonArgs, FrfFactsArgs, PhaseArg, QuantityArg, RefineFitArgs, WelchArgs};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+
+/// Which defaults `era identify` starts from (era::identify::route).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PresetArg {
+    // The route for measured FRFs: automatic order, refinement, continuous time, D from
+    // the quantity, the band from the coherence, the Welch window corrected.
+    Measured,
+    // Plain ERA as the thesis runs it: no refinement, discrete time, D = 0, every line,
+    // the FRFs as given.
+    Thesis,
+}
+
+impl From<PresetArg> for era::identify::route::Preset {
+    fn from(p: PresetArg) -> Self {
+        match p {
+            PresetArg::Measured => era::identify::route::Preset::Measured,
+            PresetArg::Thesis => era::identify::route::Preset::Thesis,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TimeDomainArg {
+    Discrete,
+    Continuous,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DirectTermArg {
+    // D = 0, as in the thesis.
+    Zero,
+    // D = Y_0, the time-zero Markov block.
+    Markov0,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SvdArg {
+    // Form H0 and take its thin SVD (all singular values).
+    Dense,
+    // FFT products and a truncated SVD; H0 is never formed.
+    MatrixFree,
+    // Dense while the Hankel's short side is below 1024, matrix-free beyond.
+    Auto,
+}
+
+/// `--states N` or `--states auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StatesArg {
+    /// A fixed order.
+    Fixed(usize),
+    /// Choose the physical modes automatically.
+    Auto,
+}
+
+fn parse_states(text: &str) -> Result<StatesArg, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Ok(StatesArg::Auto);
+    }
+    text.trim()
+        .parse::<usize>()
+        .map(StatesArg::Fixed)
+        .map_err(|_| format!("'{text}' is neither a number of states nor 'auto'"))
+}
+
+/// What `era identify --help` shows before the flags.
+const IDENTIFY_EXAMPLES: &str = "\
+Examples:
+  era identify frf.csv --out run
+      measured FRFs: the automatic order, refined, with model.json, figures and
+      run/report.html
+  era identify frf.uff --states 40 --no-refine
+      plain ERA at 40 states (20 modes)
+  era identify rec.csv --from-time --inputs force --outputs 2-9 --out run
+      time histories: the FRFs are estimated first (as era frf), then identified
+  era identify frf.csv --preset thesis --states 8 --hankel-factor 5
+      the thesis's own ERA, number for number";
+
+/// What `era identify --help` shows after the flags.
+const IDENTIFY_THESIS_NAMES: &str = "\
+The thesis's names (Woods 1994): --states ns, --hankel-factor lh, --integrations ni, \
+--lowpass-hz Hzbreak, --lowpass-order ford, --zero-lines nz, --pad-to ndpts, \
+--time-domain cord.";
+
+#[derive(Debug, Args)]
+#[command(before_help = IDENTIFY_EXAMPLES, after_help = IDENTIFY_THESIS_NAMES)]
+pub struct IdentifyArgs {
+    /// FRF file (CSV, UFF 58/58b or MAT v5, told apart by content), or time histories
+    /// with --from-time.
+    pub file: PathBuf,
+    /// Defaults for every choice not given: measured (automatic order, refinement,
+    /// continuous time, D from the quantity, the band from the coherence, the Welch window
+    /// corrected) or thesis (plain ERA as the thesis runs it: no refinement, discrete
+    /// time, D = 0, every line, the FRFs as given). Explicit flags override either.
+    #[arg(long, value_enum, default_value_t = PresetArg::Measured, help_heading = "Route")]
+    pub preset: PresetArg,
+    /// Model order in states (two per mode), or `auto` (the default): scan --orders,
+    /// cluster the stable poles and keep the physical modes.
+    #[arg(long, value_name = "N | auto", value_parser = parse_states, help_heading = "Route")]
+    pub states: Option<StatesArg>,
+    /// Markov samples in the Hankel matrix: states × this factor.
+    #[arg(long, default_value_t = 5, help_heading = "ERA")]
+    pub hankel_factor: usize,
+    /// Integrations of the FRFs before ERA: 1 turns acceleration into velocity.
+    #[arg(long, default_value_t = 0, help_heading = "ERA")]
+    pub integrations: usize,
+    /// Zero-phase Butterworth low-pass on the impulse responses, cut-off in Hz (off when
+    /// absent).
+    #[arg(
+        long,
+        value_name = "HZ",
+        allow_negative_numbers = true,
+        help_heading = "ERA"
+    )]
+    pub lowpass_hz: Option<f64>,
+    /// Order of that low-pass filter.
+    #[arg(
+        long,
+        default_value_t = 4,
+        requires = "lowpass_hz",
+        help_heading = "ERA"
+    )]
+    pub lowpass_order: usize,
+    /// Leading FRF lines set to zero.
+    #[arg(long, default_value_t = 0, help_heading = "ERA")]
+    pub zero_lines: usize,
+    /// Pad with zero lines to pad-to + 1 lines (0: no padding).
+    #[arg(long, default_value_t = 0, help_heading = "ERA")]
+    pub pad_to: usize,
+    /// Model returned. Default: continuous when the measured preset refines, else
+    /// discrete (ERA's own).
+    #[arg(long, value_enum, help_heading = "ERA")]
+    pub time_domain: Option<TimeDomainArg>,
+    /// D of ERA's model: zero or markov0 (Y0, the time-zero Markov block); a refined
+    /// model's D is its upper residual. Default: markov0 for accelerance after
+    /// --integrations, zero otherwise and with --preset thesis.
+    #[arg(long, value_enum, help_heading = "ERA")]
+    pub direct_term: Option<DirectTermArg>,
+    /// How the Hankel SVD is computed: dense (H0 formed, every singular value),
+    /// matrix-free (FFT products and a truncated SVD) or auto (dense while the Hankel's
+    /// short side is below 1024).
+    #[arg(long, value_enum, default_value_t = SvdArg::Auto, help_heading = "ERA")]
+    pub svd: SvdArg,
+    /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration when
+    /// neither says).
+    #[arg(long, value_enum, help_heading = "Reading the file")]
+    pub quantity: Option<QuantityArg>,
+    /// Outputs of a MAT file's FRF matrix, when the file does not say and the set is not
+    /// square; with --from-time, the output channels (as era frf --outputs).
+    #[arg(long, value_name = "N | CHANNELS", help_heading = "Reading the file")]
+    pub outputs: Option<String>,
+    #[command(flatten, next_help_heading = "Reading the file")]
+    pub facts: FrfFactsArgs,
+    /// Orders of the stabilization diagram, MIN..MAX[:STEP] (step 2) or a list such as
+    /// 50,70,80, all from one SVD. Default with --states auto: a range the data support.
+    #[arg(long, value_name = "MIN..MAX[:STEP]", help_heading = "Route")]
+    pub orders: Option<String>,
+    /// The band the test excited, LO..HI Hz: modes outside it are not physical, and the
+    /// refinement fits its lines only. Default: where the coherence is at least 0.5
+    /// (every line without coherence, with --preset thesis, or with --band all).
+    #[arg(long, value_name = "LO..HI | all", help_heading = "Route")]
+    pub band: Option<String>,
+    /// FILE holds time histories: estimate the FRFs first (as era frf), then identify.
+    #[arg(
+        long,
+        requires = "inputs",
+        help_heading = "Time histories (--from-time)"
+    )]
+    pub from_time: bool,
+    /// The input channels of the time file.
+    #[arg(
+        long,
+        value_name = "CHANNELS",
+        requires = "from_time",
+        help_heading = "Time histories (--from-time)"
+    )]
+    pub inputs: Option<String>,
+    /// Do not check the physical modes against a second estimate with frames twice (or
+    /// half) as long; by default a mode not found again there is not physical.
+    #[arg(
+        long,
+        requires = "from_time",
+        help_heading = "Time histories (--from-time)"
+    )]
+    pub no_frame_check: bool,
+    #[command(flatten, next_help_heading = "Time histories (--from-time)")]
+    pub welch: WelchArgs,
+    /// Also write the estimated FRFs (.csv, .uff or .mat).
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "from_time",
+        help_heading = "Time histories (--from-time)"
+    )]
+    pub save_frf: Option<PathBuf>,
+    /// Refine the model against the FRFs (the default, but for --preset thesis): poles,
+    /// residues and residual terms by maximum likelihood over the band, with standard
+    /// deviations.
+    #[arg(long, conflicts_with = "no_refine", help_heading = "Route")]
+    pub refine: bool,
+    /// Plain ERA: no refinement.
+    #[arg(long, help_heading = "Route")]
+    pub no_refine: bool,
+    /// Keep a Welch estimate's tapered-window bias: by default (not with --preset thesis)
+    /// its lag window is divided out when the file says which window and frame made it.
+    #[arg(long, help_heading = "ERA")]
+    pub no_window_correction: bool,
+    #[command(flatten, next_help_heading = "Refinement")]
+    pub refine_fit: RefineFitArgs,
+    /// Phase in the figures: wrapped (−180…180°, each line's own) or unwrapped (where
+    /// unambiguous: the model's phase, the measurement on its branch).
+    #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped, help_heading = "Output")]
+    pub phase: PhaseArg,
+    /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
+    /// figures (created if missing).
+    #[arg(long, value_name = "DIR", help_heading = "Output")]
+    pub out: Option<PathBuf>,
+    /// The model files in --out but no figures and no report.html (an earlier run's stay
+    /// as they were): for batch runs.
+    #[arg(long, requires = "out", help_heading = "Output")]
+    pub no_figures: bool,
+    #[command(flatten, next_help_heading = "Output")]
+    pub common: CommonArgs,
+}

@@ -1,0 +1,312 @@
+//! `era demo`: the embedded default. The thesis's truth model (Table 5.2) identified
+//! with the thesis settings, without and with noise, beside the exact truth.
+
+use crate::args::DemoArgs;
+use crate::config::Settings;
+use crate::output::identification::{write_identification, Bundle};
+use crate::output::report::{parameter_echo, print_json, timings_table, Human};
+use crate::output::{prepare_out_dir, write_output, RunInput};
+use anyhow::Context;
+use era::identify::{identify, EraOptions, Identification};
+use era::modal::{modal_parameters, Mode};
+use era::sim::{truth_model, truth_model_frf, TABLE_5_2_ERA_NOISY};
+use era_io::atomic::OutputSet;
+use era_io::csv::write_frf_csv;
+use era_io::model_json::{timings_map, FitJson, ModeJson, ModelJson, ModelParameters};
+use era_plot::FrfUnits;
+use serde_json::json;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+fn max_errors(truth: &[Mode], found: &[Mode]) -> serde_json::Value {
+    if truth.len() != found.len() {
+        return json!({"modes_found": found.len(), "modes_expected": truth.len()});
+    }
+    let df = truth
+        .iter()
+        .zip(found)
+        .map(|(t, f)| (t.frequency_hz - f.frequency_hz).abs())
+        .fold(0.0, f64::max);
+    let dz = truth
+        .iter()
+        .zip(found)
+        .map(|(t, f)| (t.damping_ratio - f.damping_ratio).abs())
+        .fold(0.0, f64::max);
+    json!({"max_frequency_error_hz": df, "max_damping_ratio_error": dz})
+}
+
+fn cell(mode: Option<&Mode>) -> String {
+    mode.map_or(format!("{:>10} {:>7}", "-", "-"), |m| {
+        format!("{:>10.2} {:>7.2}", m.frequency_hz, 100.0 * m.damping_ratio)
+    })
+}
+
+/// The three identifications of the demo: ERA without noise, ERA with noise, and that
+/// noisy model refined.
+struct Runs {
+    clean: Identification,
+    noisy: Identification,
+    refined: Identification,
+}
+
+pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
+    let settings = Settings::from(&a.common);
+    let human = Human::new(&settings);
+    crate::config::check_noise(a.noise)?;
+    let mut outputs = match &a.out {
+        Some(dir) => Some(prepare_out_dir(dir)?),
+        None => None,
+    };
+    let options = EraOptions::thesis_truth_model();
+    human.print("era demo: the thesis's truth model (Woods 1994, section 4.2, Table 5.2)\n");
+    human.print("  4 masses, 3 force inputs, 3 displacement outputs; ZOH at 25 600 Hz, 1025 lines 0..12 800 Hz\n");
+    human.print(&parameter_echo(&options));
+
+    let truth = modal_parameters(&truth_model())?.modes;
+    let clean_frf = truth_model_frf(None)?;
+    let noisy_frf = truth_model_frf(Some((a.noise, a.seed)))?;
+    let runs = identify_both(&options, &clean_frf, &noisy_frf)?;
+    let err = |found: &Identification| max_errors(&truth, &found.modal.modes);
+    let errors = [err(&runs.clean), err(&runs.noisy), err(&runs.refined)];
+    human.print(&table(a, &truth, &runs, &errors));
+
+    let mut timing_json = serde_json::Map::new();
+    if settings.timings {
+        for (label, found) in [("no_noise", &runs.clean), ("noisy", &runs.noisy)] {
+            let map = timings_map(&found.timings);
+            human.print(&format!("\n{label}:"));
+            human.print(&timings_table(&map));
+            timing_json.insert(label.into(), json!(map));
+        }
+    }
+    if let (Some(dir), Some(set)) = (&a.out, outputs.take()) {
+        let clock = Instant::now();
+        let frfs = [&clean_frf, &noisy_frf];
+        write_files(a, set, &options, frfs, &runs, &settings)?;
+        human.print(&format!(
+            "\nwrote {0}/truth_frf.csv, {0}/truth_frf_noisy.csv, and in {0}/no_noise and {0}/noisy: model.json, fit.json, model.mat, modes.uff, model_frf.uff, report.html and figures ({1:.3} s)\n",
+            dir.display(),
+            clock.elapsed().as_secs_f64()
+        ));
+    }
+    if settings.json {
+        let mut out = demo_json(a, &options, &truth, &runs, errors);
+        if settings.timings {
+            out["timings_s"] = serde_json::Value::Object(timing_json);
+        }
+        print_json(&out)?;
+    }
+    Ok(())
+}
+
+/// ERA on the clean and the noisy FRFs, and ERA's noisy model refined against the same
+/// noisy FRFs (the z-domain fit, each pair weighted by its noise): the thesis's closing
+/// recommendation, carried out. The thesis columns are untouched by it.
+fn identify_both(
+    options: &EraOptions,
+    clean_frf: &era::FrfData,
+    noisy_frf: &era::FrfData,
+) -> anyhow::Result<Runs> {
+    let run_one = |frf: &era::FrfData, label: &str| -> anyhow::Result<Identification> {
+        identify(frf, options).with_context(|| format!("identifying the truth model ({label})"))
+    };
+    let clean = run_one(clean_frf, "no noise")?;
+    let noisy = run_one(noisy_frf, "noisy")?;
+    let mut refine_options = era::refine::RefineOptions::default();
+    refine_options.weighting = era::refine::Weighting::PairNoise;
+    let refined = era::identify::refine_identification(
+        noisy.clone(),
+        noisy_frf,
+        &refine_options,
+        &mut |_| {},
+        &mut |_, _| {},
+    )
+    .context("refining the noisy truth-model fit")?;
+    Ok(Runs {
+        clean,
+        noisy,
+        refined,
+    })
+}
+
+/// Table 5.2 beside the truth, and the largest errors of each run.
+fn table(a: &DemoArgs, truth: &[Mode], runs: &Runs, errors: &[serde_json::Value; 3]) -> String {
+    let pct = 100.0 * a.noise;
+    let mut t = String::new();
+    let _ = writeln!(t, "\nTable 5.2: f in Hz, zeta in %");
+    let _ = writeln!(
+        t,
+        "{:>4} | {:^18} | {:^18} | {:^18} | {:^16} || {:^18} | {:^16}",
+        "mode",
+        "truth",
+        "ERA, no noise",
+        format!("ERA, {pct:.0} % noise"),
+        "noisy - truth",
+        "ERA + refined",
+        "refined - truth"
+    );
+    let _ = writeln!(
+        t,
+        "{:>4} | {:>10} {:>7} | {:>10} {:>7} | {:>10} {:>7} | {:>8} {:>7} || {:>10} {:>7} | {:>8} {:>7}",
+        "", "f", "zeta", "f", "zeta", "f", "zeta", "df", "dzeta", "f", "zeta", "df", "dzeta"
+    );
+    for (k, m) in truth.iter().enumerate() {
+        let n = runs.noisy.modal.modes.get(k);
+        let difference = |n: Option<&Mode>| {
+            n.map_or(format!("{:>8} {:>7}", "-", "-"), |n| {
+                format!(
+                    "{:>8.2} {:>7.2}",
+                    n.frequency_hz - m.frequency_hz,
+                    100.0 * (n.damping_ratio - m.damping_ratio)
+                )
+            })
+        };
+        let diff = difference(n).trim_end().to_string();
+        let diff = if n.is_none() { String::from("-") } else { diff };
+        // The refined mode nearest the truth (a refinement may drop a mode).
+        let r = runs.refined.modal.modes.iter().min_by(|a, b| {
+            (a.frequency_hz - m.frequency_hz)
+                .abs()
+                .total_cmp(&(b.frequency_hz - m.frequency_hz).abs())
+        });
+        let _ = writeln!(
+            t,
+            "{:>4} | {} | {} | {} | {:<16} || {} | {}",
+            k + 1,
+            cell(Some(m)),
+            cell(runs.clean.modal.modes.get(k)),
+            cell(n),
+            diff,
+            cell(r),
+            difference(r)
+        );
+    }
+    let show = |e: &serde_json::Value| match (
+        e["max_frequency_error_hz"].as_f64(),
+        e["max_damping_ratio_error"].as_f64(),
+    ) {
+        (Some(f), Some(z)) => format!("max |df| = {f:.3e} Hz, max |dzeta| = {z:.3e}"),
+        _ => format!("{e}"),
+    };
+    let _ = writeln!(t, "\nno noise: {}", show(&errors[0]));
+    let _ = writeln!(
+        t,
+        "{pct:.0} % noise (seed {}): {}",
+        a.seed,
+        show(&errors[1])
+    );
+    let _ = writeln!(
+        t,
+        "{pct:.0} % noise, ERA + refinement (z-domain, weighted by each pair's noise): {}",
+        show(&errors[2])
+    );
+    let _ = write!(t, "thesis (1994), ERA with 15 % noise:");
+    for (f, z) in TABLE_5_2_ERA_NOISY {
+        let _ = write!(t, "  {f:.2} / {z:.2}");
+    }
+    let _ = writeln!(t, "\n(the noisy column depends on the noise draw; scripts/octave_peer.sh compare SEED runs the thesis routines on the same draw)");
+    t
+}
+
+/// The FRFs (CSV) and both runs' bundles (no_noise/, noisy/) into `set`, committed
+/// together: both take their place, or none does.
+fn write_files(
+    a: &DemoArgs,
+    mut set: OutputSet,
+    options: &EraOptions,
+    [clean_frf, noisy_frf]: [&era::FrfData; 2],
+    runs: &Runs,
+    settings: &Settings,
+) -> anyhow::Result<()> {
+    let seed = a.seed.to_string();
+    let noise = a.noise.to_string();
+    write_output(&mut set, "truth_frf.csv", |p| {
+        Ok(write_frf_csv(
+            p,
+            clean_frf,
+            &[
+                ("source", "era demo"),
+                ("noise_fraction", "0"),
+                ("response_unit", "in"),
+                ("force_unit", "lbf"),
+            ],
+        )?)
+    })?;
+    write_output(&mut set, "truth_frf_noisy.csv", |p| {
+        Ok(write_frf_csv(
+            p,
+            noisy_frf,
+            &[
+                ("source", "era demo"),
+                ("noise_fraction", &noise),
+                ("seed", &seed),
+                ("response_unit", "in"),
+                ("force_unit", "lbf"),
+            ],
+        )?)
+    })?;
+    for (label, found) in [("no_noise", &runs.clean), ("noisy", &runs.noisy)] {
+        let title = format!("era demo: the truth model, {}", label.replace('_', " "));
+        let model = ModelJson::from_run(found, &ModelParameters::new(options));
+        // The truth model is in inches and pounds-force (thesis section 4.2).
+        let source = RunInput::synthetic(
+            &format!(
+                "the thesis's truth model (Table 5.2), {}",
+                if label == "noisy" {
+                    format!("{} % noise, seed {}", 100.0 * a.noise, a.seed)
+                } else {
+                    "no noise".into()
+                }
+            ),
+            clean_frf.quantity(),
+            FrfUnits {
+                response: Some("in".into()),
+                force: Some("lbf".into()),
+            },
+        );
+        let fit = FitJson::from_report(&found.fit);
+        let echo = parameter_echo(options);
+        let bundle = Bundle {
+            found,
+            fit: &fit,
+            source: &source,
+            title: &title,
+            echo: &echo,
+            states: options.states,
+            figures: true,
+        };
+        write_identification(&mut set, Path::new(label), &model, &bundle, settings)?;
+    }
+    set.commit()?;
+    Ok(())
+}
+
+/// The demo's JSON: the truth, each run's modes, the refinement, the errors and the
+/// parameters.
+fn demo_json(
+    a: &DemoArgs,
+    options: &EraOptions,
+    truth: &[Mode],
+    runs: &Runs,
+    [e0, e1, e2]: [serde_json::Value; 3],
+) -> serde_json::Value {
+    let modes = |v: &[Mode]| v.iter().map(ModeJson::from_mode).collect::<Vec<_>>();
+    let refined = &runs.refined;
+    json!({
+        "truth": modes(truth),
+        "no_noise": modes(&runs.clean.modal.modes),
+        "noisy": modes(&runs.noisy.modal.modes),
+        "refined": refined
+            .modal
+            .modes
+            .iter()
+            .zip(&refined.quality)
+            .map(|(m, q)| ModeJson::from_mode_quality(m, q))
+            .collect::<Vec<_>>(),
+        "refinement": refined.refinement.as_ref().map(era_io::model_json::RefinementJson::of),
+        "noise": {"fraction": a.noise, "seed": a.seed},
+        "errors": {"no_noise": e0, "noisy": e1, "refined": e2},
+        "parameters": ModelParameters::new(options).to_map(),
+    })
+}

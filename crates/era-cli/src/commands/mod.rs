@@ -1,0 +1,13 @@
+//! One file per verb: read the input, call the library, hand a typed result to
+//! [`crate::output`]. The flags arrive as typed settings from [`crate::config`].
+
+pub mod compare;
+pub mod demo;
+pub mod experiment;
+pub mod files;
+pub mod frf;
+pub mod friction;
+pub mod identify;
+pub mod plot;
+pub mod refine;
+pub mod simulate;
