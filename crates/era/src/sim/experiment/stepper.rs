@@ -202,6 +202,20 @@ pub(super) fn simulate_run_shared(
     })
 }
 
+/// Every mass at rest: stuck where it is released when there is friction or a stroke,
+/// else sliding.
+fn initial_modes(init: &[f64], any_friction: bool) -> Vec<Mode> {
+    init.iter()
+        .map(|&z| {
+            if any_friction || z != 0.0 {
+                Mode::Stuck { z, stop: 0.0 }
+            } else {
+                Mode::Sliding(1.0)
+            }
+        })
+        .collect()
+}
+
 /// The compensator of `spec`, one channel per actuator, if there is one.
 fn compensator(spec: &ExperimentSpec) -> Result<Option<FrictionCompensator>> {
     let Some(c) = &spec.compensation else {
@@ -253,21 +267,9 @@ impl<'a> Stepper<'a> {
         let compensator = compensator(spec)?;
         let fc: Vec<f64> = spec.actuators.iter().map(|x| x.coulomb_force).collect();
         let any_friction = fc.iter().any(|&f| f > 0.0);
-        // Initial state: at rest; masses released at their initial strokes, stuck where
-        // they are when there is friction or a stroke.
+        // Initial state: at rest; masses released at their initial strokes.
         let init = opts.initial_stroke.clone().unwrap_or_else(|| vec![0.0; a]);
-        let modes: Vec<Mode> = (0..a)
-            .map(|j| {
-                if any_friction || init[j] != 0.0 {
-                    Mode::Stuck {
-                        z: init[j],
-                        stop: 0.0,
-                    }
-                } else {
-                    Mode::Sliding(1.0)
-                }
-            })
-            .collect();
+        let modes = initial_modes(&init[..a], any_friction);
         let samples = grid.samples;
         let mut s = Stepper {
             spec,
