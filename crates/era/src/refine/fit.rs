@@ -4,7 +4,8 @@
 //! this fit).
 
 use super::lm::{
-    limit_step, marquardt_step, normalise, Damping, Geometric, EXACT_FIT, STATISTICAL_STOP,
+    descend, limit_step, marquardt_step, normalise, Geometric, LeastSquares, Trial, EXACT_FIT,
+    STATISTICAL_STOP,
 };
 use super::model::{basis, Problem, ResidualKind};
 use super::uncertainty::mode_std;
@@ -135,13 +136,10 @@ pub(crate) fn run(
         .iter()
         .map(|b| b.rhs.squared_norm_l2() + b.cost_offset)
         .sum();
-    let mut current = settle(&problem, &mut state, evaluate, &mut dropped)?;
+    let current = settle(&problem, &mut state, evaluate, &mut dropped)?;
     let cost_before = current.cost;
     let fit_before = fit_of(&problem, &state.theta, &current.coefficients);
     progress(0, current.cost);
-    let mut damping = Geometric::new();
-    let mut iterations = 0;
-    let mut converged = false;
     // Where the rank-one stage follows, the free fit is only its start: that stage moves
     // every pole again, to its own tolerance.
     let rank_one_follows = super::rank_one::will_run(&problem, state.ids.len());
@@ -150,95 +148,27 @@ pub(crate) fn run(
     } else {
         options.tolerance
     };
-    let free_iterations = if placed && rank_one_follows {
-        converged = true;
-        0
-    } else {
-        options.max_iterations
+    let mut stage = FreeStage {
+        problem: &problem,
+        state,
+        current,
+        evaluate,
+        dropped,
+        progress,
+        weighted_norm2,
+        tolerance: free_tolerance,
     };
-    while iterations < free_iterations {
-        if current.cost <= EXACT_FIT * weighted_norm2 {
-            converged = true;
-            break;
-        }
-        let Some(step) = marquardt_step(&current.jtj, &current.jtr, damping.lambda()) else {
-            if damping.singular() {
-                break;
-            }
-            continue;
-        };
-        let step = limit_step(step, &state.theta, problem.parameters.log_damping);
-        let mut trial = state.theta.clone();
-        for (t, d) in trial.iter_mut().zip(&step) {
-            *t += d;
-        }
-        normalise(&mut trial);
-        let outcome = if trial.iter().all(|t| t.is_finite()) {
-            Some(evaluate(&problem, &trial, Need::Cost)?)
-        } else {
-            None
-        };
-        match outcome {
-            Some(Outcome::Ready(next)) if next.cost < current.cost => {
-                let decrease = current.cost - next.cost;
-                let relative = decrease / current.cost;
-                state.theta = trial;
-                // The trial was evaluated without its Jacobian; the accepted point needs it.
-                current = match evaluate(&problem, &state.theta, Need::JacobianAfter(&next))? {
-                    Outcome::Ready(e) => e,
-                    Outcome::Deficient { .. } => {
-                        return Err(EraError::Numerical(
-                            "the basis was deficient at a point that was not a moment before"
-                                .into(),
-                        ))
-                    }
-                };
-                // The trial's kept factors are spent.
-                drop(next);
-                iterations += 1;
-                // The free stage's rule takes no gain ratio.
-                damping.accepted(f64::NAN);
-                let before_checks = state.ids.len();
-                current = settle_ready(&problem, &mut state, current, evaluate, &mut dropped)?;
-                progress(iterations, current.cost);
-                if state.ids.len() != before_checks {
-                    damping.reset();
-                    continue;
-                }
-                // A decrease below a hundredth of one noise unit `σ²` moves the
-                // parameters by about a tenth of their standard deviation or less: the
-                // rest is noise (module doc, "Stopping").
-                let noise_unit = problem
-                    .degrees_of_freedom(state.theta.len())
-                    .map_or(0.0, |dof| current.cost / dof as f64);
-                if relative <= free_tolerance || decrease <= STATISTICAL_STOP * noise_unit {
-                    converged = true;
-                    break;
-                }
-            }
-            Some(Outcome::Deficient { mode: Some(m), .. }) => {
-                // The step drives two poles onto each other: drop the one it names.
-                let s = problem.parameters.pole(&trial, m);
-                state.drop_mode(
-                    m,
-                    format!(
-                        "its pole coalesced with another at {:.6} Hz",
-                        s.norm() / (2.0 * PI)
-                    ),
-                    &mut dropped,
-                );
-                current = settle(&problem, &mut state, evaluate, &mut dropped)?;
-                damping.reset();
-            }
-            _ => {
-                if damping.rejected() {
-                    // No step lowers the cost any more: a minimum to working precision.
-                    converged = true;
-                    break;
-                }
-            }
-        }
-    }
+    let (iterations, converged) = if placed && rank_one_follows {
+        (0, true)
+    } else {
+        descend(&mut stage, &mut Geometric::new(), options.max_iterations)?
+    };
+    let FreeStage {
+        state,
+        current,
+        dropped,
+        ..
+    } = stage;
     finish(
         &problem,
         state,
@@ -254,6 +184,110 @@ pub(crate) fn run(
             tolerance: options.tolerance,
         },
     )
+}
+
+/// The free stage as [`descend`] drives it: the active modes, the evaluation at their
+/// point, and the modes dropped so far.
+struct FreeStage<'p, 'f> {
+    problem: &'p Problem,
+    state: State,
+    current: Evaluation,
+    evaluate: Evaluator,
+    dropped: Vec<(usize, String)>,
+    progress: &'f mut dyn FnMut(usize, f64),
+    /// The (weighted) data's squared norm.
+    weighted_norm2: f64,
+    /// Relative decrease that ends the fit.
+    tolerance: f64,
+}
+
+impl LeastSquares for FreeStage<'_, '_> {
+    fn exact(&self) -> bool {
+        self.current.cost <= EXACT_FIT * self.weighted_norm2
+    }
+
+    fn step(&mut self, lambda: f64) -> Option<Vec<f64>> {
+        marquardt_step(&self.current.jtj, &self.current.jtr, lambda)
+    }
+
+    fn attempt(&mut self, step: Vec<f64>, iteration: usize) -> Result<Trial> {
+        let (problem, evaluate) = (self.problem, self.evaluate);
+        let step = limit_step(step, &self.state.theta, problem.parameters.log_damping);
+        let mut trial = self.state.theta.clone();
+        for (t, d) in trial.iter_mut().zip(&step) {
+            *t += d;
+        }
+        normalise(&mut trial);
+        let outcome = if trial.iter().all(|t| t.is_finite()) {
+            Some(evaluate(problem, &trial, Need::Cost)?)
+        } else {
+            None
+        };
+        match outcome {
+            Some(Outcome::Ready(next)) if next.cost < self.current.cost => {
+                let decrease = self.current.cost - next.cost;
+                let relative = decrease / self.current.cost;
+                self.state.theta = trial;
+                // The trial was evaluated without its Jacobian; the accepted point needs it.
+                let accepted =
+                    match evaluate(problem, &self.state.theta, Need::JacobianAfter(&next))? {
+                        Outcome::Ready(e) => e,
+                        Outcome::Deficient { .. } => {
+                            return Err(EraError::Numerical(
+                                "the basis was deficient at a point that was not a moment before"
+                                    .into(),
+                            ))
+                        }
+                    };
+                // The trial's kept factors are spent.
+                drop(next);
+                let before_checks = self.state.ids.len();
+                self.current = settle_ready(
+                    problem,
+                    &mut self.state,
+                    accepted,
+                    evaluate,
+                    &mut self.dropped,
+                )?;
+                (self.progress)(iteration, self.current.cost);
+                // The free stage's rule takes no gain ratio.
+                if self.state.ids.len() != before_checks {
+                    return Ok(Trial::Lower {
+                        rho: f64::NAN,
+                        restart: true,
+                        converged: false,
+                    });
+                }
+                // A decrease below a hundredth of one noise unit `σ²` moves the
+                // parameters by about a tenth of their standard deviation or less: the
+                // rest is noise (module doc, "Stopping").
+                let noise_unit = problem
+                    .degrees_of_freedom(self.state.theta.len())
+                    .map_or(0.0, |dof| self.current.cost / dof as f64);
+                Ok(Trial::Lower {
+                    rho: f64::NAN,
+                    restart: false,
+                    converged: relative <= self.tolerance
+                        || decrease <= STATISTICAL_STOP * noise_unit,
+                })
+            }
+            Some(Outcome::Deficient { mode: Some(m), .. }) => {
+                // The step drives two poles onto each other: drop the one it names.
+                let s = problem.parameters.pole(&trial, m);
+                self.state.drop_mode(
+                    m,
+                    format!(
+                        "its pole coalesced with another at {:.6} Hz",
+                        s.norm() / (2.0 * PI)
+                    ),
+                    &mut self.dropped,
+                );
+                self.current = settle(problem, &mut self.state, evaluate, &mut self.dropped)?;
+                Ok(Trial::Restart)
+            }
+            _ => Ok(Trial::Higher),
+        }
+    }
 }
 
 struct Summary {

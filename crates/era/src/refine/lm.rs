@@ -1,10 +1,86 @@
 //! Pieces of a Levenberg–Marquardt step shared by the free stage ([`super::fit`]) and the
 //! rank-one stage ([`super::rank_one`]): the damped normal equations
 //! `(N + λ diag N) δ = −g` (Marquardt's scaling), the per-mode limit on a step, and the
-//! stopping thresholds, and the two rules for `λ` behind one small trait ([`Damping`]):
-//! the free stage's ([`Geometric`]) and the rank-one stage's ([`Nielsen`]).
+//! stopping thresholds; one loop ([`descend`]) over a small problem trait
+//! ([`LeastSquares`]) that both stages implement, and their two rules for `λ` behind one
+//! trait ([`Damping`]): the free stage's ([`Geometric`]) and the rank-one stage's
+//! ([`Nielsen`]).
 
+use crate::error::Result;
 use faer::Mat;
+
+/// What a trial step did.
+pub(crate) enum Trial {
+    /// It lowered the cost and the problem moved there: `rho` is its gain ratio (NaN
+    /// where the problem has no prediction), `restart` says that the set of modes
+    /// changed (`λ` starts again), `converged` that the decrease ends the fit.
+    Lower {
+        rho: f64,
+        restart: bool,
+        converged: bool,
+    },
+    /// The problem changed without a step (a mode dropped): `λ` starts again.
+    Restart,
+    /// It did not lower the cost.
+    Higher,
+}
+
+/// A nonlinear least-squares problem at its current point, as [`descend`] drives it.
+pub(crate) trait LeastSquares {
+    /// Whether the current cost is an exact fit.
+    fn exact(&self) -> bool;
+    /// The step of the damped normal equations at `λ`, or `None` when they give none.
+    fn step(&mut self, lambda: f64) -> Option<Vec<f64>>;
+    /// Tries `step`, moving there when it lowers the cost; `iteration` is the number it
+    /// then gets.
+    fn attempt(&mut self, step: Vec<f64>, iteration: usize) -> Result<Trial>;
+}
+
+/// Levenberg–Marquardt: at most `max_iterations` accepted steps from the problem's
+/// current point, `λ` moved by `damping`; the accepted steps and whether it converged
+/// (an exact fit, a decrease the problem calls converged, or no step lowering the cost
+/// at any `λ`).
+pub(crate) fn descend(
+    problem: &mut impl LeastSquares,
+    damping: &mut impl Damping,
+    max_iterations: usize,
+) -> Result<(usize, bool)> {
+    let mut iterations = 0;
+    while iterations < max_iterations {
+        if problem.exact() {
+            return Ok((iterations, true));
+        }
+        let Some(step) = problem.step(damping.lambda()) else {
+            if damping.singular() {
+                return Ok((iterations, false));
+            }
+            continue;
+        };
+        match problem.attempt(step, iterations + 1)? {
+            Trial::Lower {
+                rho,
+                restart,
+                converged,
+            } => {
+                iterations += 1;
+                damping.accepted(rho);
+                if restart {
+                    damping.reset();
+                } else if converged {
+                    return Ok((iterations, true));
+                }
+            }
+            Trial::Restart => damping.reset(),
+            Trial::Higher => {
+                if damping.rejected() {
+                    // No step lowers the cost any more: a minimum to working precision.
+                    return Ok((iterations, true));
+                }
+            }
+        }
+    }
+    Ok((iterations, false))
+}
 
 /// Levenberg–Marquardt's `λ` and how it moves after each trial.
 pub(crate) trait Damping {
@@ -18,6 +94,8 @@ pub(crate) trait Damping {
     /// After damped normal equations that gave no step; whether `λ` has grown past any
     /// use.
     fn singular(&mut self) -> bool;
+    /// Starts again, for a problem whose modes changed.
+    fn reset(&mut self);
 }
 
 /// `λ` at which both rules start, and to which the free stage returns when its set of
@@ -39,11 +117,6 @@ impl Geometric {
             lambda: START_LAMBDA,
         }
     }
-
-    /// Starts again, for a problem whose modes changed.
-    pub(crate) fn reset(&mut self) {
-        self.lambda = START_LAMBDA;
-    }
 }
 
 impl Damping for Geometric {
@@ -62,6 +135,10 @@ impl Damping for Geometric {
     fn singular(&mut self) -> bool {
         self.lambda *= 4.0;
         self.lambda > MAX_LAMBDA
+    }
+
+    fn reset(&mut self) {
+        self.lambda = START_LAMBDA;
     }
 }
 
@@ -103,6 +180,10 @@ impl Damping for Nielsen {
     fn singular(&mut self) -> bool {
         self.lambda *= 4.0;
         self.lambda > MAX_LAMBDA
+    }
+
+    fn reset(&mut self) {
+        *self = Nielsen::new();
     }
 }
 

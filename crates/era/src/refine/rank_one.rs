@@ -46,7 +46,8 @@
 //! than the free fit's, so slightly smaller standard deviations where modes overlap.
 
 use super::lm::{
-    damped, finite_column, limit_step, normalise, Damping, Nielsen, EXACT_FIT, STATISTICAL_STOP,
+    damped, descend, finite_column, limit_step, normalise, LeastSquares, Nielsen, Trial, EXACT_FIT,
+    STATISTICAL_STOP,
 };
 use super::model::{basis, basis_derivatives, Problem};
 use crate::error::{EraError, Result};
@@ -1373,7 +1374,7 @@ pub(crate) fn fit(
         dof: problem.observations.checked_sub(ix.free).filter(|&d| d > 0),
     };
     let mut point = stage.first_point(x);
-    let (iterations, converged) = stage.descend(&mut point, max_iterations, tolerance);
+    let (iterations, converged) = stage.descend(&mut point, max_iterations, tolerance)?;
     let noise_variance = stage.dof.map_or(f64::NAN, |d| point.cost / d as f64);
     let covariance = pole_covariance(&point, n, noise_variance);
     Ok(Some(Joint {
@@ -1456,66 +1457,18 @@ impl<'a> Stage<'a> {
         point: &mut Point<'a>,
         max_iterations: usize,
         tolerance: f64,
-    ) -> (usize, bool) {
+    ) -> Result<(usize, bool)> {
         let weights = self.weights;
-        let mut damping = Nielsen::new();
-        let mut iterations = 0;
         let data_norm2: f64 = (0..self.y.ncols())
             .map(|pair| weights[pair] * weights[pair] * self.y.col(pair).squared_norm_l2())
             .sum();
-        while iterations < max_iterations {
-            if point.cost <= EXACT_FIT * data_norm2 {
-                return (iterations, true);
-            }
-            if point.reduced.is_none() {
-                if let Normal::Blocks(blocks) = &point.normal {
-                    point.reduced = Reduced::new(blocks);
-                }
-            }
-            let step = match &point.reduced {
-                Some(r) => r.step(damping.lambda()),
-                None => point.normal.dense_step(damping.lambda()),
-            };
-            let Some(step) = step else {
-                if damping.singular() {
-                    return (iterations, false);
-                }
-                continue;
-            };
-            let (trial, factor, predicted) = self.trial(point, &step);
-            match trial {
-                Some((next, trial_phi, next_cost, next_residual)) if next_cost < point.cost => {
-                    let decrease = point.cost - next_cost;
-                    point.x = next;
-                    point.cost = next_cost;
-                    point.residual = next_residual;
-                    point.phi = trial_phi;
-                    iterations += 1;
-                    let rho = if predicted > 0.0 {
-                        decrease / predicted
-                    } else {
-                        1.0
-                    };
-                    damping.accepted(rho);
-                    point.normal = self.normal(&point.x, &point.phi, &point.residual);
-                    point.reduced = None;
-                    let noise_unit = self.dof.map_or(0.0, |d| point.cost / d as f64);
-                    // A step shortened by one mode's limit says nothing about convergence.
-                    if factor == 1.0
-                        && (decrease <= tolerance * (point.cost + decrease)
-                            || decrease <= STATISTICAL_STOP * noise_unit)
-                    {
-                        return (iterations, true);
-                    }
-                }
-                _ => {
-                    if damping.rejected() {
-                        return (iterations, true);
-                    }
-                }
-            }
-        }
-        (iterations, false)
+        let mut problem = Descent {
+            stage: self,
+            point,
+            tolerance,
+            data_norm2,
+        };
+        descend(&mut problem, &mut Nielsen::new(), max_iterations)
     }
 
     /// The point `step` leads to from `point`, with the shapes that fit its poles and
@@ -1560,6 +1513,67 @@ impl<'a> Stage<'a> {
             (trial, trial_phi, c, r)
         });
         (evaluated, factor, predicted)
+    }
+}
+
+/// The rank-one fit as [`descend`] drives it.
+struct Descent<'s, 'a> {
+    stage: &'s Stage<'a>,
+    point: &'s mut Point<'a>,
+    /// Relative decrease that ends the fit.
+    tolerance: f64,
+    /// The weighted data's squared norm.
+    data_norm2: f64,
+}
+
+impl LeastSquares for Descent<'_, '_> {
+    fn exact(&self) -> bool {
+        self.point.cost <= EXACT_FIT * self.data_norm2
+    }
+
+    fn step(&mut self, lambda: f64) -> Option<Vec<f64>> {
+        let point = &mut *self.point;
+        if point.reduced.is_none() {
+            if let Normal::Blocks(blocks) = &point.normal {
+                point.reduced = Reduced::new(blocks);
+            }
+        }
+        match &point.reduced {
+            Some(r) => r.step(lambda),
+            None => point.normal.dense_step(lambda),
+        }
+    }
+
+    fn attempt(&mut self, step: Vec<f64>, _iteration: usize) -> Result<Trial> {
+        let (trial, factor, predicted) = self.stage.trial(self.point, &step);
+        let point = &mut *self.point;
+        match trial {
+            Some((next, trial_phi, next_cost, next_residual)) if next_cost < point.cost => {
+                let decrease = point.cost - next_cost;
+                point.x = next;
+                point.cost = next_cost;
+                point.residual = next_residual;
+                point.phi = trial_phi;
+                let rho = if predicted > 0.0 {
+                    decrease / predicted
+                } else {
+                    1.0
+                };
+                point.normal = self.stage.normal(&point.x, &point.phi, &point.residual);
+                point.reduced = None;
+                let noise_unit = self.stage.dof.map_or(0.0, |d| point.cost / d as f64);
+                // A step shortened by one mode's limit says nothing about convergence.
+                let converged = factor == 1.0
+                    && (decrease <= self.tolerance * (point.cost + decrease)
+                        || decrease <= STATISTICAL_STOP * noise_unit);
+                Ok(Trial::Lower {
+                    rho,
+                    restart: false,
+                    converged,
+                })
+            }
+            _ => Ok(Trial::Higher),
+        }
     }
 }
 
