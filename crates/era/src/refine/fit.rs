@@ -1,5 +1,5 @@
-//! The Levenberg–Marquardt driver of the free stage, shared by the fast and the naive
-//! evaluation: start poles, steps, the dropping of modes that collapse or coalesce, and
+//! The free stage, shared by the fast and the naive evaluation: start poles, its steps
+//! under [`super::lm::descend`], the dropping of modes that collapse or coalesce, and
 //! the result with its uncertainties (the rank-one stage, when it follows, starts from
 //! this fit).
 

@@ -1,10 +1,9 @@
-//! Pieces of a Levenberg–Marquardt step shared by the free stage ([`super::fit`]) and the
-//! rank-one stage ([`super::rank_one`]): the damped normal equations
-//! `(N + λ diag N) δ = −g` (Marquardt's scaling), the per-mode limit on a step, and the
-//! stopping thresholds; one loop ([`descend`]) over a small problem trait
-//! ([`LeastSquares`]) that both stages implement, and their two rules for `λ` behind one
-//! trait ([`Damping`]): the free stage's ([`Geometric`]) and the rank-one stage's
-//! ([`Nielsen`]).
+//! Levenberg–Marquardt for the free stage ([`super::fit`]) and the rank-one stage
+//! ([`super::rank_one`]): one loop ([`descend`]) over a small problem trait
+//! ([`LeastSquares`]) that both stages implement; the damped normal equations
+//! `(N + λ diag N) δ = −g` (Marquardt's scaling), the per-mode limit on a step and the
+//! stopping thresholds; and the two rules for `λ` behind one trait ([`Damping`]): the
+//! free stage's ([`Geometric`]) and the rank-one stage's ([`Nielsen`]).
 
 use crate::error::Result;
 use faer::Mat;
