@@ -397,9 +397,25 @@ pub fn estimate_velocity(
     let offset = median(&mut velocity.to_vec());
     let centred: Vec<f64> = velocity.iter().map(|v| v - offset).collect();
     let f_rough = dominant_frequency(&centred, dt);
-    let nyquist = 0.5 / dt;
+    let (smooth, threshold) = segmentation_signal(&centred, noise, f_rough, dt)?;
+    let lobes = Lobes::find(time_s, &smooth, threshold, f_rough)?;
+    let half_cycles = lobes.half_cycles(time_s, &smooth, &centred);
+    let mut estimate = fit_decay(&lobes, half_cycles, stiffness);
+    estimate.noise_rms = noise;
+    estimate.offset = offset;
+    Ok(estimate)
+}
 
-    // Segmentation signal: low-passed at 3 f_n where the sampling allows it.
+/// The record low-passed at `3 f_n` where the sampling allows it (for the segmentation)
+/// and the threshold a lobe's height must pass: four times the noise left after the
+/// filter, and 2 % of the largest value.
+fn segmentation_signal(
+    centred: &[f64],
+    noise: f64,
+    f_rough: f64,
+    dt: f64,
+) -> Result<(Vec<f64>, f64)> {
+    let nyquist = 0.5 / dt;
     let cutoff = 3.0 * f_rough;
     let (smooth, noise_after) = if f_rough > 0.0 && cutoff < 0.9 * nyquist {
         let filter =
@@ -408,84 +424,114 @@ pub fn estimate_velocity(
                 value: format!("{f_rough} Hz"),
                 reason: e.to_string(),
             })?;
-        match filter.apply(&centred) {
+        match filter.apply(centred) {
             Ok(s) => (s, noise * (cutoff / nyquist).sqrt()),
-            Err(_) => (centred.clone(), noise),
+            Err(_) => (centred.to_vec(), noise),
         }
     } else {
-        (centred.clone(), noise)
+        (centred.to_vec(), noise)
     };
     let peak = smooth.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let threshold = (4.0 * noise_after).max(0.02 * peak);
+    Ok((smooth, (4.0 * noise_after).max(0.02 * peak)))
+}
 
-    // Zero crossings (linear interpolation) and the lobes between them.
-    let mut crossings = vec![time_s[0]];
-    let mut crossing_index = vec![0usize];
-    for k in 1..smooth.len() {
-        let (a, b) = (smooth[k - 1], smooth[k]);
-        if (a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0) {
-            let frac = if a != b { a / (a - b) } else { 0.0 };
-            crossings.push(time_s[k - 1] + frac * (time_s[k] - time_s[k - 1]));
-            crossing_index.push(k);
-        }
-    }
-    crossings.push(time_s[time_s.len() - 1]);
-    crossing_index.push(time_s.len());
-    let quarter = 0.25 / f_rough.max(f64::MIN_POSITIVE);
-    let valid: Vec<bool> = (0..crossings.len() - 1)
-        .map(|l| {
-            let lobe = &smooth[crossing_index[l]..crossing_index[l + 1]];
-            let height = lobe.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            height > threshold && crossings[l + 1] - crossings[l] >= quarter
-        })
-        .collect();
-    // The longest run of consecutive valid lobes.
-    let (mut best_start, mut best_len, mut start) = (0usize, 0usize, 0usize);
-    for l in 0..=valid.len() {
-        if l == valid.len() || !valid[l] {
-            if l - start > best_len {
-                best_len = l - start;
-                best_start = start;
+/// The zero crossings of the segmentation signal (linear interpolation, with the
+/// record's ends) and the usable lobes between them.
+struct Lobes {
+    crossings: Vec<f64>,
+    crossing_index: Vec<usize>,
+    /// Lobe `l` lies between crossings `l` and `l + 1`.
+    usable: Vec<usize>,
+}
+
+impl Lobes {
+    /// The longest run of consecutive lobes higher than `threshold` and at least a
+    /// quarter period long, less its first (the release transient) and last (the stuck
+    /// tail).
+    fn find(time_s: &[f64], smooth: &[f64], threshold: f64, f_rough: f64) -> Result<Self> {
+        let mut crossings = vec![time_s[0]];
+        let mut crossing_index = vec![0usize];
+        for k in 1..smooth.len() {
+            let (a, b) = (smooth[k - 1], smooth[k]);
+            if (a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0) {
+                let frac = if a != b { a / (a - b) } else { 0.0 };
+                crossings.push(time_s[k - 1] + frac * (time_s[k] - time_s[k - 1]));
+                crossing_index.push(k);
             }
-            start = l + 1;
         }
-    }
-    if best_len < 3 {
-        return Err(FrictionError::NeverOscillates {
-            half_cycles: best_len,
-        });
-    }
-    // Drop the release transient and the stuck tail.
-    let lobes: Vec<usize> = (best_start + 1..best_start + best_len - 1).collect();
-    if lobes.len() < MIN_USABLE_HALF_CYCLES {
-        return Err(FrictionError::TooFewCycles {
-            usable: lobes.len(),
-            needed: MIN_USABLE_HALF_CYCLES,
-        });
+        crossings.push(time_s[time_s.len() - 1]);
+        crossing_index.push(time_s.len());
+        let quarter = 0.25 / f_rough.max(f64::MIN_POSITIVE);
+        let valid: Vec<bool> = (0..crossings.len() - 1)
+            .map(|l| {
+                let lobe = &smooth[crossing_index[l]..crossing_index[l + 1]];
+                let height = lobe.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                height > threshold && crossings[l + 1] - crossings[l] >= quarter
+            })
+            .collect();
+        // The longest run of consecutive valid lobes.
+        let (mut best_start, mut best_len, mut start) = (0usize, 0usize, 0usize);
+        for l in 0..=valid.len() {
+            if l == valid.len() || !valid[l] {
+                if l - start > best_len {
+                    best_len = l - start;
+                    best_start = start;
+                }
+                start = l + 1;
+            }
+        }
+        if best_len < 3 {
+            return Err(FrictionError::NeverOscillates {
+                half_cycles: best_len,
+            });
+        }
+        // Drop the release transient and the stuck tail.
+        let usable: Vec<usize> = (best_start + 1..best_start + best_len - 1).collect();
+        if usable.len() < MIN_USABLE_HALF_CYCLES {
+            return Err(FrictionError::TooFewCycles {
+                usable: usable.len(),
+                needed: MIN_USABLE_HALF_CYCLES,
+            });
+        }
+        Ok(Lobes {
+            crossings,
+            crossing_index,
+            usable,
+        })
     }
 
-    // Half-sine amplitude of each usable lobe, from the unfiltered samples.
-    let mut half_cycles = Vec::with_capacity(lobes.len());
-    for &l in &lobes {
-        let (ta, tb) = (crossings[l], crossings[l + 1]);
-        let sign = smooth[(crossing_index[l] + crossing_index[l + 1]) / 2].signum();
-        let (mut num, mut den) = (0.0, 0.0);
-        for k in crossing_index[l]..crossing_index[l + 1] {
-            let s = (std::f64::consts::PI * (time_s[k] - ta) / (tb - ta)).sin();
-            num += sign * centred[k] * s;
-            den += s * s;
+    /// Half-sine amplitude of each usable lobe, from the unfiltered samples.
+    fn half_cycles(&self, time_s: &[f64], smooth: &[f64], centred: &[f64]) -> Vec<HalfCycle> {
+        let (crossings, crossing_index) = (&self.crossings, &self.crossing_index);
+        let mut half_cycles = Vec::with_capacity(self.usable.len());
+        for &l in &self.usable {
+            let (ta, tb) = (crossings[l], crossings[l + 1]);
+            let sign = smooth[(crossing_index[l] + crossing_index[l + 1]) / 2].signum();
+            let (mut num, mut den) = (0.0, 0.0);
+            for k in crossing_index[l]..crossing_index[l + 1] {
+                let s = (std::f64::consts::PI * (time_s[k] - ta) / (tb - ta)).sin();
+                num += sign * centred[k] * s;
+                den += s * s;
+            }
+            half_cycles.push(HalfCycle {
+                start_s: ta,
+                end_s: tb,
+                amplitude: num / den,
+            });
         }
-        half_cycles.push(HalfCycle {
-            start_s: ta,
-            end_s: tb,
-            amplitude: num / den,
-        });
+        half_cycles
     }
+}
 
+/// The frequencies (from the zero crossings and from the lobes' centres) and the decay
+/// models fitted to the half-cycle amplitudes; the noise and the offset are left at 0
+/// for the caller.
+fn fit_decay(lobes: &Lobes, half_cycles: Vec<HalfCycle>, stiffness: f64) -> DecayEstimate {
+    let usable = &lobes.usable;
     // Frequencies.
-    let index: Vec<f64> = (0..=lobes.len()).map(|i| i as f64).collect();
-    let zero_times: Vec<f64> = (lobes[0]..=lobes[lobes.len() - 1] + 1)
-        .map(|l| crossings[l])
+    let index: Vec<f64> = (0..=usable.len()).map(|i| i as f64).collect();
+    let zero_times: Vec<f64> = (usable[0]..=usable[usable.len() - 1] + 1)
+        .map(|l| lobes.crossings[l])
         .collect();
     let (_, half_period, _) = line_fit(&index, &zero_times);
     let natural_frequency_hz = 0.5 / half_period;
@@ -522,7 +568,7 @@ pub fn estimate_velocity(
     } else {
         DampingModel::Viscous
     };
-    Ok(DecayEstimate {
+    DecayEstimate {
         natural_frequency_hz,
         natural_frequency_hz_from_peaks,
         cycles,
@@ -534,9 +580,9 @@ pub fn estimate_velocity(
         better_model,
         combined,
         half_cycles,
-        noise_rms: noise,
-        offset,
-    })
+        noise_rms: 0.0,
+        offset: 0.0,
+    }
 }
 
 /// Analyses a displacement record: the displacement is low-passed at 3 f_n (zero

@@ -702,6 +702,35 @@ const DAMPING_WEIGHT: f64 = 0.1;
 /// Clusters the poles of `scan` and judges each cluster (module doc, steps 1–3).
 /// `band_hz` is the fitted band.
 pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) -> Selection {
+    let (candidate, rejected) = screen_poles(scan, band_hz, criteria);
+    let clusters = track_clusters(scan, &candidate, criteria);
+    // Step 3: recurrence over the upper half of the orders.
+    let counted_orders: Vec<usize> = scan.orders[scan.orders.len() / 2..].to_vec();
+    let mut out: Vec<Cluster> = clusters
+        .into_iter()
+        .map(|members| judge_cluster(scan, members, &counted_orders, criteria))
+        .collect();
+    drop_duplicates(scan, &mut out, criteria);
+    out.sort_by(|a, b| {
+        scan.poles[a.representative]
+            .frequency_hz
+            .total_cmp(&scan.poles[b.representative].frequency_hz)
+    });
+    Selection {
+        clusters: out,
+        counted_orders,
+        rejected,
+        criteria: *criteria,
+    }
+}
+
+/// Step 1: the poles that pass the hard limits (a flag per pole), and the others with
+/// the reason.
+fn screen_poles(
+    scan: &Scan,
+    band_hz: (f64, f64),
+    criteria: &SelectionCriteria,
+) -> (Vec<bool>, Vec<(usize, Rejection)>) {
     let mut rejected = Vec::new();
     let mut candidate = vec![false; scan.poles.len()];
     for (i, p) in scan.poles.iter().enumerate() {
@@ -712,8 +741,16 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             None => candidate[i] = true,
         }
     }
-    // Step 2: clusters (member indices, ascending order), visiting orders from low to
-    // high; a pole is compared with each cluster's latest member.
+    (candidate, rejected)
+}
+
+/// Step 2: clusters (member indices, ascending order), visiting orders from low to
+/// high; a pole is compared with each cluster's latest member.
+fn track_clusters(
+    scan: &Scan,
+    candidate: &[bool],
+    criteria: &SelectionCriteria,
+) -> Vec<Vec<usize>> {
     let mut clusters: Vec<Vec<usize>> = Vec::new();
     for &order in &scan.orders {
         let here: Vec<usize> = (0..scan.poles.len())
@@ -721,23 +758,10 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             .collect();
         let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
         for &i in &here {
-            let p = &scan.poles[i];
             for (c, members) in clusters.iter().enumerate() {
-                let latest = &scan.poles[*members.last().expect("clusters are never empty")];
-                let df = (p.frequency_hz - latest.frequency_hz).abs() / latest.frequency_hz;
-                if df > criteria.frequency_tolerance {
-                    continue;
+                if let Some(d) = track_distance(scan, i, members, criteria) {
+                    pairs.push((d, i, c));
                 }
-                let m = mac(&p.shape, &latest.shape);
-                if m < criteria.mac_minimum {
-                    continue;
-                }
-                // Damping tells apart two modes closer in frequency than the noise
-                // moves them (and whose shapes mix): without it the greedy assignment
-                // swaps their poles between the two tracks from order to order.
-                let dz = (p.damping_ratio - latest.damping_ratio).abs()
-                    / p.damping_ratio.max(latest.damping_ratio);
-                pairs.push((df + (1.0 - m) + DAMPING_WEIGHT * dz, i, c));
             }
         }
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -757,72 +781,105 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             }
         }
     }
-    // Step 3: recurrence over the upper half of the orders.
-    let counted_orders: Vec<usize> = scan.orders[scan.orders.len() / 2..].to_vec();
+    clusters
+}
+
+/// The distance between pole `i` and the track `members` (its latest member), or `None`
+/// when they are too far apart in frequency or shape to be one mode.
+fn track_distance(
+    scan: &Scan,
+    i: usize,
+    members: &[usize],
+    criteria: &SelectionCriteria,
+) -> Option<f64> {
+    let p = &scan.poles[i];
+    let latest = &scan.poles[*members.last().expect("clusters are never empty")];
+    let df = (p.frequency_hz - latest.frequency_hz).abs() / latest.frequency_hz;
+    if df > criteria.frequency_tolerance {
+        return None;
+    }
+    let m = mac(&p.shape, &latest.shape);
+    if m < criteria.mac_minimum {
+        return None;
+    }
+    // Damping tells apart two modes closer in frequency than the noise moves them (and
+    // whose shapes mix): without it the greedy assignment swaps their poles between the
+    // two tracks from order to order.
+    let dz =
+        (p.damping_ratio - latest.damping_ratio).abs() / p.damping_ratio.max(latest.damping_ratio);
+    Some(df + (1.0 - m) + DAMPING_WEIGHT * dz)
+}
+
+/// The median of `v` after sorting it (the upper one of an even count), or 0 when empty.
+fn sorted_median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Step 3: one cluster's medians, representative and verdict; recurrence is counted
+/// over `counted_orders` (the upper half of the scan).
+fn judge_cluster(
+    scan: &Scan,
+    members: Vec<usize>,
+    counted_orders: &[usize],
+    criteria: &SelectionCriteria,
+) -> Cluster {
     let lowest_counted = counted_orders.first().copied().unwrap_or(0);
     let counted = counted_orders.len();
     let needed = ((criteria.recurrence * counted as f64).ceil() as usize).max(1);
-    let mut out: Vec<Cluster> = clusters
-        .into_iter()
-        .map(|members| {
-            // The members in the counted (upper) orders.
-            let upper: Vec<usize> = members
-                .iter()
-                .copied()
-                .filter(|&i| scan.poles[i].order >= lowest_counted)
-                .collect();
-            let upper_count = upper.len();
-            let mut f: Vec<f64> = members
-                .iter()
-                .map(|&i| scan.poles[i].frequency_hz)
-                .collect();
-            let mut z: Vec<f64> = members
-                .iter()
-                .map(|&i| scan.poles[i].damping_ratio)
-                .collect();
-            f.sort_by(f64::total_cmp);
-            z.sort_by(f64::total_cmp);
-            let median_frequency_hz = f[f.len() / 2];
-            let representative = representative(scan, &members, &upper);
-            let mut upper_cmi: Vec<f64> = upper.iter().map(|&i| scan.poles[i].cmi()).collect();
-            upper_cmi.sort_by(f64::total_cmp);
-            let median_cmi = upper_cmi.get(upper_cmi.len() / 2).copied().unwrap_or(0.0);
-            let mut upper_mpc: Vec<f64> = upper.iter().map(|&i| scan.poles[i].mpc).collect();
-            upper_mpc.sort_by(f64::total_cmp);
-            let median_mpc = upper_mpc.get(upper_mpc.len() / 2).copied().unwrap_or(0.0);
-            // A short scan (exact low-order data) cannot ask for more poles than it has
-            // counted orders.
-            let min_poles = criteria.min_poles.min(counted.max(1));
-            let rejection = if upper_count < needed || members.len() < min_poles {
-                Some(Rejection::Unstable(upper_count, counted))
-            } else if median_mpc < criteria.mpc_minimum {
-                Some(Rejection::LowMpc(median_mpc))
-            } else if median_cmi < criteria.cmi_minimum {
-                Some(Rejection::LowCmi(median_cmi))
-            } else {
-                None
-            };
-            Cluster {
-                physical: rejection.is_none(),
-                rejection,
-                median_cmi,
-                median_mpc,
-                representative,
-                upper_count,
-                median_frequency_hz,
-                median_damping_ratio: z[z.len() / 2],
-                frequency_spread: (f[f.len() - 1] - f[0]) / median_frequency_hz,
-                members,
-            }
-        })
+    // The members in the counted (upper) orders.
+    let upper: Vec<usize> = members
+        .iter()
+        .copied()
+        .filter(|&i| scan.poles[i].order >= lowest_counted)
         .collect();
-    // Step 4: one mode split into two clusters by noise (same shape, within the frequency
-    // tolerance) keeps only its larger cluster; one mode whose pole drifted by more than
-    // the tolerance between orders (same shape, within three tolerances, the two
-    // clusters sharing at most one order) keeps the cluster that reached the higher
-    // order. Close modes have different shapes.
-    let orders_of =
-        |c: &Cluster| -> Vec<usize> { c.members.iter().map(|&i| scan.poles[i].order).collect() };
+    let upper_count = upper.len();
+    let mut f: Vec<f64> = members
+        .iter()
+        .map(|&i| scan.poles[i].frequency_hz)
+        .collect();
+    let mut z: Vec<f64> = members
+        .iter()
+        .map(|&i| scan.poles[i].damping_ratio)
+        .collect();
+    f.sort_by(f64::total_cmp);
+    z.sort_by(f64::total_cmp);
+    let median_frequency_hz = f[f.len() / 2];
+    let representative = representative(scan, &members, &upper);
+    let median_cmi = sorted_median(upper.iter().map(|&i| scan.poles[i].cmi()).collect());
+    let median_mpc = sorted_median(upper.iter().map(|&i| scan.poles[i].mpc).collect());
+    // A short scan (exact low-order data) cannot ask for more poles than it has counted
+    // orders.
+    let min_poles = criteria.min_poles.min(counted.max(1));
+    let rejection = if upper_count < needed || members.len() < min_poles {
+        Some(Rejection::Unstable(upper_count, counted))
+    } else if median_mpc < criteria.mpc_minimum {
+        Some(Rejection::LowMpc(median_mpc))
+    } else if median_cmi < criteria.cmi_minimum {
+        Some(Rejection::LowCmi(median_cmi))
+    } else {
+        None
+    };
+    Cluster {
+        physical: rejection.is_none(),
+        rejection,
+        median_cmi,
+        median_mpc,
+        representative,
+        upper_count,
+        median_frequency_hz,
+        median_damping_ratio: z[z.len() / 2],
+        frequency_spread: (f[f.len() - 1] - f[0]) / median_frequency_hz,
+        members,
+    }
+}
+
+/// Step 4: one mode split into two clusters by noise (same shape, within the frequency
+/// tolerance) keeps only its larger cluster; one mode whose pole drifted by more than
+/// the tolerance between orders (same shape, within three tolerances, the two clusters
+/// sharing at most one order) keeps the cluster that reached the higher order. Close
+/// modes have different shapes.
+fn drop_duplicates(scan: &Scan, out: &mut [Cluster], criteria: &SelectionCriteria) {
     let mut by_size: Vec<usize> = (0..out.len()).collect();
     // Larger first; of two the same size, the more consistent (a satellite of a mode
     // can be as stable as the mode).
@@ -841,50 +898,46 @@ pub fn select(scan: &Scan, band_hz: (f64, f64), criteria: &SelectionCriteria) ->
             if !out[b].physical || !out[a].physical {
                 continue;
             }
-            let (pa, pb) = (
-                &scan.poles[out[a].representative],
-                &scan.poles[out[b].representative],
-            );
-            if mac(&pa.shape, &pb.shape) < criteria.mac_minimum {
-                continue;
-            }
-            let df = (pa.frequency_hz - pb.frequency_hz).abs() / pa.frequency_hz;
-            let (oa, ob) = (orders_of(&out[a]), orders_of(&out[b]));
-            let shared = oa.iter().filter(|o| ob.contains(o)).count();
-            let (keep, drop) = if df <= criteria.frequency_tolerance {
-                // The larger, unless the smaller is far more consistent over the
-                // record: noise can hold a pole on the mode's track at more orders.
-                if out[b].median_cmi > DUPLICATE_CMI_RATIO * out[a].median_cmi {
-                    (b, a)
-                } else {
-                    (a, b)
-                }
-            } else if df <= 3.0 * criteria.frequency_tolerance
-                && shared * 5 <= oa.len().min(ob.len())
-            {
-                if pb.order > pa.order {
-                    (b, a)
-                } else {
-                    (a, b)
-                }
-            } else {
+            let Some(keep_a) = duplicate_pair(scan, &out[a], &out[b], criteria) else {
                 continue;
             };
+            let (keep, drop) = if keep_a { (a, b) } else { (b, a) };
             let f = scan.poles[out[keep].representative].frequency_hz;
             out[drop].physical = false;
             out[drop].rejection = Some(Rejection::Duplicate(f));
         }
     }
-    out.sort_by(|a, b| {
-        scan.poles[a.representative]
-            .frequency_hz
-            .total_cmp(&scan.poles[b.representative].frequency_hz)
-    });
-    Selection {
-        clusters: out,
-        counted_orders,
-        rejected,
-        criteria: *criteria,
+}
+
+/// Whether clusters `a` (the larger) and `b` are one mode (step 4): `None` when they are
+/// not, else whether to keep `a` (rather than `b`).
+fn duplicate_pair(
+    scan: &Scan,
+    a: &Cluster,
+    b: &Cluster,
+    criteria: &SelectionCriteria,
+) -> Option<bool> {
+    let (pa, pb) = (&scan.poles[a.representative], &scan.poles[b.representative]);
+    if mac(&pa.shape, &pb.shape) < criteria.mac_minimum {
+        return None;
+    }
+    let orders_of =
+        |c: &Cluster| -> Vec<usize> { c.members.iter().map(|&i| scan.poles[i].order).collect() };
+    let df = (pa.frequency_hz - pb.frequency_hz).abs() / pa.frequency_hz;
+    let (oa, ob) = (orders_of(a), orders_of(b));
+    let shared = oa.iter().filter(|o| ob.contains(o)).count();
+    if df <= criteria.frequency_tolerance {
+        // The larger, unless the smaller is far more consistent over the record: noise
+        // can hold a pole on the mode's track at more orders.
+        if b.median_cmi > DUPLICATE_CMI_RATIO * a.median_cmi {
+            Some(false)
+        } else {
+            Some(true)
+        }
+    } else if df <= 3.0 * criteria.frequency_tolerance && shared * 5 <= oa.len().min(ob.len()) {
+        Some(pb.order <= pa.order)
+    } else {
+        None
     }
 }
 

@@ -1,9 +1,15 @@
-//! The Levenberg–Marquardt driver shared by the fast and the naive evaluation: start
-//! poles, steps, the dropping of modes that collapse or coalesce, and the result with its
-//! uncertainties.
+//! The free stage, shared by the fast and the naive evaluation: start poles, its steps
+//! under [`super::lm::descend`], the dropping of modes that collapse or coalesce, and
+//! the result with its uncertainties (the rank-one stage, when it follows, starts from
+//! this fit).
 
+use super::lm::{
+    descend, limit_step, marquardt_step, normalise, Geometric, LeastSquares, Trial, EXACT_FIT,
+    STATISTICAL_STOP,
+};
 use super::model::{basis, Problem, ResidualKind};
 use super::uncertainty::mode_std;
+use super::varpro::{Evaluation, Evaluator, Need, Outcome};
 use super::{RefineOptions, RefinedMode, Refinement};
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
@@ -12,53 +18,10 @@ use faer::Mat;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
-/// What an evaluation of the projected functional gives.
-pub(crate) struct Evaluation {
-    /// `‖r‖²`, weighted.
-    pub cost: f64,
-    /// `JᵀJ` over the pole parameters.
-    pub jtj: Mat<f64>,
-    /// `Jᵀr`.
-    pub jtr: Vec<f64>,
-    /// Linear coefficients, `columns × pairs`.
-    pub coefficients: Mat<f64>,
-    /// What a cost-only evaluation of the fast path keeps for the Jacobian at the same
-    /// point ([`Need::JacobianAfter`]).
-    pub kept: Option<super::varpro::Kept>,
-}
-
-/// An evaluation, or the column of the basis that is a combination of the others.
-pub(crate) enum Outcome {
-    Ready(Evaluation),
-    Deficient { column: usize, mode: Option<usize> },
-}
-
-/// What an evaluation must give.
-#[derive(Clone, Copy)]
-pub(crate) enum Need<'a> {
-    /// The cost and the coefficients only (`jtj` and `jtr` empty): a trial step that
-    /// may be rejected.
-    Cost,
-    /// Everything.
-    Jacobian,
-    /// Everything, at the point of this cost-only evaluation: the fast path starts from
-    /// the factorisations it kept, so an accepted trial costs no second QR.
-    JacobianAfter(&'a Evaluation),
-}
-
-/// `evaluate(problem, θ, need)`.
-pub(crate) type Evaluator = fn(&Problem, &[f64], Need<'_>) -> Result<Outcome>;
-
 /// A mode whose share of the band's FRF norm falls below this has collapsed.
 pub const MIN_CONTRIBUTION: f64 = 1e-10;
 /// Two poles closer than this, relative to their modulus, have coalesced.
 pub const COALESCED: f64 = 1e-9;
-/// A step that lowers the cost by less than this many noise variances `σ̂²` ends the
-/// fit.
-pub(crate) const STATISTICAL_STOP: f64 = 1e-2;
-/// Cost below this fraction of the (weighted) data's squared norm is an exact fit.
-pub(crate) const EXACT_FIT: f64 = 1e-28;
-
 /// The active modes: their start indices and parameters.
 struct State {
     ids: Vec<usize>,
@@ -173,13 +136,10 @@ pub(crate) fn run(
         .iter()
         .map(|b| b.rhs.squared_norm_l2() + b.cost_offset)
         .sum();
-    let mut current = settle(&problem, &mut state, evaluate, &mut dropped)?;
+    let current = settle(&problem, &mut state, evaluate, &mut dropped)?;
     let cost_before = current.cost;
     let fit_before = fit_of(&problem, &state.theta, &current.coefficients);
     progress(0, current.cost);
-    let mut lambda = 1e-3;
-    let mut iterations = 0;
-    let mut converged = false;
     // Where the rank-one stage follows, the free fit is only its start: that stage moves
     // every pole again, to its own tolerance.
     let rank_one_follows = super::rank_one::will_run(&problem, state.ids.len());
@@ -188,96 +148,27 @@ pub(crate) fn run(
     } else {
         options.tolerance
     };
-    let free_iterations = if placed && rank_one_follows {
-        converged = true;
-        0
-    } else {
-        options.max_iterations
+    let mut stage = FreeStage {
+        problem: &problem,
+        state,
+        current,
+        evaluate,
+        dropped,
+        progress,
+        weighted_norm2,
+        tolerance: free_tolerance,
     };
-    while iterations < free_iterations {
-        if current.cost <= EXACT_FIT * weighted_norm2 {
-            converged = true;
-            break;
-        }
-        let Some(step) = marquardt_step(&current.jtj, &current.jtr, lambda) else {
-            lambda *= 4.0;
-            if lambda > 1e16 {
-                break;
-            }
-            continue;
-        };
-        let step = limit_step(step, &state.theta, problem.parameters.log_damping);
-        let mut trial = state.theta.clone();
-        for (t, d) in trial.iter_mut().zip(&step) {
-            *t += d;
-        }
-        normalise(&mut trial);
-        let outcome = if trial.iter().all(|t| t.is_finite()) {
-            Some(evaluate(&problem, &trial, Need::Cost)?)
-        } else {
-            None
-        };
-        match outcome {
-            Some(Outcome::Ready(next)) if next.cost < current.cost => {
-                let decrease = current.cost - next.cost;
-                let relative = decrease / current.cost;
-                state.theta = trial;
-                // The trial was evaluated without its Jacobian; the accepted point needs it.
-                current = match evaluate(&problem, &state.theta, Need::JacobianAfter(&next))? {
-                    Outcome::Ready(e) => e,
-                    Outcome::Deficient { .. } => {
-                        return Err(EraError::Numerical(
-                            "the basis was deficient at a point that was not a moment before"
-                                .into(),
-                        ))
-                    }
-                };
-                // The trial's kept factors are spent.
-                drop(next);
-                iterations += 1;
-                lambda = (lambda / 5.0).max(1e-15);
-                let before_checks = state.ids.len();
-                current = settle_ready(&problem, &mut state, current, evaluate, &mut dropped)?;
-                progress(iterations, current.cost);
-                if state.ids.len() != before_checks {
-                    lambda = 1e-3;
-                    continue;
-                }
-                // A decrease below a hundredth of one noise unit `σ²` moves the
-                // parameters by about a tenth of their standard deviation or less: the
-                // rest is noise (module doc, "Stopping").
-                let noise_unit = problem
-                    .degrees_of_freedom(state.theta.len())
-                    .map_or(0.0, |dof| current.cost / dof as f64);
-                if relative <= free_tolerance || decrease <= STATISTICAL_STOP * noise_unit {
-                    converged = true;
-                    break;
-                }
-            }
-            Some(Outcome::Deficient { mode: Some(m), .. }) => {
-                // The step drives two poles onto each other: drop the one it names.
-                let s = problem.parameters.pole(&trial, m);
-                state.drop_mode(
-                    m,
-                    format!(
-                        "its pole coalesced with another at {:.6} Hz",
-                        s.norm() / (2.0 * PI)
-                    ),
-                    &mut dropped,
-                );
-                current = settle(&problem, &mut state, evaluate, &mut dropped)?;
-                lambda = 1e-3;
-            }
-            _ => {
-                lambda *= 4.0;
-                if lambda > 1e16 {
-                    // No step lowers the cost any more: a minimum to working precision.
-                    converged = true;
-                    break;
-                }
-            }
-        }
-    }
+    let (iterations, converged) = if placed && rank_one_follows {
+        (0, true)
+    } else {
+        descend(&mut stage, &mut Geometric::new(), options.max_iterations)?
+    };
+    let FreeStage {
+        state,
+        current,
+        dropped,
+        ..
+    } = stage;
     finish(
         &problem,
         state,
@@ -295,6 +186,110 @@ pub(crate) fn run(
     )
 }
 
+/// The free stage as [`descend`] drives it: the active modes, the evaluation at their
+/// point, and the modes dropped so far.
+struct FreeStage<'p, 'f> {
+    problem: &'p Problem,
+    state: State,
+    current: Evaluation,
+    evaluate: Evaluator,
+    dropped: Vec<(usize, String)>,
+    progress: &'f mut dyn FnMut(usize, f64),
+    /// The (weighted) data's squared norm.
+    weighted_norm2: f64,
+    /// Relative decrease that ends the fit.
+    tolerance: f64,
+}
+
+impl LeastSquares for FreeStage<'_, '_> {
+    fn exact(&self) -> bool {
+        self.current.cost <= EXACT_FIT * self.weighted_norm2
+    }
+
+    fn step(&mut self, lambda: f64) -> Option<Vec<f64>> {
+        marquardt_step(&self.current.jtj, &self.current.jtr, lambda)
+    }
+
+    fn attempt(&mut self, step: Vec<f64>, iteration: usize) -> Result<Trial> {
+        let (problem, evaluate) = (self.problem, self.evaluate);
+        let step = limit_step(step, &self.state.theta, problem.parameters.log_damping);
+        let mut trial = self.state.theta.clone();
+        for (t, d) in trial.iter_mut().zip(&step) {
+            *t += d;
+        }
+        normalise(&mut trial);
+        let outcome = if trial.iter().all(|t| t.is_finite()) {
+            Some(evaluate(problem, &trial, Need::Cost)?)
+        } else {
+            None
+        };
+        match outcome {
+            Some(Outcome::Ready(next)) if next.cost < self.current.cost => {
+                let decrease = self.current.cost - next.cost;
+                let relative = decrease / self.current.cost;
+                self.state.theta = trial;
+                // The trial was evaluated without its Jacobian; the accepted point needs it.
+                let accepted =
+                    match evaluate(problem, &self.state.theta, Need::JacobianAfter(&next))? {
+                        Outcome::Ready(e) => e,
+                        Outcome::Deficient { .. } => {
+                            return Err(EraError::Numerical(
+                                "the basis was deficient at a point that was not a moment before"
+                                    .into(),
+                            ))
+                        }
+                    };
+                // The trial's kept factors are spent.
+                drop(next);
+                let before_checks = self.state.ids.len();
+                self.current = settle_ready(
+                    problem,
+                    &mut self.state,
+                    accepted,
+                    evaluate,
+                    &mut self.dropped,
+                )?;
+                (self.progress)(iteration, self.current.cost);
+                // The free stage's rule takes no gain ratio.
+                if self.state.ids.len() != before_checks {
+                    return Ok(Trial::Lower {
+                        rho: f64::NAN,
+                        restart: true,
+                        converged: false,
+                    });
+                }
+                // A decrease below a hundredth of one noise unit `σ²` moves the
+                // parameters by about a tenth of their standard deviation or less: the
+                // rest is noise (module doc, "Stopping").
+                let noise_unit = problem
+                    .degrees_of_freedom(self.state.theta.len())
+                    .map_or(0.0, |dof| self.current.cost / dof as f64);
+                Ok(Trial::Lower {
+                    rho: f64::NAN,
+                    restart: false,
+                    converged: relative <= self.tolerance
+                        || decrease <= STATISTICAL_STOP * noise_unit,
+                })
+            }
+            Some(Outcome::Deficient { mode: Some(m), .. }) => {
+                // The step drives two poles onto each other: drop the one it names.
+                let s = problem.parameters.pole(&trial, m);
+                self.state.drop_mode(
+                    m,
+                    format!(
+                        "its pole coalesced with another at {:.6} Hz",
+                        s.norm() / (2.0 * PI)
+                    ),
+                    &mut self.dropped,
+                );
+                self.current = settle(problem, &mut self.state, evaluate, &mut self.dropped)?;
+                Ok(Trial::Restart)
+            }
+            _ => Ok(Trial::Higher),
+        }
+    }
+}
+
 struct Summary {
     iterations: usize,
     converged: bool,
@@ -302,76 +297,6 @@ struct Summary {
     fit_before: f64,
     max_iterations: usize,
     tolerance: f64,
-}
-
-/// Largest step of a mode's frequency, in units of its `σ` (half the half-power
-/// bandwidth): the cost is far from quadratic beyond a resonance's width.
-const MAX_FREQUENCY_STEP: f64 = 2.0;
-/// Largest step of `ln σ` (a factor `e^0.7 ≈ 2` in damping).
-const MAX_LOG_DAMPING_STEP: f64 = 0.7;
-
-/// Shortens each mode's part of the step to the region where its linearisation holds,
-/// so that one badly predicted mode does not force `λ` up for all.
-pub(crate) fn limit_step(mut step: Vec<f64>, theta: &[f64], log_damping: bool) -> Vec<f64> {
-    for r in 0..theta.len() / 2 {
-        let sigma = if log_damping {
-            theta[2 * r].exp()
-        } else {
-            theta[2 * r].abs()
-        };
-        let damping_step = if log_damping {
-            step[2 * r].abs() / MAX_LOG_DAMPING_STEP
-        } else {
-            step[2 * r].abs() / (0.5 * sigma)
-        };
-        let frequency_step = step[2 * r + 1].abs() / (MAX_FREQUENCY_STEP * sigma);
-        let worst = damping_step.max(frequency_step);
-        if worst > 1.0 {
-            step[2 * r] /= worst;
-            step[2 * r + 1] /= worst;
-        }
-    }
-    step
-}
-
-/// `ω_d < 0` is the conjugate pole: keep the representative with `Im s > 0`.
-pub(crate) fn normalise(theta: &mut [f64]) {
-    for r in 0..theta.len() / 2 {
-        theta[2 * r + 1] = theta[2 * r + 1].abs();
-    }
-}
-
-/// `(JᵀJ + λ diag JᵀJ) δ = −Jᵀr` (Marquardt's scaling, with a floor on the diagonal).
-fn marquardt_step(jtj: &Mat<f64>, jtr: &[f64], lambda: f64) -> Option<Vec<f64>> {
-    use faer::linalg::solvers::Solve;
-    let m = damped(jtj, lambda)?;
-    let rhs = Mat::from_fn(jtr.len(), 1, |k, _| -jtr[k]);
-    let step = match m.llt(faer::Side::Lower) {
-        Ok(llt) => llt.solve(&rhs),
-        Err(_) => m.partial_piv_lu().solve(&rhs),
-    };
-    finite_column(&step)
-}
-
-/// `N + λ diag N`, each diagonal entry floored at 1e-14 of the largest (Marquardt's
-/// scaling), or `None` when `N` has no positive finite diagonal.
-pub(crate) fn damped(normal: &Mat<f64>, lambda: f64) -> Option<Mat<f64>> {
-    let n = normal.nrows();
-    let largest = (0..n).map(|k| normal[(k, k)]).fold(0.0, f64::max);
-    if !(largest > 0.0 && largest.is_finite()) {
-        return None;
-    }
-    let mut m = normal.clone();
-    for k in 0..n {
-        m[(k, k)] += lambda * normal[(k, k)].max(1e-14 * largest);
-    }
-    Some(m)
-}
-
-/// The column as a vector, or `None` when an entry is not finite.
-pub(crate) fn finite_column(step: &Mat<f64>) -> Option<Vec<f64>> {
-    let v: Vec<f64> = (0..step.nrows()).map(|k| step[(k, 0)]).collect();
-    v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
 /// Evaluates, dropping the modes that make the basis deficient, then checks for

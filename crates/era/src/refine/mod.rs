@@ -203,6 +203,7 @@
 
 mod fit;
 pub mod identification;
+mod lm;
 mod model;
 mod naive;
 mod rank_one;
@@ -422,7 +423,7 @@ fn run(
     start_poles: &[Complex64],
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
-    evaluate: fit::Evaluator,
+    evaluate: varpro::Evaluator,
 ) -> Result<Refinement> {
     let mut result = run_once(frf, start_poles, &[], options, progress, evaluate)?;
     if !options.add_missed {
@@ -489,7 +490,7 @@ fn run_once(
     warm: &[Option<fit::Warm>],
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
-    evaluate: fit::Evaluator,
+    evaluate: varpro::Evaluator,
 ) -> Result<Refinement> {
     if options.weighting != Weighting::PairNoise {
         return fit::run(frf, start_poles, warm, false, options, progress, evaluate);

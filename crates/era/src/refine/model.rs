@@ -309,78 +309,177 @@ fn invalid(name: &'static str, value: String, reason: impl Into<String>) -> EraE
     }
 }
 
+/// The fitted band as line indices `first..end`: the options' band, checked, or every
+/// line above 0 Hz; with a sample time, every line of it below the Nyquist frequency.
+fn fit_band(freq: &[f64], options: &RefineOptions) -> Result<(usize, usize)> {
+    let lines = freq.len();
+    let band = match options.band {
+        Some((a, b)) => {
+            if !(a < b && b <= lines) {
+                return Err(invalid(
+                    "band",
+                    format!("{a}..{b}"),
+                    format!("need first < end <= {lines} (the lines of the data)"),
+                ));
+            }
+            if freq[a] <= 0.0 {
+                return Err(invalid(
+                    "band",
+                    format!("{a}..{b}"),
+                    "the band must leave out the 0 Hz line",
+                ));
+            }
+            (a, b)
+        }
+        None => {
+            let first = freq.iter().position(|&f| f > 0.0).unwrap_or(lines);
+            (first, lines)
+        }
+    };
+    if let Some(ts) = options.sample_time_s {
+        if !(ts.is_finite() && ts > 0.0) {
+            return Err(invalid(
+                "sample time",
+                ts.to_string(),
+                "must be positive and finite",
+            ));
+        }
+        if options.real_modes {
+            return Err(invalid(
+                "real-modes",
+                "true".into(),
+                "the residues of a sampled (z-domain) model are not imaginary: real modes need the continuous model",
+            ));
+        }
+        if let Some(&f) = freq[band.0..band.1]
+            .iter()
+            .find(|&&f| f * ts > 0.5 * (1.0 + 1e-9))
+        {
+            return Err(invalid(
+                "band",
+                format!("{}..{}", band.0, band.1),
+                format!(
+                    "{f} Hz is above the Nyquist frequency {} Hz of the sample time {ts} s",
+                    0.5 / ts
+                ),
+            ));
+        }
+    }
+    Ok(band)
+}
+
+/// The options that do not depend on the data's values: reciprocity on a square set, the
+/// tolerance, the iteration limit.
+fn check_options(options: &RefineOptions, q: usize, p: usize) -> Result<()> {
+    if options.reciprocal && q != p {
+        return Err(invalid(
+            "reciprocal",
+            format!("{q}x{p}"),
+            "reciprocity needs a square (collocated) set",
+        ));
+    }
+    if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
+        return Err(invalid(
+            "tolerance",
+            options.tolerance.to_string(),
+            "must be a finite number >= 0",
+        ));
+    }
+    crate::limits::ITERATIONS.check("max-iterations", options.max_iterations as u64)?;
+    Ok(())
+}
+
+/// Units: pairs (`i·p + j`) sharing a coefficient vector, `(i, j)` with `(j, i)` when
+/// reciprocal.
+fn units_of(q: usize, p: usize, reciprocal: bool) -> Vec<Vec<usize>> {
+    if reciprocal {
+        let mut u = Vec::new();
+        for i in 0..q {
+            u.push(vec![i * p + i]);
+            for j in i + 1..p {
+                u.push(vec![i * p + j, j * p + i]);
+            }
+        }
+        u
+    } else {
+        (0..q * p).map(|pair| vec![pair]).collect()
+    }
+}
+
+/// Refuses a pair whose every weight in the band is zero.
+fn check_pair_weights(weights: &[Vec<f64>], p: usize) -> Result<()> {
+    for (pair, wp) in weights.iter().enumerate() {
+        if wp.iter().all(|&x| x == 0.0) {
+            return Err(invalid(
+                "weighting",
+                format!("output {}, input {}", pair / p + 1, pair % p + 1),
+                "every weight of this pair in the band is zero",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// One block for every unit when each pair has one weight `pw` over the band: each unit
+/// fitted through its weighted mean ([`Block::scales`]).
+fn shared_block(units: &[Vec<usize>], pw: &[f64], data: &[Vec<Complex64>], nl: usize) -> Block {
+    let mut block = Block {
+        segment_weights: vec![None],
+        units: units.to_vec(),
+        scales: Vec::with_capacity(units.len()),
+        cost_offset: 0.0,
+        rhs: Mat::zeros(2 * nl, units.len()),
+    };
+    for (u, unit) in units.iter().enumerate() {
+        let total: f64 = unit.iter().map(|&pair| pw[pair] * pw[pair]).sum();
+        let root = total.sqrt();
+        block.scales.push(root);
+        // `k` indexes the line of every pair of the unit, not one slice.
+        #[allow(clippy::needless_range_loop)]
+        for k in 0..nl {
+            let mean = unit
+                .iter()
+                .map(|&pair| pw[pair] * pw[pair] * data[pair][k])
+                .sum::<Complex64>()
+                / total;
+            block.rhs[(k, u)] = root * mean.re;
+            block.rhs[(nl + k, u)] = root * mean.im;
+            block.cost_offset += unit
+                .iter()
+                .map(|&pair| pw[pair] * pw[pair] * (data[pair][k] - mean).norm_sqr())
+                .sum::<f64>();
+        }
+    }
+    block
+}
+
+/// The block of one unit whose weights `w` vary over the band: its pairs stacked, each
+/// segment weighted line by line.
+fn weighted_block(unit: &[usize], w: &[Vec<f64>], data: &[Vec<Complex64>], nl: usize) -> Block {
+    let segments = unit.len();
+    let mut rhs = Mat::<f64>::zeros(segments * 2 * nl, 1);
+    for (seg, &pair) in unit.iter().enumerate() {
+        for k in 0..nl {
+            rhs[(seg * 2 * nl + k, 0)] = w[pair][k] * data[pair][k].re;
+            rhs[(seg * 2 * nl + nl + k, 0)] = w[pair][k] * data[pair][k].im;
+        }
+    }
+    Block {
+        segment_weights: unit.iter().map(|&pair| Some(w[pair].clone())).collect(),
+        units: vec![unit.to_vec()],
+        scales: vec![1.0],
+        cost_offset: 0.0,
+        rhs,
+    }
+}
+
 impl Problem {
     /// Validates the options against the data and arranges the blocks.
     pub fn new(frf: &FrfData, options: &RefineOptions) -> Result<Self> {
         let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
         let freq = frf.frequency_hz();
-        let band = match options.band {
-            Some((a, b)) => {
-                if !(a < b && b <= lines) {
-                    return Err(invalid(
-                        "band",
-                        format!("{a}..{b}"),
-                        format!("need first < end <= {lines} (the lines of the data)"),
-                    ));
-                }
-                if freq[a] <= 0.0 {
-                    return Err(invalid(
-                        "band",
-                        format!("{a}..{b}"),
-                        "the band must leave out the 0 Hz line",
-                    ));
-                }
-                (a, b)
-            }
-            None => {
-                let first = freq.iter().position(|&f| f > 0.0).unwrap_or(lines);
-                (first, lines)
-            }
-        };
-        if let Some(ts) = options.sample_time_s {
-            if !(ts.is_finite() && ts > 0.0) {
-                return Err(invalid(
-                    "sample time",
-                    ts.to_string(),
-                    "must be positive and finite",
-                ));
-            }
-            if options.real_modes {
-                return Err(invalid(
-                    "real-modes",
-                    "true".into(),
-                    "the residues of a sampled (z-domain) model are not imaginary: real modes need the continuous model",
-                ));
-            }
-            if let Some(&f) = freq[band.0..band.1]
-                .iter()
-                .find(|&&f| f * ts > 0.5 * (1.0 + 1e-9))
-            {
-                return Err(invalid(
-                    "band",
-                    format!("{}..{}", band.0, band.1),
-                    format!(
-                        "{f} Hz is above the Nyquist frequency {} Hz of the sample time {ts} s",
-                        0.5 / ts
-                    ),
-                ));
-            }
-        }
-        if options.reciprocal && q != p {
-            return Err(invalid(
-                "reciprocal",
-                format!("{q}x{p}"),
-                "reciprocity needs a square (collocated) set",
-            ));
-        }
-        if !(options.tolerance.is_finite() && options.tolerance >= 0.0) {
-            return Err(invalid(
-                "tolerance",
-                options.tolerance.to_string(),
-                "must be a finite number >= 0",
-            ));
-        }
-        crate::limits::ITERATIONS.check("max-iterations", options.max_iterations as u64)?;
+        let band = fit_band(freq, options)?;
+        check_options(options, q, p)?;
         let omega: Vec<f64> = freq[band.0..band.1].iter().map(|f| 2.0 * PI * f).collect();
         let nl = omega.len();
         let pair_count = q * p;
@@ -393,29 +492,9 @@ impl Problem {
         }
         let weights = square_root_weights(&options.weighting, q * p * lines, lines, band)?;
         let layout = Layout::new(frf.quantity(), options);
-        // Units: pairs sharing a coefficient vector.
-        let units: Vec<Vec<usize>> = if options.reciprocal {
-            let mut u = Vec::new();
-            for i in 0..q {
-                u.push(vec![i * p + i]);
-                for j in i + 1..p {
-                    u.push(vec![i * p + j, j * p + i]);
-                }
-            }
-            u
-        } else {
-            (0..pair_count).map(|pair| vec![pair]).collect()
-        };
+        let units = units_of(q, p, options.reciprocal);
         if let Some(w) = &weights {
-            for (pair, wp) in w.iter().enumerate() {
-                if wp.iter().all(|&x| x == 0.0) {
-                    return Err(invalid(
-                        "weighting",
-                        format!("output {}, input {}", pair / p + 1, pair % p + 1),
-                        "every weight of this pair in the band is zero",
-                    ));
-                }
-            }
+            check_pair_weights(w, p)?;
         }
         // One weight per pair over the whole band (uniform included): every unit shares
         // one basis (`Block::scales`).
@@ -426,59 +505,14 @@ impl Problem {
                 .map(|wp| wp.iter().all(|&x| x == wp[0]).then_some(wp[0]))
                 .collect(),
         };
-        let mut blocks = Vec::new();
-        match (&pair_weight, &weights) {
-            (Some(pw), _) => {
-                let mut block = Block {
-                    segment_weights: vec![None],
-                    units: units.clone(),
-                    scales: Vec::with_capacity(units.len()),
-                    cost_offset: 0.0,
-                    rhs: Mat::zeros(2 * nl, units.len()),
-                };
-                for (u, unit) in units.iter().enumerate() {
-                    let total: f64 = unit.iter().map(|&pair| pw[pair] * pw[pair]).sum();
-                    let root = total.sqrt();
-                    block.scales.push(root);
-                    // `k` indexes the line of every pair of the unit, not one slice.
-                    #[allow(clippy::needless_range_loop)]
-                    for k in 0..nl {
-                        let mean = unit
-                            .iter()
-                            .map(|&pair| pw[pair] * pw[pair] * data[pair][k])
-                            .sum::<Complex64>()
-                            / total;
-                        block.rhs[(k, u)] = root * mean.re;
-                        block.rhs[(nl + k, u)] = root * mean.im;
-                        block.cost_offset += unit
-                            .iter()
-                            .map(|&pair| pw[pair] * pw[pair] * (data[pair][k] - mean).norm_sqr())
-                            .sum::<f64>();
-                    }
-                }
-                blocks.push(block);
-            }
-            (None, Some(w)) => {
-                for unit in &units {
-                    let segments = unit.len();
-                    let mut rhs = Mat::<f64>::zeros(segments * 2 * nl, 1);
-                    for (seg, &pair) in unit.iter().enumerate() {
-                        for k in 0..nl {
-                            rhs[(seg * 2 * nl + k, 0)] = w[pair][k] * data[pair][k].re;
-                            rhs[(seg * 2 * nl + nl + k, 0)] = w[pair][k] * data[pair][k].im;
-                        }
-                    }
-                    blocks.push(Block {
-                        segment_weights: unit.iter().map(|&pair| Some(w[pair].clone())).collect(),
-                        units: vec![unit.clone()],
-                        scales: vec![1.0],
-                        cost_offset: 0.0,
-                        rhs,
-                    });
-                }
-            }
+        let blocks = match (&pair_weight, &weights) {
+            (Some(pw), _) => vec![shared_block(&units, pw, &data, nl)],
+            (None, Some(w)) => units
+                .iter()
+                .map(|unit| weighted_block(unit, w, &data, nl))
+                .collect(),
             (None, None) => unreachable!("uniform weights are one per pair"),
-        }
+        };
         Ok(Problem {
             layout,
             parameters: PoleParameters {

@@ -3,9 +3,8 @@
 //! the Jacobian by central differences of `r` (so the full Golub–Pereyra Jacobian, not
 //! Kaufman's). Slow, simple, and a check of every index in [`super::varpro`].
 
-use super::fit::{Evaluation, Need, Outcome};
 use super::model::{basis, Problem};
-use super::varpro::DEFICIENT_COLUMN;
+use super::varpro::{Evaluation, Need, Outcome, DEFICIENT_COLUMN};
 use crate::error::Result;
 use faer::linalg::solvers::SolveLstsq;
 use faer::Mat;

@@ -45,7 +45,10 @@
 //! free parameter, `σ̂² = cost/(observations − parameters)`: fewer nuisance parameters
 //! than the free fit's, so slightly smaller standard deviations where modes overlap.
 
-use super::fit::{damped, finite_column, limit_step, normalise, EXACT_FIT, STATISTICAL_STOP};
+use super::lm::{
+    damped, descend, finite_column, limit_step, normalise, LeastSquares, Nielsen, Trial, EXACT_FIT,
+    STATISTICAL_STOP,
+};
 use super::model::{basis, basis_derivatives, Problem};
 use crate::error::{EraError, Result};
 use faer::linalg::solvers::Solve;
@@ -434,48 +437,124 @@ fn add_output_blocks(
     (nzz, gz): (&mut Mat<f64>, &mut [f64]),
     (nii, niz, gi): (&mut Mat<f64>, &mut Mat<f64>, &mut [f64]),
 ) {
-    let (n, p, n_res) = (ix.n, ix.p, ix.n_res);
-    let m2 = 2 * n;
-    let Grams {
-        h,
-        e,
-        m,
-        phi_r,
-        d_r,
-    } = grams;
-    let slot = |f: Option<usize>| f.map(|f| part.slot[f]);
-    let local = |f: Option<usize>| match slot(f) {
+    let m2 = 2 * ix.n;
+    let mut sums = OutputSums {
+        theta_z: (0..m2)
+            .map(|t| shared_slot(part, Some(t)).expect("the poles are shared"))
+            .collect(),
+        u_local: (0..m2)
+            .map(|k| local_slot(part, ix.reduced[ix.u(i, k / 2, k % 2)]))
+            .collect(),
+        nzz,
+        gz,
+        nii,
+        niz,
+        gi,
+    };
+    let mut scratch = Scratch {
+        yv: Mat::<f64>::zeros(m2, m2),
+        yu: Mat::<f64>::zeros(m2, m2),
+        mp: Mat::<f64>::zeros(2 * m2, m2),
+        pe: Mat::<f64>::zeros(m2, grams.h.ncols()),
+    };
+    for j in 0..ix.p {
+        let maps = PairMaps::new(x, ix, part, weights, i, j);
+        sums.add_shapes(grams, &maps, &mut scratch);
+        sums.add_residual_terms(grams, &maps);
+        sums.add_poles(grams, &maps, &mut scratch);
+        sums.add_gradient(grams, &maps);
+    }
+}
+
+/// Where free parameter `f` sits among an output's own parameters.
+fn local_slot(part: &Partition, f: Option<usize>) -> usize {
+    match f.map(|f| part.slot[f]) {
         Some(Slot::Local(a)) => a,
         _ => unreachable!("an output's shapes and residual terms are its own"),
-    };
-    let shared = |f: Option<usize>| match slot(f) {
+    }
+}
+
+/// Where free parameter `f` sits among the shared parameters, if it is one.
+fn shared_slot(part: &Partition, f: Option<usize>) -> Option<usize> {
+    match f.map(|f| part.slot[f]) {
         Some(Slot::Shared(a)) => Some(a),
         _ => None,
-    };
-    let theta_z: Vec<usize> = (0..m2)
-        .map(|t| shared(Some(t)).expect("the poles are shared"))
-        .collect();
-    let u_local: Vec<usize> = (0..m2)
-        .map(|k| local(ix.reduced[ix.u(i, k / 2, k % 2)]))
-        .collect();
-    // The 2 × 2 map of a complex factor c: (Re w, Im w) ↦ (Re cw, Im cw), as [row][col].
-    let map = |c: Complex64| [[c.re, -c.im], [c.im, c.re]];
-    let mut yv = Mat::<f64>::zeros(m2, m2);
-    let mut yu = Mat::<f64>::zeros(m2, m2);
-    let mut mp = Mat::<f64>::zeros(2 * m2, m2);
-    let mut pe = Mat::<f64>::zeros(m2, h.ncols());
-    for j in 0..p {
+    }
+}
+
+/// The 2 × 2 map of a complex factor c: (Re w, Im w) ↦ (Re cw, Im cw), as [row][col].
+fn complex_map(c: Complex64) -> [[f64; 2]; 2] {
+    [[c.re, -c.im], [c.im, c.re]]
+}
+
+/// Pair `(i, j)` in [`add_output_blocks`]: its weight, the 2 × 2 maps `Bv`, `Bu`, the
+/// residues `R_r = u_r v_r`, and where its participations and residual terms sit.
+struct PairMaps {
+    pair: usize,
+    w: f64,
+    bv: Vec<[[f64; 2]; 2]>,
+    bu: Vec<[[f64; 2]; 2]>,
+    z: Vec<Complex64>,
+    v_z: Vec<Option<usize>>,
+    k_local: Vec<usize>,
+}
+
+impl PairMaps {
+    fn new(
+        x: &Parameters,
+        ix: &Indices,
+        part: &Partition,
+        weights: &[f64],
+        i: usize,
+        j: usize,
+    ) -> Self {
+        let (n, p, n_res) = (ix.n, ix.p, ix.n_res);
         let pair = i * p + j;
-        let w = weights[pair] * weights[pair];
-        let bv: Vec<[[f64; 2]; 2]> = (0..n).map(|r| map(x.v[j * n + r])).collect();
-        let bu: Vec<[[f64; 2]; 2]> = (0..n).map(|r| map(x.u[i * n + r])).collect();
-        let z: Vec<Complex64> = (0..n).map(|r| x.u[i * n + r] * x.v[j * n + r]).collect();
-        let v_z: Vec<Option<usize>> = (0..m2)
-            .map(|k| shared(ix.reduced[ix.v(j, k / 2, k % 2)]))
-            .collect();
-        let k_local: Vec<usize> = (0..n_res)
-            .map(|res| local(ix.reduced[ix.k(pair, res)]))
-            .collect();
+        PairMaps {
+            pair,
+            w: weights[pair] * weights[pair],
+            bv: (0..n).map(|r| complex_map(x.v[j * n + r])).collect(),
+            bu: (0..n).map(|r| complex_map(x.u[i * n + r])).collect(),
+            z: (0..n).map(|r| x.u[i * n + r] * x.v[j * n + r]).collect(),
+            v_z: (0..2 * n)
+                .map(|k| shared_slot(part, ix.reduced[ix.v(j, k / 2, k % 2)]))
+                .collect(),
+            k_local: (0..n_res)
+                .map(|res| local_slot(part, ix.reduced[ix.k(pair, res)]))
+                .collect(),
+        }
+    }
+}
+
+/// Work matrices of [`add_output_blocks`], reused from pair to pair.
+struct Scratch {
+    yv: Mat<f64>,
+    yu: Mat<f64>,
+    mp: Mat<f64>,
+    pe: Mat<f64>,
+}
+
+/// Output `i`'s sums in [`Blocks`] (shared–shared `nzz`, `gz`; own–own `nii`, own–shared
+/// `niz`, `gi`), and where the output's shapes (`u_local`) and the poles (`theta_z`) sit.
+struct OutputSums<'a> {
+    nzz: &'a mut Mat<f64>,
+    gz: &'a mut [f64],
+    nii: &'a mut Mat<f64>,
+    niz: &'a mut Mat<f64>,
+    gi: &'a mut [f64],
+    u_local: Vec<usize>,
+    theta_z: Vec<usize>,
+}
+
+impl OutputSums<'_> {
+    /// `N_uu = Bvᵀ H Bv`, `N_uv = Bvᵀ H Bu`, `N_vv = Buᵀ H Bu`.
+    fn add_shapes(&mut self, grams: &Grams, maps: &PairMaps, scratch: &mut Scratch) {
+        let h = &grams.h;
+        let m2 = self.u_local.len();
+        let n = m2 / 2;
+        let PairMaps { w, bv, bu, v_z, .. } = maps;
+        let w = *w;
+        let Scratch { yv, yu, .. } = scratch;
         // Y = H Bv and H Bu over the modes' columns.
         for r in 0..n {
             let (h0, h1) = (
@@ -483,7 +562,7 @@ fn add_output_blocks(
                 &h.col_as_slice(2 * r + 1)[..m2],
             );
             for c in 0..2 {
-                for (y, b) in [(&mut yv, &bv), (&mut yu, &bu)] {
+                for (y, b) in [(&mut *yv, bv), (&mut *yu, bu)] {
                     let (a0, a1) = (b[r][0][c], b[r][1][c]);
                     for (out, (x0, x1)) in y
                         .col_as_slice_mut(2 * r + c)
@@ -495,20 +574,51 @@ fn add_output_blocks(
                 }
             }
         }
-        left(&bv, &yv, |row, col, val| {
+        let OutputSums {
+            nzz,
+            nii,
+            niz,
+            u_local,
+            ..
+        } = self;
+        left(bv, yv, |row, col, val| {
             nii[(u_local[row], u_local[col])] += w * val
         });
-        left(&bv, &yu, |row, col, val| {
+        left(bv, yu, |row, col, val| {
             if let Some(c) = v_z[col] {
                 niz[(u_local[row], c)] += w * val;
             }
         });
-        left(&bu, &yu, |row, col, val| {
+        left(bu, yu, |row, col, val| {
             if let (Some(a), Some(c)) = (v_z[row], v_z[col]) {
                 nzz[(a, c)] += w * val;
             }
         });
-        // The residual terms: their columns of H against the shapes, and each other.
+    }
+
+    /// The residual terms: their columns of H against the shapes, and each other, and
+    /// their gradient.
+    fn add_residual_terms(&mut self, grams: &Grams, maps: &PairMaps) {
+        let Grams { h, phi_r, .. } = grams;
+        let m2 = self.u_local.len();
+        let n = m2 / 2;
+        let PairMaps {
+            pair,
+            w,
+            bv,
+            bu,
+            v_z,
+            k_local,
+            ..
+        } = maps;
+        let (pair, w) = (*pair, *w);
+        let OutputSums {
+            nii,
+            niz,
+            gi,
+            u_local,
+            ..
+        } = self;
         for (res, &kl) in k_local.iter().enumerate() {
             let hk = &h.col_as_slice(m2 + res)[..m2];
             for r in 0..n {
@@ -532,7 +642,32 @@ fn add_output_blocks(
             }
             gi[kl] += w * phi_r[(m2 + res, pair)];
         }
-        // The poles: `mp = M P`, then `Pᵀ mp`; `pe = Pᵀ E`, then `pe Bv` and `pe Bu`.
+    }
+
+    /// The poles: `mp = M P`, then `N_θθ = Pᵀ mp`; `pe = Pᵀ E`, then `N_θu = pe Bv`,
+    /// `N_θv = pe Bu` and the residual terms' rows.
+    fn add_poles(&mut self, grams: &Grams, maps: &PairMaps, scratch: &mut Scratch) {
+        let Grams { e, m, .. } = grams;
+        let m2 = self.u_local.len();
+        let n = m2 / 2;
+        let PairMaps {
+            w,
+            bv,
+            bu,
+            z,
+            v_z,
+            k_local,
+            ..
+        } = maps;
+        let w = *w;
+        let Scratch { mp, pe, .. } = scratch;
+        let OutputSums {
+            nzz,
+            niz,
+            u_local,
+            theta_z,
+            ..
+        } = self;
         for k in 0..m2 {
             let zk = z[k / 2];
             let (m0, m1) = (m.col_as_slice(2 * k), m.col_as_slice(2 * k + 1));
@@ -577,7 +712,30 @@ fn add_output_blocks(
                 niz[(kl, theta_z[k])] += w * pc[k];
             }
         }
-        // The gradient.
+    }
+
+    /// The gradient over the shapes, participations and poles.
+    fn add_gradient(&mut self, grams: &Grams, maps: &PairMaps) {
+        let Grams { phi_r, d_r, .. } = grams;
+        let m2 = self.u_local.len();
+        let n = m2 / 2;
+        let PairMaps {
+            pair,
+            w,
+            bv,
+            bu,
+            z,
+            v_z,
+            ..
+        } = maps;
+        let (pair, w) = (*pair, *w);
+        let OutputSums {
+            gz,
+            gi,
+            u_local,
+            theta_z,
+            ..
+        } = self;
         for r in 0..n {
             for a in 0..2 {
                 let row = 2 * r + a;
@@ -1190,7 +1348,7 @@ pub(crate) fn fit(
     let (q, p) = (problem.outputs, problem.inputs);
     let n = theta.len() / 2;
     let n_res = problem.layout.residuals.len();
-    let mut x = start(problem, theta, free, warm)?;
+    let x = start(problem, theta, free, warm)?;
     // Hold each participation's largest entry (the scale between u and v is free).
     let fixed: Vec<usize> = (0..n)
         .map(|r| {
@@ -1204,65 +1362,144 @@ pub(crate) fn fit(
     if ix.free > MAX_PARAMETERS {
         return Ok(None);
     }
-    let y = stacked_data(problem);
-    // The best shapes for the start's participations.
-    let mut phi = basis_at(problem, &x.theta);
-    let mut solved = x.clone();
-    if solve_linear(problem, &mut solved, &ix, &phi, &y, weights) {
-        x = solved;
-    }
-    let log_damping = problem.parameters.log_damping;
-    let dof = problem.observations.checked_sub(ix.free).filter(|&d| d > 0);
-    let (mut current, mut residual) = cost(&x, &ix, &phi, &y, weights);
     // A reciprocal fit's shapes are also its participations: no output owns a
     // parameter, and its normal equations stay dense (756 unknowns on 8 × 8).
     let partition = (!problem.reciprocal).then(|| Partition::new(&ix));
-    let part = partition.as_ref();
-    let mut normal = Normal::new(problem, &x, &ix, part, &phi, &residual, weights);
-    // Levenberg–Marquardt with Nielsen's (1999) update of λ from the gain ratio
-    // ρ = actual / predicted decrease: no oscillation between accepted and rejected
-    // steps.
-    let mut lambda = 1e-3;
-    let mut nu = 2.0;
-    let mut reduced: Option<Reduced> = None;
-    let mut iterations = 0;
-    let mut converged = false;
-    let data_norm2: f64 = (0..y.ncols())
-        .map(|pair| weights[pair] * weights[pair] * y.col(pair).squared_norm_l2())
-        .sum();
-    while iterations < max_iterations {
-        if current <= EXACT_FIT * data_norm2 {
-            converged = true;
-            break;
+    let stage = Stage {
+        problem,
+        ix: &ix,
+        part: partition.as_ref(),
+        y: stacked_data(problem),
+        weights,
+        dof: problem.observations.checked_sub(ix.free).filter(|&d| d > 0),
+    };
+    let mut point = stage.first_point(x);
+    let (iterations, converged) = stage.descend(&mut point, max_iterations, tolerance)?;
+    let noise_variance = stage.dof.map_or(f64::NAN, |d| point.cost / d as f64);
+    let covariance = pole_covariance(&point, n, noise_variance);
+    Ok(Some(Joint {
+        coefficients: coefficients(&point.x, &ix, point.phi.ncols()),
+        theta: point.x.theta,
+        cost: point.cost,
+        covariance,
+        noise_variance,
+        iterations,
+        converged,
+    }))
+}
+
+/// What stays fixed during the rank-one fit: the problem, the parameters' layout and
+/// partition, the stacked data and the pairs' weights.
+struct Stage<'a> {
+    problem: &'a Problem,
+    ix: &'a Indices,
+    part: Option<&'a Partition>,
+    y: Mat<f64>,
+    weights: &'a [f64],
+    /// Observations less free parameters, when positive.
+    dof: Option<usize>,
+}
+
+/// A point of the rank-one fit with its basis, cost, residual and normal equations.
+struct Point<'a> {
+    x: Parameters,
+    phi: Mat<f64>,
+    cost: f64,
+    residual: Mat<f64>,
+    normal: Normal<'a>,
+    /// The shapes eliminated from `normal`, once computed.
+    reduced: Option<Reduced<'a>>,
+}
+
+impl<'a> Stage<'a> {
+    /// The start point: `x` with the best shapes for its participations.
+    fn first_point(&self, mut x: Parameters) -> Point<'a> {
+        let phi = basis_at(self.problem, &x.theta);
+        let mut solved = x.clone();
+        if solve_linear(
+            self.problem,
+            &mut solved,
+            self.ix,
+            &phi,
+            &self.y,
+            self.weights,
+        ) {
+            x = solved;
         }
-        if reduced.is_none() {
-            if let Normal::Blocks(blocks) = &normal {
-                reduced = Reduced::new(blocks);
-            }
+        let (cost, residual) = cost(&x, self.ix, &phi, &self.y, self.weights);
+        let normal = self.normal(&x, &phi, &residual);
+        Point {
+            x,
+            phi,
+            cost,
+            residual,
+            normal,
+            reduced: None,
         }
-        let step = match &reduced {
-            Some(r) => r.step(lambda),
-            None => normal.dense_step(lambda),
+    }
+
+    fn normal(&self, x: &Parameters, phi: &Mat<f64>, residual: &Mat<f64>) -> Normal<'a> {
+        Normal::new(
+            self.problem,
+            x,
+            self.ix,
+            self.part,
+            phi,
+            residual,
+            self.weights,
+        )
+    }
+
+    /// Levenberg–Marquardt from `point` ([`Nielsen`]'s damping); the iterations taken and
+    /// whether it converged.
+    fn descend(
+        &self,
+        point: &mut Point<'a>,
+        max_iterations: usize,
+        tolerance: f64,
+    ) -> Result<(usize, bool)> {
+        let weights = self.weights;
+        let data_norm2: f64 = (0..self.y.ncols())
+            .map(|pair| weights[pair] * weights[pair] * self.y.col(pair).squared_norm_l2())
+            .sum();
+        let mut problem = Descent {
+            stage: self,
+            point,
+            tolerance,
+            data_norm2,
         };
-        let Some(step) = step else {
-            lambda *= 4.0;
-            if lambda > 1e16 {
-                break;
-            }
-            continue;
-        };
-        let (mut trial, factor) = apply(&x, &ix, &step, log_damping);
+        descend(&mut problem, &mut Nielsen::new(), max_iterations)
+    }
+
+    /// The point `step` leads to from `point`, with the shapes that fit its poles and
+    /// participations best, its basis, cost and residual (`None` when not finite); the
+    /// factor the step was shortened by; the linear model's predicted decrease.
+    #[allow(clippy::type_complexity)]
+    fn trial(
+        &self,
+        point: &Point<'a>,
+        step: &[f64],
+    ) -> (Option<(Parameters, Mat<f64>, f64, Mat<f64>)>, f64, f64) {
+        let (mut trial, factor) =
+            apply(&point.x, self.ix, step, self.problem.parameters.log_damping);
         // The linear model's decrease, `2fδᵀg − f²δᵀNδ`.
         let predicted = {
-            let (dg, dnd) = normal.gradient_and_curvature(&step);
+            let (dg, dnd) = point.normal.gradient_and_curvature(step);
             2.0 * factor * dg - factor * factor * dnd
         };
         // The step's poles and participations, with the shapes that fit them best
         // (variable projection: the bilinear product makes the linearised shape step
         // poor far from the optimum).
-        let trial_phi = basis_at(problem, &trial.theta);
+        let trial_phi = basis_at(self.problem, &trial.theta);
         let mut solved = trial.clone();
-        if solve_linear(problem, &mut solved, &ix, &trial_phi, &y, weights) {
+        if solve_linear(
+            self.problem,
+            &mut solved,
+            self.ix,
+            &trial_phi,
+            &self.y,
+            self.weights,
+        ) {
             trial = solved;
         }
         let finite = trial.theta.iter().all(|t| t.is_finite())
@@ -1271,48 +1508,79 @@ pub(crate) fn fit(
                 .iter()
                 .chain(&trial.v)
                 .all(|z| z.re.is_finite() && z.im.is_finite());
-        let evaluated = finite.then(|| cost(&trial, &ix, &trial_phi, &y, weights));
-        match evaluated {
-            Some((next, next_residual)) if next < current => {
-                let decrease = current - next;
-                x = trial;
-                current = next;
-                residual = next_residual;
-                phi = trial_phi;
-                iterations += 1;
+        let evaluated = finite.then(|| {
+            let (c, r) = cost(&trial, self.ix, &trial_phi, &self.y, self.weights);
+            (trial, trial_phi, c, r)
+        });
+        (evaluated, factor, predicted)
+    }
+}
+
+/// The rank-one fit as [`descend`] drives it.
+struct Descent<'s, 'a> {
+    stage: &'s Stage<'a>,
+    point: &'s mut Point<'a>,
+    /// Relative decrease that ends the fit.
+    tolerance: f64,
+    /// The weighted data's squared norm.
+    data_norm2: f64,
+}
+
+impl LeastSquares for Descent<'_, '_> {
+    fn exact(&self) -> bool {
+        self.point.cost <= EXACT_FIT * self.data_norm2
+    }
+
+    fn step(&mut self, lambda: f64) -> Option<Vec<f64>> {
+        let point = &mut *self.point;
+        if point.reduced.is_none() {
+            if let Normal::Blocks(blocks) = &point.normal {
+                point.reduced = Reduced::new(blocks);
+            }
+        }
+        match &point.reduced {
+            Some(r) => r.step(lambda),
+            None => point.normal.dense_step(lambda),
+        }
+    }
+
+    fn attempt(&mut self, step: Vec<f64>, _iteration: usize) -> Result<Trial> {
+        let (trial, factor, predicted) = self.stage.trial(self.point, &step);
+        let point = &mut *self.point;
+        match trial {
+            Some((next, trial_phi, next_cost, next_residual)) if next_cost < point.cost => {
+                let decrease = point.cost - next_cost;
+                point.x = next;
+                point.cost = next_cost;
+                point.residual = next_residual;
+                point.phi = trial_phi;
                 let rho = if predicted > 0.0 {
                     decrease / predicted
                 } else {
                     1.0
                 };
-                lambda = (lambda * (1.0 / 3.0f64).max(1.0 - (2.0 * rho.min(1.0) - 1.0).powi(3)))
-                    .max(1e-15);
-                nu = 2.0;
-                normal = Normal::new(problem, &x, &ix, part, &phi, &residual, weights);
-                reduced = None;
-                let noise_unit = dof.map_or(0.0, |d| current / d as f64);
+                point.normal = self.stage.normal(&point.x, &point.phi, &point.residual);
+                point.reduced = None;
+                let noise_unit = self.stage.dof.map_or(0.0, |d| point.cost / d as f64);
                 // A step shortened by one mode's limit says nothing about convergence.
-                if factor == 1.0
-                    && (decrease <= tolerance * (current + decrease)
-                        || decrease <= STATISTICAL_STOP * noise_unit)
-                {
-                    converged = true;
-                    break;
-                }
+                let converged = factor == 1.0
+                    && (decrease <= self.tolerance * (point.cost + decrease)
+                        || decrease <= STATISTICAL_STOP * noise_unit);
+                Ok(Trial::Lower {
+                    rho,
+                    restart: false,
+                    converged,
+                })
             }
-            _ => {
-                lambda *= nu;
-                nu *= 2.0;
-                if lambda > 1e16 {
-                    converged = true;
-                    break;
-                }
-            }
+            _ => Ok(Trial::Higher),
         }
     }
-    let noise_variance = dof.map_or(f64::NAN, |d| current / d as f64);
-    // The pole block of `N⁻¹`: with the shapes eliminated it is the pole block of
-    // `S⁻¹` (the poles come first among `z`), so only `S` is factorised.
+}
+
+/// `σ̂² (N⁻¹)` over the pole parameters at `point`, when finite. The pole block of `N⁻¹`:
+/// with the shapes eliminated it is the pole block of `S⁻¹` (the poles come first among
+/// `z`), so only `S` is factorised.
+fn pole_covariance(point: &Point<'_>, n: usize, noise_variance: f64) -> Option<Mat<f64>> {
     let covariance = noise_variance.is_finite().then(|| {
         let poles_block = |m: &Mat<f64>| {
             let unit = Mat::from_fn(m.nrows(), 2 * n, |a, b| f64::from(u8::from(a == b)));
@@ -1322,27 +1590,24 @@ pub(crate) fn fit(
             };
             Mat::from_fn(2 * n, 2 * n, |a, b| noise_variance * x[(a, b)])
         };
-        let reduced = reduced.or_else(|| match &normal {
-            Normal::Blocks(blocks) => Reduced::new(blocks),
-            Normal::Dense(..) => None,
-        });
-        match (reduced, &normal) {
+        let fresh;
+        let reduced = match &point.reduced {
+            Some(r) => Some(r),
+            None => {
+                fresh = match &point.normal {
+                    Normal::Blocks(blocks) => Reduced::new(blocks),
+                    Normal::Dense(..) => None,
+                };
+                fresh.as_ref()
+            }
+        };
+        match (reduced, &point.normal) {
             (Some(r), _) => poles_block(&r.s),
             (None, Normal::Dense(n, _)) => poles_block(n),
             (None, Normal::Blocks(b)) => poles_block(&b.dense().0),
         }
     });
-    let covariance = covariance
-        .filter(|c| (0..c.nrows()).all(|a| (0..c.ncols()).all(|b| c[(a, b)].is_finite())));
-    Ok(Some(Joint {
-        coefficients: coefficients(&x, &ix, phi.ncols()),
-        theta: x.theta,
-        cost: current,
-        covariance,
-        noise_variance,
-        iterations,
-        converged,
-    }))
+    covariance.filter(|c| (0..c.nrows()).all(|a| (0..c.ncols()).all(|b| c[(a, b)].is_finite())))
 }
 
 #[cfg(test)]

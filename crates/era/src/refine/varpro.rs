@@ -15,11 +15,47 @@
 //! so an iteration of the 8 × 8, 40-mode, 801-line set costs a QR of a 1602 × 82 matrix
 //! and a few products of that size, not the 102 528 × 80 Jacobian.
 
-use super::fit::{Evaluation, Need, Outcome};
 use super::model::{basis, basis_derivatives, Problem};
 use crate::error::Result;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
+
+/// What an evaluation of the projected functional gives.
+pub(crate) struct Evaluation {
+    /// `‖r‖²`, weighted.
+    pub cost: f64,
+    /// `JᵀJ` over the pole parameters.
+    pub jtj: Mat<f64>,
+    /// `Jᵀr`.
+    pub jtr: Vec<f64>,
+    /// Linear coefficients, `columns × pairs`.
+    pub coefficients: Mat<f64>,
+    /// What a cost-only evaluation of the fast path keeps for the Jacobian at the same
+    /// point ([`Need::JacobianAfter`]).
+    pub kept: Option<Kept>,
+}
+
+/// An evaluation, or the column of the basis that is a combination of the others.
+pub(crate) enum Outcome {
+    Ready(Evaluation),
+    Deficient { column: usize, mode: Option<usize> },
+}
+
+/// What an evaluation must give.
+#[derive(Clone, Copy)]
+pub(crate) enum Need<'a> {
+    /// The cost and the coefficients only (`jtj` and `jtr` empty): a trial step that
+    /// may be rejected.
+    Cost,
+    /// Everything.
+    Jacobian,
+    /// Everything, at the point of this cost-only evaluation: the fast path starts from
+    /// the factorisations it kept, so an accepted trial costs no second QR.
+    JacobianAfter(&'a Evaluation),
+}
+
+/// `evaluate(problem, θ, need)`.
+pub(crate) type Evaluator = fn(&Problem, &[f64], Need<'_>) -> Result<Outcome>;
 
 /// Relative size of `|R_cc|` to the column norm below which a column is taken as a
 /// combination of the others (a pole coalesced with another).
