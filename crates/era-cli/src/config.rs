@@ -3,15 +3,12 @@
 //! read. The core names option fields ([`Naming`]); this module adds the flag names, so
 //! other front ends (Python) can word the same checks their own way.
 
-use crate::args::{
-    CommonArgs, DirectTermArg, IdentifyArgs, RefineFitArgs, StatesArg, SvdArg, TimeDomainArg,
-    WeightingArg,
-};
+use crate::args::{CommonArgs, IdentifyArgs, RefineFitArgs, StatesArg};
 use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
 use era::modal::stabilization::OrderRange;
 use era::params::Naming;
-use era::realize::{DirectTerm, SvdPath};
+use era::pipeline::realize::DirectTerm;
 use era::refine::RefineOptions;
 
 /// How much a verb says on the terminal.
@@ -79,14 +76,8 @@ pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
     } else {
         None
     };
-    r.domain = a.time_domain.map(|d| match d {
-        TimeDomainArg::Discrete => ModelDomain::Discrete,
-        TimeDomainArg::Continuous => ModelDomain::Continuous,
-    });
-    r.direct_term = a.direct_term.map(|d| match d {
-        DirectTermArg::Zero => DirectTerm::Zero,
-        DirectTermArg::Markov0 => DirectTerm::FirstMarkov,
-    });
+    r.domain = a.time_domain;
+    r.direct_term = a.direct_term;
     match a.band.as_deref().map(str::trim) {
         Some(t) if t.eq_ignore_ascii_case("all") => r.coherence_band = Some(false),
         // Parsed and checked against the data by the identification; the route only
@@ -113,10 +104,9 @@ pub fn apply_route(options: &mut EraOptions, route: &Route) {
 
 /// The options ERA runs with on `route` ([`Route::realization_domain`]).
 pub fn era_options(options: &EraOptions, route: &Route) -> EraOptions {
-    EraOptions {
-        domain: route.realization_domain(),
-        ..options.clone()
-    }
+    let mut o = options.clone();
+    o.domain = route.realization_domain();
+    o
 }
 
 /// Options from flags, with the checks clap cannot do (those of the library call are
@@ -130,33 +120,21 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
         // The scan sets its own orders; this is only echoed.
         _ => 0,
     };
-    let opts = EraOptions {
-        states,
-        hankel_factor: a.hankel_factor,
-        integrations: a.integrations,
-        lowpass: a.lowpass_hz.map(|hz| (a.lowpass_order, hz)),
-        zero_lines: a.zero_lines,
-        pad_to: a.pad_to,
-        domain: match a.time_domain {
-            Some(TimeDomainArg::Continuous) => ModelDomain::Continuous,
-            _ => ModelDomain::Discrete,
-        },
-        direct_term: match a.direct_term {
-            Some(DirectTermArg::Markov0) => DirectTerm::FirstMarkov,
-            _ => DirectTerm::Zero,
-        },
-        svd: match a.svd {
-            SvdArg::Dense => SvdPath::Dense,
-            SvdArg::MatrixFree => SvdPath::MatrixFree,
-            SvdArg::Auto => SvdPath::Auto,
-        },
-    };
+    let mut opts = EraOptions::new(states, a.hankel_factor);
+    opts.integrations = a.integrations;
+    opts.lowpass = a.lowpass_hz.map(|hz| (a.lowpass_order, hz));
+    opts.zero_lines = a.zero_lines;
+    opts.pad_to = a.pad_to;
+    opts.domain = a.time_domain.unwrap_or(ModelDomain::Discrete);
+    opts.direct_term = a.direct_term.unwrap_or(DirectTerm::Zero);
+    opts.svd = a.svd;
     // Sizes are checked against their limits here, under the flag's name, before anything
     // is read or allocated (the core checks them again for library users). With
     // --states auto every other parameter is checked as for one state.
-    let checked = EraOptions {
-        states: states.max(usize::from(auto)),
-        ..opts.clone()
+    let checked = {
+        let mut o = opts.clone();
+        o.states = states.max(usize::from(auto));
+        o
     };
     checked.check(Naming::Flag)?;
     use era::limits::SAMPLES;
@@ -237,15 +215,15 @@ pub fn lag_window(
 pub fn refine_options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
     let mut o = RefineOptions::default();
     if let Some(r) = fit.residuals {
-        o.residuals = r.into();
+        o.residuals = r;
     }
     o.reciprocal = fit.reciprocal;
     o.rank_one = !fit.free_residues;
     o.add_missed = !fit.no_added_modes;
-    o.weighting = match fit.weighting {
-        Some(WeightingArg::Uniform) => era::refine::Weighting::Uniform,
-        Some(WeightingArg::PairNoise) | None => era::refine::Weighting::PairNoise,
-    };
+    o.weighting = fit
+        .weighting
+        .clone()
+        .unwrap_or(era::refine::Weighting::PairNoise);
     if let Some(n) = fit.max_iterations {
         if n == 0 {
             return crate::error::usage(

@@ -2,7 +2,7 @@
 //! quantity and layout notes the summaries print. `identify`, `plot`, `refine`, `info`
 //! and `convert` read through here; time histories go through `frf`.
 
-use crate::args::{FrfReadArgs, QuantityArg, UnitsArg};
+use crate::args::{FrfReadArgs, UnitsArg};
 use era::Quantity;
 use era_io::format::{parse_frf_bytes, FrfFormat, ReadOptions};
 
@@ -20,7 +20,7 @@ pub struct InputFrf {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FrfFlags<'a> {
     /// `--quantity`: overrides the file's tag.
-    pub quantity: Option<QuantityArg>,
+    pub quantity: Option<era::Quantity>,
     /// `--outputs`: the split of a MAT `FRF` matrix.
     pub outputs: Option<usize>,
     /// `--units`: override the file's units (the `response_unit` and `force_unit`
@@ -71,7 +71,7 @@ pub fn read_frf_bytes(
         .unwrap_or_else(|| format!(" [{}]", format.name()));
     let note = match quantity {
         Some(q) => {
-            file.frf = file.frf.with_quantity(q.into());
+            file.frf = file.frf.with_quantity(q);
             file.quantity_given = true;
             format!(" (from --quantity){layout}")
         }

@@ -2,7 +2,23 @@
 //! file is read, how FRFs are estimated from time histories, how a refinement fits, and
 //! how figures draw the phase.
 
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
+use era::frf::estimate::{Detrend, Estimator, Window};
+use era::names::{Named, UnknownName};
+use era::refine::{Residuals, Weighting};
+use era::Quantity;
+use std::str::FromStr;
+
+/// The parser of a core enum's words: clap offers the core's names
+/// ([`era::names::Named`]) and reads them with the core's `FromStr`, so the CLI and
+/// Python spell every value alike.
+pub fn named<T>() -> impl TypedValueParser<Value = T>
+where
+    T: Named + FromStr<Err = UnknownName> + Clone + Send + Sync + 'static,
+{
+    PossibleValuesParser::new(T::NAMES).try_map(|word| word.parse::<T>())
+}
 
 /// Flags every verb has.
 #[derive(Debug, Args, Clone)]
@@ -16,23 +32,6 @@ pub struct CommonArgs {
     /// Print nothing but errors (and the JSON with --json).
     #[arg(long, short)]
     pub quiet: bool,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum QuantityArg {
-    Acceleration,
-    Velocity,
-    Displacement,
-}
-
-impl From<QuantityArg> for era::Quantity {
-    fn from(q: QuantityArg) -> Self {
-        match q {
-            QuantityArg::Acceleration => era::Quantity::Acceleration,
-            QuantityArg::Velocity => era::Quantity::Velocity,
-            QuantityArg::Displacement => era::Quantity::Displacement,
-        }
-    }
 }
 
 /// What an FRF file may not say about itself, given on the command line (identify,
@@ -54,8 +53,8 @@ pub struct FrfFactsArgs {
 pub struct FrfReadArgs {
     /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration is
     /// assumed when neither says).
-    #[arg(long, value_enum)]
-    pub quantity: Option<QuantityArg>,
+    #[arg(long, value_parser = named::<Quantity>())]
+    pub quantity: Option<Quantity>,
     /// Outputs (sensors) of a MAT file's FRF matrix, when the file does not say and the
     /// set is not square.
     #[arg(long, value_name = "N")]
@@ -113,18 +112,18 @@ pub struct WelchArgs {
     #[arg(long, default_value_t = 2048)]
     pub frame: usize,
     /// Window of each frame.
-    #[arg(long, value_enum, default_value_t = WindowArg::Hann)]
-    pub window: WindowArg,
+    #[arg(long, value_parser = named::<Window>(), default_value_t = Window::Hann)]
+    pub window: Window,
     /// Overlap of consecutive frames, as a fraction of the frame (0 ≤ overlap < 1).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub overlap: f64,
     /// FRF estimator: h1 (noise on the outputs), h2 (noise on the inputs), hv (total
     /// least squares).
-    #[arg(long, value_enum, default_value_t = EstimatorArg::H1)]
-    pub estimator: EstimatorArg,
+    #[arg(long, value_parser = named::<Estimator>(), default_value_t = Estimator::H1)]
+    pub estimator: Estimator,
     /// Trend removed from each frame before windowing.
-    #[arg(long, value_enum, default_value_t = DetrendArg::Mean)]
-    pub detrend: DetrendArg,
+    #[arg(long, value_parser = named::<Detrend>(), default_value_t = Detrend::Mean)]
+    pub detrend: Detrend,
     /// Keep the lines up to this frequency (the analyzer's span). ERA then sees a
     /// Nyquist frequency of max-hz, as after decimation: use it when the modes lie far
     /// below fs/2.
@@ -143,35 +142,14 @@ pub struct WelchArgs {
     pub dataset: Vec<String>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum WindowArg {
-    Rectangular,
-    Hann,
-    FlatTop,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum EstimatorArg {
-    H1,
-    H2,
-    Hv,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum DetrendArg {
-    None,
-    Mean,
-    Linear,
-}
-
 /// How a refinement fits (docs: README "Refinement").
 #[derive(Debug, Args, Clone)]
 pub struct RefineFitArgs {
     /// Residual terms of the refined model: none (modes only), lower (L/(jω)² in
     /// displacement: modes below the band), upper (a constant in the data's quantity:
     /// modes above the band, or D) or both (the default).
-    #[arg(long, value_enum, value_name = "none|lower|upper|both")]
-    pub residuals: Option<ResidualsArg>,
+    #[arg(long, value_parser = named::<Residuals>(), value_name = "none|lower|upper|both")]
+    pub residuals: Option<Residuals>,
     /// Reciprocity: symmetric residues and residuals (square, collocated sets); with
     /// rank-one residues each is `ψψᵀ`.
     #[arg(long)]
@@ -191,42 +169,8 @@ pub struct RefineFitArgs {
     /// Weights of the refinement's cost: uniform (every pair and line alike) or
     /// pair-noise (the default: each pair by the inverse of its noise variance, estimated
     /// from a first uniform fit's residual).
-    #[arg(long, value_enum, value_name = "uniform|pair-noise")]
-    pub weighting: Option<WeightingArg>,
-}
-
-/// The residual terms of a refined model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ResidualsArg {
-    // Modes only.
-    None,
-    // L/(jω)² in displacement: modes below the band.
-    Lower,
-    // A constant in the data's quantity: modes above the band, or D.
-    Upper,
-    // Both.
-    Both,
-}
-
-impl From<ResidualsArg> for era::refine::Residuals {
-    fn from(r: ResidualsArg) -> Self {
-        match r {
-            ResidualsArg::None => era::refine::Residuals::None,
-            ResidualsArg::Lower => era::refine::Residuals::Lower,
-            ResidualsArg::Upper => era::refine::Residuals::Upper,
-            ResidualsArg::Both => era::refine::Residuals::Both,
-        }
-    }
-}
-
-/// How the refinement weights the pairs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum WeightingArg {
-    // Every pair and line alike.
-    Uniform,
-    // Each pair by the inverse of its noise variance, estimated from a first uniform
-    // fit's residual (maximum likelihood when the pairs' noise levels differ).
-    PairNoise,
+    #[arg(long, value_parser = named::<Weighting>(), value_name = "uniform|pair-noise")]
+    pub weighting: Option<Weighting>,
 }
 
 /// How the figures draw the phase.

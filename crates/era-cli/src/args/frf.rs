@@ -1,6 +1,6 @@
 //! `era frf TIME_FILE...`.
 
-use super::common::{parse_units, CommonArgs, QuantityArg, UnitsArg, WelchArgs};
+use super::common::{named, parse_units, CommonArgs, UnitsArg, WelchArgs};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -20,8 +20,8 @@ pub struct FrfArgs {
     #[command(flatten)]
     pub welch: WelchArgs,
     /// What the outputs measure (the FRFs' quantity).
-    #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
-    pub quantity: QuantityArg,
+    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::Acceleration)]
+    pub quantity: era::Quantity,
     /// Units of the estimated FRFs, RESPONSE,FORCE (e.g. m/s^2,N), written into the FRF
     /// file for identify, plot and the report; time files seldom carry them.
     #[arg(long, value_name = "RESPONSE,FORCE", value_parser = parse_units)]

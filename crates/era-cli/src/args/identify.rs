@@ -1,52 +1,12 @@
 //! `era identify FILE`.
 
-use super::common::{CommonArgs, FrfFactsArgs, PhaseArg, QuantityArg, RefineFitArgs, WelchArgs};
-use clap::{Args, ValueEnum};
+use super::common::{named, CommonArgs, FrfFactsArgs, PhaseArg, RefineFitArgs, WelchArgs};
+use clap::Args;
+use era::identify::route::Preset;
+use era::identify::ModelDomain;
+use era::pipeline::realize::{DirectTerm, SvdPath};
+use era::Quantity;
 use std::path::PathBuf;
-
-/// Which defaults `era identify` starts from (era::identify::route).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PresetArg {
-    // The route for measured FRFs: automatic order, refinement, continuous time, D from
-    // the quantity, the band from the coherence, the Welch window corrected.
-    Measured,
-    // Plain ERA as the thesis runs it: no refinement, discrete time, D = 0, every line,
-    // the FRFs as given.
-    Thesis,
-}
-
-impl From<PresetArg> for era::identify::route::Preset {
-    fn from(p: PresetArg) -> Self {
-        match p {
-            PresetArg::Measured => era::identify::route::Preset::Measured,
-            PresetArg::Thesis => era::identify::route::Preset::Thesis,
-        }
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum TimeDomainArg {
-    Discrete,
-    Continuous,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum DirectTermArg {
-    // D = 0, as in the thesis.
-    Zero,
-    // D = Y_0, the time-zero Markov block.
-    Markov0,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SvdArg {
-    // Form H0 and take its thin SVD (all singular values).
-    Dense,
-    // FFT products and a truncated SVD; H0 is never formed.
-    MatrixFree,
-    // Dense while the Hankel's short side is below 1024, matrix-free beyond.
-    Auto,
-}
 
 /// `--states N` or `--states auto`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -96,8 +56,8 @@ pub struct IdentifyArgs {
     /// continuous time, D from the quantity, the band from the coherence, the Welch window
     /// corrected) or thesis (plain ERA as the thesis runs it: no refinement, discrete
     /// time, D = 0, every line, the FRFs as given). Explicit flags override either.
-    #[arg(long, value_enum, default_value_t = PresetArg::Measured, help_heading = "Route")]
-    pub preset: PresetArg,
+    #[arg(long, value_parser = named::<Preset>(), default_value_t = Preset::default(), help_heading = "Route")]
+    pub preset: Preset,
     /// Model order in states (two per mode), or `auto` (the default): scan --orders,
     /// cluster the stable poles and keep the physical modes.
     #[arg(long, value_name = "N | auto", value_parser = parse_states, help_heading = "Route")]
@@ -133,22 +93,22 @@ pub struct IdentifyArgs {
     pub pad_to: usize,
     /// Model returned. Default: continuous when the measured preset refines, else
     /// discrete (ERA's own).
-    #[arg(long, value_enum, help_heading = "ERA")]
-    pub time_domain: Option<TimeDomainArg>,
+    #[arg(long, value_parser = named::<ModelDomain>(), help_heading = "ERA")]
+    pub time_domain: Option<ModelDomain>,
     /// D of ERA's model: zero or markov0 (Y0, the time-zero Markov block); a refined
     /// model's D is its upper residual. Default: markov0 for accelerance after
     /// --integrations, zero otherwise and with --preset thesis.
-    #[arg(long, value_enum, help_heading = "ERA")]
-    pub direct_term: Option<DirectTermArg>,
+    #[arg(long, value_parser = named::<DirectTerm>(), help_heading = "ERA")]
+    pub direct_term: Option<DirectTerm>,
     /// How the Hankel SVD is computed: dense (H0 formed, every singular value),
     /// matrix-free (FFT products and a truncated SVD) or auto (dense while the Hankel's
     /// short side is below 1024).
-    #[arg(long, value_enum, default_value_t = SvdArg::Auto, help_heading = "ERA")]
-    pub svd: SvdArg,
+    #[arg(long, value_parser = named::<SvdPath>(), default_value_t = SvdPath::default(), help_heading = "ERA")]
+    pub svd: SvdPath,
     /// Quantity of the FRFs; overrides the file's "# quantity:" line (acceleration when
     /// neither says).
-    #[arg(long, value_enum, help_heading = "Reading the file")]
-    pub quantity: Option<QuantityArg>,
+    #[arg(long, value_parser = named::<Quantity>(), help_heading = "Reading the file")]
+    pub quantity: Option<Quantity>,
     /// Outputs of a MAT file's FRF matrix, when the file does not say and the set is not
     /// square; with --from-time, the output channels (as era frf --outputs).
     #[arg(long, value_name = "N | CHANNELS", help_heading = "Reading the file")]

@@ -1,6 +1,6 @@
 //! `era simulate truth-model | modal | experiment | shaker`.
 
-use super::common::{CommonArgs, QuantityArg};
+use super::common::{named, CommonArgs};
 use super::experiment::ExperimentArgs;
 use clap::{Args, Subcommand, ValueEnum};
 use std::path::PathBuf;
@@ -89,8 +89,8 @@ pub struct ShakerArgs {
     #[arg(long, default_value_t = 0.02, allow_negative_numbers = true)]
     pub pulse_width: f64,
     /// What the outputs measure.
-    #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
-    pub quantity: QuantityArg,
+    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::Acceleration)]
+    pub quantity: era::Quantity,
     /// Time-history CSV to write (time_s, force1.., acc1..); the truth goes to
     /// <name>.truth.json beside it.
     #[arg(long, value_name = "FILE")]
@@ -147,8 +147,8 @@ pub struct ModalArgs {
     #[arg(long, default_value_t = 0.025, allow_negative_numbers = true)]
     pub df: f64,
     /// What the FRFs measure per unit force.
-    #[arg(long, value_enum, default_value_t = QuantityArg::Acceleration)]
-    pub quantity: QuantityArg,
+    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::Acceleration)]
+    pub quantity: era::Quantity,
     /// Input shapes equal output shapes (square, reciprocal set like the DTA's).
     #[arg(long)]
     pub collocated: bool,

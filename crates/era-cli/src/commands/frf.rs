@@ -1,12 +1,12 @@
 //! `era frf`: FRFs and coherence from time histories, and the same step for
 //! `era identify --from-time`.
 
-use crate::args::{DetrendArg, EstimatorArg, FrfArgs, QuantityArg, WelchArgs, WindowArg};
+use crate::args::{FrfArgs, WelchArgs};
 use crate::config::Settings;
 use crate::input::{shape_line, InputFrf};
 use crate::output::report::{finish_output, Human};
 use anyhow::Context as _;
-use era::frf::estimate::{self, Detrend, Estimator, FrfEstimate, WelchOptions, Window};
+use era::frf::estimate::{self, Estimator, FrfEstimate, WelchOptions};
 use era_io::csv::FrfFile;
 use era_io::format::FrfFormat;
 use era_io::time::{parse_channels, read_time_file, TimeHistory, TimeSelection};
@@ -48,30 +48,6 @@ pub struct EstimateFacts {
     pub averages: usize,
 }
 
-fn window(w: WindowArg) -> Window {
-    match w {
-        WindowArg::Rectangular => Window::Rectangular,
-        WindowArg::Hann => Window::Hann,
-        WindowArg::FlatTop => Window::FlatTop,
-    }
-}
-
-fn estimator(e: EstimatorArg) -> Estimator {
-    match e {
-        EstimatorArg::H1 => Estimator::H1,
-        EstimatorArg::H2 => Estimator::H2,
-        EstimatorArg::Hv => Estimator::Hv,
-    }
-}
-
-fn detrend(d: DetrendArg) -> Detrend {
-    match d {
-        DetrendArg::None => Detrend::None,
-        DetrendArg::Mean => Detrend::Mean,
-        DetrendArg::Linear => Detrend::Linear,
-    }
-}
-
 /// UFF entity names are 10 characters wide.
 fn entity(label: &str) -> String {
     let cleaned: String = label
@@ -108,13 +84,11 @@ struct Records {
 
 /// The Welch settings of the flags at `rate` samples per second.
 fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
-    WelchOptions {
-        sample_rate_hz: rate,
-        frame: welch.frame,
-        overlap: welch.overlap,
-        window: window(welch.window),
-        detrend: detrend(welch.detrend),
-    }
+    let mut o = WelchOptions::new(rate, welch.frame);
+    o.overlap = welch.overlap;
+    o.window = welch.window;
+    o.detrend = welch.detrend;
+    o
 }
 
 /// The sample rate of `history`: `--sample-rate` or the file's, and where it came from.
@@ -231,7 +205,7 @@ pub fn estimate_from_time(
     inputs: &str,
     outputs: &str,
     welch: &WelchArgs,
-    quantity: QuantityArg,
+    quantity: era::Quantity,
     settings: &Settings,
 ) -> anyhow::Result<FromTime> {
     if let Some(r) = welch.sample_rate {
@@ -241,7 +215,7 @@ pub fn estimate_from_time(
             ));
         }
     }
-    let est = estimator(welch.estimator);
+    let est = welch.estimator;
     let spinner = crate::output::progress::spinner(settings);
     let records = read_records(paths, inputs, outputs, welch, est, &spinner)?;
     let mut estimate_s = records.estimate_s;
@@ -254,7 +228,7 @@ pub fn estimate_from_time(
     let clock = Instant::now();
     let pooled = estimate::Spectra::pool(&records.spectra)
         .with_context(|| "averaging the records".to_string())?;
-    let found = estimate::estimate_from_spectra(pooled, est, quantity.into());
+    let found = estimate::estimate_from_spectra(pooled, est, quantity);
     spinner.finish_and_clear();
     let mut found = found
         .map_err(|e| describe_estimate_error(e, &first.history, &first.inputs, &first.outputs))

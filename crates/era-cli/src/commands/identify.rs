@@ -3,7 +3,7 @@
 //! from time histories by [`crate::commands::frf`]), and the outputs are written by
 //! [`crate::output`].
 
-use crate::args::{IdentifyArgs, QuantityArg};
+use crate::args::IdentifyArgs;
 use crate::config::Settings;
 use crate::config::{apply_route, era_options, options, route_request, scan_orders};
 use crate::input::InputFrf;
@@ -71,10 +71,11 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let fit = fit_lines(a, frf, source.coherence.as_ref(), &route, &human)?;
     let mut refine_options = refine_options;
     refine_options.band = fit.lines;
-    let scan_options = ScanOptions {
-        orders: scan_orders(a)?,
-        band_hz: fit.band_hz,
-        ..ScanOptions::default()
+    let scan_options = {
+        let mut o = ScanOptions::default();
+        o.orders = scan_orders(a)?;
+        o.band_hz = fit.band_hz;
+        o
     };
     let era_opts = era_options(&opts, &route);
     let mut found = realize(a, frf, &era_opts, &scan_options, auto, &settings)?;
@@ -239,7 +240,7 @@ fn read_source(
     let Some(outputs) = a.outputs.as_deref() else {
         return crate::error::usage("--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)");
     };
-    let quantity = a.quantity.unwrap_or(QuantityArg::Acceleration);
+    let quantity = a.quantity.unwrap_or(era::Quantity::Acceleration);
     let mut found = crate::commands::frf::estimate_from_time(
         std::slice::from_ref(&a.file),
         inputs,
@@ -531,7 +532,7 @@ fn frame_check(
             a.inputs.as_deref().unwrap_or_default(),
             a.outputs.as_deref().unwrap_or_default(),
             &welch,
-            a.quantity.unwrap_or(QuantityArg::Acceleration),
+            a.quantity.unwrap_or(era::Quantity::Acceleration),
             &quiet,
         ) else {
             tried.push(format!("{other} samples give no estimate"));

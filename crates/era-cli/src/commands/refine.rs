@@ -229,11 +229,12 @@ fn start(
     frf: &era::FrfData,
     channels: Option<&era_io::uff::ChannelTable>,
 ) -> anyhow::Result<Identification> {
-    let options = EraOptions {
-        integrations: count(model, "integrations"),
-        zero_lines: count(model, "zero_lines"),
-        pad_to: count(model, "pad_to"),
-        ..EraOptions::new(model.states.max(1), 1)
+    let options = {
+        let mut o = EraOptions::new(model.states.max(1), 1);
+        o.integrations = count(model, "integrations");
+        o.zero_lines = count(model, "zero_lines");
+        o.pad_to = count(model, "pad_to");
+        o
     };
     let state_space = model
         .state_space()
