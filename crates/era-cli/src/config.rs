@@ -64,7 +64,7 @@ impl From<&CommonArgs> for Settings {
 /// The route the flags ask for: the preset, and every choice given explicitly
 /// (era::identify::route resolves the rest once the data's quantity is known).
 pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
-    let mut r = RouteRequest::new(a.preset.into());
+    let mut r = RouteRequest::new(a.preset);
     r.states = match a.states {
         Some(StatesArg::Fixed(n)) => Some(n),
         Some(StatesArg::Auto) | None => None,

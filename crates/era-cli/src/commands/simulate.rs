@@ -119,7 +119,7 @@ fn modal(a: &ModalArgs) -> anyhow::Result<()> {
     let spec = request.spec;
     let clock = Instant::now();
     let structure = ModalStructure::random(&spec)?;
-    let quantity: Quantity = a.quantity.into();
+    let quantity: Quantity = a.quantity;
     let mut frf = structure.frf(a.lines, a.df, quantity)?;
     if a.sim.noise > 0.0 {
         frf = add_noise(&frf, a.sim.noise, a.sim.seed)?;
@@ -275,7 +275,7 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
         collocated: false,
         seed: a.seed,
     };
-    let quantity: Quantity = a.quantity.into();
+    let quantity: Quantity = a.quantity;
     let mut test = ShakerTest::new(spec, a.sample_rate, a.duration);
     test.excitation = excitation;
     test.quantity = quantity;
