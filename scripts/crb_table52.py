@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Cramér–Rao bound of the Table 5.2 frequencies with 15 % noise (issue 14).
 
-The thesis's truth model (docs/design.md §2) is discretised by zero-order hold at
+The thesis's truth model (docs/src/design.md §2) is discretised by zero-order hold at
 25 600 Hz and its 3 × 3 displacement FRFs taken at 1024 lines above 0 Hz, as
 `era::sim::truth_model_frf`. `add_noise` gives each pair complex Gaussian noise with an
 RMS of 15 % of the pair's RMS: variance sigma_k**2 = (0.15 rms_k)**2, half of it in each of

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The DaISy steel subframe walkthrough (docs/walkthroughs.md): 2 shaker forces and 28
+# The DaISy steel subframe walkthrough (docs/src/walkthroughs.md): 2 shaker forces and 28
 # accelerations, 1024 Hz, 8523 samples -> 28 x 2 H1 FRFs and coherence -> ERA models at
 # several orders and two frame lengths, with the stability check.
 # Usage: scripts/daisy_walkthrough.sh [OUT_DIR]   (default TARGET/walkthrough/daisy, TARGET

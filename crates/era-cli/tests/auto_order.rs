@@ -1,4 +1,4 @@
-//! `era identify --states auto` and the stabilization diagram (docs/design.md §10), on
+//! `era identify --states auto` and the stabilization diagram (docs/src/design.md §10), on
 //! DTA-like sets the tuning never saw (seeds 11 and 12), on the real DaISy subframe, and
 //! on bad input.
 

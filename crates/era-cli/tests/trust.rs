@@ -62,7 +62,7 @@ fn shaker_test(dir: &Path, seed: u64) -> (std::path::PathBuf, Vec<(f64, f64)>) {
 /// correction, the noise test and the satellite rule, every case had 3–6 spurious
 /// physical modes and damping 10–20 % off. The target is no spurious mode at
 /// all; today a weak pole beside the lowest, most lightly damped mode still passes in
-/// some cases (docs/trust.md), so this asserts what holds: at most 2 in a case and 4
+/// some cases (docs/src/trust.md), so this asserts what holds: at most 2 in a case and 4
 /// over the nine.
 #[test]
 fn a_simulated_shaker_test_gives_its_modes_and_few_spurious_ones_at_every_frame() {

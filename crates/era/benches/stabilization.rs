@@ -1,4 +1,4 @@
-//! The cost of a stabilization diagram (docs/design.md §10) against one identification at
+//! The cost of a stabilization diagram (docs/src/design.md §10) against one identification at
 //! its largest order, at the thesis's DTA size: 8×8 continuous-time FRFs with 5 % noise,
 //! 40 modes, 801 lines, thesis preprocessing (lh 5, ni 1, nz 3, ndpts 1024). The scan
 //! covers 40 orders, 4..160:4, from one factorization of the H0 of 160 states; the

@@ -1,4 +1,4 @@
-//! How `--states auto` does on DTA-like sets (docs/design.md §10): for each seed and noise
+//! How `--states auto` does on DTA-like sets (docs/src/design.md §10): for each seed and noise
 //! level, the modes found within 0.5 % of the truth and the spurious modes marked
 //! physical.
 //!

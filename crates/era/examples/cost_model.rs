@@ -1,4 +1,4 @@
-//! The cost model of the matrix-free ERA core (docs/design.md §7): wall time against the
+//! The cost model of the matrix-free ERA core (docs/src/design.md §7): wall time against the
 //! Hankel's size `m` (block rows = block columns), the outputs `q`, the inputs `p` and the
 //! order `n`, one varied at a time around the thesis case, with the fitted exponent of
 //! each, and the ratio of the time to its floor.

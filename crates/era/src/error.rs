@@ -145,7 +145,7 @@ pub enum EraError {
         /// Lines supplied.
         lines: usize,
     },
-    /// The first line is not 0 Hz (docs/design.md §1: the pipeline needs `f_0 = 0`).
+    /// The first line is not 0 Hz (docs/src/design.md §1: the pipeline needs `f_0 = 0`).
     #[error("frequencies must start at 0 Hz, the first line is {first_hz} Hz")]
     FirstLineNotZero {
         /// The first frequency, Hz.

@@ -1,4 +1,4 @@
-//! Frequency response data: the input of the pipeline (docs/design.md §1 and §4).
+//! Frequency response data: the input of the pipeline (docs/src/design.md §1 and §4).
 
 use crate::error::{EraError, Result};
 use num_complex::Complex64;
@@ -46,7 +46,7 @@ impl std::fmt::Display for Quantity {
 /// Measured (or simulated) FRFs `G[i][j](f_k)` of a structure with `q` outputs and `p`
 /// inputs, at uniformly spaced lines `f_k = k·Δf` starting at 0 Hz.
 ///
-/// Public axis order is `[output][input][line]` (docs/design.md §4); the values are stored in
+/// Public axis order is `[output][input][line]` (docs/src/design.md §4); the values are stored in
 /// exactly that order, so [`FrfData::pair`] is one contiguous slice per output/input
 /// pair, which is what the FFT of the next stage wants.
 ///
@@ -270,7 +270,7 @@ impl FrfData {
     }
 }
 
-/// Checks that lines start at 0 Hz and are uniform (docs/design.md §1).
+/// Checks that lines start at 0 Hz and are uniform (docs/src/design.md §1).
 pub(crate) fn validate_frequencies(frequency_hz: &[f64]) -> Result<()> {
     let lines = frequency_hz.len();
     for (line, f) in frequency_hz.iter().enumerate() {

@@ -80,7 +80,7 @@ pub struct Identification {
     /// leading lines kept): the data a refinement fits.
     pub processed: FrfData,
     /// `processed` with its leading lines zeroed: what the fit compared and what every
-    /// plot overlays (docs/design.md §1.10). Built here once, for every consumer.
+    /// plot overlays (docs/src/design.md §1.10). Built here once, for every consumer.
     pub measured: FrfData,
     /// First line of `measured` in the fit (the zeroed lines, and the 0 Hz line of
     /// integrated data, are left out).

@@ -1,4 +1,4 @@
-//! The whole pipeline of docs/design.md §1 (the thesis's `frffilt`): FRFs in, a model, its
+//! The whole pipeline of docs/src/design.md §1 (the thesis's `frffilt`): FRFs in, a model, its
 //! singular values, modes and fit out.
 
 use crate::error::{EraError, Result};
@@ -42,7 +42,7 @@ pub enum ModelDomain {
     Continuous,
 }
 
-/// Every parameter of the pipeline (docs/design.md §1 table).
+/// Every parameter of the pipeline (docs/src/design.md §1 table).
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct EraOptions {
@@ -269,7 +269,7 @@ enum Path {
     Naive,
 }
 
-/// Runs docs/design.md §1 on `frf`.
+/// Runs docs/src/design.md §1 on `frf`.
 ///
 /// # Errors
 /// [`EraError::AllZero`] when there is nothing to identify, and every error of the
@@ -1044,7 +1044,7 @@ pub fn identify_auto(
     Ok(found)
 }
 
-/// Step 5 of the automatic choice (docs/design.md §10): each physical cluster's mode
+/// Step 5 of the automatic choice (docs/src/design.md §10): each physical cluster's mode
 /// judged against the noise of the data. The representatives' poles are fitted to the
 /// processed FRFs over the band, with free residues and residual terms (a linear least
 /// squares, [`crate::refine`] with no iteration), in the domain that fits better (a
@@ -1148,11 +1148,11 @@ fn judge_significance(
 }
 
 /// A mode this close (relative frequency) to a stronger one may be its satellite
-/// (step 6 of the automatic choice, docs/trust.md).
+/// (step 6 of the automatic choice, docs/src/trust.md).
 pub(crate) const SATELLITE_DISTANCE: f64 = 0.05;
 
 /// A satellite's norm over the band is below this fraction of its host's
-/// (step 6 of the automatic choice, docs/trust.md). In the shaker study (docs/trust.md) the satellites were at
+/// (step 6 of the automatic choice, docs/src/trust.md). In the shaker study (docs/src/trust.md) the satellites were at
 /// 2–23 %; the weaker partners of true close pairs passed by their consistency.
 pub(crate) const SATELLITE_SHARE: f64 = 0.25;
 

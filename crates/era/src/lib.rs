@@ -3,7 +3,7 @@
 //! Measured frequency response functions (FRFs) in, a state-space model `(A, B, C, D)`,
 //! its Hankel singular values, modal parameters and fit out. The pipeline restates the
 //! thesis's `frffilt` (Woods 1994, §III.2 and Appendix J; Juang & Pappa 1985), as
-//! docs/design.md §1 lists it:
+//! docs/src/design.md §1 lists it:
 //!
 //! The house has one seam: a **source** turns its data into a [`sources::MarkovSequence`],
 //! and the **pipeline** after it is shared.

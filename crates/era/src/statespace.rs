@@ -1,5 +1,5 @@
 //! State-space models `x' = A x + B u`, `y = C x + D u`, in discrete or continuous time,
-//! and the zero-order-hold conversions between them (docs/design.md §1.10).
+//! and the zero-order-hold conversions between them (docs/src/design.md §1.10).
 //!
 //! `c2d` uses the matrix exponential of the augmented matrix `[[A, B], [0, 0]]·Ts`.
 //! `faer` has no matrix exponential, so [`expm`] is written here: Higham's (2005)
@@ -118,7 +118,7 @@ impl StateSpace {
         ))
     }
 
-    /// Zero-order-hold inverse (docs/design.md §1.10): `Ac = log(Ad)/Ts` and
+    /// Zero-order-hold inverse (docs/src/design.md §1.10): `Ac = log(Ad)/Ts` and
     /// `Bc = Ac (Ad − I)⁻¹ Bd`, both evaluated as `V f(Λ) V⁻¹` on the eigendecomposition
     /// `Ad = V Λ V⁻¹` with `f(λ) = ln λ / Ts` and `f(λ) = ln λ / (Ts (λ − 1))` (→ `1/Ts`
     /// at `λ = 1`). The result is converted back with [`StateSpace::c2d`] and must

@@ -5,7 +5,7 @@
 //! Three cases are common enough, and cheap enough to detect, to be checked on every
 //! run:
 //!
-//! - **A Hankel too short for the lowest mode.** The Hankel matrices of docs/design.md
+//! - **A Hankel too short for the lowest mode.** The Hankel matrices of docs/src/design.md
 //!   §1.7 see the impulse response over the Markov samples `Y_1 … Y_{r+c}` (`r` block
 //!   rows, `c` block columns), a window of `T_H = (r + c)·Ts` seconds. A mode whose
 //!   period `1/f` is longer than `T_H` is seen over less than one cycle: its frequency and
@@ -247,7 +247,7 @@ impl Identification {
     }
 
     /// Every warning of the run, worded for `naming`'s front end: the realization's
-    /// (docs/design.md §1.8), then the suspect results.
+    /// (docs/src/design.md §1.8), then the suspect results.
     pub fn warnings(&self, naming: Naming) -> Vec<String> {
         self.realization
             .warnings

@@ -142,7 +142,7 @@ pub struct WelchArgs {
     pub dataset: Vec<String>,
 }
 
-/// How a refinement fits (docs: README "Refinement").
+/// How a refinement fits (docs/src/refinement.md).
 #[derive(Debug, Args, Clone)]
 pub struct RefineFitArgs {
     /// Residual terms of the refined model: none (modes only), lower (L/(jω)² in

@@ -1,5 +1,5 @@
 //! Command-line arguments (clap), one file per verb and the shared flag groups in
-//! [`common`]. Nothing here reads, computes or writes: flags follow docs/design.md §1's
+//! [`common`]. Nothing here reads, computes or writes: flags follow docs/src/design.md §1's
 //! table, and [`crate::config`] turns them into typed settings.
 
 mod common;

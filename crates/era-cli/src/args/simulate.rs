@@ -31,7 +31,7 @@ pub struct SimulateCommon {
 pub enum SimulateModel {
     /// The thesis's 4-mass truth model: 3×3 displacement FRFs, 1025 lines 0…12.8 kHz.
     TruthModel(SimulateCommon),
-    /// A seeded lightly damped structure with real normal modes (docs/design.md §3).
+    /// A seeded lightly damped structure with real normal modes (docs/src/design.md §3).
     Modal(ModalArgs),
     /// The thesis's FRF test (§4.5) in the time domain: a structure, reaction-mass
     /// actuators with Coulomb friction and end stops, the 200 Hz compensator, random

@@ -1,4 +1,4 @@
-//! `era identify FILE`: the pipeline of docs/design.md §1 on an FRF file. Flags become
+//! `era identify FILE`: the pipeline of docs/src/design.md §1 on an FRF file. Flags become
 //! options in [`crate::config`], the file is read by [`crate::input`] (or estimated
 //! from time histories by [`crate::commands::frf`]), and the outputs are written by
 //! [`crate::output`].

@@ -50,7 +50,7 @@ pub fn print_json(value: &impl serde::Serialize) -> anyhow::Result<()> {
 }
 
 /// The modal table: frequency, damping, the indicators and whether to trust each mode
-/// (docs/design.md §10). Suspect modes are marked `?` with the reason below the table;
+/// (docs/src/design.md §10). Suspect modes are marked `?` with the reason below the table;
 /// negative damping is always called out.
 pub fn mode_table(found: &Identification) -> String {
     let mut s = String::new();

@@ -1,5 +1,5 @@
 //! Quality indicators of identified modes: which poles describe the structure and which
-//! only fit noise or truncation error (docs/design.md §10).
+//! only fit noise or truncation error (docs/src/design.md §10).
 //!
 //! Each indicator is a pure function of the mode and, for EMAC, of what the Hankel
 //! matrix said about it. None depends on the state basis: a similarity transform

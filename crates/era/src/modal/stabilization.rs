@@ -1,4 +1,4 @@
-//! Stabilization diagram and automatic choice of the physical modes (docs/design.md §10).
+//! Stabilization diagram and automatic choice of the physical modes (docs/src/design.md §10).
 //!
 //! **The scan.** One [`Factorization`] of `H0` at the largest order gives a balanced
 //! realization at every order of an [`OrderRange`] for the price of an `n × n` slice

@@ -1,4 +1,4 @@
-//! Zero-phase Butterworth low-pass on the impulse responses (docs/design.md §1.6; thesis
+//! Zero-phase Butterworth low-pass on the impulse responses (docs/src/design.md §1.6; thesis
 //! `butter` + `filtfilt` in `frffilt`).
 //!
 //! The design and the forward–backward filtering come from `sci-rs`, a port of

@@ -1,4 +1,4 @@
-//! The model's frequency response and its fit to the measurement (docs/design.md §1.12).
+//! The model's frequency response and its fit to the measurement (docs/src/design.md §1.12).
 //!
 //! `G(f) = C (zI − A)⁻¹ B + D` with `z = exp(j2πf·Ts)` for a discrete model, or
 //! `C (j2πf I − A)⁻¹ B + D` for a continuous one.
@@ -445,7 +445,7 @@ pub struct PairFit {
     pub rms_log_magnitude_db: f64,
 }
 
-/// Per-pair fit and its means (docs/design.md §1.12).
+/// Per-pair fit and its means (docs/src/design.md §1.12).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FitReport {
     /// One entry per pair, `[output][input]` order.

@@ -1,4 +1,4 @@
-//! Block Hankel matrices of Markov parameters (docs/design.md §1.7; thesis `mimohank`,
+//! Block Hankel matrices of Markov parameters (docs/src/design.md §1.7; thesis `mimohank`,
 //! Appendix J.1.2).
 //!
 //! A general block Hankel of `r` block rows, `c` block columns starting at sample `s` is
@@ -97,7 +97,7 @@ pub fn build_naive(markov: &MarkovSequence, shape: HankelShape) -> Result<Mat<f6
     Ok(h)
 }
 
-/// The thesis's pair of Hankel shapes (docs/design.md §1.7).
+/// The thesis's pair of Hankel shapes (docs/src/design.md §1.7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ThesisHankel {
     /// Markov samples taken, `M = ns·lh` rounded down to a multiple of 4.

@@ -1,4 +1,4 @@
-//! Block-Hankel products without forming the Hankel matrix (docs/design.md §7).
+//! Block-Hankel products without forming the Hankel matrix (docs/src/design.md §7).
 //!
 //! With `H[r·q+i][c·p+j] = Y_(s+r+c)[i][j]` (`R` block rows, `C` block columns), one
 //! output block of `H x` is a sum of correlations of the Markov sequences with the input

@@ -1,5 +1,5 @@
 //! The steps of the thesis's `frffilt` after the Markov sequence, in reading order
-//! (docs/design.md §1):
+//! (docs/src/design.md §1):
 //!
 //! 1. [`filter`]: optional zero-phase Butterworth low-pass on the impulse responses.
 //! 2. [`hankel`]: `H0[r][c] = Y_(1+r+c)`, `H1[r][c] = Y_(2+r+c)`; [`hankel_op`] applies

@@ -1,4 +1,4 @@
-//! Modal parameters of a state-space model (docs/design.md §1.11).
+//! Modal parameters of a state-space model (docs/src/design.md §1.11).
 //!
 //! With `A = V Λ V⁻¹`, each eigenvalue `λ` maps to a continuous pole `s = ln(λ)/Ts`
 //! (discrete model) or `s = λ` (continuous). A complex pair is one mode of natural
@@ -135,7 +135,7 @@ pub fn continuous_pole(eigenvalue: Complex64, domain: TimeDomain) -> Complex64 {
     }
 }
 
-/// Modal parameters of a model (docs/design.md §1.11).
+/// Modal parameters of a model (docs/src/design.md §1.11).
 ///
 /// # Errors
 /// [`crate::EraError::Numerical`] when the eigen solver fails.

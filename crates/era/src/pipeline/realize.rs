@@ -1,4 +1,4 @@
-//! Realization by singular value decomposition (docs/design.md §1.8–1.9; thesis `mimoera`,
+//! Realization by singular value decomposition (docs/src/design.md §1.8–1.9; thesis `mimoera`,
 //! Appendix J.1.3; Juang & Pappa, 1985).
 //!
 //! With `H0 = U S Vᵀ` and the `n` largest singular values kept, the balanced realization
@@ -305,7 +305,7 @@ fn direct_term(markov: &MarkovSequence, which: DirectTerm) -> Mat<f64> {
     }
 }
 
-/// ERA on a Markov sequence with samples `sample_time_s` apart (docs/design.md §1.7–1.9).
+/// ERA on a Markov sequence with samples `sample_time_s` apart (docs/src/design.md §1.7–1.9).
 ///
 /// # Errors
 /// [`EraError::InvalidParameter`], [`EraError::NotEnoughMarkovSamples`],
@@ -590,7 +590,7 @@ impl FactorOptions {
 }
 
 /// The SVD of `H0`, kept so that a balanced realization of any order up to
-/// [`Factorization::max_states`] costs only small products (docs/design.md §1.9).
+/// [`Factorization::max_states`] costs only small products (docs/src/design.md §1.9).
 ///
 /// With `H0 = U S Vᵀ`, the realization at order `n` uses `U_n`, `S_n`, `V_n` — the leading
 /// `n` columns — and `U_nᵀ H1 V_n`, the leading `n × n` block of `U_Nᵀ H1 V_N` for any
@@ -800,7 +800,7 @@ impl Factorization {
         self.seconds
     }
 
-    /// The balanced realization at `states` (docs/design.md §1.9) from the kept factors.
+    /// The balanced realization at `states` (docs/src/design.md §1.9) from the kept factors.
     ///
     /// # Errors
     /// [`EraError::InvalidParameter`] for 0 states or more than [`Self::max_states`];

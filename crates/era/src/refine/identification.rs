@@ -34,7 +34,7 @@ pub const MAX_FREQUENCY_SPREAD: f64 = 0.15;
 ///   [`crate::refine`]), so that either way the model returned *is* the fitted one.
 /// - **Data**: a continuous model is fitted to `frf` *as measured* (the data `found`
 ///   was identified from), and realised in the quantity of the processed data: the
-///   integrations of docs/design.md §1.1 help ERA's Markov parameters decay, but they
+///   integrations of docs/src/design.md §1.1 help ERA's Markov parameters decay, but they
 ///   colour the noise (its variance grows as `1/ω²` per integration), so a fit of the
 ///   integrated data would weight the noisy low lines most. The `z`-domain model has
 ///   only the quantity it was fitted in, so a discrete model is fitted to the processed
@@ -49,7 +49,7 @@ pub const MAX_FREQUENCY_SPREAD: f64 = 0.15;
 ///   a largest entry of 1), with the standard deviations of frequency and damping. The
 ///   lower residual's integrator states are the model's real poles at `s = 0`.
 /// - **Judgement**: a mode is physical when it passes the hard criteria of
-///   docs/design.md §10 with its refined frequency and damping, its share is at least
+///   docs/src/design.md §10 with its refined frequency and damping, its share is at least
 ///   the minimum and at most [`MAX_REFINED_SHARE`], its significance is at least
 ///   [`crate::refine::Refinement::significance_minimum`] (not judged when the weights
 ///   vary by line), its frequency's standard deviation is at most

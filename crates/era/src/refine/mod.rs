@@ -74,7 +74,7 @@
 //! is. The costs reported are of the second pass's weights; `fit_before` is the
 //! unweighted fit at the start poles, as always. On the truth model with 15 % noise this
 //! lowers the median frequency error of every mode against the uniform fit (docs in the
-//! README, "Refinement").
+//! docs/src/refinement.md).
 //!
 //! A mode is dropped, and the reason recorded in [`Refinement::dropped`], when its
 //! share of the band's FRF norm falls below [`MIN_CONTRIBUTION`], when its pole
@@ -145,7 +145,7 @@
 //! # Sampled data: the z-domain model
 //!
 //! FRFs computed from a zero-order-hold discrete model (the truth model's,
-//! docs/design.md §2) are not those of any continuous pole–residue model: the hold
+//! docs/src/design.md §2) are not those of any continuous pole–residue model: the hold
 //! delays and folds them, and a continuous fit is biased (by up to about 100 Hz in a
 //! truth-model frequency with 15 % noise, where ERA's error is about 10 Hz). With [`RefineOptions::sample_time_s`] the model
 //! is the hold's image instead,

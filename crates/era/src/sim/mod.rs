@@ -1,4 +1,4 @@
-//! Simulators: the thesis's truth model (docs/design.md §2, thesis §4.2 and Table 5.2),
+//! Simulators: the thesis's truth model (docs/src/design.md §2, thesis §4.2 and Table 5.2),
 //! seeded synthetic lightly damped structures (§3), and FRF measurement noise.
 //!
 //! All random numbers come from [`Minstd`], the Park–Miller generator with Box–Muller
@@ -124,7 +124,7 @@ impl ModalRequest {
 }
 
 /// Adds complex Gaussian noise to every FRF: the noise on each pair has an RMS of exactly
-/// `fraction` times that pair's RMS magnitude (docs/design.md §2; thesis "15 % noise").
+/// `fraction` times that pair's RMS magnitude (docs/src/design.md §2; thesis "15 % noise").
 ///
 /// Draw order, for bit-for-bit agreement with the peer's `addnoise.m`: pairs input-major
 /// (input 1: outputs 1…q, then input 2, …), and within a pair every line in order.
@@ -178,7 +178,7 @@ pub const TABLE_5_2_ERA_NOISY: [(f64, f64); 4] = [
     (9457.83, 6.03),
 ];
 
-/// Sample rate of the truth-model FRFs, Hz (docs/design.md §2).
+/// Sample rate of the truth-model FRFs, Hz (docs/src/design.md §2).
 pub const TRUTH_SAMPLE_RATE_HZ: f64 = 25_600.0;
 /// Number of truth-model FRF lines (0 … 12 800 Hz).
 pub const TRUTH_LINES: usize = 1025;
@@ -243,7 +243,7 @@ pub fn truth_model_frf(noise: Option<(f64, u64)>) -> Result<FrfData> {
     }
 }
 
-/// How to draw a synthetic structure (docs/design.md §3).
+/// How to draw a synthetic structure (docs/src/design.md §3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalSpec {
     /// Outputs `q`.

@@ -1,4 +1,4 @@
-//! The scan's core promises (docs/design.md §10): a realization from the kept factors is
+//! The scan's core promises (docs/src/design.md §10): a realization from the kept factors is
 //! the fresh identification at that order, on both SVD paths; the indicators do not
 //! depend on the state basis.
 

@@ -1,4 +1,4 @@
-//! FRF → impulse response → Markov parameters (docs/design.md §1.5).
+//! FRF → impulse response → Markov parameters (docs/src/design.md §1.5).
 //!
 //! Each FRF of `N` lines (0 … Nyquist) is extended to a Hermitian spectrum of
 //! `n = 2(N − 1)` points and inverse-transformed *with* the `1/n` factor, exactly as

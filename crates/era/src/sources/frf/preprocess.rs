@@ -1,4 +1,4 @@
-//! FRF preprocessing before the inverse FFT: docs/design.md §1 steps 1–4 (the thesis's
+//! FRF preprocessing before the inverse FFT: docs/src/design.md §1 steps 1–4 (the thesis's
 //! `frffilt`, Appendix J.1.1, and `frfinter`, J.1.4).
 
 use crate::error::{EraError, Result};
@@ -6,7 +6,7 @@ use crate::frf::{uniform_lines, FrfData};
 use num_complex::Complex64;
 
 /// Integrates every FRF `times` times: `G(f_k) ← G(f_k) / (j·2πf_k)` for `k ≥ 1` and
-/// `G(f_0) ← 0` (docs/design.md §1.1). Acceleration becomes velocity, velocity displacement.
+/// `G(f_0) ← 0` (docs/src/design.md §1.1). Acceleration becomes velocity, velocity displacement.
 ///
 /// Because [`FrfData`] guarantees `f_0 = 0`, the thesis's `frfinter` first-line bug
 /// (it divides by the last ω when `f_0 ≠ 0`) cannot arise.
@@ -44,7 +44,7 @@ pub fn integrate(frf: &FrfData, times: usize) -> Result<FrfData> {
     FrfData::new(freq.to_vec(), frf.outputs(), frf.inputs(), values, quantity)
 }
 
-/// Pads with zero lines up to `pad_to + 1` lines (docs/design.md §1.2; thesis `ndpts`).
+/// Pads with zero lines up to `pad_to + 1` lines (docs/src/design.md §1.2; thesis `ndpts`).
 /// `pad_to = 0`, or `pad_to + 1 ≤ L`, leaves the data as it is.
 pub fn pad(frf: &FrfData, pad_to: usize) -> FrfData {
     let lines = frf.lines();
@@ -63,13 +63,13 @@ pub fn pad(frf: &FrfData, pad_to: usize) -> FrfData {
         .expect("padding a valid FrfData keeps it valid")
 }
 
-/// Sample time of the impulse responses, `Ts = 1 / (2·Δf·(N − 1))` (docs/design.md §1.3):
+/// Sample time of the impulse responses, `Ts = 1 / (2·Δf·(N − 1))` (docs/src/design.md §1.3):
 /// `N` lines span 0 … Nyquist.
 pub fn sample_time_s(spacing_hz: f64, lines: usize) -> f64 {
     1.0 / (2.0 * spacing_hz * (lines as f64 - 1.0))
 }
 
-/// Sets the first `count` lines of every FRF to zero (docs/design.md §1.4; thesis `nz`, used
+/// Sets the first `count` lines of every FRF to zero (docs/src/design.md §1.4; thesis `nz`, used
 /// to drop the large low-frequency accelerations of the DTA).
 pub fn zero_leading_lines(frf: &FrfData, count: usize) -> FrfData {
     if count == 0 {
@@ -103,7 +103,7 @@ pub struct Preprocessed {
     pub measured_lines: usize,
 }
 
-/// Steps 1–4 of docs/design.md §1 in the thesis's order: integrate, pad, sample time, zero.
+/// Steps 1–4 of docs/src/design.md §1 in the thesis's order: integrate, pad, sample time, zero.
 ///
 /// # Errors
 /// From [`integrate`]; [`EraError::InvalidParameter`] when `zero_lines` removes every
