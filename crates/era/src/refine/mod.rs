@@ -73,8 +73,8 @@
 //! exact fit (`fit_after` below 1e-9) has no noise to weight by and is returned as it
 //! is. The costs reported are of the second pass's weights; `fit_before` is the
 //! unweighted fit at the start poles, as always. On the truth model with 15 % noise this
-//! lowers the median frequency error of every mode against the uniform fit (docs in the
-//! docs/src/refinement.md).
+//! lowers the median frequency error of every mode against the uniform fit
+//! (docs/src/refinement.md).
 //!
 //! A mode is dropped, and the reason recorded in [`Refinement::dropped`], when its
 //! share of the band's FRF norm falls below [`MIN_CONTRIBUTION`], when its pole
