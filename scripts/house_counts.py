@@ -75,6 +75,11 @@ def strip(text):
     return "".join(out)
 
 
+def strip_comments_only(text):
+    """Line comments dropped (doc comments too); strings kept."""
+    return "\n".join(re.sub(r"^\s*//.*$", "", line) for line in text.split("\n"))
+
+
 def modules(src):
     """file path -> module path tuple, for one crate's src folder."""
     mods = {}
@@ -243,15 +248,33 @@ def long_functions(src):
     return sorted(found, reverse=True)
 
 
+def cli_flags():
+    """The CLI's long flags, from the clap structs under crates/era-cli/src/args."""
+    flags = set()
+    args = os.path.join(ROOT, "crates", "era-cli", "src", "args")
+    for f in os.listdir(args) if os.path.isdir(args) else []:
+        text = open(os.path.join(args, f), encoding="utf-8").read()
+        for m in re.finditer(r"#\[arg\(([^\]]*)\)\]\s*(?:///[^\n]*\n\s*)*pub (\w+):", text):
+            if "long" in m.group(1):
+                named = re.search(r'long\s*=\s*"([^"]+)"', m.group(1))
+                flags.add(named.group(1) if named else m.group(2).replace("_", "-"))
+    return {f for f in flags if "-" in f}
+
+
 def flag_spellings(src):
+    """Kebab-case flag names in the core's code: as a parameter name, backticked with its
+    dashes in a message, or any string literal that is one of the CLI's flags."""
+    flags = cli_flags()
     hits = []
     for dirpath, _, files in os.walk(src):
         for f in files:
             if not f.endswith(".rs"):
                 continue
             p = os.path.join(dirpath, f)
-            for k, line in enumerate(open(p, encoding="utf-8"), 1):
-                if re.search(r'name:\s*"[a-z0-9]+(-[a-z0-9]+)+"', line) or re.search(r"`--[a-z]", line) and "//" not in line.split("`--")[0]:
+            for k, line in enumerate(strip_comments_only(open(p, encoding="utf-8").read()).split("\n"), 1):
+                literals = set(re.findall(r'"([a-z0-9]+(?:-[a-z0-9]+)+)"', line))
+                if (re.search(r'name:\s*"[a-z0-9]+(-[a-z0-9]+)+"', line)
+                        or re.search(r"`--[a-z]", line) or literals & flags):
                     hits.append(f"{os.path.relpath(p, ROOT)}:{k}: {line.strip()[:100]}")
     return hits
 
@@ -263,7 +286,7 @@ def options_structs(src):
             if not f.endswith(".rs"):
                 continue
             text = open(os.path.join(dirpath, f), encoding="utf-8").read()
-            for m in re.finditer(r"((?:#\[[^\]]*\]\s*)*)pub struct (\w*(?:Options|Opts|Config|Request|Settings))\b", text):
+            for m in re.finditer(r"((?:#\[[^\]]*\]\s*)*)pub struct (\w*(?:Options|Opts|Config|Request|Settings|Criteria))\b", text):
                 total += 1
                 ok = "non_exhaustive" in m.group(1)
                 marked += ok

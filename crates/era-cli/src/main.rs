@@ -48,9 +48,12 @@ fn message(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for cause in err.chain() {
         // The core names options by their fields; the CLI's users know them as flags.
-        let text = match cause.downcast_ref::<era::EraError>() {
-            Some(e) => e.message(era::params::Naming::Flag),
-            None => cause.to_string(),
+        let text = if let Some(e) = cause.downcast_ref::<era::EraError>() {
+            e.message(era::params::Naming::Flag)
+        } else if let Some(e) = cause.downcast_ref::<era::friction::FrictionError>() {
+            e.message(era::params::Naming::Flag)
+        } else {
+            cause.to_string()
         };
         let named = parts.last().and_then(|context| {
             let (_, subject) = context.split_once(' ')?;

@@ -38,7 +38,7 @@ pub enum Param {
     DirectTerm,
     /// SVD method.
     Svd,
-    /// Orders of the stability check.
+    /// Orders of a scan.
     Orders,
     /// Samples per Welch frame.
     Frame,
@@ -64,11 +64,75 @@ pub enum Param {
     CompensatorRate,
     /// Viscous damping ratio of an oscillator.
     ViscousDampingRatio,
+    /// `accel_noise`.
+    AccelNoise,
+    /// `actuators`.
+    Actuators,
+    /// `averages`.
+    Averages,
+    /// `band`.
+    Band,
+    /// `burst_on`.
+    BurstOn,
+    /// `collocated`.
+    Collocated,
+    /// `compensation`.
+    Compensation,
+    /// `coulomb_force`.
+    CoulombForce,
+    /// `damping`.
+    Damping,
+    /// `dead_zone`.
+    DeadZone,
+    /// `estimator`.
+    Estimator,
+    /// `excitation`.
+    Excitation,
+    /// `fmax`.
+    Fmax,
+    /// `fraction`.
+    Fraction,
+    /// `hold`.
+    Hold,
+    /// `lvt_noise`.
+    LvtNoise,
+    /// `max_iterations`.
+    MaxIterations,
+    /// `model`.
+    Model,
+    /// `modes`.
+    Modes,
+    /// `natural_frequency_hz`.
+    NaturalFrequencyHz,
+    /// `noise`.
+    Noise,
+    /// `period`.
+    Period,
+    /// `pulse_width`.
+    PulseWidth,
+    /// `quantity`.
+    Quantity,
+    /// `reciprocal`.
+    Reciprocal,
+    /// `refine`.
+    Refine,
+    /// `stiffness`.
+    Stiffness,
+    /// `weighting`.
+    Weighting,
+    /// `x0`.
+    X0,
+    /// `analyzer_rate`.
+    AnalyzerRate,
+    /// `lvt_rate`.
+    LvtRate,
+    /// `motor_force_per_volt`.
+    MotorForcePerVolt,
 }
 
 impl Param {
     /// Every parameter, in declaration order.
-    pub const ALL: [Param; 23] = [
+    pub const ALL: &'static [Param] = &[
         Param::States,
         Param::HankelFactor,
         Param::Integrations,
@@ -92,6 +156,38 @@ impl Param {
         Param::MaxHz,
         Param::CompensatorRate,
         Param::ViscousDampingRatio,
+        Param::AccelNoise,
+        Param::Actuators,
+        Param::Averages,
+        Param::Band,
+        Param::BurstOn,
+        Param::Collocated,
+        Param::Compensation,
+        Param::CoulombForce,
+        Param::Damping,
+        Param::DeadZone,
+        Param::Estimator,
+        Param::Excitation,
+        Param::Fmax,
+        Param::Fraction,
+        Param::Hold,
+        Param::LvtNoise,
+        Param::MaxIterations,
+        Param::Model,
+        Param::Modes,
+        Param::NaturalFrequencyHz,
+        Param::Noise,
+        Param::Period,
+        Param::PulseWidth,
+        Param::Quantity,
+        Param::Reciprocal,
+        Param::Refine,
+        Param::Stiffness,
+        Param::Weighting,
+        Param::X0,
+        Param::AnalyzerRate,
+        Param::LvtRate,
+        Param::MotorForcePerVolt,
     ];
 
     /// The field name: `hankel_factor`, `lowpass_hz`.
@@ -120,12 +216,44 @@ impl Param {
             Param::MaxHz => "max_hz",
             Param::CompensatorRate => "compensator_rate",
             Param::ViscousDampingRatio => "viscous_damping_ratio",
+            Param::AccelNoise => "accel_noise",
+            Param::Actuators => "actuators",
+            Param::Averages => "averages",
+            Param::Band => "band",
+            Param::BurstOn => "burst_on",
+            Param::Collocated => "collocated",
+            Param::Compensation => "compensation",
+            Param::CoulombForce => "coulomb_force",
+            Param::Damping => "damping",
+            Param::DeadZone => "dead_zone",
+            Param::Estimator => "estimator",
+            Param::Excitation => "excitation",
+            Param::Fmax => "fmax",
+            Param::Fraction => "fraction",
+            Param::Hold => "hold",
+            Param::LvtNoise => "lvt_noise",
+            Param::MaxIterations => "max_iterations",
+            Param::Model => "model",
+            Param::Modes => "modes",
+            Param::NaturalFrequencyHz => "natural_frequency_hz",
+            Param::Noise => "noise",
+            Param::Period => "period",
+            Param::PulseWidth => "pulse_width",
+            Param::Quantity => "quantity",
+            Param::Reciprocal => "reciprocal",
+            Param::Refine => "refine",
+            Param::Stiffness => "stiffness",
+            Param::Weighting => "weighting",
+            Param::X0 => "x0",
+            Param::AnalyzerRate => "analyzer_rate",
+            Param::LvtRate => "lvt_rate",
+            Param::MotorForcePerVolt => "motor_force_per_volt",
         }
     }
 
     /// The parameter whose field name is `field`.
     pub fn from_field(field: &str) -> Option<Param> {
-        Param::ALL.into_iter().find(|p| p.field() == field)
+        Param::ALL.iter().copied().find(|p| p.field() == field)
     }
 }
 

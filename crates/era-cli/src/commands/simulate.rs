@@ -99,8 +99,8 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
 fn modal(a: &ModalArgs) -> anyhow::Result<()> {
     crate::config::check_noise(a.sim.noise)?;
     let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
-    let request = ModalRequest {
-        spec: ModalSpec {
+    let request = ModalRequest::new(
+        ModalSpec {
             outputs: a.outputs,
             inputs: a.inputs,
             modes: a.modes,
@@ -111,9 +111,9 @@ fn modal(a: &ModalArgs) -> anyhow::Result<()> {
             collocated: a.collocated,
             seed: a.sim.seed,
         },
-        lines: a.lines,
-        df_hz: a.df,
-    };
+        a.lines,
+        a.df,
+    );
     // Sizes against their limits, under the flag's name, before anything is allocated.
     request.check(Naming::Flag)?;
     let spec = request.spec;

@@ -20,6 +20,7 @@ use super::{FrictionError, Result};
 
 /// One actuator's compensation settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct ChannelConfig {
     /// Coulomb coefficient (force).
     pub coefficient: f64,
@@ -61,7 +62,7 @@ impl ChannelConfig {
         }
         if !(self.dead_zone.is_finite() && self.dead_zone >= 0.0) {
             return bad(
-                "dead-zone",
+                "dead_zone",
                 self.dead_zone,
                 format!("channel {}: must be >= 0", channel + 1),
             );

@@ -39,7 +39,6 @@
 
 use super::{coulomb_force_from_decay, FrictionError, Result};
 use crate::pipeline::filter::LowPass;
-use realfft::RealFftPlanner;
 
 /// Which damping law explains a decay better.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -185,8 +184,7 @@ fn noise_rms(values: &[f64]) -> f64 {
 /// Frequency of the spectral peak (excluding DC), Hz.
 fn dominant_frequency(values: &[f64], dt: f64) -> f64 {
     let n = (4 * values.len()).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
+    let (fft, _) = crate::linalg::fft::real_fft_plans(n);
     let mut input = fft.make_input_vec();
     input[..values.len()].copy_from_slice(values);
     let mut spectrum = fft.make_output_vec();

@@ -41,7 +41,8 @@ pub enum FrictionError {
     /// A parameter is out of range.
     #[error("invalid parameter {name} = {value}: {reason}")]
     InvalidParameter {
-        /// Flag name.
+        /// The parameter's field name, snake case (`sample_rate`); a front end spells it
+        /// its own way ([`FrictionError::message`]).
         name: &'static str,
         /// Value given.
         value: String,
@@ -116,7 +117,25 @@ pub enum FrictionError {
 }
 
 impl FrictionError {
-    /// [`FrictionError::InvalidParameter`] from a flag name, its value and the reason.
+    /// The message with a refused parameter spelled as `naming`'s front end spells it
+    /// (`--sample-rate` from the CLI); other variants read as their `Display`.
+    pub fn message(&self, naming: crate::params::Naming) -> String {
+        match self {
+            FrictionError::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => {
+                let shown = crate::error::Param::from_field(name)
+                    .map_or_else(|| name.to_string(), |p| naming.spell(p));
+                format!("invalid parameter {shown} = {value}: {reason}")
+            }
+            other => other.to_string(),
+        }
+    }
+
+    /// [`FrictionError::InvalidParameter`] from a parameter's field name, its value and
+    /// the reason.
     pub fn invalid(name: &'static str, value: impl ToString, reason: impl Into<String>) -> Self {
         FrictionError::InvalidParameter {
             name,
@@ -204,19 +223,19 @@ impl Oscillator {
         }
         if !(self.natural_frequency_hz.is_finite() && self.natural_frequency_hz > 0.0) {
             return bad(
-                "natural-frequency-hz",
+                "natural_frequency_hz",
                 self.natural_frequency_hz,
                 "must be positive",
             );
         }
         if !(self.coulomb_force.is_finite() && self.coulomb_force >= 0.0) {
-            return bad("coulomb-force", self.coulomb_force, "must be >= 0");
+            return bad("coulomb_force", self.coulomb_force, "must be >= 0");
         }
         if !(self.viscous_damping_ratio.is_finite()
             && (0.0..1.0).contains(&self.viscous_damping_ratio))
         {
             return bad(
-                "viscous-damping-ratio",
+                "viscous_damping_ratio",
                 self.viscous_damping_ratio,
                 "must be in [0, 1)",
             );

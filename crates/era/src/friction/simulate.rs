@@ -36,7 +36,7 @@ pub fn exact_free_decay(osc: &Oscillator, x0: f64, times: &[f64]) -> Result<Vec<
     osc.validate()?;
     if osc.viscous_damping_ratio != 0.0 {
         return Err(FrictionError::InvalidParameter {
-            name: "viscous-damping-ratio",
+            name: "viscous_damping_ratio",
             value: osc.viscous_damping_ratio.to_string(),
             reason: "the exact solution is for Coulomb friction alone; use the integrator".into(),
         });
@@ -185,7 +185,7 @@ pub fn integrate(
     osc.validate()?;
     if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
         return Err(FrictionError::InvalidParameter {
-            name: "sample-rate",
+            name: "sample_rate",
             value: sample_rate_hz.to_string(),
             reason: "must be positive".into(),
         });
@@ -272,7 +272,7 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
     }
     if !(spec.sample_rate_hz.is_finite() && spec.sample_rate_hz > 4.0 * osc.natural_frequency_hz) {
         return Err(FrictionError::invalid(
-            "sample-rate",
+            "sample_rate",
             spec.sample_rate_hz,
             format!(
                 "must exceed 4 x the natural frequency (natural-frequency-hz {})",

@@ -103,7 +103,7 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
         return bad("fraction", spec.fraction, "must be in (0, 1]");
     }
     if !(spec.dead_zone.is_finite() && spec.dead_zone >= 0.0) {
-        return bad("dead-zone", spec.dead_zone, "must be >= 0");
+        return bad("dead_zone", spec.dead_zone, "must be >= 0");
     }
     if spec.cycles < 2 {
         return bad(
@@ -116,7 +116,7 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
         && spec.sample_rate_hz > 4.0 * spec.oscillator.natural_frequency_hz)
     {
         return Err(FrictionError::invalid(
-            "sample-rate",
+            "sample_rate",
             spec.sample_rate_hz,
             format!(
                 "must exceed 4 x the natural frequency (natural-frequency-hz {})",
@@ -128,7 +128,7 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     // Both are finite and positive (validated), so the product is never NaN.
     if o.stiffness * spec.x0.abs() <= o.coulomb_force {
         return Err(FrictionError::invalid(
-            "coulomb-force",
+            "coulomb_force",
             super::show(o.coulomb_force),
             format!(
                 "the mass never moves: the spring force at release, stiffness {} x x0 {}, does not exceed the friction force, so no coefficient is neutral",

@@ -219,6 +219,7 @@ impl PoleStatus {
 
 /// Tolerances of the diagram's order-to-order comparison.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct DiagramCriteria {
     /// Relative frequency difference.
     pub frequency: f64,
@@ -403,6 +404,7 @@ pub fn status_against(
 
 /// Thresholds of the automatic choice (module doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct SelectionCriteria {
     /// Largest plausible damping ratio of a structural mode.
     pub damping_maximum: f64,

@@ -346,7 +346,7 @@ fn fit_band(freq: &[f64], options: &RefineOptions) -> Result<(usize, usize)> {
         }
         if options.real_modes {
             return Err(invalid(
-                "real-modes",
+                "real_modes",
                 "true".into(),
                 "the residues of a sampled (z-domain) model are not imaginary: real modes need the continuous model",
             ));
@@ -385,7 +385,7 @@ fn check_options(options: &RefineOptions, q: usize, p: usize) -> Result<()> {
             "must be a finite number >= 0",
         ));
     }
-    crate::limits::ITERATIONS.check("max-iterations", options.max_iterations as u64)?;
+    crate::limits::ITERATIONS.check("max_iterations", options.max_iterations as u64)?;
     Ok(())
 }
 

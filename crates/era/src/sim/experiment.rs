@@ -171,7 +171,7 @@ impl Actuator {
         }
         if !(self.natural_frequency_hz.is_finite() && self.natural_frequency_hz > 0.0) {
             return bad(
-                "natural-frequency-hz",
+                "natural_frequency_hz",
                 self.natural_frequency_hz,
                 "must be positive",
             );
@@ -180,7 +180,7 @@ impl Actuator {
             && (0.0..1.0).contains(&self.viscous_damping_ratio))
         {
             return bad(
-                "viscous-damping-ratio",
+                "viscous_damping_ratio",
                 self.viscous_damping_ratio,
                 "must be in [0, 1)",
             );
@@ -200,7 +200,7 @@ impl Actuator {
         }
         if !(self.motor_force_per_volt.is_finite() && self.motor_force_per_volt != 0.0) {
             return bad(
-                "motor-force-per-volt",
+                "motor_force_per_volt",
                 self.motor_force_per_volt,
                 "must be finite and non-zero",
             );
@@ -488,7 +488,7 @@ impl ExperimentSpec {
             }
             if !(c.rate_hz.is_finite() && c.rate_hz > 0.0) {
                 return bad(
-                    "compensator-rate",
+                    "compensator_rate",
                     c.rate_hz.to_string(),
                     "must be positive".into(),
                 );
@@ -508,12 +508,12 @@ impl ExperimentSpec {
                 bad(name, v.to_string(), "must be >= 0".into())
             }
         };
-        pos("lvt-rate", self.lvt_rate_hz)?;
-        pos("analyzer-rate", self.analyzer_rate_hz)?;
+        pos("lvt_rate", self.lvt_rate_hz)?;
+        pos("analyzer_rate", self.analyzer_rate_hz)?;
         nonneg("excitation", self.excitation_rms_v)?;
         nonneg("settle", self.settle_s)?;
-        nonneg("accel-noise", self.accel_noise_rms)?;
-        nonneg("lvt-noise", self.lvt_noise_rms)?;
+        nonneg("accel_noise", self.accel_noise_rms)?;
+        nonneg("lvt_noise", self.lvt_noise_rms)?;
         if !(self.band_hz.is_finite()
             && self.band_hz > 0.0
             && self.band_hz < self.analyzer_rate_hz / 2.0)
@@ -580,7 +580,7 @@ impl ExperimentSpec {
             }
         }
         Err(EraError::InvalidParameter {
-            name: "compensator-rate",
+            name: "compensator_rate",
             value: lvt.to_string(),
             reason: format!(
                 "must be commensurate with the excitation rate {knot} Hz (a common tick of at least 1/{} s)",
@@ -1214,6 +1214,7 @@ pub struct CompensatorTrace {
 
 /// Initial condition and options of a single run for tests.
 #[derive(Debug, Clone, Default)]
+#[non_exhaustive]
 pub struct RunOptions {
     /// Initial relative displacements of the proof masses, released from rest
     /// (`None`: all at 0).

@@ -44,6 +44,7 @@ pub fn check_noise(naming: crate::params::Naming, noise: f64) -> Result<()> {
 /// What `era simulate modal` (and Python's `simulate_modal`) is asked for: a
 /// [`ModalSpec`] and the lines to evaluate it on.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct ModalRequest {
     /// The structure.
     pub spec: ModalSpec,
@@ -54,6 +55,11 @@ pub struct ModalRequest {
 }
 
 impl ModalRequest {
+    /// `spec` on `lines` lines from 0 Hz, `df_hz` apart.
+    pub fn new(spec: ModalSpec, lines: usize, df_hz: f64) -> Self {
+        ModalRequest { spec, lines, df_hz }
+    }
+
     /// Checks sizes against [`crate::limits`] before anything is allocated, and the
     /// frequencies: positive spacing and band, `fmax` below the last line, a
     /// collocated set square. Messages name each parameter as `naming` does.

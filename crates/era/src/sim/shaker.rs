@@ -140,7 +140,7 @@ pub fn simulate_shaker_test(test: &ShakerTest) -> Result<ShakerRecord> {
     let fs = test.sample_rate_hz;
     if !(fs.is_finite() && fs > 0.0) {
         return Err(bad(
-            "sample-rate",
+            "sample_rate",
             fs.to_string(),
             "must be a positive rate in Hz",
         ));
@@ -205,7 +205,7 @@ pub fn simulate_shaker_test(test: &ShakerTest) -> Result<ShakerRecord> {
             period_check(period_s, "burst")?;
             if !(on_fraction > 0.0 && on_fraction <= 1.0) {
                 return Err(bad(
-                    "burst-on",
+                    "burst_on",
                     on_fraction.to_string(),
                     "the fraction of each period with noise on must be in (0, 1]",
                 ));
@@ -215,7 +215,7 @@ pub fn simulate_shaker_test(test: &ShakerTest) -> Result<ShakerRecord> {
             period_check(period_s, "impact")?;
             if !(width_s.is_finite() && width_s * fs >= 1.0 && width_s < period_s) {
                 return Err(bad(
-                    "pulse-width",
+                    "pulse_width",
                     width_s.to_string(),
                     "a pulse must span at least one sample and be shorter than the period",
                 ));
@@ -316,10 +316,7 @@ fn excite(
 /// Gaussian noise with a flat spectrum from `lo` to `hi` Hz: white noise, its FFT zeroed
 /// outside the band, scaled back to unit RMS.
 fn band_limited(n: usize, fs: f64, lo_hz: f64, hi_hz: f64, rng: &mut Minstd) -> Vec<f64> {
-    use realfft::RealFftPlanner;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let forward = planner.plan_fft_forward(n);
-    let inverse = planner.plan_fft_inverse(n);
+    let (forward, inverse) = crate::linalg::fft::real_fft_plans(n);
     let mut u: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
     let mut spectrum = forward.make_output_vec();
     forward
@@ -470,7 +467,7 @@ mod tests {
     #[test]
     fn bad_parameters_are_named() {
         let cases: Vec<(ShakerTest, &str)> = vec![
-            (ShakerTest::new(spec(), 0.0, 10.0), "sample-rate"),
+            (ShakerTest::new(spec(), 0.0, 10.0), "sample_rate"),
             (ShakerTest::new(spec(), 64.0, -1.0), "duration"),
             (ShakerTest::new(spec(), 64.0, 1e12), "duration"),
             (ShakerTest::new(spec(), 30.0, 10.0), "fmax"),
@@ -492,7 +489,7 @@ mod tests {
                     },
                     ..ShakerTest::new(spec(), 64.0, 10.0)
                 },
-                "burst-on",
+                "burst_on",
             ),
         ];
         for (test, name) in cases {

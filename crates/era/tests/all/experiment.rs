@@ -85,15 +85,12 @@ fn stick_slip_on_a_clamped_base_is_the_exact_coulomb_decay() {
         ..Actuator::thesis(0.05)
     };
     let times: Vec<f64> = (0..1200).map(|k| k as f64 * 0.01).collect();
-    let out = simulate_run_with(
-        &single(act, None),
-        &[],
-        0,
-        RunOptions {
-            initial_stroke: Some(vec![0.9]),
-            probe_times_s: times.clone(),
-        },
-    )
+    let out = simulate_run_with(&single(act, None), &[], 0, {
+        let mut o = RunOptions::default();
+        o.initial_stroke = Some(vec![0.9]);
+        o.probe_times_s = times.clone();
+        o
+    })
     .unwrap();
     let osc = Oscillator::coulomb(1.0, 1.5, 0.05);
     let exact = exact_free_decay(&osc, 0.9, &times).unwrap();
@@ -126,22 +123,20 @@ fn compensator_samples_at_200_hz_and_holds_its_output() {
         ..Compensation::thesis()
     };
     let times: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
-    let out = simulate_run_with(
-        &single(act, Some(comp.clone())),
-        &[],
-        0,
-        RunOptions {
-            initial_stroke: Some(vec![0.8]),
-            probe_times_s: times.clone(),
-        },
-    )
+    let out = simulate_run_with(&single(act, Some(comp.clone())), &[], 0, {
+        let mut o = RunOptions::default();
+        o.initial_stroke = Some(vec![0.8]);
+        o.probe_times_s = times.clone();
+        o
+    })
     .unwrap();
     // Timing: one sample every 5 ms, each output the channel's map of what it read.
     let trace = &out.compensator;
     assert!(trace.time_s.len() > 1000);
-    let channel = ChannelConfig {
-        gain: 1.0 / MOTOR_LBF_PER_VOLT,
-        ..ChannelConfig::thesis(0.05)
+    let channel = {
+        let mut o = ChannelConfig::thesis(0.05);
+        o.gain = 1.0 / MOTOR_LBF_PER_VOLT;
+        o
     };
     for (k, t) in trace.time_s.iter().enumerate() {
         assert!((t - k as f64 / 200.0).abs() < 1e-12, "sample {k} at {t}");

@@ -137,7 +137,7 @@ pub fn preprocess(
     if pad_to != 0 {
         // pad_to + 1 lines per pair, without wrapping at usize::MAX.
         let lines = (pad_to as u64).saturating_add(1);
-        crate::limits::LINES.check("pad-to", lines)?;
+        crate::limits::LINES.check("pad_to", lines)?;
         crate::limits::VALUES.check_product(
             "pad-to (outputs x inputs x lines)",
             &[frf.outputs() as u64, frf.inputs() as u64, lines],
@@ -187,7 +187,7 @@ mod tests {
         for pad_to in [usize::MAX - 1, usize::MAX, 100_000_000] {
             match preprocess(&d, 0, pad_to, 0) {
                 Err(EraError::Limit(e)) => {
-                    assert_eq!(e.context, "pad-to");
+                    assert_eq!(e.context, "pad_to");
                     assert!(e.asked > e.allowed, "{e}");
                 }
                 other => panic!("pad-to {pad_to}: {other:?}"),
