@@ -175,8 +175,9 @@ pub fn window_corrected(
     let Some((lag, why)) = lag_window(metadata) else {
         return Ok(None);
     };
-    let padded = era::suspect::leading_zero_lines(frf);
-    let corrected = era::preprocess::zero_leading_lines(&lag.correct_frf(frf)?, padded);
+    let padded = era::frf::leading_zero_lines(frf);
+    let corrected =
+        era::sources::frf::preprocess::zero_leading_lines(&lag.correct_frf(frf)?, padded);
     Ok(Some((corrected, why)))
 }
 
@@ -187,7 +188,7 @@ pub fn window_corrected(
 /// the echo.
 pub fn lag_window(
     metadata: &std::collections::BTreeMap<String, String>,
-) -> Option<(era::markov::LagWindow, String)> {
+) -> Option<(era::sources::frf::LagWindow, String)> {
     use era::frf::estimate::Window;
     // The lag window is H1's bias (an output-noise estimator); H2 and Hv differ.
     if metadata.get("estimator").map(|e| e.trim()) != Some("h1") {
@@ -200,7 +201,7 @@ pub fn lag_window(
     };
     let frame: usize = metadata.get("frame")?.trim().parse().ok()?;
     let rate: f64 = metadata.get("sample_rate_hz")?.trim().parse().ok()?;
-    let lag = era::markov::LagWindow::new(window, frame, rate).ok()?;
+    let lag = era::sources::frf::LagWindow::new(window, frame, rate).ok()?;
     Some((
         lag,
         format!(

@@ -6,9 +6,9 @@
 //! data.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use era::hankel::HankelShape;
-use era::hankel_op::{HankelOperator, LinearOperator};
-use era::realize::{realize_general, RealizeOptions, SvdPath};
+use era::pipeline::hankel::HankelShape;
+use era::pipeline::hankel_op::{HankelOperator, LinearOperator};
+use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
 use era::sim::lightly_damped_markov;
 use faer::Mat;
 use std::hint::black_box;
@@ -58,7 +58,7 @@ fn grid(c: &mut Criterion) {
         first_sample: 1,
     };
     let op = HankelOperator::new(&markov, shape).unwrap();
-    let dense = era::hankel::build(&markov, shape).unwrap();
+    let dense = era::pipeline::hankel::build(&markov, shape).unwrap();
     let x = Mat::from_fn(1600, 120, |i, j| ((i * 7 + j * 3) as f64).sin());
     let mut g = c.benchmark_group("product_1600x1600_by_120");
     g.sample_size(20);

@@ -9,16 +9,16 @@
 //! whole `identify` at 5 % noise.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use era::hankel::{self, ThesisHankel};
-use era::hankel_op::HankelOperator;
 use era::identify::{identify, EraOptions};
-use era::markov::markov_from_frf;
-use era::modal::modal_parameters;
-use era::preprocess::preprocess;
-use era::realize::{realize, RealizeOptions};
-use era::response::{frequency_response, HessenbergForm};
+use era::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
+use era::pipeline::fit::{frequency_response, HessenbergForm};
+use era::pipeline::hankel::{self, ThesisHankel};
+use era::pipeline::hankel_op::HankelOperator;
+use era::pipeline::modes::modal_parameters;
+use era::pipeline::realize::{realize, RealizeOptions};
 use era::sim::{add_noise, ModalSpec, ModalStructure};
-use era::tsvd::{truncated_svd, TruncatedSvdOptions};
+use era::sources::frf::markov_from_frf;
+use era::sources::frf::preprocess::preprocess;
 use era::Quantity;
 use std::hint::black_box;
 

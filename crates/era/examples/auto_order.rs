@@ -118,7 +118,7 @@ fn main() -> era::Result<()> {
                             println!(
                                 "      vs {:.4}: mac {:.3}",
                                 st.scan.poles[d.representative].frequency_hz,
-                                era::stability::mac(
+                                era::modal::indicators::mac(
                                     &rep.shape,
                                     &st.scan.poles[d.representative].shape
                                 )

@@ -6,7 +6,7 @@
 //! `cargo run --release -p era --example cost_model [-- REPEATS]` (default 3, medians).
 //!
 //! **The floor** of a run is what its truncated SVD cannot avoid: the FFT Hankel
-//! products alone ([`era::hankel_op::HankelOperator`]), one `H·X` and one `Hᵀ·Y` with as
+//! products alone ([`era::pipeline::hankel_op::HankelOperator`]), one `H·X` and one `Hᵀ·Y` with as
 //! many columns as the run's passes multiplied in all (`TruncatedSvd::columns`: a narrow
 //! block a pass in the unrestarted phase, `n + oversample` in the restarted one), timed
 //! here on their own. `total / floor` is then what orthogonalisation, the small SVDs, the
@@ -17,13 +17,13 @@
 //! the order has no gap, as measured data has none; and the DTA-like thesis case
 //! (`ModalSpec::default()`, 801 lines, 5 % noise on the FRFs, thesis preprocessing).
 
-use era::hankel::HankelShape;
-use era::hankel_op::{HankelOperator, LinearOperator};
-use era::markov::{markov_from_frf, MarkovSequence};
-use era::preprocess::preprocess;
-use era::realize::{realize_general, RealizeOptions, SvdPath};
+use era::linalg::tsvd::TruncatedSvdOptions;
+use era::pipeline::hankel::HankelShape;
+use era::pipeline::hankel_op::{HankelOperator, LinearOperator};
+use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
 use era::sim::{add_noise, lightly_damped_markov, Minstd, ModalSpec, ModalStructure};
-use era::tsvd::TruncatedSvdOptions;
+use era::sources::frf::preprocess::preprocess;
+use era::sources::frf::{markov_from_frf, MarkovSequence};
 use era::Quantity;
 use faer::Mat;
 use std::time::Instant;
@@ -87,7 +87,8 @@ fn measure(label: String, markov: &MarkovSequence, m: usize, n: usize, repeats: 
     }
     // The floor: the products each way of as many columns as the SVD multiplied.
     let op = HankelOperator::new(markov, shape).expect("shape fits");
-    let svd = era::tsvd::truncated_svd(&op, &TruncatedSvdOptions::new(n)).expect("converges");
+    let svd =
+        era::linalg::tsvd::truncated_svd(&op, &TruncatedSvdOptions::new(n)).expect("converges");
     assert_eq!(svd.iterations, passes, "the same SVD as the run's");
     let t = svd.timings;
     let x = Mat::from_fn(op.ncols(), svd.columns, |i, j| {

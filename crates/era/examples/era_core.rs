@@ -13,12 +13,12 @@
 //!     H0 = m × m blocks from Y_1 (as python-control builds it); prints one JSON line
 //! ```
 
-use era::hankel::HankelShape;
-use era::markov::{markov_from_frf, MarkovSequence};
-use era::preprocess::preprocess;
-use era::realize::{realize_general, RealizeOptions, SvdPath};
+use era::pipeline::hankel::HankelShape;
+use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
 use era::sim::lightly_damped_markov;
 use era::sim::{add_noise, ModalSpec, ModalStructure};
+use era::sources::frf::preprocess::preprocess;
+use era::sources::frf::{markov_from_frf, MarkovSequence};
 use era::Quantity;
 use std::io::Write;
 use std::time::Instant;

@@ -2,7 +2,7 @@
 //! and with 5 % and 15 % noise (`cargo run --release -p era --example pipeline_probe`).
 
 use era::identify::{identify, EraOptions};
-use era::realize::SvdPath;
+use era::pipeline::realize::SvdPath;
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::Quantity;
 

@@ -21,9 +21,9 @@ use era::identify::{
     identify, identify_auto, refine_identification, EraOptions, Identification, ModelDomain,
     ScanOptions,
 };
-use era::preprocess::integrate;
 use era::refine::RefineOptions;
 use era::sim::{add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure};
+use era::sources::frf::preprocess::integrate;
 use era::{FrfData, Quantity};
 use std::time::Instant;
 
@@ -259,7 +259,7 @@ fn report_dta(
 }
 
 fn table52(seeds: &[u64]) -> era::Result<()> {
-    let truth: Vec<f64> = era::modal::modal_parameters(&truth_model())?
+    let truth: Vec<f64> = era::pipeline::modes::modal_parameters(&truth_model())?
         .modes
         .iter()
         .map(|m| m.frequency_hz)

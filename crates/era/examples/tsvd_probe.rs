@@ -3,12 +3,12 @@
 //! and Krylov depths, noise-free and noisy
 //! (`cargo run --release -p era --example tsvd_probe [DEPTH...]`).
 
-use era::hankel::ThesisHankel;
-use era::hankel_op::HankelOperator;
-use era::markov::markov_from_frf;
-use era::preprocess::preprocess;
+use era::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
+use era::pipeline::hankel::ThesisHankel;
+use era::pipeline::hankel_op::HankelOperator;
 use era::sim::{add_noise, ModalSpec, ModalStructure};
-use era::tsvd::{truncated_svd, TruncatedSvdOptions};
+use era::sources::frf::markov_from_frf;
+use era::sources::frf::preprocess::preprocess;
 use era::Quantity;
 use std::time::Instant;
 

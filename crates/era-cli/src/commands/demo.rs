@@ -115,7 +115,7 @@ fn identify_both(
     let noisy = run_one(noisy_frf, "noisy")?;
     let mut refine_options = era::refine::RefineOptions::default();
     refine_options.weighting = era::refine::Weighting::PairNoise;
-    let refined = era::identify::refine_identification(
+    let refined = era::refine::identification::refine_identification(
         noisy.clone(),
         noisy_frf,
         &refine_options,

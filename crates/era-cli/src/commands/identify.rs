@@ -86,7 +86,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         opts.states = states;
     }
     // What the data's zeroed start does to ERA's modes, measured on this model.
-    let zero_start = era::suspect::zero_start(&found, &era_opts, route.refine);
+    let zero_start = era::identify::zero_start(&found, &era_opts, route.refine);
     if route.refine {
         let check = Check {
             band_hz: fit.band_hz,
@@ -503,7 +503,7 @@ struct Check<'a> {
 /// With `--from-time`: the records are estimated again through frames twice as long
 /// (half as long when the records are too short for that) and identified on the same
 /// route, and `found`'s physical modes that are not found
-/// again there are not physical ([`era::identify::confirm_modes`]): a structure's
+/// again there are not physical ([`era::refine::identification::confirm_modes`]): a structure's
 /// modes stay where they are, the poles a fit adds for leakage, a short frame's bias
 /// or one estimate's noise do not. Skipped, and said, when the records give fewer than
 /// [`CHECK_AVERAGES`] averages at either frame. Returns the lines to print.
@@ -553,7 +553,7 @@ fn frame_check(
     };
     match second_identification(a, second, other, check, &quiet) {
         Ok(again) => {
-            let unconfirmed = era::identify::confirm_modes(found, &again, other);
+            let unconfirmed = era::refine::identification::confirm_modes(found, &again, other);
             Ok(format!(
                 "  frame check: identified again from frames of {other} samples ({averages} averages, {:.2} s): {unconfirmed} physical mode(s) not found again, so not physical (--no-frame-check: off)\n",
                 clock.elapsed().as_secs_f64()

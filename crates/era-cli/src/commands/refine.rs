@@ -1,6 +1,6 @@
 //! Refinement in the CLI: `era identify … --refine` and `era refine MODEL.json FRF_FILE`
 //! (the core is [`era::refine`], wired into the pipeline by
-//! [`era::identify::refine_identification`]).
+//! [`era::refine::identification::refine_identification`]).
 
 use crate::args::RefineArgs;
 use crate::config::Settings;
@@ -10,7 +10,7 @@ use crate::output::prepare_out_dir;
 use crate::output::report::{identification_summary, print_json, Human};
 use anyhow::Context;
 use era::identify::{assess_model, refine_identification_in, EraOptions, Identification};
-use era::realize::SvdPath;
+use era::pipeline::realize::SvdPath;
 use era::refine::RefineOptions;
 use era_io::model_json::{FitJson, ModelJson, ModelParameters};
 use std::fmt::Write as _;
@@ -246,9 +246,9 @@ fn start(
     } else {
         frf.lines()
     };
-    let sample_time_s = model
-        .sample_time_s
-        .unwrap_or_else(|| era::preprocess::sample_time_s(frf.spacing_hz(), padded_lines));
+    let sample_time_s = model.sample_time_s.unwrap_or_else(|| {
+        era::sources::frf::preprocess::sample_time_s(frf.spacing_hz(), padded_lines)
+    });
     let svd_path = if model.hankel.path == "matrix-free" {
         SvdPath::MatrixFree
     } else {

@@ -75,7 +75,7 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
     let clock = Instant::now();
     let noise = (sim.noise > 0.0).then_some((sim.noise, sim.seed));
     let frf = truth_model_frf(noise)?;
-    let modal = era::modal::modal_parameters(&era::sim::truth_model())?;
+    let modal = era::pipeline::modes::modal_parameters(&era::sim::truth_model())?;
     let modes: Vec<_> = modal
         .modes
         .iter()

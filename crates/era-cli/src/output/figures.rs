@@ -1,7 +1,7 @@
 //! Writing the figures and `report.html` of one identification into an [`OutputSet`].
 
 use crate::output::{write_output, RunInput};
-use era::identify::Identification;
+use era::identification::Identification;
 use era::{FrfData, Quantity};
 use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::uff::ChannelTable;
@@ -36,7 +36,7 @@ pub fn collocated_in(table: &ChannelTable, i: usize, j: usize) -> bool {
 /// node and direction), as the figures and report do ([`frf_view`]): the summary,
 /// fit.json, model.json and the report then agree. Without a table, by index.
 pub fn collocate_fit(
-    fit: &mut era::response::FitReport,
+    fit: &mut era::pipeline::fit::FitReport,
     channels: Option<&ChannelTable>,
     q: usize,
     p: usize,

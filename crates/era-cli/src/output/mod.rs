@@ -329,7 +329,7 @@ pub fn output_name<'a>(flag: &str, path: &'a Path) -> anyhow::Result<&'a std::ff
 }
 
 /// Per-pair relative fit error as an outputs × inputs grid (up to 64 pairs).
-pub fn pair_fit_table(fit: &era::response::FitReport, q: usize, p: usize) -> String {
+pub fn pair_fit_table(fit: &era::pipeline::fit::FitReport, q: usize, p: usize) -> String {
     use std::fmt::Write as _;
     if q * p > 64 {
         return format!("  per-pair fit: {} pairs, see fit.json (--out)\n", q * p);

@@ -4,7 +4,7 @@
 
 use crate::config::{Settings, Verbosity};
 use era::identify::{EraOptions, Identification, ModelDomain};
-use era::realize::DirectTerm;
+use era::pipeline::realize::DirectTerm;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -154,7 +154,7 @@ pub fn mode_table(found: &Identification) -> String {
 }
 
 /// The scan's summary: the diagram's extent, the rule and how many modes it kept.
-pub fn stabilization_summary(st: &era::identify::Stabilization) -> String {
+pub fn stabilization_summary(st: &era::identification::Stabilization) -> String {
     let mut s = String::new();
     let physical = st.selection.physical().count();
     let candidates = st
@@ -351,7 +351,7 @@ pub fn finish_output(
 }
 
 /// Which SVD path ran, for the timings.
-pub fn svd_path_line(r: &era::realize::Realization) -> String {
+pub fn svd_path_line(r: &era::pipeline::realize::Realization) -> String {
     match r.svd_iterations {
         Some(it) => format!(
             "  hankel_svd path: {} ({} iterations)\n",

@@ -3,7 +3,7 @@
 
 use crate::common;
 
-use era::filter::LowPass;
+use era::pipeline::filter::LowPass;
 
 #[test]
 fn matches_scipy_sosfiltfilt() {

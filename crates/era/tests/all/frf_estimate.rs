@@ -3,7 +3,7 @@
 //! exact discrete FRF.
 
 use era::frf::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
-use era::response::frequency_response;
+use era::pipeline::fit::frequency_response;
 use era::sim::{time_response, truth_model, Minstd, ModalSpec, ModalStructure};
 use era::{Complex64, EraError, Quantity};
 
@@ -115,7 +115,7 @@ fn h1_of_the_truth_model_is_within_one_percent_away_from_resonances() {
     )
     .unwrap();
     let exact = frequency_response(&model, est.frf.frequency_hz()).unwrap();
-    let modes: Vec<(f64, f64)> = era::modal::modal_parameters(&truth_model())
+    let modes: Vec<(f64, f64)> = era::pipeline::modes::modal_parameters(&truth_model())
         .unwrap()
         .modes
         .iter()

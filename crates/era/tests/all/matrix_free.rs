@@ -7,9 +7,9 @@ use crate::common;
 
 use common::worst_match;
 use era::identify::{identify, EraOptions};
-use era::markov::MarkovSequence;
-use era::realize::{realize, RealizeOptions, SvdPath};
+use era::pipeline::realize::{realize, RealizeOptions, SvdPath};
 use era::sim::{add_noise, Minstd, ModalSpec, ModalStructure};
+use era::sources::frf::MarkovSequence;
 use era::Quantity;
 use faer::Mat;
 use proptest::prelude::*;
@@ -44,10 +44,10 @@ fn dta_like_set_without_and_with_noise() {
     let (err, passes) = both_paths(&noisy);
     assert!(err <= 1e-6, "15 % noise: {err:e}");
     // σ81/σ80 = 0.995: subspace iteration needed 24 passes of 120 columns each way here,
-    // the restarted block Krylov iteration 7–8. The unrestarted phase (era::tsvd) in
+    // the restarted block Krylov iteration 7–8. The unrestarted phase (era::linalg::tsvd) in
     // blocks of 13 finishes within 480 columns each way, without a restart (its room is
     // 784 columns).
-    let block = era::tsvd::default_block(80);
+    let block = era::linalg::tsvd::default_block(80);
     assert_eq!(block, 13);
     assert!(
         passes * block <= 480,
@@ -179,12 +179,12 @@ proptest! {
             .collect();
         let a = with_spectrum(m, n, &d, seed);
         let options = {
-            let mut o = era::tsvd::TruncatedSvdOptions::new(rank);
+            let mut o = era::linalg::tsvd::TruncatedSvdOptions::new(rank);
             o.block = block;
             o.depth = depth;
             o
         };
-        let t = era::tsvd::truncated_svd(&a, &options).unwrap();
+        let t = era::linalg::tsvd::truncated_svd(&a, &options).unwrap();
         prop_assert!(t.residual <= options.tolerance);
         let (av, atu) = (&a * &t.v, a.transpose() * &t.u);
         for i in 0..rank {

@@ -4,9 +4,9 @@
 use crate::common;
 
 use common::worst_match;
-use era::hankel::{build, build_naive, HankelShape};
-use era::markov::MarkovSequence;
-use era::realize::{realize, RealizeOptions};
+use era::pipeline::hankel::{build, build_naive, HankelShape};
+use era::pipeline::realize::{realize, RealizeOptions};
+use era::sources::frf::MarkovSequence;
 use era::statespace::{relative_difference, StateSpace, TimeDomain};
 use era::Complex64;
 use faer::Mat;

@@ -1,8 +1,8 @@
 //! `era::refine` on the DTA-like synthetic set and the thesis truth model.
 
 use era::identify::{identify, EraOptions};
+use era::pipeline::fit::frequency_response;
 use era::refine::{refine, RefineOptions, Refinement, Residuals};
-use era::response::frequency_response;
 use era::sim::{
     add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure, TRUTH_SAMPLE_RATE_HZ,
 };

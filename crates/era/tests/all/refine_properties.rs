@@ -2,8 +2,8 @@
 //! reference, reciprocity and stability, the state-space model of every quantity, the
 //! Monte Carlo check of the standard deviations, and bad input.
 
+use era::pipeline::fit::frequency_response;
 use era::refine::{refine, refine_naive, RefineOptions, Refinement, Residuals, Weighting};
-use era::response::frequency_response;
 use era::sim::{add_noise, Minstd, ModalSpec, ModalStructure};
 use era::{Complex64, EraError, FrfData, Quantity};
 use proptest::prelude::*;

@@ -4,8 +4,8 @@
 //! its constant term, the velocity and displacement models of an exact structure are
 //! that structure's velocity and displacement FRFs.
 
+use era::pipeline::fit::frequency_response;
 use era::refine::{refine, RefineOptions, Residuals};
-use era::response::frequency_response;
 use era::sim::{ModalSpec, ModalStructure};
 use era::{Complex64, Quantity};
 

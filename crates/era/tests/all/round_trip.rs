@@ -9,7 +9,7 @@ use crate::common;
 use common::worst_match;
 use era::frf::uniform_lines;
 use era::identify::{identify, EraOptions, ModelDomain};
-use era::response::frequency_response;
+use era::pipeline::fit::frequency_response;
 use era::sim::{ModalSpec, ModalStructure};
 use era::{Complex64, FrfData, Quantity};
 

@@ -2,14 +2,14 @@
 //! the fresh identification at that order, on both SVD paths; the indicators do not
 //! depend on the state basis.
 
-use era::hankel::HankelShape;
-use era::markov::MarkovSequence;
 use era::modal::indicators::{emac, mpc};
-use era::modal::ModalForm;
-use era::realize::{
+use era::pipeline::hankel::HankelShape;
+use era::pipeline::modes::ModalForm;
+use era::pipeline::realize::{
     realize_general, DirectTerm, FactorOptions, Factorization, RealizeOptions, SvdPath,
 };
 use era::sim::{lightly_damped_markov, Minstd};
+use era::sources::frf::MarkovSequence;
 use era::Complex64;
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
@@ -78,7 +78,9 @@ fn a_realization_from_the_factors_is_a_fresh_identification_on_both_paths() {
             assert!(worst < 1e-10, "{path:?} at {n} states: {worst:e}");
         }
         // The matrix-free path keeps singular values past the largest order.
-        assert!(factors.singular_values().len() >= 60 + era::realize::EXTRA_SINGULAR_VALUES);
+        assert!(
+            factors.singular_values().len() >= 60 + era::pipeline::realize::EXTRA_SINGULAR_VALUES
+        );
     }
 }
 

@@ -5,7 +5,7 @@ use crate::common;
 
 use common::{read_csv, worst_match};
 use era::identify::{identify, identify_naive, EraOptions, Identification};
-use era::realize::SvdPath;
+use era::pipeline::realize::SvdPath;
 use era::sim::{ModalSpec, ModalStructure};
 use era::{Complex64, Quantity};
 

@@ -100,6 +100,6 @@ fn noisy_modes_match_the_peer_modal_table() {
 fn the_kept_model_response_is_the_model_frf_on_the_measured_lines() {
     let frf = truth_model_frf(Some((0.15, 5))).unwrap();
     let found = identify(&frf, &EraOptions::thesis_truth_model()).unwrap();
-    let again = era::response::model_frf(&found.model, &found.processed).unwrap();
+    let again = era::pipeline::fit::model_frf(&found.model, &found.processed).unwrap();
     assert_eq!(again.values(), &found.model_response[..]);
 }
