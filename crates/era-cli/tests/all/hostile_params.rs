@@ -4,7 +4,7 @@
 //! error, an allocation abort or a hang; an exit 2 names the flag (or parameter) at
 //! fault; nothing written holds NaN or infinity.
 
-mod common;
+use crate::common;
 use common::hostile::*;
 use std::f64::consts::PI;
 use std::fmt::Write as _;

@@ -1,6 +1,6 @@
 //! End-to-end tests of `era friction`.
 
-mod common;
+use crate::common;
 
 use common::{era, expect_input_error};
 use serde_json::Value;

@@ -5,7 +5,7 @@
 //! Without a Chromium on the machine the test says so on stderr and passes: a developer
 //! without a browser can still run the suite, and CI always has one.
 
-mod common;
+use crate::common;
 
 use common::era;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! wrapped phase, collocation from the channel table, the input section, the fit
 //! matrix, the dashed legend, coherence, and the size of an 8 x 8 report.
 
-mod common;
+use crate::common;
 
 use common::{era, s};
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! `era info`, `era convert`, UFF/MAT input to `identify`, and the malformed-file cases
 //! of issue 3: each exits 2 naming the file and the record or line, without a panic.
 
-mod common;
+use crate::common;
 use common::{era, expect_input_error, s};
 use std::path::{Path, PathBuf};
 

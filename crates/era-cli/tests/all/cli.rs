@@ -1,6 +1,6 @@
 //! End-to-end tests of the `era` binary.
 
-mod common;
+use crate::common;
 
 use common::{era, expect_input_error, s};
 use era::sim::TABLE_5_2_TRUTH;

@@ -2,7 +2,7 @@
 //! through era's own analyzer (`--from-time`), exact FRFs through the refinement in both
 //! time domains, the real DaISy subframe and the real LADISK plate.
 
-mod common;
+use crate::common;
 use common::{data_file, era, json_of, s};
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 //! `--freq-variable`; a missing file is named once; CSV → MAT → UFF keeps the quantity,
 //! the units and the channel table.
 
-mod common;
+use crate::common;
 use common::hostile::run_capped;
 use common::{data_file, era, expect_input_error, json_of, s};
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! check through the files, bad input (exit 2 naming the flag), and compare on identical
 //! sets (zero difference, MAC 1).
 
-mod common;
+use crate::common;
 
 use common::era;
 use common::hostile::run_capped;

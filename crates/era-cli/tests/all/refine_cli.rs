@@ -2,7 +2,7 @@
 //! model is the model of every output, its modes carry standard deviations, and bad
 //! input exits 2 naming the flag or file.
 
-mod common;
+use crate::common;
 use common::hostile::run_capped;
 use common::{era, json_of, s};
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! DTA-like sets the tuning never saw (seeds 11 and 12), on the real DaISy subframe, and
 //! on bad input.
 
-mod common;
+use crate::common;
 use common::{data_file, era, expect_input_error, json_of, s};
 use std::path::Path;
 

@@ -3,7 +3,7 @@
 //! killed runs, folders that take no files. Every case runs the binary through
 //! `run_capped`, and checks that nothing but era's own regular outputs is touched.
 
-mod common;
+use crate::common;
 use common::hostile::*;
 use common::s;
 use std::collections::BTreeMap;

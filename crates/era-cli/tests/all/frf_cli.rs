@@ -2,7 +2,7 @@
 //! data refused with exit code 2, and the walkthroughs on the DaISy steel subframe and
 //! the LADISK plate (data/; a missing data file fails the test).
 
-mod common;
+use crate::common;
 use common::{data_file, era, expect_input_error, json_of, s};
 use era::sim::{time_response, truth_model, Minstd};
 use std::fmt::Write as _;

@@ -3,7 +3,7 @@
 //! a UFF far above 0 Hz, an HDF5 declaring an unwritten huge dataset, a scipy MAT file,
 //! byte-order marks and escape sequences.
 
-mod common;
+use crate::common;
 use common::hostile::*;
 use common::s;
 use std::path::{Path, PathBuf};

@@ -1,0 +1,18 @@
+//! The command line's integration tests, one binary (one link) with a module per area;
+//! `common` holds the helpers (the era binary, data files, the hostile-input watchdog).
+
+mod common;
+mod auto_order;
+mod browser;
+mod cli;
+mod experiment_cli;
+mod formats_cli;
+mod frf_cli;
+mod friction_cli;
+mod hostile_inputs;
+mod hostile_outputs;
+mod hostile_params;
+mod messages_cli;
+mod refine_cli;
+mod report_cli;
+mod trust;
