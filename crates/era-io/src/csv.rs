@@ -184,7 +184,7 @@ pub fn parse_frf_csv(
             time,
             format!(
                 "a time column: this file holds time histories, not FRFs; {}",
-                crate::format::time_hint(path)
+                crate::frf_file::time_hint(path)
             ),
         ));
     }

@@ -22,7 +22,7 @@
 //!   3. one q×p×L complex array + `FreqV`.
 //!
 //!   The frequency variable is `FreqV` unless the caller names another
-//!   ([`crate::format::ReadOptions::frequency_variable`], `--freq-variable` in the CLI).
+//!   ([`crate::frf_file::ReadOptions::frequency_variable`], `--freq-variable` in the CLI).
 //!   The facts above are read back when present. Lines that start a whole number of
 //!   increments above 0 Hz are padded with zero lines, as in every format
 //!   ([`crate::frf_file::zero_start`]).
@@ -31,7 +31,7 @@
 //! dimensions), the one constructor it offers for arrays built at run time.
 
 use crate::atomic::write_via;
-use crate::format::ReadOptions;
+use crate::frf_file::ReadOptions;
 use crate::frf_file::{Channel, ChannelTable, Dof, FrfFile};
 use crate::IoError;
 use era::modal::ModalParameters;
@@ -751,7 +751,7 @@ fn frf_from_variables(
                     format!(
                         "no FreqV variable and no complex array (the file has: {}): real matrices like these are time histories; {}; if the file holds FRFs with the frequencies under another name, give it with --freq-variable NAME",
                         has(),
-                        crate::format::time_hint(path)
+                        crate::frf_file::time_hint(path)
                     )
                 }
                 None => format!(
