@@ -896,7 +896,7 @@ fn frf_matrix(
             r
         }
     };
-    if q == 0 || cols % q != 0 {
+    if q == 0 || !cols.is_multiple_of(q) {
         return Err(variable_error(
             path,
             "FRF",

@@ -380,9 +380,9 @@ where
     for (x, y) in s.x.iter().zip(&s.y) {
         if usable(*x, *y, scale) {
             // Clamped into the axes, so no coordinate is far outside them.
-            pieces
-                .last_mut()
-                .map(|p| p.push((x.clamp(x0, x1), y.clamp(y0, y1))));
+            if let Some(p) = pieces.last_mut() {
+                p.push((x.clamp(x0, x1), y.clamp(y0, y1)));
+            }
         } else if pieces.last().is_some_and(|p| !p.is_empty()) {
             pieces.push(Vec::new());
         }
