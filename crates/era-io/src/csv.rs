@@ -138,7 +138,64 @@ pub fn parse_frf_csv(
         })?,
         None => default_quantity,
     };
+    let names = header_names(text, path, header_line)?;
+    let columns = column_map(path, header_line, &names)?;
+    let (q, p) = (columns.q, columns.p);
+    let rows = data_rows(text, path, header_line, &names, columns.frequency)?;
 
+    // Lines from 0 Hz: a start a whole number of increments above is padded with zero
+    // lines (as in every format), another start is refused with the remedy.
+    let DataRows {
+        mut frequency_hz,
+        rows,
+        line_of_row,
+    } = rows;
+    let mut metadata = metadata;
+    let start = crate::frf_file::zero_start(
+        path,
+        &format!("line {}, column frequency_hz: ", line_of_row[0]),
+        &frequency_hz,
+        q * p,
+    )?;
+    let added = start.as_ref().map_or(0, |z| z.added);
+    if let Some(z) = &start {
+        crate::frf_file::add_note(&mut metadata, z.note());
+        frequency_hz = z.frequency_hz.clone();
+    }
+    let lines = rows.len() + added;
+    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+    for i in 1..=q {
+        for j in 1..=p {
+            let (re, im) = (columns.pairs[&(i, j, 0)], columns.pairs[&(i, j, 1)]);
+            for (k, row) in rows.iter().enumerate() {
+                values[((i - 1) * p + (j - 1)) * lines + added + k] =
+                    Complex64::new(row[re], row[im]);
+            }
+        }
+    }
+    // A line index of the padded set is row `line − added` of the file.
+    let row_line = |line: usize| line_of_row[line.saturating_sub(added).min(rows.len() - 1)];
+    let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
+        EraError::NonUniformFrequencies { line, .. } | EraError::NonFinite { line, .. } => {
+            fail(row_line(line), "frequency_hz", e.to_string())
+        }
+        EraError::FirstLineNotZero { .. } => fail(line_of_row[0], "frequency_hz", e.to_string()),
+        other => IoError::format(path, "", other.to_string()),
+    })?;
+    Ok(FrfFile {
+        channels: crate::frf_file::channels_from_metadata(&metadata, frf.outputs(), frf.inputs()),
+        frf,
+        quantity_given: metadata.contains_key("quantity"),
+        metadata,
+    })
+}
+
+/// The header's column names, read with the `csv` crate (which knows quoting) from the
+/// first non-blank record; a header of one column split by another separator, or one
+/// with a time column, is refused with what to do instead.
+fn header_names(text: &str, path: &Path, header_line: usize) -> Result<Vec<String>, IoError> {
+    let fail =
+        |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
     let mut reader = ::csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))
@@ -184,10 +241,29 @@ pub fn parse_frf_csv(
             time,
             format!(
                 "a time column: this file holds time histories, not FRFs; {}",
-                crate::format::time_hint(path)
+                crate::frf_file::time_hint(path)
             ),
         ));
     }
+    Ok(names)
+}
+
+/// Where each column of the header is: the frequencies, and each pair's parts.
+struct ColumnMap {
+    /// The `frequency_hz` column.
+    frequency: usize,
+    /// `(i, j, 0 re | 1 im)` → column, 1-based `i`, `j`.
+    pairs: BTreeMap<(usize, usize, u8), usize>,
+    /// Outputs and inputs: the largest `i` and `j` named.
+    q: usize,
+    p: usize,
+}
+
+/// The column map of the header, refusing unknown, duplicate or missing columns and a
+/// channel count over [`era::limits::CHANNELS`].
+fn column_map(path: &Path, header_line: usize, names: &[String]) -> Result<ColumnMap, IoError> {
+    let fail =
+        |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
     let mut frequency_col = None;
     let mut columns: BTreeMap<(usize, usize, u8), usize> = BTreeMap::new();
     let (mut q, mut p) = (0, 0);
@@ -255,12 +331,37 @@ pub fn parse_frf_csv(
             ),
         ));
     }
-
     for (count, side) in [(q, "outputs"), (p, "inputs")] {
         era::limits::CHANNELS
             .check(format!("the header names {count} {side}"), count as u64)
             .map_err(|e| IoError::limit(path, e))?;
     }
+    Ok(ColumnMap {
+        frequency: frequency_col,
+        pairs: columns,
+        q,
+        p,
+    })
+}
+
+/// The data rows of the file: each row's numbers, its frequency and its line number.
+struct DataRows {
+    frequency_hz: Vec<f64>,
+    rows: Vec<Vec<f64>>,
+    line_of_row: Vec<usize>,
+}
+
+/// Every line after the header as numbers (comments and blank lines skipped), at least
+/// one row.
+fn data_rows(
+    text: &str,
+    path: &Path,
+    header_line: usize,
+    names: &[String],
+    frequency_col: usize,
+) -> Result<DataRows, IoError> {
+    let fail =
+        |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
     // Rows: every line after the header, parsed in parallel (docs/design.md §7: a 2 MB
     // file is about 100 000 numbers, and parsing them is the whole cost of reading).
     // The header went through the csv crate, which knows quoting; a number has no
@@ -273,7 +374,7 @@ pub fn parse_frf_csv(
         .collect();
     let parsed: Vec<Result<Option<Vec<f64>>, IoError>> = data
         .par_iter()
-        .map(|&(line, text)| parse_row(text, line, &names, &fail))
+        .map(|&(line, text)| parse_row(text, line, names, &fail))
         .collect();
     let mut frequency_hz = Vec::new();
     let mut rows: Vec<Vec<f64>> = Vec::new();
@@ -288,46 +389,10 @@ pub fn parse_frf_csv(
     if rows.is_empty() {
         return Err(IoError::format(path, "", "no data rows"));
     }
-
-    // Lines from 0 Hz: a start a whole number of increments above is padded with zero
-    // lines (as in every format), another start is refused with the remedy.
-    let mut metadata = metadata;
-    let start = crate::frf_file::zero_start(
-        path,
-        &format!("line {}, column frequency_hz: ", line_of_row[0]),
-        &frequency_hz,
-        q * p,
-    )?;
-    let added = start.as_ref().map_or(0, |z| z.added);
-    if let Some(z) = &start {
-        crate::frf_file::add_note(&mut metadata, z.note());
-        frequency_hz = z.frequency_hz.clone();
-    }
-    let lines = rows.len() + added;
-    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
-    for i in 1..=q {
-        for j in 1..=p {
-            let (re, im) = (columns[&(i, j, 0)], columns[&(i, j, 1)]);
-            for (k, row) in rows.iter().enumerate() {
-                values[((i - 1) * p + (j - 1)) * lines + added + k] =
-                    Complex64::new(row[re], row[im]);
-            }
-        }
-    }
-    // A line index of the padded set is row `line − added` of the file.
-    let row_line = |line: usize| line_of_row[line.saturating_sub(added).min(rows.len() - 1)];
-    let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
-        EraError::NonUniformFrequencies { line, .. } | EraError::NonFinite { line, .. } => {
-            fail(row_line(line), "frequency_hz", e.to_string())
-        }
-        EraError::FirstLineNotZero { .. } => fail(line_of_row[0], "frequency_hz", e.to_string()),
-        other => IoError::format(path, "", other.to_string()),
-    })?;
-    Ok(FrfFile {
-        channels: crate::frf_file::channels_from_metadata(&metadata, frf.outputs(), frf.inputs()),
-        frf,
-        quantity_given: metadata.contains_key("quantity"),
-        metadata,
+    Ok(DataRows {
+        frequency_hz,
+        rows,
+        line_of_row,
     })
 }
 

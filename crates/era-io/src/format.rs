@@ -12,10 +12,9 @@
 
 use crate::csv::{format_frf_csv, read_frf_csv};
 use crate::frf_file::FrfFile;
-pub use crate::frf_file::{channel_metadata, channels_from_metadata};
+pub use crate::frf_file::{channel_metadata, channels_from_metadata, time_hint, ReadOptions};
 use crate::uff::UffWriteOptions;
 use crate::IoError;
-use era::Quantity;
 use std::path::Path;
 
 /// A file format for FRFs.
@@ -27,27 +26,6 @@ pub enum FrfFormat {
     Uff,
     /// MATLAB MAT v5 (compressed or not).
     Mat,
-}
-
-/// What a reader needs beyond the path.
-#[derive(Debug, Clone)]
-pub struct ReadOptions {
-    /// Tag for files that do not say what they measure.
-    pub default_quantity: Quantity,
-    /// How many of a MAT `FRF` matrix's columns are outputs, when the file does not say.
-    pub outputs: Option<usize>,
-    /// The MAT variable holding the frequencies (Hz), when not `FreqV`.
-    pub frequency_variable: Option<String>,
-}
-
-impl Default for ReadOptions {
-    fn default() -> Self {
-        ReadOptions {
-            default_quantity: Quantity::Acceleration,
-            outputs: None,
-            frequency_variable: None,
-        }
-    }
 }
 
 /// Reads FRFs from a file.
@@ -147,14 +125,6 @@ impl FrfFormat {
             (None, _) => Ok(FrfFormat::Csv),
         }
     }
-}
-
-/// What to do with the time histories in `path`, given where FRFs are expected.
-pub fn time_hint(path: &Path) -> String {
-    let f = crate::text::escaped_message(&path.display().to_string());
-    format!(
-        "estimate the FRFs with `era frf {f} --inputs CHANNELS --outputs CHANNELS --out frf.csv`, or identify from the time histories directly with `era identify --from-time {f} --inputs CHANNELS --outputs CHANNELS`"
-    )
 }
 
 fn first_line(head: &[u8]) -> String {

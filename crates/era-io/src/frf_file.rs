@@ -1,10 +1,33 @@
 //! The types every FRF format shares: [`FrfFile`] (data, metadata, channel table), the
 //! [`ChannelTable`] of node/direction [`Dof`]s, and the channel-table metadata lines a
-//! CSV carries (`# output_1: node 12 +Z`). No other module of this crate is imported
-//! here, so every format can use these without a cycle.
+//! CSV carries (`# output_1: node 12 +Z`), with what every reader takes
+//! ([`ReadOptions`]) and says ([`time_hint`]). Of this crate only the error and the text
+//! helpers are imported here, so every format can use these without a cycle.
 
-use era::FrfData;
+use era::{FrfData, Quantity};
 use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What a reader needs beyond the path.
+#[derive(Debug, Clone)]
+pub struct ReadOptions {
+    /// Tag for files that do not say what they measure.
+    pub default_quantity: Quantity,
+    /// How many of a MAT `FRF` matrix's columns are outputs, when the file does not say.
+    pub outputs: Option<usize>,
+    /// The MAT variable holding the frequencies (Hz), when not `FreqV`.
+    pub frequency_variable: Option<String>,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            default_quantity: Quantity::Acceleration,
+            outputs: None,
+            frequency_variable: None,
+        }
+    }
+}
 
 /// An FRF file's data and metadata.
 #[derive(Debug, Clone)]
@@ -325,4 +348,12 @@ pub fn add_note(metadata: &mut BTreeMap<String, String>, note: String) {
             n.push_str(&note);
         })
         .or_insert(note);
+}
+
+/// What to do with the time histories in `path`, given where FRFs are expected.
+pub fn time_hint(path: &Path) -> String {
+    let f = crate::text::escaped_message(&path.display().to_string());
+    format!(
+        "estimate the FRFs with `era frf {f} --inputs CHANNELS --outputs CHANNELS --out frf.csv`, or identify from the time histories directly with `era identify --from-time {f} --inputs CHANNELS --outputs CHANNELS`"
+    )
 }

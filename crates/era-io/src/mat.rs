@@ -22,7 +22,7 @@
 //!   3. one q×p×L complex array + `FreqV`.
 //!
 //!   The frequency variable is `FreqV` unless the caller names another
-//!   ([`crate::format::ReadOptions::frequency_variable`], `--freq-variable` in the CLI).
+//!   ([`crate::frf_file::ReadOptions::frequency_variable`], `--freq-variable` in the CLI).
 //!   The facts above are read back when present. Lines that start a whole number of
 //!   increments above 0 Hz are padded with zero lines, as in every format
 //!   ([`crate::frf_file::zero_start`]).
@@ -31,7 +31,7 @@
 //! dimensions), the one constructor it offers for arrays built at run time.
 
 use crate::atomic::write_via;
-use crate::format::ReadOptions;
+use crate::frf_file::ReadOptions;
 use crate::frf_file::{Channel, ChannelTable, Dof, FrfFile};
 use crate::IoError;
 use era::modal::ModalParameters;
@@ -712,189 +712,53 @@ fn channels_of(
     }))
 }
 
+/// An FRF error about one variable: `variable NAME: message`.
+fn variable_error(path: &Path, variable: &str, message: String) -> IoError {
+    IoError::format(path, format!("variable {variable}: "), message)
+}
+
+/// Every variable of the file, for messages: `FRF 100x4, FreqV 100x1, label (char)`.
+fn listing(all: &Variables) -> String {
+    all.numeric
+        .iter()
+        .map(|(n, a)| {
+            let dims = a.dim.iter().map(usize::to_string).collect::<Vec<_>>();
+            format!("{n} {}", dims.join("x"))
+        })
+        .chain(all.other.iter().map(|(n, c)| format!("{n} ({c})")))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// FRFs pair-major (pair `(i, j)` from `(i · p + j) · lines`), `q` outputs by `p`
+/// inputs, with the layout they were read from (a note of the file).
+struct Layout {
+    q: usize,
+    p: usize,
+    values: Vec<Complex64>,
+    note: String,
+}
+
+/// An FRF file from its variables: the frequencies, the FRFs in one of three layouts
+/// (`FRF` matrix, `xferIJ` pairs, a `q x p x lines` array), lines from 0 Hz, then the
+/// facts a file of ours carries (quantity, units, channel table).
 fn frf_from_variables(
     path: &Path,
     all: &Variables,
     opts: &ReadOptions,
 ) -> Result<FrfFile, IoError> {
     let vars = &all.numeric;
-    let outputs = opts.outputs;
-    let fail = |variable: &str, message: String| {
-        IoError::format(path, format!("variable {variable}: "), message)
-    };
-    let has = || {
-        vars.iter()
-            .map(|(n, a)| {
-                let dims = a.dim.iter().map(usize::to_string).collect::<Vec<_>>();
-                format!("{n} {}", dims.join("x"))
-            })
-            .chain(all.other.iter().map(|(n, c)| format!("{n} ({c})")))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let frequency_name = opts.frequency_variable.as_deref().unwrap_or("FreqV");
-    let freq = vars.get(frequency_name).ok_or_else(|| {
-        IoError::format(
-            path,
-            "",
-            match &opts.frequency_variable {
-                Some(v) => format!("no numeric variable {v} (the file has: {})", has()),
-                None if ["a", "b", "c", "d"].iter().all(|k| vars.contains_key(*k)) => format!(
-                    "holds a state-space model (the file has: {}), not FRFs: give the FRF file (FRF + FreqV, xferIJ + FreqV, or a q x p x lines array + FreqV)",
-                    has()
-                ),
-                // Only real arrays and no FRF name: time histories, most likely.
-                None if vars.values().all(|a| a.im.is_none())
-                    && !vars.contains_key("FRF")
-                    && !vars.keys().any(|k| k.starts_with("xfer")) =>
-                {
-                    format!(
-                        "no FreqV variable and no complex array (the file has: {}): real matrices like these are time histories; {}; if the file holds FRFs with the frequencies under another name, give it with --freq-variable NAME",
-                        has(),
-                        crate::format::time_hint(path)
-                    )
-                }
-                None => format!(
-                    "no FreqV variable, the frequencies in Hz (the file has: {}): if they are under another name, give it with --freq-variable NAME",
-                    has()
-                ),
-            },
-        )
-    })?;
-    if freq.im.is_some() || freq.dim.iter().filter(|d| **d > 1).count() > 1 {
-        return Err(fail(
-            frequency_name,
-            format!(
-                "is {}{:?}: the frequencies must be a real vector (Hz)",
-                if freq.im.is_some() { "complex " } else { "" },
-                freq.dim
-            ),
-        ));
-    }
-    let lines = freq.re.len();
-    let frequency_hz = freq.re.clone();
-    let mut notes = BTreeMap::new();
-    let (q, p, values): (usize, usize, Vec<Complex64>) = if let Some(frf) = vars.get("FRF") {
-        if frf.dim.len() != 2 || frf.dim[0] != lines {
-            return Err(fail(
-                "FRF",
-                format!(
-                    "is {:?}, expected {lines} lines ({frequency_name}) x outputs·inputs columns",
-                    frf.dim
-                ),
-            ));
-        }
-        let cols = frf.dim[1];
-        let q = match (scalar(vars, "outputs"), outputs) {
-            (Some(q), _) | (None, Some(q)) => q,
-            (None, None) => {
-                let r = (cols as f64).sqrt().round() as usize;
-                if r * r != cols {
-                    return Err(fail(
-                        "FRF",
-                        format!("has {cols} columns: say how many are outputs (--outputs)"),
-                    ));
-                }
-                notes.insert(
-                    "layout".to_string(),
-                    format!("FRF + FreqV, assumed square {r} x {r}"),
-                );
-                r
-            }
-        };
-        if q == 0 || cols % q != 0 {
-            return Err(fail(
-                "FRF",
-                format!("has {cols} columns, not a multiple of {q} outputs"),
-            ));
-        }
-        let p = cols / q;
-        let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
-        for j in 0..p {
-            for i in 0..q {
-                let col = j * q + i;
-                for k in 0..lines {
-                    let at = col * lines + k;
-                    values[(i * p + j) * lines + k] =
-                        Complex64::new(frf.re[at], frf.im.as_ref().map_or(0.0, |v| v[at]));
-                }
-            }
-        }
-        notes
-            .entry("layout".to_string())
-            .or_insert_with(|| format!("FRF + FreqV, {q} x {p}"));
-        (q, p, values)
+    let (frequency_name, frequency_hz) = frequency_lines(path, all, opts)?;
+    let lines = frequency_hz.len();
+    let layout = if let Some(frf) = vars.get("FRF") {
+        frf_matrix(path, vars, frf, lines, frequency_name, opts.outputs)?
     } else if vars.keys().any(|k| k.starts_with("xfer")) {
-        let mut pairs = BTreeMap::new();
-        let mut ambiguous = Vec::new();
-        for (name, a) in vars.iter().filter(|(k, _)| k.starts_with("xfer")) {
-            match xfer_indices(name) {
-                Some(Ok(ij)) => {
-                    if a.re.len() != lines {
-                        return Err(fail(
-                            name,
-                            format!("has {} values, {frequency_name} has {lines}", a.re.len()),
-                        ));
-                    }
-                    pairs.insert(ij, a);
-                }
-                Some(Err(n)) => ambiguous.push(n),
-                None => {}
-            }
-        }
-        if !ambiguous.is_empty() {
-            return Err(IoError::format(
-                path,
-                "",
-                format!(
-                    "ambiguous xfer names {} (indices of 10 and over need an underscore, e.g. xfer1_10)",
-                    ambiguous.join(", ")
-                ),
-            ));
-        }
-        let q = pairs.keys().map(|k| k.0).max().unwrap_or(0);
-        let p = pairs.keys().map(|k| k.1).max().unwrap_or(0);
-        let missing: Vec<String> = (1..=q)
-            .flat_map(|i| (1..=p).map(move |j| (i, j)))
-            .filter(|ij| !pairs.contains_key(ij))
-            .map(|(i, j)| format!("xfer{i}{j}"))
-            .collect();
-        if !missing.is_empty() {
-            return Err(IoError::format(
-                path,
-                "",
-                format!("missing pairs for a {q} x {p} set: {}", missing.join(", ")),
-            ));
-        }
-        let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
-        for ((i, j), a) in &pairs {
-            for k in 0..lines {
-                values[((i - 1) * p + (j - 1)) * lines + k] =
-                    Complex64::new(a.re[k], a.im.as_ref().map_or(0.0, |v| v[k]));
-            }
-        }
-        notes.insert("layout".to_string(), format!("xferIJ + FreqV, {q} x {p}"));
-        (q, p, values)
+        xfer_pairs(path, vars, lines, frequency_name)?
     } else if let Some((name, cube)) = vars
         .iter()
         .find(|(_, a)| a.dim.len() == 3 && a.dim[2] == lines)
     {
-        let (q, p) = (cube.dim[0], cube.dim[1]);
-        let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
-        for k in 0..lines {
-            for j in 0..p {
-                for i in 0..q {
-                    let at = i + q * (j + p * k);
-                    values[(i * p + j) * lines + k] =
-                        Complex64::new(cube.re[at], cube.im.as_ref().map_or(0.0, |v| v[at]));
-                }
-            }
-        }
-        notes.insert(
-            "layout".to_string(),
-            format!("{name} ({q} x {p} x {lines}) + FreqV"),
-        );
-        (q, p, values)
+        frf_cube(name, cube, lines)
     } else {
         return Err(IoError::format(
             path,
@@ -905,9 +769,16 @@ fn frf_from_variables(
             ),
         ));
     };
+    let Layout {
+        q,
+        p,
+        mut values,
+        note,
+    } = layout;
+    let mut notes = BTreeMap::new();
+    notes.insert("layout".to_string(), note);
     // Lines from 0 Hz, as in every format.
     let mut frequency_hz = frequency_hz;
-    let mut values = values;
     let location = format!("variable {frequency_name}: ");
     if let Some(start) = crate::frf_file::zero_start(path, &location, &frequency_hz, q * p)? {
         values = start.pad_values(&values, q * p);
@@ -915,18 +786,7 @@ fn frf_from_variables(
         frequency_hz = start.frequency_hz;
     }
     // The facts a file of ours carries.
-    let (quantity, quantity_given) = match all.text.get("quantity") {
-        Some(q) => (
-            Quantity::parse(q).ok_or_else(|| {
-                fail(
-                    "quantity",
-                    format!("unknown quantity '{q}' (acceleration, velocity or displacement)"),
-                )
-            })?,
-            true,
-        ),
-        None => (opts.default_quantity, false),
-    };
+    let (quantity, quantity_given) = quantity_of(path, all, opts.default_quantity)?;
     for key in ["response_unit", "force_unit"] {
         if let Some(u) = all.text.get(key) {
             notes.insert(key.to_string(), u.clone());
@@ -935,7 +795,7 @@ fn frf_from_variables(
     let channels = channels_of(path, vars, q, p)?;
     let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| match e {
         EraError::NonUniformFrequencies { .. } | EraError::FirstLineNotZero { .. } => {
-            fail(frequency_name, e.to_string())
+            variable_error(path, frequency_name, e.to_string())
         }
         other => IoError::format(path, "", other.to_string()),
     })?;
@@ -945,6 +805,216 @@ fn frf_from_variables(
         metadata: notes,
         channels,
     })
+}
+
+/// The frequency variable's name and its lines (Hz): `FreqV` unless the options name
+/// another; when it is missing, the message says what the file looks like instead (a
+/// state-space model, time histories, or FRFs under another name).
+fn frequency_lines<'a>(
+    path: &Path,
+    all: &Variables,
+    opts: &'a ReadOptions,
+) -> Result<(&'a str, Vec<f64>), IoError> {
+    let vars = &all.numeric;
+    let frequency_name = opts.frequency_variable.as_deref().unwrap_or("FreqV");
+    let freq = vars.get(frequency_name).ok_or_else(|| {
+        IoError::format(
+            path,
+            "",
+            match &opts.frequency_variable {
+                Some(v) => format!("no numeric variable {v} (the file has: {})", listing(all)),
+                None if ["a", "b", "c", "d"].iter().all(|k| vars.contains_key(*k)) => format!(
+                    "holds a state-space model (the file has: {}), not FRFs: give the FRF file (FRF + FreqV, xferIJ + FreqV, or a q x p x lines array + FreqV)",
+                    listing(all)
+                ),
+                // Only real arrays and no FRF name: time histories, most likely.
+                None if vars.values().all(|a| a.im.is_none())
+                    && !vars.contains_key("FRF")
+                    && !vars.keys().any(|k| k.starts_with("xfer")) =>
+                {
+                    format!(
+                        "no FreqV variable and no complex array (the file has: {}): real matrices like these are time histories; {}; if the file holds FRFs with the frequencies under another name, give it with --freq-variable NAME",
+                        listing(all),
+                        crate::frf_file::time_hint(path)
+                    )
+                }
+                None => format!(
+                    "no FreqV variable, the frequencies in Hz (the file has: {}): if they are under another name, give it with --freq-variable NAME",
+                    listing(all)
+                ),
+            },
+        )
+    })?;
+    if freq.im.is_some() || freq.dim.iter().filter(|d| **d > 1).count() > 1 {
+        return Err(variable_error(
+            path,
+            frequency_name,
+            format!(
+                "is {}{:?}: the frequencies must be a real vector (Hz)",
+                if freq.im.is_some() { "complex " } else { "" },
+                freq.dim
+            ),
+        ));
+    }
+    Ok((frequency_name, freq.re.clone()))
+}
+
+/// The `FRF` matrix: `lines` rows, `q · p` columns with column `j · q + i` the pair
+/// `(i, j)`; `q` from the file's `outputs`, else the options, else a square set.
+fn frf_matrix(
+    path: &Path,
+    vars: &BTreeMap<String, Array>,
+    frf: &Array,
+    lines: usize,
+    frequency_name: &str,
+    outputs: Option<usize>,
+) -> Result<Layout, IoError> {
+    if frf.dim.len() != 2 || frf.dim[0] != lines {
+        return Err(variable_error(
+            path,
+            "FRF",
+            format!(
+                "is {:?}, expected {lines} lines ({frequency_name}) x outputs·inputs columns",
+                frf.dim
+            ),
+        ));
+    }
+    let cols = frf.dim[1];
+    let mut square_note = None;
+    let q = match (scalar(vars, "outputs"), outputs) {
+        (Some(q), _) | (None, Some(q)) => q,
+        (None, None) => {
+            let r = (cols as f64).sqrt().round() as usize;
+            if r * r != cols {
+                return Err(variable_error(
+                    path,
+                    "FRF",
+                    format!("has {cols} columns: say how many are outputs (--outputs)"),
+                ));
+            }
+            square_note = Some(format!("FRF + FreqV, assumed square {r} x {r}"));
+            r
+        }
+    };
+    if q == 0 || !cols.is_multiple_of(q) {
+        return Err(variable_error(
+            path,
+            "FRF",
+            format!("has {cols} columns, not a multiple of {q} outputs"),
+        ));
+    }
+    let p = cols / q;
+    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+    for j in 0..p {
+        for i in 0..q {
+            let col = j * q + i;
+            for k in 0..lines {
+                let at = col * lines + k;
+                values[(i * p + j) * lines + k] =
+                    Complex64::new(frf.re[at], frf.im.as_ref().map_or(0.0, |v| v[at]));
+            }
+        }
+    }
+    let note = square_note.unwrap_or_else(|| format!("FRF + FreqV, {q} x {p}"));
+    Ok(Layout { q, p, values, note })
+}
+
+/// One variable `xferIJ` (or `xferI_J`) per pair, every pair of the `q x p` set present.
+fn xfer_pairs(
+    path: &Path,
+    vars: &BTreeMap<String, Array>,
+    lines: usize,
+    frequency_name: &str,
+) -> Result<Layout, IoError> {
+    let mut pairs = BTreeMap::new();
+    let mut ambiguous = Vec::new();
+    for (name, a) in vars.iter().filter(|(k, _)| k.starts_with("xfer")) {
+        match xfer_indices(name) {
+            Some(Ok(ij)) => {
+                if a.re.len() != lines {
+                    return Err(variable_error(
+                        path,
+                        name,
+                        format!("has {} values, {frequency_name} has {lines}", a.re.len()),
+                    ));
+                }
+                pairs.insert(ij, a);
+            }
+            Some(Err(n)) => ambiguous.push(n),
+            None => {}
+        }
+    }
+    if !ambiguous.is_empty() {
+        return Err(IoError::format(
+            path,
+            "",
+            format!(
+                "ambiguous xfer names {} (indices of 10 and over need an underscore, e.g. xfer1_10)",
+                ambiguous.join(", ")
+            ),
+        ));
+    }
+    let q = pairs.keys().map(|k| k.0).max().unwrap_or(0);
+    let p = pairs.keys().map(|k| k.1).max().unwrap_or(0);
+    let missing: Vec<String> = (1..=q)
+        .flat_map(|i| (1..=p).map(move |j| (i, j)))
+        .filter(|ij| !pairs.contains_key(ij))
+        .map(|(i, j)| format!("xfer{i}{j}"))
+        .collect();
+    if !missing.is_empty() {
+        return Err(IoError::format(
+            path,
+            "",
+            format!("missing pairs for a {q} x {p} set: {}", missing.join(", ")),
+        ));
+    }
+    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+    for ((i, j), a) in &pairs {
+        for k in 0..lines {
+            values[((i - 1) * p + (j - 1)) * lines + k] =
+                Complex64::new(a.re[k], a.im.as_ref().map_or(0.0, |v| v[k]));
+        }
+    }
+    let note = format!("xferIJ + FreqV, {q} x {p}");
+    Ok(Layout { q, p, values, note })
+}
+
+/// A `q x p x lines` array (MATLAB's column-major order: `i` fastest, then `j`, then `k`).
+fn frf_cube(name: &str, cube: &Array, lines: usize) -> Layout {
+    let (q, p) = (cube.dim[0], cube.dim[1]);
+    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+    for k in 0..lines {
+        for j in 0..p {
+            for i in 0..q {
+                let at = i + q * (j + p * k);
+                values[(i * p + j) * lines + k] =
+                    Complex64::new(cube.re[at], cube.im.as_ref().map_or(0.0, |v| v[at]));
+            }
+        }
+    }
+    let note = format!("{name} ({q} x {p} x {lines}) + FreqV");
+    Layout { q, p, values, note }
+}
+
+/// The file's `quantity` text variable, or the default (and whether the file said).
+fn quantity_of(
+    path: &Path,
+    all: &Variables,
+    default: Quantity,
+) -> Result<(Quantity, bool), IoError> {
+    match all.text.get("quantity") {
+        Some(q) => Ok((
+            Quantity::parse(q).ok_or_else(|| {
+                variable_error(
+                    path,
+                    "quantity",
+                    format!("unknown quantity '{q}' (acceleration, velocity or displacement)"),
+                )
+            })?,
+            true,
+        )),
+        None => Ok((default, false)),
+    }
 }
 
 #[cfg(test)]

@@ -21,7 +21,9 @@
 //! A series is cut where a point is not drawable (NaN marks a gap, such as a wrapped
 //! phase passing ±180°); a piece of one point is drawn as a dot.
 
-use crate::figures::{Figure, Panel, SeriesKind, YScale};
+use crate::figures::{Figure, Panel, Series, SeriesKind, YScale};
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
@@ -172,6 +174,20 @@ macro_rules! dashed_mark {
     };
 }
 
+/// A panel's chart: x linear, y linear or logarithmic.
+type PanelChart<'a, DB, Y> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>;
+
+/// How a panel is drawn: its axes' ranges (already through [`safe_range`]), the font
+/// size, and the medium.
+#[derive(Clone, Copy)]
+struct Frame {
+    x: (f64, f64),
+    y: (f64, f64),
+    font: i32,
+    compact: bool,
+    svg: bool,
+}
+
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
@@ -198,188 +214,291 @@ where
     if !panel.title.is_empty() {
         builder.caption(&panel.title, ("sans-serif", font));
     }
-    let (x0, x1) = safe_range(panel.x_range, false);
-    let (y0, y1) = safe_range(panel.y_range, panel.y_scale == YScale::Log);
-    macro_rules! body {
-        ($chart:expr) => {{
-            let mut chart = $chart;
-            let mut mesh = chart.configure_mesh();
-            mesh.x_desc(panel.x_label.as_str())
-                .y_desc(panel.y_label.as_str())
-                .label_style(("sans-serif", font - 2));
-            if compact {
-                mesh.x_labels(4)
-                    .y_labels(4)
-                    .disable_x_mesh()
-                    .disable_y_mesh();
-            } else {
-                // One light line between labelled ones: the minor grid of every
-                // overlay was most of a report's bytes.
-                mesh.max_light_lines(1);
-            }
-            let x_span = x1 - x0;
-            let x_format = move |v: &f64| {
-                if x_span >= 20.0 {
-                    format!("{v:.0}")
-                } else {
-                    format!("{v:.2}")
-                }
-            };
-            mesh.x_label_formatter(&x_format);
-            // Linear ticks with as many decimals as the span needs (a ±0.3 V axis
-            // is not labelled 0, 0, 0).
-            let y_span = y1 - y0;
-            let decimals = if y_span >= 20.0 {
-                0
-            } else {
-                (1.0 - y_span.log10().floor()).clamp(1.0, 6.0) as usize
-            };
-            let y_format = move |v: &f64| match panel.y_scale {
-                YScale::Log => format!("{v:.0e}"),
-                // A tick at 0 that roundoff put at -1e-17 is "0", not "-0.0".
-                YScale::Linear if v.abs() < 0.5 * 10f64.powi(-(decimals as i32)) => {
-                    format!("{:.decimals$}", 0.0)
-                }
-                YScale::Linear => format!("{v:.decimals$}"),
-            };
-            mesh.y_label_formatter(&y_format);
-            mesh.draw().map_err(err)?;
-            for s in &panel.series {
-                let usable = |x: f64, y: f64| {
-                    x.is_finite() && y.is_finite() && (panel.y_scale == YScale::Linear || y > 0.0)
-                };
-                if s.kind == SeriesKind::Values {
-                    let points: Vec<(f64, f64)> =
-                        s.x.iter()
-                            .zip(&s.y)
-                            .filter(|(x, y)| usable(**x, **y))
-                            .map(|(x, y)| (x.clamp(x0, x1), y.clamp(y0, y1)))
-                            .collect();
-                    chart
-                        .draw_series(LineSeries::new(points.clone(), MEASURED.stroke_width(1)))
-                        .map_err(err)?;
-                    chart
-                        .draw_series(points.iter().map(|p| Circle::new(*p, 3, MEASURED.filled())))
-                        .map_err(err)?
-                        .label(s.label.as_str())
-                        .legend(|(x, y)| Circle::new((x + 10, y), 3, MEASURED.filled()));
-                    continue;
-                }
-                // A curve is cut where a point is not drawable (NaN marks a gap, e.g. a
-                // wrapped phase's jump), each piece thinned to what the pixels show.
-                let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
-                for (x, y) in s.x.iter().zip(&s.y) {
-                    if usable(*x, *y) {
-                        // Clamped into the axes, so no coordinate is far outside them.
-                        pieces
-                            .last_mut()
-                            .map(|p| p.push((x.clamp(x0, x1), y.clamp(y0, y1))));
-                    } else if pieces.last().is_some_and(|p| !p.is_empty()) {
-                        pieces.push(Vec::new());
-                    }
-                }
-                for (k, piece) in pieces.into_iter().enumerate() {
-                    let pixels: Vec<(i32, i32)> =
-                        piece.iter().map(|p| chart.backend_coord(p)).collect();
-                    let points: Vec<(f64, f64)> = visible_points(&pixels)
-                        .into_iter()
-                        .map(|k| piece[k])
-                        .collect();
-                    // A bitmap strokes a wide polyline as a polygon with mitred joins, and a
-                    // noisy measurement turning back within a pixel makes miters that shoot
-                    // far past its points (and the panel): measured curves are one pixel
-                    // wide there, drawn without joins. SVG viewers limit the miter.
-                    let width = if compact || (!svg && s.kind != SeriesKind::Model) {
-                        1
-                    } else {
-                        2
-                    };
-                    let colour = if s.kind == SeriesKind::Model {
-                        MODEL
-                    } else {
-                        MEASURED
-                    };
-                    let drawn =
-                        match s.kind {
-                            // A piece of one point (a noisy phase flipping across ±180°
-                            // line by line) is a dot, not an invisible one-point line.
-                            _ if points.len() == 1 => chart.draw_series(std::iter::once(
-                                Circle::new(points[0], width, colour.filled()),
-                            )),
-                            SeriesKind::Model if !svg => chart.draw_series(DashedLineSeries::new(
-                                points,
-                                6,
-                                4,
-                                MODEL.stroke_width(width),
-                            )),
-                            // In SVG one polyline, dashed by the style sheet `compact_svg`
-                            // adds.
-                            SeriesKind::Model => chart
-                                .draw_series(LineSeries::new(points, MODEL.stroke_width(width))),
-                            _ => chart
-                                .draw_series(LineSeries::new(points, MEASURED.stroke_width(width))),
-                        }
-                        .map_err(err)?;
-                    // The legend entry once per series.
-                    if k == 0 {
-                        if s.kind == SeriesKind::Model {
-                            drawn
-                                .label(s.label.as_str())
-                                .legend(|(x, y)| dashed_mark!(x, y, MODEL.stroke_width(2)));
-                        } else {
-                            drawn.label(s.label.as_str()).legend(|(x, y)| {
-                                PathElement::new(
-                                    vec![(x, y), (x + 20, y)],
-                                    MEASURED.stroke_width(2),
-                                )
-                            });
-                        }
-                    }
-                }
-            }
-            if let Some((x, label)) = panel.marker_x.as_ref().filter(|(x, _)| x.is_finite()) {
-                let x = &x.clamp(x0, x1);
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![(*x, y0), (*x, y1)],
-                        5,
-                        5,
-                        MODEL.stroke_width(1),
-                    ))
-                    .map_err(err)?
-                    .label(label.as_str())
-                    .legend(|(x, y)| dashed_mark!(x, y, MODEL.stroke_width(1)));
-            }
-            if let Some((y, label)) = panel.guide_y.as_ref().filter(|(y, _)| y.is_finite()) {
-                let y = &y.clamp(y0, y1);
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![(x0, *y), (x1, *y)],
-                        5,
-                        5,
-                        GUIDE.stroke_width(1),
-                    ))
-                    .map_err(err)?
-                    .label(label.as_str())
-                    .legend(|(x, y)| dashed_mark!(x, y, GUIDE.stroke_width(1)));
-            }
-            if panel.legend || panel.marker_x.is_some() || panel.guide_y.is_some() {
-                chart
-                    .configure_series_labels()
-                    .position(SeriesLabelPosition::UpperRight)
-                    .label_font(("sans-serif", font - 2))
-                    .border_style(BLACK)
-                    .background_style(WHITE.mix(0.9))
-                    .draw()
-                    .map_err(err)?;
-            }
-        }};
-    }
+    let frame = Frame {
+        x: safe_range(panel.x_range, false),
+        y: safe_range(panel.y_range, panel.y_scale == YScale::Log),
+        font,
+        compact,
+        svg,
+    };
+    let ((x0, x1), (y0, y1)) = (frame.x, frame.y);
     match panel.y_scale {
-        YScale::Log => body!(builder
-            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-            .map_err(err)?),
-        YScale::Linear => body!(builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?),
+        YScale::Log => draw_chart(
+            builder
+                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+                .map_err(err)?,
+            panel,
+            frame,
+        ),
+        YScale::Linear => draw_chart(
+            builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?,
+            panel,
+            frame,
+        ),
+    }
+}
+
+/// A panel's content on its chart: the mesh, each series, the marker and guide lines,
+/// and the legend.
+fn draw_chart<'a, DB, Y>(
+    mut chart: PanelChart<'a, DB, Y>,
+    panel: &Panel,
+    frame: Frame,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    draw_mesh(&mut chart, panel, frame)?;
+    for s in &panel.series {
+        if s.kind == SeriesKind::Values {
+            draw_values(&mut chart, s, panel.y_scale, frame)?;
+        } else {
+            draw_curve(&mut chart, s, panel.y_scale, frame)?;
+        }
+    }
+    draw_guides(&mut chart, panel, frame)?;
+    if panel.legend || panel.marker_x.is_some() || panel.guide_y.is_some() {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(("sans-serif", frame.font - 2))
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.9))
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// The axes, their names and tick labels, and the grid (none when compact).
+fn draw_mesh<'a, DB, Y>(
+    chart: &mut PanelChart<'a, DB, Y>,
+    panel: &Panel,
+    frame: Frame,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let ((x0, x1), (y0, y1)) = (frame.x, frame.y);
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(panel.x_label.as_str())
+        .y_desc(panel.y_label.as_str())
+        .label_style(("sans-serif", frame.font - 2));
+    if frame.compact {
+        mesh.x_labels(4)
+            .y_labels(4)
+            .disable_x_mesh()
+            .disable_y_mesh();
+    } else {
+        // One light line between labelled ones: the minor grid of every
+        // overlay was most of a report's bytes.
+        mesh.max_light_lines(1);
+    }
+    let x_span = x1 - x0;
+    let x_format = move |v: &f64| {
+        if x_span >= 20.0 {
+            format!("{v:.0}")
+        } else {
+            format!("{v:.2}")
+        }
+    };
+    mesh.x_label_formatter(&x_format);
+    // Linear ticks with as many decimals as the span needs (a ±0.3 V axis
+    // is not labelled 0, 0, 0).
+    let y_span = y1 - y0;
+    let decimals = if y_span >= 20.0 {
+        0
+    } else {
+        (1.0 - y_span.log10().floor()).clamp(1.0, 6.0) as usize
+    };
+    let y_format = move |v: &f64| match panel.y_scale {
+        YScale::Log => format!("{v:.0e}"),
+        // A tick at 0 that roundoff put at -1e-17 is "0", not "-0.0".
+        YScale::Linear if v.abs() < 0.5 * 10f64.powi(-(decimals as i32)) => {
+            format!("{:.decimals$}", 0.0)
+        }
+        YScale::Linear => format!("{v:.decimals$}"),
+    };
+    mesh.y_label_formatter(&y_format);
+    mesh.draw().map_err(err)
+}
+
+/// Whether a point can be drawn on a `scale` axis: finite, and positive on a log axis.
+fn usable(x: f64, y: f64, scale: YScale) -> bool {
+    x.is_finite() && y.is_finite() && (scale == YScale::Linear || y > 0.0)
+}
+
+/// A series of values: each drawable point a dot, joined by a thin line.
+fn draw_values<'a, DB, Y>(
+    chart: &mut PanelChart<'a, DB, Y>,
+    s: &Series,
+    scale: YScale,
+    frame: Frame,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let ((x0, x1), (y0, y1)) = (frame.x, frame.y);
+    let points: Vec<(f64, f64)> =
+        s.x.iter()
+            .zip(&s.y)
+            .filter(|(x, y)| usable(**x, **y, scale))
+            .map(|(x, y)| (x.clamp(x0, x1), y.clamp(y0, y1)))
+            .collect();
+    chart
+        .draw_series(LineSeries::new(points.clone(), MEASURED.stroke_width(1)))
+        .map_err(err)?;
+    chart
+        .draw_series(points.iter().map(|p| Circle::new(*p, 3, MEASURED.filled())))
+        .map_err(err)?
+        .label(s.label.as_str())
+        .legend(|(x, y)| Circle::new((x + 10, y), 3, MEASURED.filled()));
+    Ok(())
+}
+
+/// A measured or model curve, cut where a point is not drawable (NaN marks a gap, e.g. a
+/// wrapped phase's jump), each piece thinned to what the pixels show.
+fn draw_curve<'a, DB, Y>(
+    chart: &mut PanelChart<'a, DB, Y>,
+    s: &Series,
+    scale: YScale,
+    frame: Frame,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let ((x0, x1), (y0, y1)) = (frame.x, frame.y);
+    let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    for (x, y) in s.x.iter().zip(&s.y) {
+        if usable(*x, *y, scale) {
+            // Clamped into the axes, so no coordinate is far outside them.
+            if let Some(p) = pieces.last_mut() {
+                p.push((x.clamp(x0, x1), y.clamp(y0, y1)));
+            }
+        } else if pieces.last().is_some_and(|p| !p.is_empty()) {
+            pieces.push(Vec::new());
+        }
+    }
+    for (k, piece) in pieces.into_iter().enumerate() {
+        let pixels: Vec<(i32, i32)> = piece.iter().map(|p| chart.backend_coord(p)).collect();
+        let points: Vec<(f64, f64)> = visible_points(&pixels)
+            .into_iter()
+            .map(|k| piece[k])
+            .collect();
+        draw_piece(chart, s, points, k == 0, frame)?;
+    }
+    Ok(())
+}
+
+/// One piece of a curve (a dot when it is one point), with the series' legend entry
+/// when it is the first.
+fn draw_piece<'a, DB, Y>(
+    chart: &mut PanelChart<'a, DB, Y>,
+    s: &Series,
+    points: Vec<(f64, f64)>,
+    first: bool,
+    frame: Frame,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let (compact, svg) = (frame.compact, frame.svg);
+    // A bitmap strokes a wide polyline as a polygon with mitred joins, and a
+    // noisy measurement turning back within a pixel makes miters that shoot
+    // far past its points (and the panel): measured curves are one pixel
+    // wide there, drawn without joins. SVG viewers limit the miter.
+    let width = if compact || (!svg && s.kind != SeriesKind::Model) {
+        1
+    } else {
+        2
+    };
+    let colour = if s.kind == SeriesKind::Model {
+        MODEL
+    } else {
+        MEASURED
+    };
+    let drawn = match s.kind {
+        // A piece of one point (a noisy phase flipping across ±180°
+        // line by line) is a dot, not an invisible one-point line.
+        _ if points.len() == 1 => chart.draw_series(std::iter::once(Circle::new(
+            points[0],
+            width,
+            colour.filled(),
+        ))),
+        SeriesKind::Model if !svg => chart.draw_series(DashedLineSeries::new(
+            points,
+            6,
+            4,
+            MODEL.stroke_width(width),
+        )),
+        // In SVG one polyline, dashed by the style sheet `compact_svg`
+        // adds.
+        SeriesKind::Model => chart.draw_series(LineSeries::new(points, MODEL.stroke_width(width))),
+        _ => chart.draw_series(LineSeries::new(points, MEASURED.stroke_width(width))),
+    }
+    .map_err(err)?;
+    // The legend entry once per series.
+    if first {
+        if s.kind == SeriesKind::Model {
+            drawn
+                .label(s.label.as_str())
+                .legend(|(x, y)| dashed_mark!(x, y, MODEL.stroke_width(2)));
+        } else {
+            drawn.label(s.label.as_str()).legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], MEASURED.stroke_width(2))
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The panel's vertical marker and horizontal guide, dashed across the axes, when set.
+fn draw_guides<'a, DB, Y>(
+    chart: &mut PanelChart<'a, DB, Y>,
+    panel: &Panel,
+    frame: Frame,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let ((x0, x1), (y0, y1)) = (frame.x, frame.y);
+    if let Some((x, label)) = panel.marker_x.as_ref().filter(|(x, _)| x.is_finite()) {
+        let x = &x.clamp(x0, x1);
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(*x, y0), (*x, y1)],
+                5,
+                5,
+                MODEL.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(label.as_str())
+            .legend(|(x, y)| dashed_mark!(x, y, MODEL.stroke_width(1)));
+    }
+    if let Some((y, label)) = panel.guide_y.as_ref().filter(|(y, _)| y.is_finite()) {
+        let y = &y.clamp(y0, y1);
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(x0, *y), (x1, *y)],
+                5,
+                5,
+                GUIDE.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(label.as_str())
+            .legend(|(x, y)| dashed_mark!(x, y, GUIDE.stroke_width(1)));
     }
     Ok(())
 }

@@ -7,6 +7,8 @@
 use crate::render::{safe_range, PlotError};
 use era::identify::Stabilization;
 use era::modal::stabilization::PoleStatus;
+use plotters::chart::DualCoordChartContext;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -81,6 +83,14 @@ fn err(e: impl std::fmt::Display) -> PlotError {
     PlotError(e.to_string())
 }
 
+/// The diagram's chart: poles on (frequency, order), the CMIF on a secondary log axis.
+type Diagram<'a, DB> = DualCoordChartContext<
+    'a,
+    DB,
+    Cartesian2d<RangedCoordf64, RangedCoordf64>,
+    Cartesian2d<RangedCoordf64, LogCoord<f64>>,
+>;
+
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     plot: &StabilizationPlot,
@@ -110,6 +120,28 @@ where
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?
         .set_secondary_coord(x0..x1, (c0..c1).log_scale());
+    draw_axes(&mut chart)?;
+    draw_cmif(&mut chart, plot, (x0, x1), (c0, c1))?;
+    draw_physical(&mut chart, plot, (x0, x1), (y0, y1))?;
+    draw_poles(&mut chart, plot, (x0, x1), (y0, y1))?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .label_font(("sans-serif", 13))
+        .border_style(BLACK)
+        // See-through enough that poles under the legend still show.
+        .background_style(WHITE.mix(0.65))
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+/// Frequency and order on the primary axes, the CMIF's decades on the right.
+fn draw_axes<'a, DB: DrawingBackend + 'a>(chart: &mut Diagram<'a, DB>) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
     chart
         .configure_mesh()
         .x_desc("Frequency (Hz)")
@@ -126,7 +158,19 @@ where
         .label_style(("sans-serif", 14))
         .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
         .draw()
-        .map_err(err)?;
+        .map_err(err)
+}
+
+/// The CMIF curves on the right axis, the first one darker and in the legend.
+fn draw_cmif<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Diagram<'a, DB>,
+    plot: &StabilizationPlot,
+    (x0, x1): (f64, f64),
+    (c0, c1): (f64, f64),
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
     for (k, curve) in plot.cmif.1.iter().enumerate() {
         let points: Vec<(f64, f64)> = plot
             .cmif
@@ -150,6 +194,19 @@ where
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], CMIF.stroke_width(1)));
         }
     }
+    Ok(())
+}
+
+/// A dashed vertical line at each physical mode in the band, and its legend entry.
+fn draw_physical<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Diagram<'a, DB>,
+    plot: &StabilizationPlot,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
     for &f in &plot.physical_hz {
         if f >= x0 && f <= x1 {
             chart
@@ -175,6 +232,20 @@ where
                 + PathElement::new(vec![(0, 0), (8, 0)], CHOSEN.stroke_width(1))
                 + PathElement::new(vec![(12, 0), (20, 0)], CHOSEN.stroke_width(1))
         });
+    Ok(())
+}
+
+/// The poles, one marker per status (new, stable in frequency, … and damping, … and
+/// shape), each status one legend entry.
+fn draw_poles<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Diagram<'a, DB>,
+    plot: &StabilizationPlot,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
     let groups = [
         (PoleStatus::New, "new", NEW),
         (PoleStatus::Frequency, "stable in frequency", FREQ),
@@ -220,16 +291,6 @@ where
             PoleStatus::Stable => Circle::new((x + 10, y), 3, colour.filled()).into_dyn(),
         });
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
-        .label_font(("sans-serif", 13))
-        .border_style(BLACK)
-        // See-through enough that poles under the legend still show.
-        .background_style(WHITE.mix(0.65))
-        .draw()
-        .map_err(err)?;
-    root.present().map_err(err)?;
     Ok(())
 }
 

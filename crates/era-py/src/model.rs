@@ -444,19 +444,102 @@ pub fn identify(
     preset: &str,
     threads: Option<Int>,
 ) -> PyResult<PyIdentification> {
-    let threads = match threads {
-        None => None,
-        Some(n) => {
-            let n = n.size("threads")?;
-            era::parallel::check_threads(Naming::Keyword, n).map_err(era_error)?;
-            Some(n)
-        }
-    };
+    let threads = thread_count(threads)?;
     let chosen = match states {
         Some(s) if !s.is_none() => states_of(s)?,
         _ => None,
     };
     let states = chosen.unwrap_or(0);
+    let request = route_request(preset, chosen, refine, time_domain, direct_term, band)?;
+    let integrations_n = integrations.size("integrations")?;
+    let route = request.resolve(frf.get().inner.quantity(), integrations_n);
+    let refine = route.refine;
+    let mut refine_options = refine_options_of(
+        frf.get(),
+        residuals,
+        weighting,
+        reciprocal,
+        added_modes,
+        max_iterations,
+    )?;
+    let lowpass = lowpass_of(lowpass)?;
+    let options = EraOptions {
+        states,
+        hankel_factor: hankel_factor.size("hankel_factor")?,
+        integrations: integrations_n,
+        lowpass,
+        zero_lines: zero_lines.size("zero_lines")?,
+        pad_to: pad_to.size("pad_to")?,
+        domain: route.domain,
+        direct_term: route.direct_term,
+        svd: svd_path(svd)?,
+    };
+    let checked = EraOptions {
+        states: states.max(usize::from(chosen.is_none())),
+        ..options.clone()
+    };
+    checked.check(Naming::Keyword).map_err(era_error)?;
+    let data = frf.get().inner.clone();
+    // The refinement fits measured lines only (never leading zero lines: a padded
+    // start, or zero_lines), inside the band when one is given: as the CLI does.
+    let fit = era::frf::fit_lines(&data, options.zero_lines, band).or_else(|why| {
+        let (lo, hi) = band.unwrap_or_default();
+        value_error(format!("band ({lo}, {hi}): {why}"))
+    })?;
+    refine_options.band = fit.lines;
+    let scan_options = ScanOptions {
+        band_hz: fit.band_hz,
+        ..ScanOptions::default()
+    };
+    let era_run = EraOptions {
+        domain: route.realization_domain(),
+        ..options.clone()
+    };
+    let run = Run {
+        data: &data,
+        era: &era_run,
+        fixed_order: chosen.is_some(),
+        scan: &scan_options,
+        refine: refine.then_some(&refine_options),
+        domain: route.domain,
+        fitted_hz: fit.fitted_hz,
+    };
+    let found = guarded(py, || {
+        // One pool for the whole call: identification and refinement alike.
+        era::parallel::with_threads(Naming::Keyword, threads, || run.identify())
+            .and_then(|found| found)
+            .map_err(era_error)
+    })?;
+    Ok(PyIdentification {
+        found,
+        options,
+        refine: refine.then_some(refine_options),
+        route,
+    })
+}
+
+/// `threads=`, checked as the CLI's `--threads`; `None` for every core.
+fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
+    match threads {
+        None => Ok(None),
+        Some(n) => {
+            let n = n.size("threads")?;
+            era::parallel::check_threads(Naming::Keyword, n).map_err(era_error)?;
+            Ok(Some(n))
+        }
+    }
+}
+
+/// The route asked for: `preset` with the choices given (`None` leaves one to the
+/// preset). An FrfData carries no coherence and no window metadata.
+fn route_request(
+    preset: &str,
+    states: Option<usize>,
+    refine: Option<bool>,
+    time_domain: Option<&str>,
+    direct_term: Option<&str>,
+    band: Option<(f64, f64)>,
+) -> PyResult<era::identify::route::RouteRequest> {
     let Some(preset) = era::identify::route::Preset::parse(preset) else {
         return value_error(format!(
             "preset '{preset}': expected 'measured' or 'thesis'"
@@ -467,7 +550,7 @@ pub fn identify(
     // the route says so.
     request.without_metadata = true;
     request.band_hz = band;
-    request.states = chosen;
+    request.states = states;
     request.refine = refine;
     request.domain = match time_domain {
         None => None,
@@ -489,9 +572,19 @@ pub fn identify(
             ))
         }
     };
-    let integrations_n = integrations.size("integrations")?;
-    let route = request.resolve(frf.get().inner.quantity(), integrations_n);
-    let refine = route.refine;
+    Ok(request)
+}
+
+/// The refinement's settings from the keywords (its band is set once the lines are
+/// known); `reciprocal=True` needs a square set.
+fn refine_options_of(
+    frf: &PyFrfData,
+    residuals: &str,
+    weighting: &str,
+    reciprocal: bool,
+    added_modes: bool,
+    max_iterations: Int,
+) -> PyResult<era::refine::RefineOptions> {
     let mut refine_options = era::refine::RefineOptions::default();
     refine_options.residuals = match residuals {
         "none" => era::refine::Residuals::None,
@@ -523,14 +616,19 @@ pub fn identify(
         .check("max_iterations", iterations as u64)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     refine_options.max_iterations = iterations;
-    if reciprocal && frf.get().inner.outputs() != frf.get().inner.inputs() {
+    if reciprocal && frf.inner.outputs() != frf.inner.inputs() {
         return value_error(format!(
             "reciprocal=True: the set has {} outputs x {} inputs; reciprocity needs a square (collocated) set",
-            frf.get().inner.outputs(),
-            frf.get().inner.inputs()
+            frf.inner.outputs(),
+            frf.inner.inputs()
         ));
     }
-    let lowpass = match lowpass {
+    Ok(refine_options)
+}
+
+/// `lowpass=`: a cut-off in Hz (order 4), `(order, cut-off Hz)`, or `None`.
+fn lowpass_of(lowpass: Option<&Bound<'_, PyAny>>) -> PyResult<Option<(usize, f64)>> {
+    Ok(match lowpass {
         None => None,
         Some(obj) if obj.is_none() => None,
         Some(obj) => match obj.extract::<(Int, f64)>() {
@@ -545,85 +643,63 @@ pub fn identify(
                 }
             },
         },
-    };
-    let options = EraOptions {
-        states,
-        hankel_factor: hankel_factor.size("hankel_factor")?,
-        integrations: integrations_n,
-        lowpass,
-        zero_lines: zero_lines.size("zero_lines")?,
-        pad_to: pad_to.size("pad_to")?,
-        domain: route.domain,
-        direct_term: route.direct_term,
-        svd: match svd {
-            "auto" => SvdPath::Auto,
-            "dense" => SvdPath::Dense,
-            "matrix-free" | "matrix_free" => SvdPath::MatrixFree,
-            other => {
-                return value_error(format!(
-                    "svd '{other}': expected 'auto', 'dense' or 'matrix-free'"
-                ))
-            }
-        },
-    };
-    let checked = EraOptions {
-        states: states.max(usize::from(chosen.is_none())),
-        ..options.clone()
-    };
-    checked.check(Naming::Keyword).map_err(era_error)?;
-    let data = frf.get().inner.clone();
-    // The refinement fits measured lines only (never leading zero lines: a padded
-    // start, or zero_lines), inside the band when one is given: as the CLI does.
-    let fit = era::frf::fit_lines(&data, options.zero_lines, band).or_else(|why| {
-        let (lo, hi) = band.unwrap_or_default();
-        value_error(format!("band ({lo}, {hi}): {why}"))
-    })?;
-    refine_options.band = fit.lines;
-    let scan_options = ScanOptions {
-        band_hz: fit.band_hz,
-        ..ScanOptions::default()
-    };
-    let era_run = EraOptions {
-        domain: route.realization_domain(),
-        ..options.clone()
-    };
-    let found = guarded(py, || {
-        // One pool for the whole call: identification and refinement alike.
-        era::parallel::with_threads(Naming::Keyword, threads, || {
-            match chosen {
-                Some(_) => run_identify(&data, &era_run),
-                None => identify_auto(&data, &era_run, &scan_options, &mut |_| {}, &mut |_, _| {}),
-            }
-            .and_then(|found| {
-                let mut at_order = era_run.clone();
-                at_order.states = found.realization.model.states();
-                let zero_start = era::suspect::zero_start(&found, &at_order, refine);
-                let found = if refine {
-                    era::identify::refine_identification_in(
-                        found,
-                        &data,
-                        &refine_options,
-                        Some(route.domain),
-                        &mut |_| {},
-                        &mut |_, _| {},
-                    )?
-                } else {
-                    found
-                };
-                let mut found = found;
-                found.suspects.extend(zero_start);
-                let edges = era::suspect::band_edges(&found, fit.fitted_hz);
-                found.suspects.extend(edges);
-                Ok(found)
-            })
-        })
-        .and_then(|found| found)
-        .map_err(era_error)
-    })?;
-    Ok(PyIdentification {
-        found,
-        options,
-        refine: refine.then_some(refine_options),
-        route,
     })
+}
+
+/// `svd=`: 'auto', 'dense' or 'matrix-free'.
+fn svd_path(svd: &str) -> PyResult<SvdPath> {
+    match svd {
+        "auto" => Ok(SvdPath::Auto),
+        "dense" => Ok(SvdPath::Dense),
+        "matrix-free" | "matrix_free" => Ok(SvdPath::MatrixFree),
+        other => value_error(format!(
+            "svd '{other}': expected 'auto', 'dense' or 'matrix-free'"
+        )),
+    }
+}
+
+/// One identification as `identify` runs it, every input checked.
+struct Run<'a> {
+    data: &'a era::FrfData,
+    /// The realization's options (its domain the route's realization domain).
+    era: &'a EraOptions,
+    /// A fixed order (`states=` an int), else the automatic order.
+    fixed_order: bool,
+    scan: &'a ScanOptions,
+    /// The refinement's settings, when the route refines.
+    refine: Option<&'a era::refine::RefineOptions>,
+    /// The domain of the model returned.
+    domain: ModelDomain,
+    /// The band identified over, Hz, for the band-edge suspects.
+    fitted_hz: (f64, f64),
+}
+
+impl Run<'_> {
+    /// ERA at the fixed or automatic order, the refinement when asked, then the
+    /// suspects of a zero start and of the band's edges.
+    fn identify(&self) -> era::Result<Identification> {
+        let found = if self.fixed_order {
+            run_identify(self.data, self.era)
+        } else {
+            identify_auto(self.data, self.era, self.scan, &mut |_| {}, &mut |_, _| {})
+        }?;
+        let mut at_order = self.era.clone();
+        at_order.states = found.realization.model.states();
+        let zero_start = era::suspect::zero_start(&found, &at_order, self.refine.is_some());
+        let mut found = match self.refine {
+            Some(options) => era::identify::refine_identification_in(
+                found,
+                self.data,
+                options,
+                Some(self.domain),
+                &mut |_| {},
+                &mut |_, _| {},
+            )?,
+            None => found,
+        };
+        found.suspects.extend(zero_start);
+        let edges = era::suspect::band_edges(&found, self.fitted_hz);
+        found.suspects.extend(edges);
+        Ok(found)
+    }
 }

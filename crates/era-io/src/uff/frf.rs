@@ -107,6 +107,66 @@ pub fn frf_from_uff(
     default_quantity: Quantity,
 ) -> Result<FrfFile, IoError> {
     let fail = |m: String| IoError::format(path, "", m);
+    let mut notes: Vec<String> = contents.notes.clone();
+    let frfs = frf_records(path, contents, &mut notes)?;
+    let (table, slot) = complete_pairs(path, &frfs)?;
+    let (q, p) = (table.outputs.len(), table.inputs.len());
+    let first = &frfs[0].0;
+    let abscissa = common_abscissa(path, &frfs)?;
+    let (quantity, quantity_given) = response_quantity(path, &frfs, default_quantity)?;
+    // Lines from 0 Hz: a whole number of increments above is padded with zero lines
+    // (as CSV and MAT files are), another start is refused with the remedy.
+    let mut frequency_hz = abscissa;
+    let mut pad = 0usize;
+    let location = format!("record {}: ", first.record);
+    // An uneven abscissa has no grid to pad on: the frequency checks refuse it below.
+    let start = if first.even {
+        crate::frf_file::zero_start(path, &location, &frequency_hz, q * p)?
+    } else {
+        None
+    };
+    if let Some(start) = start {
+        notes.push(start.note());
+        pad = start.added;
+        frequency_hz = start.frequency_hz;
+    }
+    let lines = frequency_hz.len();
+    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
+    for (s, n) in slot.iter().enumerate() {
+        let d = frfs[n.expect("every pair present")]
+            .1
+            .as_ref()
+            .expect("read with data");
+        values[s * lines + pad..(s + 1) * lines].copy_from_slice(&d.values);
+    }
+    let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| {
+        let uneven = if first.even {
+            ""
+        } else {
+            " (the records have an uneven abscissa)"
+        };
+        fail(format!(
+            "records {}…: ERA needs uniformly spaced lines from 0 Hz{uneven}: {e}",
+            first.record
+        ))
+    })?;
+    let metadata = uff_metadata(first, frfs.len(), (q, p), &notes);
+    Ok(FrfFile {
+        frf,
+        quantity_given,
+        metadata,
+        channels: Some(table),
+    })
+}
+
+/// The FRF records of the file (function type 4), refusing unknown function types and a
+/// file without FRFs; the records skipped (other functions, other datasets) go to `notes`.
+fn frf_records<'a>(
+    path: &Path,
+    contents: &'a UffContents,
+    notes: &mut Vec<String>,
+) -> Result<Vec<&'a (Function58, Option<Data58>)>, IoError> {
+    let fail = |m: String| IoError::format(path, "", m);
     let unknown: Vec<String> = contents
         .functions
         .iter()
@@ -124,8 +184,6 @@ pub fn frf_from_uff(
         .iter()
         .filter(|(f, _)| f.function_type == FUNCTION_FRF)
         .collect();
-    let mut metadata = BTreeMap::new();
-    let mut notes: Vec<String> = contents.notes.clone();
     let others: BTreeMap<&str, usize> = contents
         .functions
         .iter()
@@ -170,6 +228,15 @@ pub fn frf_from_uff(
                 .join(", ")
         ));
     }
+    Ok(frfs)
+}
+
+/// The channel table and the record of each pair, refusing a pair given twice or missing.
+fn complete_pairs(
+    path: &Path,
+    frfs: &[&(Function58, Option<Data58>)],
+) -> Result<(ChannelTable, Vec<Option<usize>>), IoError> {
+    let fail = |m: String| IoError::format(path, "", m);
     let layout = FrfLayout::of(frfs.iter().map(|r| &r.0));
     if !layout.duplicates.is_empty() {
         return Err(fail(format!(
@@ -186,8 +253,15 @@ pub fn frf_from_uff(
         )));
     }
     let FrfLayout { table, slot, .. } = layout;
-    let (q, p) = (table.outputs.len(), table.inputs.len());
-    // One abscissa for all.
+    Ok((table, slot))
+}
+
+/// The one abscissa every record shares (within 1e-9 of its largest value), in frequency.
+fn common_abscissa(
+    path: &Path,
+    frfs: &[&(Function58, Option<Data58>)],
+) -> Result<Vec<f64>, IoError> {
+    let fail = |m: String| IoError::format(path, "", m);
     let (first, first_data) = frfs[0];
     let describe = |f: &Function58| {
         if f.even {
@@ -247,7 +321,16 @@ pub fn frf_from_uff(
             f.record
         )));
     }
-    // Quantity.
+    Ok(abscissa)
+}
+
+/// The response quantity the records' ordinate axes agree on, or `default_quantity` when
+/// none says (and whether any did).
+fn response_quantity(
+    path: &Path,
+    frfs: &[&(Function58, Option<Data58>)],
+    default_quantity: Quantity,
+) -> Result<(Quantity, bool), IoError> {
     let tagged: Vec<(usize, Quantity)> = frfs
         .iter()
         .filter_map(|r| quantity_of(r.0.axes[1].data_type).map(|q| (r.0.record, q)))
@@ -260,52 +343,31 @@ pub fn frf_from_uff(
                 .map(|(r, q)| format!("record {r} is {q}"))
                 .collect();
             if !differ.is_empty() {
-                return Err(fail(format!(
-                    "records disagree on the response quantity: record {} is {q0}; {}",
-                    tagged[0].0,
-                    listed(&differ)
-                )));
+                return Err(IoError::format(
+                    path,
+                    "",
+                    format!(
+                        "records disagree on the response quantity: record {} is {q0}; {}",
+                        tagged[0].0,
+                        listed(&differ)
+                    ),
+                ));
             }
             q0
         }
         None => default_quantity,
     };
-    // Lines from 0 Hz: a whole number of increments above is padded with zero lines
-    // (as CSV and MAT files are), another start is refused with the remedy.
-    let mut frequency_hz = abscissa;
-    let mut pad = 0usize;
-    let location = format!("record {}: ", first.record);
-    // An uneven abscissa has no grid to pad on: the frequency checks refuse it below.
-    let start = if first.even {
-        crate::frf_file::zero_start(path, &location, &frequency_hz, q * p)?
-    } else {
-        None
-    };
-    if let Some(start) = start {
-        notes.push(start.note());
-        pad = start.added;
-        frequency_hz = start.frequency_hz;
-    }
-    let lines = frequency_hz.len();
-    let mut values = vec![Complex64::new(0.0, 0.0); q * p * lines];
-    for (s, n) in slot.iter().enumerate() {
-        let d = frfs[n.expect("every pair present")]
-            .1
-            .as_ref()
-            .expect("read with data");
-        values[s * lines + pad..(s + 1) * lines].copy_from_slice(&d.values);
-    }
-    let frf = FrfData::new(frequency_hz, q, p, values, quantity).map_err(|e| {
-        let uneven = if first.even {
-            ""
-        } else {
-            " (the records have an uneven abscissa)"
-        };
-        fail(format!(
-            "records {}…: ERA needs uniformly spaced lines from 0 Hz{uneven}: {e}",
-            first.record
-        ))
-    })?;
+    Ok((quantity, !tagged.is_empty()))
+}
+
+/// The file's metadata: the units of the first record's axes, the layout, the notes.
+fn uff_metadata(
+    first: &Function58,
+    records: usize,
+    (q, p): (usize, usize),
+    notes: &[String],
+) -> BTreeMap<String, String> {
+    let mut metadata = BTreeMap::new();
     let units = |a: &Axis| (!a.units.is_empty() && a.units != "NONE").then(|| a.units.clone());
     if let Some(u) = units(&first.axes[1]) {
         metadata.insert("response_unit".to_string(), u);
@@ -316,20 +378,14 @@ pub fn frf_from_uff(
     metadata.insert(
         "layout".to_string(),
         format!(
-            "UFF 58{}, {} FRF records, {q} x {p}",
+            "UFF 58{}, {records} FRF records, {q} x {p}",
             if first.binary.is_some() { "b" } else { "" },
-            frfs.len()
         ),
     );
     if !notes.is_empty() {
         metadata.insert("notes".to_string(), notes.join(" | "));
     }
-    Ok(FrfFile {
-        frf,
-        quantity_given: !tagged.is_empty(),
-        metadata,
-        channels: Some(table),
-    })
+    metadata
 }
 
 /// Reads FRFs from a UFF file: [`read_uff`] then [`frf_from_uff`].
