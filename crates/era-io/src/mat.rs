@@ -34,7 +34,7 @@ use crate::atomic::write_via;
 use crate::frf_file::ReadOptions;
 use crate::frf_file::{Channel, ChannelTable, Dof, FrfFile};
 use crate::IoError;
-use era::modal::ModalParameters;
+use era::pipeline::modes::ModalParameters;
 use era::{Complex64, EraError, FrfData, Quantity, StateSpace};
 use matrw::{save_matfile_v7, MatFile, MatVariable, MatlabType, NumericArray};
 use std::collections::BTreeMap;

@@ -16,9 +16,10 @@
 
 use crate::atomic::write_atomic;
 use crate::IoError;
-use era::identify::{EraOptions, Identification, StageTimings};
-use era::modal::{ModalParameters, Mode};
-use era::response::FitReport;
+use era::identification::{Identification, StageTimings};
+use era::identify::EraOptions;
+use era::pipeline::fit::FitReport;
+use era::pipeline::modes::{ModalParameters, Mode};
 use era::{StateSpace, TimeDomain};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
@@ -103,7 +104,7 @@ impl ModeJson {
     }
 
     /// From a library mode and its quality.
-    pub fn from_mode_quality(m: &Mode, q: &era::identify::ModeQuality) -> Self {
+    pub fn from_mode_quality(m: &Mode, q: &era::identification::ModeQuality) -> Self {
         let i = &q.indicators;
         ModeJson {
             physical: Some(q.physical),
@@ -287,7 +288,7 @@ pub struct RefinementJson {
 
 impl RefinementJson {
     /// From the pipeline's record.
-    pub fn of(r: &era::identify::Refined) -> Self {
+    pub fn of(r: &era::identification::Refined) -> Self {
         let f = &r.refinement;
         RefinementJson {
             iterations: f.iterations,
@@ -389,8 +390,8 @@ pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     m.insert(
         "direct_term".into(),
         json!(match o.direct_term {
-            era::realize::DirectTerm::Zero => "zero",
-            era::realize::DirectTerm::FirstMarkov => "markov0",
+            era::pipeline::realize::DirectTerm::Zero => "zero",
+            era::pipeline::realize::DirectTerm::FirstMarkov => "markov0",
         }),
     );
     m
@@ -675,7 +676,7 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), IoError> {
 
 /// The scan as stored: the range, the rule, the clusters and every pole (the diagram's
 /// data), the factored singular values and the CMIF.
-pub fn stabilization_json(st: &era::identify::Stabilization) -> serde_json::Value {
+pub fn stabilization_json(st: &era::identification::Stabilization) -> serde_json::Value {
     use serde_json::json;
     let poles: Vec<serde_json::Value> = st
         .scan

@@ -10,7 +10,7 @@
 //! lines stays well under 2 MB.
 
 use crate::figures::FrfView;
-use era::identify::Identification;
+use era::identification::Identification;
 use std::fmt::Write as _;
 
 /// One row of the channel table: which DOF an output or input is.
@@ -146,7 +146,12 @@ fn input_html(s: &InputSection) -> String {
 
 /// The fit as an outputs × inputs matrix: each cell the pair's relative error and its
 /// RMS log-magnitude error (dB); collocated pairs shaded.
-fn fit_matrix_html(fit: &era::response::FitReport, view: &FrfView, q: usize, p: usize) -> String {
+fn fit_matrix_html(
+    fit: &era::pipeline::fit::FitReport,
+    view: &FrfView,
+    q: usize,
+    p: usize,
+) -> String {
     let mut h =
         String::from("<table id=\"fit-table\" class=\"matrix\"><tr><th>output \\ input</th>");
     for j in 1..=p {
@@ -182,7 +187,7 @@ fn fit_matrix_html(fit: &era::response::FitReport, view: &FrfView, q: usize, p: 
 /// Mean relative error and mean RMS log-magnitude error (dB) of the pairs whose
 /// collocation is `collocated`.
 fn fit_means(
-    fit: &era::response::FitReport,
+    fit: &era::pipeline::fit::FitReport,
     view: &FrfView,
     collocated: bool,
 ) -> (Option<f64>, Option<f64>) {
@@ -209,7 +214,7 @@ fn plus_minus(std: Option<f64>) -> String {
 
 /// The paragraph on the refinement of a refined model: how the fit went, which modes
 /// were dropped, and how to read `±`.
-fn refinement_html(f: &era::identify::Identification) -> String {
+fn refinement_html(f: &era::identification::Identification) -> String {
     let Some(r) = &f.refinement else {
         return String::new();
     };

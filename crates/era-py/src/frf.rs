@@ -23,12 +23,7 @@ use std::sync::Arc;
 
 /// Parses a quantity name for the keyword `name`.
 pub(crate) fn quantity(name: &str, text: &str) -> PyResult<Quantity> {
-    match Quantity::parse(text) {
-        Some(q) => Ok(q),
-        None => value_error(format!(
-            "{name} '{text}': expected 'acceleration', 'velocity' or 'displacement'"
-        )),
-    }
+    crate::named::<Quantity>(name, text)
 }
 
 /// Measured or simulated FRFs, axis order `[output, input, frequency]`.
@@ -340,36 +335,9 @@ pub fn estimate_frf<'py>(
     detrend: &str,
     quantity: &str,
 ) -> PyResult<(PyFrfData, Bound<'py, PyArray3<f64>>)> {
-    let window = match window.to_ascii_lowercase().replace('_', "-").as_str() {
-        "hann" | "hanning" => Window::Hann,
-        "rectangular" | "boxcar" => Window::Rectangular,
-        "flat-top" | "flattop" => Window::FlatTop,
-        _ => {
-            return value_error(format!(
-                "window '{window}': expected 'hann', 'rectangular' or 'flat-top'"
-            ))
-        }
-    };
-    let estimator = match estimator.to_ascii_lowercase().as_str() {
-        "h1" => Estimator::H1,
-        "h2" => Estimator::H2,
-        "hv" => Estimator::Hv,
-        _ => {
-            return value_error(format!(
-                "estimator '{estimator}': expected 'h1', 'h2' or 'hv'"
-            ))
-        }
-    };
-    let detrend = match detrend.to_ascii_lowercase().as_str() {
-        "none" => Detrend::None,
-        "mean" => Detrend::Mean,
-        "linear" => Detrend::Linear,
-        _ => {
-            return value_error(format!(
-                "detrend '{detrend}': expected 'none', 'mean' or 'linear'"
-            ))
-        }
-    };
+    let window: Window = crate::named("window", window)?;
+    let estimator: Estimator = crate::named("estimator", estimator)?;
+    let detrend: Detrend = crate::named("detrend", detrend)?;
     let tag = crate::frf::quantity("quantity", quantity)?;
     if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
         return value_error(format!(
@@ -381,13 +349,10 @@ pub fn estimate_frf<'py>(
     let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
     let inputs = channels("inputs", &inputs, n_channels)?;
     let outputs = channels("outputs", &outputs, n_channels)?;
-    let options = WelchOptions {
-        sample_rate_hz,
-        frame,
-        overlap,
-        window,
-        detrend,
-    };
+    let mut options = WelchOptions::new(sample_rate_hz, frame);
+    options.overlap = overlap;
+    options.window = window;
+    options.detrend = detrend;
     // Borrowed in place: each channel is a row of the C-contiguous block.
     let view = array.readonly();
     let flat = view.as_slice()?;
@@ -443,8 +408,8 @@ pub fn simulate_modal(
 ) -> PyResult<PyFrfData> {
     let tag = crate::frf::quantity("quantity", quantity)?;
     era::sim::check_noise(Naming::Keyword, noise).map_err(era_error)?;
-    let request = era::sim::ModalRequest {
-        spec: era::sim::ModalSpec {
+    let request = era::sim::ModalRequest::new(
+        era::sim::ModalSpec {
             outputs: outputs.size("outputs")?,
             inputs: inputs.size("inputs")?,
             modes: modes.size("modes")?,
@@ -455,9 +420,9 @@ pub fn simulate_modal(
             collocated,
             seed: seed.count("seed")?,
         },
-        lines: lines.size("lines")?,
-        df_hz: df,
-    };
+        lines.size("lines")?,
+        df,
+    );
     request.check(Naming::Keyword).map_err(era_error)?;
     let frf = guarded(py, || {
         let structure = era::sim::ModalStructure::random(&request.spec).map_err(era_error)?;

@@ -71,6 +71,17 @@ pub(crate) fn io_error(e: era_io::IoError) -> PyErr {
 }
 
 /// `ValueError(message)`.
+/// The value of the core's enum that `text` names, for the keyword `keyword`: the core's
+/// names and `FromStr` ([`era::names`]), as the CLI reads its flags; a `ValueError`
+/// naming the keyword and the names expected otherwise.
+pub(crate) fn named<T>(keyword: &str, text: &str) -> PyResult<T>
+where
+    T: std::str::FromStr<Err = era::names::UnknownName>,
+{
+    text.parse::<T>()
+        .or_else(|e| value_error(format!("{keyword} {e}")))
+}
+
 pub(crate) fn value_error<T>(message: impl Into<String>) -> PyResult<T> {
     Err(PyValueError::new_err(message.into()))
 }

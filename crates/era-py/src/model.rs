@@ -11,11 +11,12 @@
 
 use crate::frf::PyFrfData;
 use crate::{contiguous, era_error, guarded, value_error, vector, Int};
+use era::identification::Identification;
 use era::identify::{
-    identify as run_identify, identify_auto, EraOptions, Identification, ModelDomain, ScanOptions,
+    identify as run_identify, identify_auto, EraOptions, ModelDomain, ScanOptions,
 };
 use era::params::Naming;
-use era::realize::{DirectTerm, SvdPath};
+use era::pipeline::realize::{DirectTerm, SvdPath};
 use era::{Complex64, TimeDomain};
 use era_io::model_json::{parameters, FitJson, ModelJson};
 use numpy::ndarray::Ix1;
@@ -312,7 +313,7 @@ impl PyIdentification {
         let model = &self.found.model;
         let (q, p, l) = (model.outputs(), model.inputs(), f.len());
         let values = guarded(py, || {
-            Ok(era::response::frequency_response_blocks(model, &f))
+            Ok(era::pipeline::fit::frequency_response_blocks(model, &f))
         })?;
         vector(py, values).reshape([q, p, l])
     }
@@ -463,20 +464,18 @@ pub fn identify(
         max_iterations,
     )?;
     let lowpass = lowpass_of(lowpass)?;
-    let options = EraOptions {
-        states,
-        hankel_factor: hankel_factor.size("hankel_factor")?,
-        integrations: integrations_n,
-        lowpass,
-        zero_lines: zero_lines.size("zero_lines")?,
-        pad_to: pad_to.size("pad_to")?,
-        domain: route.domain,
-        direct_term: route.direct_term,
-        svd: svd_path(svd)?,
-    };
-    let checked = EraOptions {
-        states: states.max(usize::from(chosen.is_none())),
-        ..options.clone()
+    let mut options = EraOptions::new(states, hankel_factor.size("hankel_factor")?);
+    options.integrations = integrations_n;
+    options.lowpass = lowpass;
+    options.zero_lines = zero_lines.size("zero_lines")?;
+    options.pad_to = pad_to.size("pad_to")?;
+    options.domain = route.domain;
+    options.direct_term = route.direct_term;
+    options.svd = svd_path(svd)?;
+    let checked = {
+        let mut o = options.clone();
+        o.states = states.max(usize::from(chosen.is_none()));
+        o
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
     let data = frf.get().inner.clone();
@@ -487,13 +486,15 @@ pub fn identify(
         value_error(format!("band ({lo}, {hi}): {why}"))
     })?;
     refine_options.band = fit.lines;
-    let scan_options = ScanOptions {
-        band_hz: fit.band_hz,
-        ..ScanOptions::default()
+    let scan_options = {
+        let mut o = ScanOptions::default();
+        o.band_hz = fit.band_hz;
+        o
     };
-    let era_run = EraOptions {
-        domain: route.realization_domain(),
-        ..options.clone()
+    let era_run = {
+        let mut o = options.clone();
+        o.domain = route.realization_domain();
+        o
     };
     let run = Run {
         data: &data,
@@ -540,11 +541,7 @@ fn route_request(
     direct_term: Option<&str>,
     band: Option<(f64, f64)>,
 ) -> PyResult<era::identify::route::RouteRequest> {
-    let Some(preset) = era::identify::route::Preset::parse(preset) else {
-        return value_error(format!(
-            "preset '{preset}': expected 'measured' or 'thesis'"
-        ));
-    };
+    let preset: era::identify::route::Preset = crate::named("preset", preset)?;
     let mut request = era::identify::route::RouteRequest::new(preset);
     // An FrfData carries no coherence and no window metadata: neither is used, and
     // the route says so.
@@ -552,26 +549,12 @@ fn route_request(
     request.band_hz = band;
     request.states = states;
     request.refine = refine;
-    request.domain = match time_domain {
-        None => None,
-        Some("discrete") => Some(ModelDomain::Discrete),
-        Some("continuous") => Some(ModelDomain::Continuous),
-        Some(other) => {
-            return value_error(format!(
-                "time_domain '{other}': expected 'discrete' or 'continuous'"
-            ))
-        }
-    };
-    request.direct_term = match direct_term {
-        None => None,
-        Some("zero") => Some(DirectTerm::Zero),
-        Some("markov0") => Some(DirectTerm::FirstMarkov),
-        Some(other) => {
-            return value_error(format!(
-                "direct_term '{other}': expected 'zero' or 'markov0'"
-            ))
-        }
-    };
+    request.domain = time_domain
+        .map(|t| crate::named::<ModelDomain>("time_domain", t))
+        .transpose()?;
+    request.direct_term = direct_term
+        .map(|t| crate::named::<DirectTerm>("direct_term", t))
+        .transpose()?;
     Ok(request)
 }
 
@@ -586,26 +569,8 @@ fn refine_options_of(
     max_iterations: Int,
 ) -> PyResult<era::refine::RefineOptions> {
     let mut refine_options = era::refine::RefineOptions::default();
-    refine_options.residuals = match residuals {
-        "none" => era::refine::Residuals::None,
-        "lower" => era::refine::Residuals::Lower,
-        "upper" => era::refine::Residuals::Upper,
-        "both" => era::refine::Residuals::Both,
-        other => {
-            return value_error(format!(
-                "residuals '{other}': expected 'none', 'lower', 'upper' or 'both'"
-            ))
-        }
-    };
-    refine_options.weighting = match weighting {
-        "pair-noise" | "pair_noise" => era::refine::Weighting::PairNoise,
-        "uniform" => era::refine::Weighting::Uniform,
-        other => {
-            return value_error(format!(
-                "weighting '{other}': expected 'pair-noise' or 'uniform'"
-            ))
-        }
-    };
+    refine_options.residuals = crate::named("residuals", residuals)?;
+    refine_options.weighting = crate::named("weighting", weighting)?;
     refine_options.reciprocal = reciprocal;
     refine_options.add_missed = added_modes;
     let iterations = max_iterations.size("max_iterations")?;
@@ -648,14 +613,7 @@ fn lowpass_of(lowpass: Option<&Bound<'_, PyAny>>) -> PyResult<Option<(usize, f64
 
 /// `svd=`: 'auto', 'dense' or 'matrix-free'.
 fn svd_path(svd: &str) -> PyResult<SvdPath> {
-    match svd {
-        "auto" => Ok(SvdPath::Auto),
-        "dense" => Ok(SvdPath::Dense),
-        "matrix-free" | "matrix_free" => Ok(SvdPath::MatrixFree),
-        other => value_error(format!(
-            "svd '{other}': expected 'auto', 'dense' or 'matrix-free'"
-        )),
-    }
+    crate::named("svd", svd)
 }
 
 /// One identification as `identify` runs it, every input checked.
@@ -685,9 +643,9 @@ impl Run<'_> {
         }?;
         let mut at_order = self.era.clone();
         at_order.states = found.realization.model.states();
-        let zero_start = era::suspect::zero_start(&found, &at_order, self.refine.is_some());
+        let zero_start = era::identify::zero_start(&found, &at_order, self.refine.is_some());
         let mut found = match self.refine {
-            Some(options) => era::identify::refine_identification_in(
+            Some(options) => era::refine::identification::refine_identification_in(
                 found,
                 self.data,
                 options,

@@ -106,9 +106,8 @@ fn bench(c: &mut Criterion) {
 
 /// From ERA's automatic order, as the CLI refines (setup: one `identify_auto` per set).
 fn bench_from_era(c: &mut Criterion) {
-    use era::identify::{
-        identify_auto, refine_identification, EraOptions, ModelDomain, ScanOptions,
-    };
+    use era::identify::{identify_auto, EraOptions, ModelDomain, ScanOptions};
+    use era::refine::identification::refine_identification;
     let spec = ModalSpec::default();
     let s = ModalStructure::random(&spec).unwrap();
     let clean = s.frf(801, 0.025, Quantity::Acceleration).unwrap();

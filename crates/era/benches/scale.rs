@@ -6,8 +6,9 @@
 //! data.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use era::linalg::LinearOperator;
 use era::pipeline::hankel::HankelShape;
-use era::pipeline::hankel_op::{HankelOperator, LinearOperator};
+use era::pipeline::hankel_op::HankelOperator;
 use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
 use era::sim::lightly_damped_markov;
 use faer::Mat;

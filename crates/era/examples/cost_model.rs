@@ -17,11 +17,13 @@
 //! the order has no gap, as measured data has none; and the DTA-like thesis case
 //! (`ModalSpec::default()`, 801 lines, 5 % noise on the FRFs, thesis preprocessing).
 
+use era::linalg::rng::Minstd;
 use era::linalg::tsvd::TruncatedSvdOptions;
+use era::linalg::LinearOperator;
 use era::pipeline::hankel::HankelShape;
-use era::pipeline::hankel_op::{HankelOperator, LinearOperator};
+use era::pipeline::hankel_op::HankelOperator;
 use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
-use era::sim::{add_noise, lightly_damped_markov, Minstd, ModalSpec, ModalStructure};
+use era::sim::{add_noise, lightly_damped_markov, ModalSpec, ModalStructure};
 use era::sources::frf::preprocess::preprocess;
 use era::sources::frf::{markov_from_frf, MarkovSequence};
 use era::Quantity;

@@ -17,10 +17,11 @@
 //! `RECIP=1` with reciprocity (Table 5.2 only); `DEBUG=1` lists every refined mode of a
 //! DTA-like set with its start, truth and standard deviations.
 
-use era::identify::{
-    identify, identify_auto, refine_identification, EraOptions, Identification, ModelDomain,
-    ScanOptions,
-};
+use era::identify::{identify, identify_auto, EraOptions, ModelDomain, ScanOptions};
+
+use era::refine::identification::refine_identification;
+
+use era::identification::Identification;
 use era::refine::RefineOptions;
 use era::sim::{add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure};
 use era::sources::frf::preprocess::integrate;

@@ -26,7 +26,7 @@ pub enum Stage {
     Modes,
     /// Model FRF and fit.
     Fit,
-    /// Refinement of the poles and residues against the FRFs ([`crate::identify::refine_identification`]).
+    /// Refinement of the poles and residues against the FRFs ([`crate::refine::identification::refine_identification`]).
     Refine,
 }
 
@@ -60,7 +60,7 @@ pub struct StageTimings {
     pub modes: f64,
     /// Model FRF and fit metrics.
     pub fit: f64,
-    /// The refinement ([`crate::identify::refine_identification`]), 0 when none ran.
+    /// The refinement ([`crate::refine::identification::refine_identification`]), 0 when none ran.
     pub refine: f64,
 }
 
@@ -99,7 +99,7 @@ pub struct Identification {
     pub band_hz: (f64, f64),
     /// The scan across orders, when one was asked for (`--orders` or `--states auto`).
     pub stabilization: Option<Stabilization>,
-    /// The refinement that gave `model`, when one ran ([`crate::identify::refine_identification`]).
+    /// The refinement that gave `model`, when one ran ([`crate::refine::identification::refine_identification`]).
     pub refinement: Option<Refined>,
     /// Results to treat with care ([`crate::suspect`]): a Hankel too short for the
     /// lowest mode, negative damping, poles outside the unit circle.

@@ -19,18 +19,13 @@ use crate::sources::frf::{impulse_responses, impulse_responses_naive, MarkovSequ
 use crate::statespace::StateSpace;
 use std::time::Instant;
 
+use crate::identification::{Identification, ModeQuality, Stabilization, Stage, StageTimings};
+
 pub mod route;
 
-pub use crate::refine::identification::{
-    confirm_modes, refine_identification, refine_identification_in,
-};
 mod zero_start;
 
 pub use zero_start::zero_start;
-
-pub use crate::identification::{
-    FitDomain, Identification, ModeQuality, Refined, Stabilization, Stage, StageTimings,
-};
 
 /// Model returned (thesis `cord`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -66,23 +66,9 @@ pub mod suspect;
 #[cfg(test)]
 mod test_support;
 
-// The paths before the pipeline/ and sources/ layout, while the other crates move to the
-// new ones (removed once they have).
-#[doc(hidden)]
-pub use linalg::tsvd;
-#[doc(hidden)]
-pub use pipeline::{filter, fit as response, hankel, hankel_op, realize};
-#[doc(hidden)]
-pub use sources::frf as markov;
-#[doc(hidden)]
-pub use sources::frf::preprocess;
-#[doc(hidden)]
-pub mod stability {
-    pub use crate::modal::indicators::mac;
-}
-
 pub use error::{EraError, Result};
 pub use frf::{FrfData, Quantity};
-pub use identify::{identify, identify_observed, EraOptions, Identification, ModelDomain, Stage};
+pub use identification::{Identification, Stage};
+pub use identify::{identify, identify_observed, EraOptions, ModelDomain};
 pub use num_complex::Complex64;
 pub use statespace::{StateSpace, TimeDomain};

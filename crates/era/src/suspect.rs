@@ -43,13 +43,7 @@
 //! Each warning is worded for the calling front end ([`Naming`]): the CLI names flags,
 //! Python keywords.
 
-#[doc(hidden)]
-pub use crate::frf::leading_zero_lines;
-#[doc(hidden)]
-pub use crate::identification::SuspectResult;
-use crate::identification::{Identification, ModeQuality};
-#[doc(hidden)]
-pub use crate::identify::zero_start;
+use crate::identification::{Identification, ModeQuality, SuspectResult};
 use crate::params::Naming;
 use crate::pipeline::modes::ModalParameters;
 

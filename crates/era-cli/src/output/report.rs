@@ -3,7 +3,8 @@
 //! `--quiet` silences it.
 
 use crate::config::{Settings, Verbosity};
-use era::identify::{EraOptions, Identification, ModelDomain};
+use era::identification::Identification;
+use era::identify::{EraOptions, ModelDomain};
 use era::pipeline::realize::DirectTerm;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

@@ -4,7 +4,8 @@
 
 use crate::common;
 use common::{data_file, era, expect_input_error, json_of, s};
-use era::sim::{time_response, truth_model, Minstd};
+use era::linalg::rng::Minstd;
+use era::sim::{time_response, truth_model};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

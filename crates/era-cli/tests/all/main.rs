@@ -1,10 +1,10 @@
 //! The command line's integration tests, one binary (one link) with a module per area;
 //! `common` holds the helpers (the era binary, data files, the hostile-input watchdog).
 
-mod common;
 mod auto_order;
 mod browser;
 mod cli;
+mod common;
 mod experiment_cli;
 mod formats_cli;
 mod frf_cli;

@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::write58::{fortran_e, header_text, write_streamed};
-use era::modal::ModalParameters;
+use era::pipeline::modes::ModalParameters;
 /// Writes the mode shapes of an identified model as UFF dataset 55, one record per
 /// mode: complex eigenvalue analysis (type 3), the continuous pole `s` (rad/s) as the
 /// eigenvalue, modal A and B written as 0, and at each output node the complex shape

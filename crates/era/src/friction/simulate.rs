@@ -14,7 +14,7 @@
 //! sample period and held (zero-order hold), as the thesis's 200 Hz compensator did.
 
 use super::{FrictionError, Oscillator, Result};
-use crate::sim::Minstd;
+use crate::linalg::rng::Minstd;
 use std::f64::consts::PI;
 
 /// Position and velocity.

@@ -372,7 +372,7 @@ mod tests {
         // 6 it has: the extra poles fit the noise and are not consistent over the record.
         let truth = real_mode_model();
         let mut markov = markov_of(&truth, 400);
-        let mut rng = crate::sim::Minstd::new(4);
+        let mut rng = crate::linalg::rng::Minstd::new(4);
         let peak = (1..400)
             .map(|k| markov.get(k, 0, 0).abs())
             .fold(0.0, f64::max);

@@ -5,6 +5,3 @@
 
 pub mod indicators;
 pub mod stabilization;
-
-#[doc(hidden)]
-pub use crate::pipeline::modes::*;

@@ -25,7 +25,7 @@
 
 use crate::error::Result;
 use crate::linalg::fft::{fast_fft_len, real_fft_plans};
-pub use crate::linalg::LinearOperator;
+use crate::linalg::LinearOperator;
 use crate::pipeline::hankel::HankelShape;
 use crate::sources::frf::MarkovSequence;
 use faer::{Mat, MatRef};

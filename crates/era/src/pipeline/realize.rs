@@ -17,8 +17,9 @@
 
 use crate::error::{EraError, Result};
 use crate::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
+use crate::linalg::LinearOperator;
 use crate::pipeline::hankel::{self, HankelShape, ThesisHankel};
-use crate::pipeline::hankel_op::{HankelOperator, LinearOperator};
+use crate::pipeline::hankel_op::HankelOperator;
 use crate::sources::frf::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;

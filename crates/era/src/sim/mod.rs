@@ -18,7 +18,7 @@ use faer::Mat;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 
-pub use crate::linalg::rng::Minstd;
+use crate::linalg::rng::Minstd;
 
 /// The largest noise fraction [`add_noise`] takes: noise a thousand times the signal
 /// already buries it; beyond, the noisy values head for overflow.

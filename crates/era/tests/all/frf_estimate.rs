@@ -3,8 +3,9 @@
 //! exact discrete FRF.
 
 use era::frf::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
+use era::linalg::rng::Minstd;
 use era::pipeline::fit::frequency_response;
-use era::sim::{time_response, truth_model, Minstd, ModalSpec, ModalStructure};
+use era::sim::{time_response, truth_model, ModalSpec, ModalStructure};
 use era::{Complex64, EraError, Quantity};
 
 fn noise(seed: u64, samples: usize, rms: f64) -> Vec<f64> {

@@ -7,8 +7,9 @@ use crate::common;
 
 use common::worst_match;
 use era::identify::{identify, EraOptions};
+use era::linalg::rng::Minstd;
 use era::pipeline::realize::{realize, RealizeOptions, SvdPath};
-use era::sim::{add_noise, Minstd, ModalSpec, ModalStructure};
+use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::sources::frf::MarkovSequence;
 use era::Quantity;
 use faer::Mat;

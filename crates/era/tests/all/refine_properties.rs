@@ -2,9 +2,10 @@
 //! reference, reciprocity and stability, the state-space model of every quantity, the
 //! Monte Carlo check of the standard deviations, and bad input.
 
+use era::linalg::rng::Minstd;
 use era::pipeline::fit::frequency_response;
 use era::refine::{refine, refine_naive, RefineOptions, Refinement, Residuals, Weighting};
-use era::sim::{add_noise, Minstd, ModalSpec, ModalStructure};
+use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::{Complex64, EraError, FrfData, Quantity};
 use proptest::prelude::*;
 use std::f64::consts::PI;

@@ -2,13 +2,14 @@
 //! the fresh identification at that order, on both SVD paths; the indicators do not
 //! depend on the state basis.
 
+use era::linalg::rng::Minstd;
 use era::modal::indicators::{emac, mpc};
 use era::pipeline::hankel::HankelShape;
 use era::pipeline::modes::ModalForm;
 use era::pipeline::realize::{
     realize_general, DirectTerm, FactorOptions, Factorization, RealizeOptions, SvdPath,
 };
-use era::sim::{lightly_damped_markov, Minstd};
+use era::sim::lightly_damped_markov;
 use era::sources::frf::MarkovSequence;
 use era::Complex64;
 use faer::linalg::solvers::DenseSolveCore;

@@ -4,7 +4,8 @@
 use crate::common;
 
 use common::{read_csv, worst_match};
-use era::identify::{identify, identify_naive, EraOptions, Identification};
+use era::identification::Identification;
+use era::identify::{identify, identify_naive, EraOptions};
 use era::pipeline::realize::SvdPath;
 use era::sim::{ModalSpec, ModalStructure};
 use era::{Complex64, Quantity};

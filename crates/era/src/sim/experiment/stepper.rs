@@ -10,7 +10,7 @@ use super::{
 };
 use crate::error::{EraError, Result};
 use crate::friction::compensator::{ChannelConfig, FrictionCompensator};
-use crate::sim::Minstd;
+use crate::linalg::rng::Minstd;
 use num_complex::Complex64;
 use std::collections::HashMap;
 use std::f64::consts::PI;
