@@ -2,7 +2,7 @@
 //! pure-Rust reader) and the DaISy steel subframe (MAT v5). A missing data file fails the
 //! test.
 
-mod common;
+use crate::common;
 use common::data_file;
 
 use era_io::time::{parse_channels, read_time_file, TimeFormat, TimeSelection};

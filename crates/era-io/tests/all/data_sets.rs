@@ -2,7 +2,7 @@
 //! listed in data/README.md, and each data file's sha256 is the one its PROVENANCE.md
 //! records (so the copy is byte for byte the published one). A missing file fails.
 
-mod common;
+use crate::common;
 use common::data_file;
 
 /// (folder, licence's first line, data files)

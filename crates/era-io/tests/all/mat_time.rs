@@ -1,7 +1,7 @@
 //! The real MAT v5 files of data/daisy-* read as time histories: shape and values
 //! (samples and column sums from scipy.io.loadmat). A missing data file fails the test.
 
-mod common;
+use crate::common;
 use common::data_file;
 
 use era_io::mat::read_mat_matrix;
