@@ -448,7 +448,7 @@ fn bad_input_is_an_error_that_names_it() {
     expect_invalid(run(&start, &z), "band");
     z.sample_time_s = Some(0.01);
     z.real_modes = true;
-    expect_invalid(run(&start, &z), "real-modes");
+    expect_invalid(run(&start, &z), "real_modes");
     let mut w = o.clone();
     w.weighting = Weighting::Coherence(vec![1.0; 3]);
     assert!(matches!(
