@@ -221,10 +221,9 @@ pub fn refine_options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
     o.reciprocal = fit.reciprocal;
     o.rank_one = !fit.free_residues;
     o.add_missed = !fit.no_added_modes;
-    o.weighting = fit
-        .weighting
-        .clone()
-        .unwrap_or(era::refine::Weighting::PairNoise);
+    if let Some(w) = fit.weighting.clone() {
+        o.weighting = w;
+    }
     if let Some(n) = fit.max_iterations {
         if n == 0 {
             return crate::error::usage(

@@ -39,7 +39,11 @@ fn bench(c: &mut Criterion) {
     let clean = s.frf(801, 0.025, Quantity::Acceleration).unwrap();
     let noisy = add_noise(&clean, 0.05, spec.seed).unwrap();
     let start = perturbed(&s);
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
 
     let mut g = c.benchmark_group("refine_dta_8x8_40modes_801lines");
@@ -117,7 +121,11 @@ fn bench_from_era(c: &mut Criterion) {
         o.domain = ModelDomain::Continuous;
         o
     };
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.weighting = Weighting::PairNoise;
     let mut g = c.benchmark_group("refine_dta_from_era_auto");
     g.sample_size(10);

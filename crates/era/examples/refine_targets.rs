@@ -124,7 +124,11 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             )?;
             let era_fit = relative(&found.measured, &found.model_response, found.first_line);
             let clock = Instant::now();
-            let mut ropts = RefineOptions::default();
+            let mut ropts = {
+                let mut o = RefineOptions::default();
+                o.weighting = era::refine::Weighting::Uniform;
+                o
+            };
             ropts.add_missed = std::env::var("NOADD").is_err();
             if std::env::var("PAIRNOISE").is_ok() {
                 ropts.weighting = era::refine::Weighting::PairNoise;
@@ -285,7 +289,11 @@ fn table52(seeds: &[u64]) -> era::Result<()> {
             era_err[k].push(nearest(&found, f));
         }
         let clock = Instant::now();
-        let mut ropts = RefineOptions::default();
+        let mut ropts = {
+            let mut o = RefineOptions::default();
+            o.weighting = era::refine::Weighting::Uniform;
+            o
+        };
         ropts.add_missed = std::env::var("NOADD").is_err();
         if std::env::var("NORES").is_ok() {
             ropts.residuals = era::refine::Residuals::None;

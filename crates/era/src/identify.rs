@@ -1074,6 +1074,7 @@ fn judge_significance(
         add_missed: false,
         rank_one: false,
         band: Some((first, end)),
+        weighting: crate::refine::Weighting::Uniform,
         ..Default::default()
     };
     let mut alive: Vec<usize> = (0..selection.clusters.len())

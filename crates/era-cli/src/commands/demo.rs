@@ -114,8 +114,7 @@ fn identify_both(
     };
     let clean = run_one(clean_frf, "no noise")?;
     let noisy = run_one(noisy_frf, "noisy")?;
-    let mut refine_options = era::refine::RefineOptions::default();
-    refine_options.weighting = era::refine::Weighting::PairNoise;
+    let refine_options = era::refine::RefineOptions::default();
     let refined = era::refine::identification::refine_identification(
         noisy.clone(),
         noisy_frf,

@@ -240,7 +240,6 @@ pub enum Residuals {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub enum Weighting {
     /// Every line and pair alike.
-    #[default]
     Uniform,
     /// Ordinary (or multiple) coherence `γ²` in [0, 1], `[output][input][line]` like
     /// [`FrfData::values`]: the squared error of a line is weighted by `γ²`.
@@ -249,7 +248,9 @@ pub enum Weighting {
     InverseVariance(Vec<f64>),
     /// Each pair weighted by `1/σ²_pair`, its noise variance estimated from the residual
     /// of a first, uniform fit (module doc, "Noise per pair"); then the fit is repeated
-    /// from the first fit's poles with those weights.
+    /// from the first fit's poles with those weights. The default: maximum likelihood
+    /// when the pairs' noise levels differ, as they do between sensors.
+    #[default]
     PairNoise,
 }
 
@@ -275,7 +276,7 @@ pub struct RefineOptions {
     pub tolerance: f64,
     /// Lines fitted, `first..end` (0-based, end exclusive); default every line above 0 Hz.
     pub band: Option<(usize, usize)>,
-    /// Weighting (default uniform).
+    /// Weighting (default [`Weighting::PairNoise`]).
     pub weighting: Weighting,
     /// `Some(Ts)`: fit the zero-order-hold image of the model, `z = e^(jωTs)` (module
     /// doc), for FRFs of a sampled system such as the truth model's; default `None`
@@ -302,7 +303,7 @@ impl Default for RefineOptions {
             max_iterations: 100,
             tolerance: 1e-6,
             band: None,
-            weighting: Weighting::Uniform,
+            weighting: Weighting::default(),
             sample_time_s: None,
             rank_one: true,
             add_missed: true,

@@ -1637,6 +1637,7 @@ mod tests {
         let options = RefineOptions {
             residuals,
             reciprocal,
+            weighting: crate::refine::Weighting::Uniform,
             ..RefineOptions::default()
         };
         let problem = Problem::new(&frf, &options).unwrap();

@@ -362,6 +362,7 @@ mod tests {
         let frf = add_noise(&s.frf(301, 0.025, Quantity::Velocity).unwrap(), 0.05, 5).unwrap();
         let options = RefineOptions {
             residuals: Residuals::Both,
+            weighting: crate::refine::Weighting::Uniform,
             ..RefineOptions::default()
         };
         let problem = Problem::new(&frf, &options).unwrap();

@@ -106,7 +106,11 @@ fn dta_noise_free_is_recovered_to_round_off() {
     // one computational pole in a gap above the modes.
     let (s, frf) = dta(0.0);
     let start = perturbed_start(&s, 17);
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
     let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
     let (fe, ze, found) = errors(&s, &r);
@@ -132,7 +136,11 @@ fn dta_noise_free_is_recovered_to_round_off() {
 fn dta_with_5_percent_noise_reaches_the_noise_floor() {
     let (s, frf) = dta(0.05);
     let start = perturbed_start(&s, 17);
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
     let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
     let (_, ze, found) = errors(&s, &r);
@@ -177,7 +185,11 @@ fn pair_variance_weights(frf: &FrfData) -> era::refine::Weighting {
 }
 
 fn truth_options() -> RefineOptions {
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
     options.reciprocal = true;
     options.sample_time_s = Some(1.0 / TRUTH_SAMPLE_RATE_HZ);
@@ -274,7 +286,11 @@ fn modes_the_start_missed_are_found_in_the_residual() {
         .filter(|r| !missing.contains(r))
         .map(|r| pole(s.frequencies_hz[r] * 1.001, s.damping_ratios[r]))
         .collect();
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
     let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
     assert!(!r.added.is_empty(), "nothing added");
@@ -312,7 +328,11 @@ fn noise_alone_adds_no_mode_and_every_true_mode_is_significant() {
             )
         })
         .collect();
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
     let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
     assert!(r.added.is_empty(), "added {:?}", r.added);
@@ -352,7 +372,11 @@ fn a_free_fit_the_rank_one_stage_steps_aside_from_runs_to_the_tolerance() {
             pole(f * (1.0 + 0.002 * sign), z * (1.0 - 0.2 * sign))
         })
         .collect();
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.weighting = era::refine::Weighting::Uniform;
     options.tolerance = 1e-8;
     options.add_missed = false;

@@ -107,7 +107,11 @@ proptest! {
                 pole(f, -s.re / s.norm() * (1.0 - 0.2 * sign))
             })
             .collect();
-        let mut options = RefineOptions::default();
+        let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
         options.rank_one = rank_one;
         let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
         prop_assert_eq!(r.modes.len(), modes);
@@ -163,7 +167,11 @@ fn start_of(s: &ModalStructure) -> Vec<Complex64> {
 #[test]
 fn naive_and_fast_paths_agree() {
     let (s, frf) = small(Quantity::Acceleration, 0.05, 3);
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::Upper;
     // The variable-projection fit itself (the rank-one stage after it is shared).
     options.rank_one = false;
@@ -198,7 +206,11 @@ fn reciprocal_fit_is_symmetric_and_stable() {
     let mut start = start_of(&s);
     // An unstable start pole is reflected into the left half-plane.
     start[1].re = -start[1].re;
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.reciprocal = true;
     let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
     assert_eq!(r.modes.len(), 4);
@@ -239,7 +251,17 @@ fn reciprocal_fit_is_symmetric_and_stable() {
         assert!((m.pole - true_pole).norm() < 1e-2 * true_pole.norm());
     }
     // The same fit without reciprocity has non-symmetric residues.
-    let free = refine(&frf, &start, &RefineOptions::default(), &mut |_, _| {}).unwrap();
+    let free = refine(
+        &frf,
+        &start,
+        &{
+            let mut o = RefineOptions::default();
+            o.weighting = era::refine::Weighting::Uniform;
+            o
+        },
+        &mut |_, _| {},
+    )
+    .unwrap();
     assert!(free.modes[0].residue[1] != free.modes[0].residue[3]);
 }
 
@@ -265,7 +287,11 @@ fn state_space_model_reproduces_the_response_in_every_quantity() {
             Residuals::Upper,
             Residuals::Both,
         ] {
-            let mut options = RefineOptions::default();
+            let mut options = {
+                let mut o = RefineOptions::default();
+                o.weighting = era::refine::Weighting::Uniform;
+                o
+            };
             options.residuals = residuals;
             let r = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
             for out in [
@@ -308,7 +334,11 @@ fn z_domain_model_is_the_zero_order_hold_of_its_state_space() {
     let freq: Vec<f64> = (0..401).map(|k| k as f64 * 0.05).collect();
     let values = frequency_response(&discrete, &freq).unwrap();
     let frf = FrfData::new(freq.clone(), 2, 2, values, Quantity::Displacement).unwrap();
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.sample_time_s = Some(ts);
     options.residuals = Residuals::Upper;
     let r = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
@@ -345,7 +375,11 @@ fn monte_carlo_spread_matches_the_predicted_standard_deviations() {
     let mut zetas = vec![Vec::new(); modes];
     let mut predicted_f = vec![0.0; modes];
     let mut predicted_z = vec![0.0; modes];
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.residuals = Residuals::None;
     for run in 0..runs {
         let mut rng = Minstd::new(1000 + run as u64);
@@ -393,11 +427,19 @@ fn coherence_of_one_is_the_uniform_fit() {
     let uniform = refine(
         &frf,
         &start_of(&s),
-        &RefineOptions::default(),
+        &{
+            let mut o = RefineOptions::default();
+            o.weighting = era::refine::Weighting::Uniform;
+            o
+        },
         &mut |_, _| {},
     )
     .unwrap();
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.weighting = Weighting::Coherence(vec![1.0; frf.values().len()]);
     let weighted = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
     for (a, b) in uniform.modes.iter().zip(&weighted.modes) {
@@ -427,7 +469,11 @@ fn bad_input_is_an_error_that_names_it() {
     let start = start_of(&s);
     let run =
         |start: &[Complex64], options: &RefineOptions| refine(&frf, start, options, &mut |_, _| {});
-    let o = RefineOptions::default();
+    let o = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     expect_invalid(run(&[], &o), "start poles");
     expect_invalid(run(&[Complex64::new(f64::NAN, 1.0)], &o), "start poles");
     expect_invalid(run(&[Complex64::new(-1.0, 0.0)], &o), "start poles");
@@ -495,7 +541,11 @@ fn weights_constant_per_pair_share_one_basis_and_fit_as_per_line_weights() {
     nudged[nl + 7] *= 1.0 + 1e-9;
     for reciprocal in [false, true] {
         let fit = |v: &Vec<f64>| {
-            let mut options = RefineOptions::default();
+            let mut options = {
+                let mut o = RefineOptions::default();
+                o.weighting = era::refine::Weighting::Uniform;
+                o
+            };
             options.residuals = Residuals::Upper;
             options.reciprocal = reciprocal;
             options.weighting = Weighting::InverseVariance(v.clone());
@@ -527,7 +577,11 @@ fn pair_noise_weighting_of_exact_data_still_gives_rank_one_residues() {
     // An exact fit has no noise to weight by and skips the weighted pass; the residues
     // are still the rank-one ones asked for.
     let (s, frf) = small(Quantity::Acceleration, 0.0, 1);
-    let mut options = RefineOptions::default();
+    let mut options = {
+        let mut o = RefineOptions::default();
+        o.weighting = era::refine::Weighting::Uniform;
+        o
+    };
     options.weighting = Weighting::PairNoise;
     let r = refine(&frf, &start_of(&s), &options, &mut |_, _| {}).unwrap();
     assert!(r.rank_one);

@@ -32,7 +32,11 @@ fn integrals_of_an_acceleration_fit_are_the_structure_s_integrals() {
         .collect();
     // (Without the constant the acceleration modal sum cannot be the data.)
     for residuals in [Residuals::Upper, Residuals::Both] {
-        let mut options = RefineOptions::default();
+        let mut options = {
+            let mut o = RefineOptions::default();
+            o.weighting = era::refine::Weighting::Uniform;
+            o
+        };
         options.residuals = residuals;
         let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
         let freq: Vec<f64> = frf.frequency_hz()[1..].to_vec();
