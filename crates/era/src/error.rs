@@ -433,10 +433,7 @@ impl EraError {
                 name,
                 value,
                 reason,
-            } => {
-                let shown = Param::from_field(name).map_or_else(|| name.to_string(), n);
-                format!("invalid parameter {shown} = {value}: {reason}")
-            }
+            } => refused_parameter(name, value, reason, spell),
             EraError::NotEnoughMarkovSamples {
                 needed,
                 available,
@@ -482,6 +479,19 @@ impl EraError {
     pub fn is_input_error(&self) -> bool {
         !matches!(self, EraError::Numerical(_))
     }
+}
+
+/// `invalid parameter {name} = {value}: {reason}`, the name spelled by `spell` when it is a
+/// [`Param`] (a front end's flag or keyword), as given otherwise (`record`, `structure`):
+/// the words of every refused parameter, [`EraError`]'s and the friction module's.
+pub(crate) fn refused_parameter(
+    name: &str,
+    value: &str,
+    reason: &str,
+    spell: &dyn Fn(Param) -> String,
+) -> String {
+    let shown = Param::from_field(name).map_or_else(|| name.to_string(), spell);
+    format!("invalid parameter {shown} = {value}: {reason}")
 }
 
 /// Result alias of the core.

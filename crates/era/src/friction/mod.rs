@@ -125,11 +125,7 @@ impl FrictionError {
                 name,
                 value,
                 reason,
-            } => {
-                let shown = crate::error::Param::from_field(name)
-                    .map_or_else(|| name.to_string(), |p| naming.spell(p));
-                format!("invalid parameter {shown} = {value}: {reason}")
-            }
+            } => crate::error::refused_parameter(name, value, reason, &|p| naming.spell(p)),
             other => other.to_string(),
         }
     }
