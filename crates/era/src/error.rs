@@ -128,6 +128,10 @@ pub enum Param {
     LvtRate,
     /// `motor_force_per_volt`.
     MotorForcePerVolt,
+    /// Lags of the OKID observer.
+    ObserverOrder,
+    /// Markov blocks a time-history source returns.
+    MarkovSamples,
 }
 
 impl Param {
@@ -188,6 +192,8 @@ impl Param {
         Param::AnalyzerRate,
         Param::LvtRate,
         Param::MotorForcePerVolt,
+        Param::ObserverOrder,
+        Param::MarkovSamples,
     ];
 
     /// The field name: `hankel_factor`, `lowpass_hz`.
@@ -248,6 +254,8 @@ impl Param {
             Param::AnalyzerRate => "analyzer_rate",
             Param::LvtRate => "lvt_rate",
             Param::MotorForcePerVolt => "motor_force_per_volt",
+            Param::ObserverOrder => "observer_order",
+            Param::MarkovSamples => "markov_samples",
         }
     }
 
@@ -390,6 +398,15 @@ pub enum EraError {
         channel: usize,
         /// 0-based sample index.
         sample: usize,
+    },
+    /// An input of a time-history source cannot drive the identification: it has no
+    /// energy, or it is a linear combination of the inputs before it.
+    #[error("input {input}: {reason}")]
+    DeficientInput {
+        /// 1-based input channel.
+        input: usize,
+        /// What is wrong, and what to do.
+        reason: String,
     },
     /// The input cross-spectral matrix cannot be inverted (H1, multiple coherence).
     #[error(

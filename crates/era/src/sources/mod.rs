@@ -3,7 +3,9 @@
 //! sample time), and everything after it ([`crate::pipeline`]) is shared.
 //!
 //! - [`frf`]: measured FRFs, preprocessed and inverse-transformed (the thesis's route).
+//! - [`okid`]: input and output time histories, through a least-squares observer.
 
 pub mod frf;
+pub mod okid;
 
 pub use frf::MarkovSequence;
