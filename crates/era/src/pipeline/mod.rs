@@ -6,6 +6,7 @@
 //!    them by FFT correlations without forming them.
 //! 3. [`realize`]: `H0 = U S Vᵀ` (dense or truncated, one [`realize::Factorization`]);
 //!    `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)` at any order.
+//!    [`realize_dc`] is ERA/DC: the same on the correlations of the Hankel blocks.
 //! 4. [`modes`]: eigenvalues to frequencies, damping, shapes and participations.
 //! 5. [`fit`]: the model's FRF through its modal form, and the per-pair fit.
 //!
@@ -18,3 +19,4 @@ pub mod hankel;
 pub mod hankel_op;
 pub mod modes;
 pub mod realize;
+pub mod realize_dc;
