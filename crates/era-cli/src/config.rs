@@ -86,7 +86,54 @@ pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
         None => {}
     }
     r.window_correction = a.no_window_correction.then_some(false);
+    r.markov = a.markov;
     r
+}
+
+/// The flags of the time-history route that only some routes take, refused elsewhere
+/// before anything is read.
+fn check_time_flags(a: &IdentifyArgs) -> anyhow::Result<()> {
+    use era::sources::MarkovSource;
+    if !a.from_time && !a.more.is_empty() {
+        return crate::error::usage(format!(
+            "{}: identify takes one FRF file; several files are records of one test with --from-time",
+            a.more[0].display()
+        ));
+    }
+    let okid = a.markov == MarkovSource::Okid;
+    if !okid {
+        for (given, flag) in [
+            (a.observer_order.is_some(), "--observer-order"),
+            (a.markov_samples.is_some(), "--markov-samples"),
+        ] {
+            if given {
+                return crate::error::usage(format!(
+                    "{flag} sets OKID's observer, which runs with --markov okid only"
+                ));
+            }
+        }
+        return Ok(());
+    }
+    for (value, flag) in [
+        (a.integrations, "--integrations"),
+        (a.pad_to, "--pad-to"),
+        (a.zero_lines, "--zero-lines"),
+    ] {
+        if value != 0 {
+            return crate::error::usage(format!(
+                "{flag} {value}: it shapes the FRFs' inverse transform, and with --markov okid the Markov parameters come from the observer: leave it out"
+            ));
+        }
+    }
+    if let Some(n) = a.markov_samples {
+        if n < 2 {
+            return crate::error::usage(format!(
+                "--markov-samples {n}: OKID returns at least 2 Markov blocks (the direct term and one more)"
+            ));
+        }
+        era::limits::SAMPLES.check("--markov-samples", n as u64)?;
+    }
+    Ok(())
 }
 
 /// `LO..HI` as two numbers, or `None`.
@@ -128,6 +175,15 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     opts.domain = a.time_domain.unwrap_or(ModelDomain::Discrete);
     opts.direct_term = a.direct_term.unwrap_or(DirectTerm::Zero);
     opts.svd = a.svd;
+    if a.era_dc {
+        if auto {
+            return crate::error::usage(
+                "--era-dc realizes at a fixed order only: give --states N (the stabilization scan and --states auto use ERA)",
+            );
+        }
+        opts.realizer = era::identify::Realizer::EraDc;
+    }
+    check_time_flags(a)?;
     // Sizes are checked against their limits here, under the flag's name, before anything
     // is read or allocated (the core checks them again for library users). With
     // --states auto every other parameter is checked as for one state.

@@ -394,6 +394,9 @@ pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
             era::pipeline::realize::DirectTerm::FirstMarkov => "markov0",
         }),
     );
+    if o.realizer != era::identify::Realizer::Era {
+        m.insert("realizer".into(), json!(o.realizer.to_string()));
+    }
     m
 }
 

@@ -60,6 +60,30 @@ pub struct EraOptions {
     pub direct_term: DirectTerm,
     /// Dense, matrix-free or automatic SVD.
     pub svd: SvdPath,
+    /// ERA, or ERA/DC on the correlations of the Hankel blocks (fixed order only).
+    pub realizer: Realizer,
+}
+
+/// How the model is realized from the Markov sequence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Realizer {
+    /// ERA on the Hankel matrix (the thesis's).
+    #[default]
+    Era,
+    /// ERA/DC on its shifted correlations ([`crate::pipeline::realize_dc`]).
+    EraDc,
+}
+
+/// Markov parameters given to the pipeline instead of the FRFs' inverse transform
+/// (§1.1–1.3): those [`crate::sources::okid`] estimates from time histories, say. The
+/// FRFs given beside them are what the model is fitted and judged against.
+#[derive(Debug, Clone, Copy)]
+pub struct SuppliedMarkov<'a> {
+    /// `Y_0, Y_1, …`, outputs and inputs as the FRFs'.
+    pub markov: &'a MarkovSequence,
+    /// Seconds between samples.
+    pub sample_time_s: f64,
 }
 
 impl EraOptions {
@@ -75,6 +99,7 @@ impl EraOptions {
             domain: ModelDomain::Discrete,
             direct_term: DirectTerm::Zero,
             svd: SvdPath::Auto,
+            realizer: Realizer::Era,
         }
     }
     /// The thesis's DTA settings (Appendix J): `ns 80, lh 5, ni 1, nz 3, ndpts 1024`.
@@ -270,7 +295,7 @@ enum Path {
 /// [`EraError::AllZero`] when there is nothing to identify, and every error of the
 /// stages (invalid parameters, too few samples, rank deficiency, numerical failure).
 pub fn identify(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
-    run(frf, options, Path::Fast, &mut |_| {})
+    run(frf, None, options, Path::Fast, &mut |_| {})
 }
 
 /// [`identify`], calling `observer` as each [`Stage`] starts (for progress displays;
@@ -283,7 +308,24 @@ pub fn identify_observed(
     options: &EraOptions,
     observer: &mut dyn FnMut(Stage),
 ) -> Result<Identification> {
-    run(frf, options, Path::Fast, observer)
+    run(frf, None, options, Path::Fast, observer)
+}
+
+/// [`identify_observed`] from `supplied` Markov parameters: `options.integrations`,
+/// `pad_to` and `zero_lines` must be 0 (they shape the FRFs' transform, which is not
+/// taken); a low-pass filters the supplied sequence. The model is fitted and judged
+/// against `frf`.
+///
+/// # Errors
+/// As [`identify`], and [`EraError::ShapeMismatch`] when the sequence's outputs or
+/// inputs are not the FRFs'.
+pub fn identify_supplied(
+    frf: &FrfData,
+    supplied: &SuppliedMarkov,
+    options: &EraOptions,
+    observer: &mut dyn FnMut(Stage),
+) -> Result<Identification> {
+    run(frf, Some(supplied), options, Path::Fast, observer)
 }
 
 /// [`identify`] with the naive reference of every stage: DFT by definition, element-wise
@@ -292,7 +334,7 @@ pub fn identify_observed(
 /// # Errors
 /// As [`identify`].
 pub fn identify_naive(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
-    run(frf, options, Path::Naive, &mut |_| {})
+    run(frf, None, options, Path::Naive, &mut |_| {})
 }
 
 /// What the front of the pipeline (§1.1–1.3) hands on.
@@ -304,6 +346,7 @@ struct Front {
 
 fn front(
     frf: &FrfData,
+    supplied: Option<&SuppliedMarkov>,
     options: &EraOptions,
     path: Path,
     observer: &mut dyn FnMut(Stage),
@@ -311,6 +354,9 @@ fn front(
 ) -> Result<Front> {
     if frf.is_all_zero() {
         return Err(EraError::AllZero);
+    }
+    if let Some(given) = supplied {
+        return supplied_front(frf, given, options, timings);
     }
     let mut clock = Instant::now();
     // Magnitudes far from 1 overflow (or underflow) the squares inside the SVD: such data
@@ -359,14 +405,90 @@ fn front(
     })
 }
 
+/// The front of the pipeline on supplied Markov parameters: checked against the FRFs'
+/// shape, low-pass filtered when asked, at the FRFs' magnitude scale.
+fn supplied_front(
+    frf: &FrfData,
+    given: &SuppliedMarkov,
+    options: &EraOptions,
+    timings: &mut StageTimings,
+) -> Result<Front> {
+    let clock = Instant::now();
+    let markov = given.markov;
+    for (what, got, expected) in [
+        (
+            "outputs of the Markov sequence",
+            markov.outputs(),
+            frf.outputs(),
+        ),
+        (
+            "inputs of the Markov sequence",
+            markov.inputs(),
+            frf.inputs(),
+        ),
+    ] {
+        if got != expected {
+            return Err(EraError::ShapeMismatch {
+                what: format!("{what} (the FRFs have {expected})"),
+                expected,
+                got,
+            });
+        }
+    }
+    for (key, value) in [
+        ("integrations", options.integrations),
+        ("pad_to", options.pad_to),
+        ("zero_lines", options.zero_lines),
+    ] {
+        if value != 0 {
+            return Err(EraError::InvalidParameter {
+                name: key,
+                value: value.to_string(),
+                reason: "it shapes the FRFs' inverse transform, and these Markov parameters come from elsewhere (OKID): leave it at 0".into(),
+            });
+        }
+    }
+    let ts = given.sample_time_s;
+    if !(ts.is_finite() && ts > 0.0) {
+        return Err(EraError::InvalidParameter {
+            name: "sample_rate",
+            value: ts.to_string(),
+            reason: "the sample time must be positive".into(),
+        });
+    }
+    let scale = MagnitudeScale::of(frf);
+    let factor = scale.map_or(1.0, |sc| MagnitudeScale::factor(sc.exponent));
+    let (q, p) = (markov.outputs(), markov.inputs());
+    let mut series: Vec<Vec<f64>> = (0..q * p)
+        .map(|k| {
+            let mut s = markov.pair_series(k / p, k % p);
+            s.iter_mut().for_each(|v| *v *= factor);
+            s
+        })
+        .collect();
+    if let Some((order, cutoff_hz)) = options.lowpass {
+        let filter = LowPass::design(order, cutoff_hz, ts)?;
+        for s in series.iter_mut() {
+            *s = filter.apply(s)?;
+        }
+    }
+    timings.markov = clock.elapsed().as_secs_f64();
+    Ok(Front {
+        scale,
+        markov: MarkovSequence::from_pair_series(q, p, &series),
+        sample_time_s: ts,
+    })
+}
+
 fn run(
     frf: &FrfData,
+    supplied: Option<&SuppliedMarkov>,
     options: &EraOptions,
     path: Path,
     observer: &mut dyn FnMut(Stage),
 ) -> Result<Identification> {
     let mut timings = StageTimings::default();
-    let f = front(frf, options, path, observer, &mut timings)?;
+    let f = front(frf, supplied, options, path, observer, &mut timings)?;
     let clock = Instant::now();
     let realize_options = RealizeOptions {
         direct_term: options.direct_term,
@@ -374,9 +496,18 @@ fn run(
         ..RealizeOptions::new(options.states, options.hankel_factor)
     };
     observer(Stage::HankelSvd);
-    let mut realization = match path {
-        Path::Fast => realize(&f.markov, f.sample_time_s, &realize_options)?,
-        Path::Naive => realize_naive(&f.markov, f.sample_time_s, &realize_options)?,
+    let mut realization = match (path, options.realizer) {
+        (_, Realizer::EraDc) => crate::pipeline::realize_dc::realize_dc(
+            &f.markov,
+            f.sample_time_s,
+            options.states,
+            options.hankel_factor,
+            options.direct_term,
+        )?,
+        (Path::Fast, Realizer::Era) => realize(&f.markov, f.sample_time_s, &realize_options)?,
+        (Path::Naive, Realizer::Era) => {
+            realize_naive(&f.markov, f.sample_time_s, &realize_options)?
+        }
     };
     if let Some(sc) = f.scale {
         sc.undo(&mut realization);
@@ -783,13 +914,21 @@ pub fn cmif(frf: &FrfData) -> Vec<Vec<f64>> {
 
 fn scan_front(
     frf: &FrfData,
+    supplied: Option<&SuppliedMarkov>,
     options: &EraOptions,
     scan_options: &ScanOptions,
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, usize),
     timings: &mut StageTimings,
 ) -> Result<(Front, Factorization, OrderRange, Scan, f64)> {
-    let f = front(frf, options, Path::Fast, observer, timings)?;
+    if options.realizer != Realizer::Era {
+        return Err(EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: "ERA/DC realizes at a fixed order only: give `states N` (the stabilization scan and the automatic order use ERA)".into(),
+        });
+    }
+    let f = front(frf, supplied, options, Path::Fast, observer, timings)?;
     let range = match scan_options.orders.clone() {
         Some(r) => r,
         None => {
@@ -890,10 +1029,44 @@ pub fn identify_with_scan(
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Identification> {
-    let mut found = run(frf, options, Path::Fast, observer)?;
+    with_scan(frf, None, options, scan_options, observer, progress)
+}
+
+/// [`identify_with_scan`] from `supplied` Markov parameters (as [`identify_supplied`]).
+///
+/// # Errors
+/// As [`identify_with_scan`] and [`identify_supplied`].
+pub fn identify_with_scan_supplied(
+    frf: &FrfData,
+    supplied: &SuppliedMarkov,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
+    with_scan(
+        frf,
+        Some(supplied),
+        options,
+        scan_options,
+        observer,
+        progress,
+    )
+}
+
+fn with_scan(
+    frf: &FrfData,
+    supplied: Option<&SuppliedMarkov>,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
+    let mut found = run(frf, supplied, options, Path::Fast, observer)?;
     let mut timings = StageTimings::default();
     let (_, factorization, range, s, seconds) = scan_front(
         frf,
+        supplied,
         options,
         scan_options,
         &mut |_| {},
@@ -947,9 +1120,49 @@ pub fn identify_auto(
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Identification> {
+    auto(frf, None, options, scan_options, observer, progress)
+}
+
+/// [`identify_auto`] from `supplied` Markov parameters (as [`identify_supplied`]).
+///
+/// # Errors
+/// As [`identify_auto`] and [`identify_supplied`].
+pub fn identify_auto_supplied(
+    frf: &FrfData,
+    supplied: &SuppliedMarkov,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
+    auto(
+        frf,
+        Some(supplied),
+        options,
+        scan_options,
+        observer,
+        progress,
+    )
+}
+
+fn auto(
+    frf: &FrfData,
+    supplied: Option<&SuppliedMarkov>,
+    options: &EraOptions,
+    scan_options: &ScanOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
     let mut timings = StageTimings::default();
-    let (f, factorization, range, s, seconds) =
-        scan_front(frf, options, scan_options, observer, progress, &mut timings)?;
+    let (f, factorization, range, s, seconds) = scan_front(
+        frf,
+        supplied,
+        options,
+        scan_options,
+        observer,
+        progress,
+        &mut timings,
+    )?;
     // The band needs the lines only: the data is integrated once, in `assess`.
     let (_, band_hz) = fit_band(frf.frequency_hz(), options);
     let band_hz = match scan_options.band_hz {
@@ -1307,6 +1520,11 @@ pub fn assess_model(
         sample_time_s,
     )
 }
+
+crate::names::named!(display Realizer, "realizer", [
+    Realizer::Era => "era",
+    Realizer::EraDc => "era-dc",
+]);
 
 crate::names::named!(display ModelDomain, "time domain", [
     ModelDomain::Discrete => "discrete",

@@ -105,12 +105,47 @@ pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
     })
 }
 
+/// Samples per frame when `--frame` is not given.
+pub const DEFAULT_FRAME: usize = 2048;
+
+/// Averages the default frame of OKID's fit FRFs gives at least (when the records are
+/// long enough for frames of 256 samples).
+pub const OKID_FIT_AVERAGES: usize = 16;
+
+impl WelchArgs {
+    /// `--frame`, or [`DEFAULT_FRAME`].
+    pub fn frame_or_default(&self) -> usize {
+        self.frame.unwrap_or(DEFAULT_FRAME)
+    }
+
+    /// The default frame for FRFs that only judge a model (OKID's): the largest power of
+    /// two up to [`DEFAULT_FRAME`], and at least 256, that gives `samples` (per record,
+    /// `records` of them) at least [`OKID_FIT_AVERAGES`] averages at `--overlap`.
+    pub fn fit_frame(&self, samples: usize, records: usize) -> usize {
+        let hop = |frame: usize| ((frame as f64 * (1.0 - self.overlap)).round() as usize).max(1);
+        let averages = |frame: usize| {
+            if samples < frame {
+                0
+            } else {
+                records * ((samples - frame) / hop(frame) + 1)
+            }
+        };
+        let mut frame = DEFAULT_FRAME;
+        while frame > 256 && averages(frame) < OKID_FIT_AVERAGES {
+            frame /= 2;
+        }
+        frame
+    }
+}
+
 /// How FRFs are estimated from time histories (era frf, era identify --from-time).
 #[derive(Debug, Args, Clone)]
 pub struct WelchArgs {
-    /// Samples per frame (FFT length): lines are frame/2 + 1, spaced fs/frame.
-    #[arg(long, default_value_t = 2048)]
-    pub frame: usize,
+    /// Samples per frame (FFT length): lines are frame/2 + 1, spaced fs/frame. Default
+    /// 2048; with --markov okid, where these FRFs only judge and refine the model, the
+    /// largest power of two up to 2048 that gives at least 16 averages.
+    #[arg(long, value_name = "N")]
+    pub frame: Option<usize>,
     /// Window of each frame.
     #[arg(long, value_parser = named::<Window>(), default_value_t = Window::Hann)]
     pub window: Window,

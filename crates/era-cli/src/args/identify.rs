@@ -5,6 +5,7 @@ use clap::Args;
 use era::identify::route::Preset;
 use era::identify::ModelDomain;
 use era::pipeline::realize::{DirectTerm, SvdPath};
+use era::sources::MarkovSource;
 use era::Quantity;
 use std::path::PathBuf;
 
@@ -27,6 +28,25 @@ fn parse_states(text: &str) -> Result<StatesArg, String> {
         .map_err(|_| format!("'{text}' is neither a number of states nor 'auto'"))
 }
 
+/// `--observer-order N` or `--observer-order auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ObserverOrderArg {
+    /// These many lags.
+    Fixed(usize),
+    /// Chosen by the information criterion.
+    Auto,
+}
+
+fn parse_observer_order(text: &str) -> Result<ObserverOrderArg, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        return Ok(ObserverOrderArg::Auto);
+    }
+    text.trim()
+        .parse::<usize>()
+        .map(ObserverOrderArg::Fixed)
+        .map_err(|_| format!("'{text}' is neither a number of lags nor 'auto'"))
+}
+
 /// What `era identify --help` shows before the flags.
 const IDENTIFY_EXAMPLES: &str = "\
 Examples:
@@ -37,6 +57,8 @@ Examples:
       plain ERA at 40 states (20 modes)
   era identify rec.csv --from-time --inputs force --outputs 2-9 --out run
       time histories: the FRFs are estimated first (as era frf), then identified
+  era identify rec.csv --from-time --inputs 1-2 --outputs 3-30 --markov okid
+      time histories: the Markov parameters by OKID, the H1 FRFs for the fit
   era identify frf.csv --preset thesis --states 8 --hankel-factor 5
       the thesis's own ERA, number for number";
 
@@ -52,6 +74,10 @@ pub struct IdentifyArgs {
     /// FRF file (CSV, UFF 58/58b or MAT v5, told apart by content), or time histories
     /// with --from-time.
     pub file: PathBuf,
+    /// With --from-time, more records of the same test (same channels and sample rate):
+    /// their spectra are averaged with the first's, and OKID fits one observer to all.
+    #[arg(value_name = "MORE_RECORDS")]
+    pub more: Vec<PathBuf>,
     /// Defaults for every choice not given: measured (automatic order, refinement,
     /// continuous time, D from the quantity, the band from the coherence, the Welch window
     /// corrected) or thesis (plain ERA as the thesis runs it: no refinement, discrete
@@ -100,6 +126,10 @@ pub struct IdentifyArgs {
     /// --integrations, zero otherwise and with --preset thesis.
     #[arg(long, value_parser = named::<DirectTerm>(), help_heading = "ERA")]
     pub direct_term: Option<DirectTerm>,
+    /// Realize by ERA/DC (ERA on the shifted correlations of the Hankel blocks) instead
+    /// of ERA; at a fixed --states only.
+    #[arg(long, help_heading = "ERA")]
+    pub era_dc: bool,
     /// How the Hankel SVD is computed: dense (H0 formed, every singular value),
     /// matrix-free (FFT products and a truncated SVD) or auto (dense while the Hankel's
     /// short side is below 1024).
@@ -147,6 +177,30 @@ pub struct IdentifyArgs {
         help_heading = "Time histories (--from-time)"
     )]
     pub no_frame_check: bool,
+    /// Where the Markov parameters come from: frf (the Welch H1 FRFs, inverse
+    /// transformed) or okid (a least-squares observer fitted to the records themselves:
+    /// no window, no leakage). The H1 FRFs are estimated either way: the fit, the
+    /// figures and the refinement use them.
+    #[arg(
+        long,
+        value_parser = named::<MarkovSource>(),
+        default_value_t = MarkovSource::default(),
+        requires = "from_time",
+        help_heading = "Time histories (--from-time)"
+    )]
+    pub markov: MarkovSource,
+    /// OKID's observer order (lags of past inputs and outputs), or auto (the default):
+    /// the order below a cap that minimises the Bayesian information criterion.
+    #[arg(
+        long,
+        value_name = "N | auto",
+        value_parser = parse_observer_order,
+        help_heading = "Time histories (--from-time)"
+    )]
+    pub observer_order: Option<ObserverOrderArg>,
+    /// Markov blocks OKID returns (default: --frame, the length the FRF route gives).
+    #[arg(long, value_name = "N", help_heading = "Time histories (--from-time)")]
+    pub markov_samples: Option<usize>,
     #[command(flatten, next_help_heading = "Time histories (--from-time)")]
     pub welch: WelchArgs,
     /// Also write the estimated FRFs (.csv, .uff or .mat).

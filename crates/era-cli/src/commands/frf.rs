@@ -31,6 +31,28 @@ pub struct FromTime {
     pub facts: EstimateFacts,
     /// Seconds reading and estimating.
     pub timings: (f64, f64),
+    /// The selected channels of every record, when asked for (OKID reads them).
+    pub records: Option<TimeRecords>,
+}
+
+/// The selected channels of one record.
+pub struct TimeRecord {
+    /// Its file.
+    pub path: PathBuf,
+    /// Its input channels.
+    pub inputs: Vec<Vec<f64>>,
+    /// Its output channels.
+    pub outputs: Vec<Vec<f64>>,
+}
+
+/// The selected channels of the records of one test, as read.
+pub struct TimeRecords {
+    /// Every record.
+    pub records: Vec<TimeRecord>,
+    /// Samples per second.
+    pub rate: f64,
+    /// The first record's label of each input and output, `3 (force2)`.
+    pub input_labels: Vec<String>,
 }
 
 /// How FRFs were estimated from time histories: the file format, the estimator, the
@@ -76,7 +98,10 @@ struct FirstRecord {
 /// The spectra of every record, the first record, and the seconds reading and
 /// estimating them.
 struct Records {
+    /// The Welch settings run, the frame resolved.
+    welch: WelchArgs,
     spectra: Vec<estimate::Spectra>,
+    kept: Option<Vec<TimeRecord>>,
     first: Option<FirstRecord>,
     read_s: f64,
     estimate_s: f64,
@@ -84,7 +109,7 @@ struct Records {
 
 /// The Welch settings of the flags at `rate` samples per second.
 fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
-    let mut o = WelchOptions::new(rate, welch.frame);
+    let mut o = WelchOptions::new(rate, welch.frame_or_default());
     o.overlap = welch.overlap;
     o.window = welch.window;
     o.detrend = welch.detrend;
@@ -121,6 +146,7 @@ fn read_records(
     outputs: &str,
     welch: &WelchArgs,
     est: Estimator,
+    keep: bool,
     spinner: &indicatif::ProgressBar,
 ) -> anyhow::Result<Records> {
     let selection = TimeSelection {
@@ -128,7 +154,9 @@ fn read_records(
         datasets: welch.dataset.clone(),
     };
     let mut records = Records {
+        welch: welch.clone(),
         spectra: Vec::new(),
+        kept: keep.then(Vec::new),
         first: None,
         read_s: 0.0,
         estimate_s: 0.0,
@@ -140,6 +168,16 @@ fn read_records(
             .with_context(|| format!("reading {}", path.display()))?;
         records.read_s += clock.elapsed().as_secs_f64();
         let (rate, rate_from) = sample_rate(path, &history, welch.sample_rate)?;
+        if records.welch.frame.is_none() {
+            // Kept for OKID, the FRFs only judge the model: as many averages as a
+            // frame of 256 samples or more allows, up to 16.
+            records.welch.frame = Some(if keep {
+                welch.fit_frame(history.samples(), paths.len())
+            } else {
+                crate::args::DEFAULT_FRAME
+            });
+        }
+        let welch = &records.welch;
         if let Some(first) = &records.first {
             let r0 = first.rate;
             if (rate - r0).abs() > 1e-9 * r0 {
@@ -170,6 +208,14 @@ fn read_records(
             .with_context(|| format!("estimating FRFs from {}", path.display()))?;
         records.estimate_s += clock.elapsed().as_secs_f64();
         records.spectra.push(spectra);
+        if let Some(kept) = records.kept.as_mut() {
+            let owned = |cols: &[&[f64]]| cols.iter().map(|c| c.to_vec()).collect::<Vec<_>>();
+            kept.push(TimeRecord {
+                path: path.clone(),
+                inputs: owned(&xs),
+                outputs: owned(&ys),
+            });
+        }
         if records.first.is_none() {
             records.first = Some(FirstRecord {
                 history,
@@ -206,6 +252,7 @@ pub fn estimate_from_time(
     outputs: &str,
     welch: &WelchArgs,
     quantity: era::Quantity,
+    keep_records: bool,
     settings: &Settings,
 ) -> anyhow::Result<FromTime> {
     if let Some(r) = welch.sample_rate {
@@ -217,11 +264,18 @@ pub fn estimate_from_time(
     }
     let est = welch.estimator;
     let spinner = crate::output::progress::spinner(settings);
-    let records = read_records(paths, inputs, outputs, welch, est, &spinner)?;
+    let mut records = read_records(paths, inputs, outputs, welch, est, keep_records, &spinner)?;
     let mut estimate_s = records.estimate_s;
+    let welch = &records.welch.clone();
     let Some(first) = records.first else {
         return crate::error::usage("no time-history file given");
     };
+    let label = |c: &usize| format!("{} ({})", c + 1, first.history.label(*c));
+    let kept = records.kept.take().map(|kept| TimeRecords {
+        records: kept,
+        rate: first.rate,
+        input_labels: first.inputs.iter().map(label).collect(),
+    });
     let path = &paths[0];
     let opts = welch_options(welch, first.rate);
     spinner.set_message("estimating FRFs");
@@ -263,6 +317,7 @@ pub fn estimate_from_time(
         json,
         facts,
         timings: (records.read_s, estimate_s),
+        records: kept,
     })
 }
 
@@ -534,7 +589,7 @@ pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
     // Refuse a bad --out before reading anything.
     let set = crate::output::estimate::prepare_estimate(&a.out, a.binary)?;
     let mut found = estimate_from_time(
-        &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, &settings,
+        &a.files, &a.inputs, &a.outputs, &a.welch, a.quantity, false, &settings,
     )?;
     // Time files seldom say their units; --units writes them into the FRF file, where
     // identify, plot and the report find them.

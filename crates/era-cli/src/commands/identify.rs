@@ -16,7 +16,10 @@ use crate::output::report::{
 use crate::output::{pair_fit_table, prepare_out_dir, InputCoherence, RunInput};
 use anyhow::Context;
 use era::identify::route::Route;
-use era::identify::{identify_auto, identify_observed, identify_with_scan, ScanOptions};
+use era::identify::{
+    identify_auto, identify_auto_supplied, identify_observed, identify_supplied,
+    identify_with_scan, identify_with_scan_supplied, ScanOptions, SuppliedMarkov,
+};
 use era_io::atomic::OutputSet;
 use era_io::model_json::{timings_map, FitJson, ModelJson, ModelParameters};
 use std::time::Instant;
@@ -28,6 +31,25 @@ struct Source {
     estimate_s: Option<f64>,
     coherence: Option<InputCoherence>,
     time_format: Option<String>,
+    records: Option<crate::commands::frf::TimeRecords>,
+    /// Samples per frame of the estimate (with `--from-time`).
+    frame: usize,
+}
+
+/// The Markov parameters OKID found in the records, and its seconds.
+struct Observed {
+    okid: era::sources::okid::Okid,
+    sample_time_s: f64,
+    seconds: f64,
+}
+
+impl Observed {
+    fn supplied(&self) -> SuppliedMarkov<'_> {
+        SuppliedMarkov {
+            markov: &self.okid.markov,
+            sample_time_s: self.sample_time_s,
+        }
+    }
 }
 
 pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
@@ -47,6 +69,12 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let clock = Instant::now();
     let source = read_source(a, frf_outputs, &human, &settings)?;
     let read_s = clock.elapsed().as_secs_f64() - source.estimate_s.unwrap_or(0.0);
+    let frame_run = source.frame;
+    let observed = match &source.records {
+        Some(records) => Some(observe(a, records, &settings)?),
+        None => None,
+    };
+    let supplied = observed.as_ref().map(Observed::supplied);
     let mut input = source.input;
     let route = request.resolve(input.file.frf.quantity(), a.integrations);
     apply_route(&mut opts, &route);
@@ -60,8 +88,9 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let auto = route.states.is_none();
     // The route and the parameters: printed here, and the report's Parameters.
     let echo = format!(
-        "{}{}",
+        "{}{}{}",
         route_echo(&route),
+        observed.as_ref().map(okid_echo).unwrap_or_default(),
         parameter_echo_states(
             &opts,
             auto.then_some("auto (from the stabilization diagram)")
@@ -78,7 +107,15 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         o
     };
     let era_opts = era_options(&opts, &route);
-    let mut found = realize(a, frf, &era_opts, &scan_options, auto, &settings)?;
+    let mut found = realize(
+        a,
+        frf,
+        supplied.as_ref(),
+        &era_opts,
+        &scan_options,
+        auto,
+        &settings,
+    )?;
     let channels = input.file.channels.as_ref();
     crate::output::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let states = found.model.states();
@@ -94,6 +131,8 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             scan_options: &scan_options,
             refine_options: &refine_options,
             route: &route,
+            supplied: supplied.as_ref(),
+            frame: frame_run,
         };
         found = refine_route(a, found, frf, &check, auto, &human, &settings)?;
     }
@@ -102,9 +141,15 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         .suspects
         .extend(era::suspect::band_edges(&found, fit.fitted_hz));
     print_found(&found, frf, states, &human);
+    let mut model = model_json(&found, &opts, &route, &refine_options, auto, states);
+    let mut timings = timings(&found, read_s, source.estimate_s, route.refine);
+    if let Some(o) = &observed {
+        okid_json(o, &mut model);
+        timings.insert("okid".into(), o.seconds);
+    }
     let written = Written {
-        model: model_json(&found, &opts, &route, &refine_options, auto, states),
-        timings: timings(&found, read_s, source.estimate_s, route.refine),
+        model,
+        timings,
         echo,
         states,
     };
@@ -140,7 +185,7 @@ fn refine_settings(
     let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
     if !refine && crate::config::refine_given(&a.refine_fit) {
         return crate::error::usage(
-            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine or --preset thesis): add --refine",
+            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine, --preset thesis or --markov okid): add --refine",
         );
     }
     crate::config::refine_options(&a.refine_fit)
@@ -234,6 +279,8 @@ fn read_source(
             estimate_s: None,
             coherence: None,
             time_format: None,
+            records: None,
+            frame: a.welch.frame_or_default(),
         });
     }
     let inputs = a.inputs.as_deref().unwrap_or_default();
@@ -242,17 +289,22 @@ fn read_source(
     };
     let quantity = a.quantity.unwrap_or(era::Quantity::Acceleration);
     let mut found = crate::commands::frf::estimate_from_time(
-        std::slice::from_ref(&a.file),
+        &record_paths(a),
         inputs,
         outputs,
         &a.welch,
         quantity,
+        a.markov == era::sources::MarkovSource::Okid,
         settings,
     )?;
     set_units(&mut found.input, a.facts.units.as_ref());
     human.print(&format!(
         "era identify --from-time {}\n{}",
-        a.file.display(),
+        record_paths(a)
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
         found.summary
     ));
     if let (Some(path), Some(set)) = (&a.save_frf, frf_outputs) {
@@ -278,7 +330,9 @@ fn read_source(
         estimate_s: Some(found.timings.1),
         coherence: Some(InputCoherence::multiple(&found.estimate)),
         time_format: Some(time_format),
+        frame: found.facts.frame,
         input: found.input,
+        records: found.records,
     })
 }
 
@@ -455,6 +509,7 @@ fn write(
 fn realize(
     a: &IdentifyArgs,
     frf: &era::FrfData,
+    supplied: Option<&SuppliedMarkov>,
     era_opts: &era::EraOptions,
     scan_options: &ScanOptions,
     auto: bool,
@@ -465,12 +520,16 @@ fn realize(
     let mut on_order = |done: usize, total: usize| {
         spinner.set_message(format!("stabilization: order {done} of {total}"));
     };
-    let found = if auto {
-        identify_auto(frf, era_opts, scan_options, &mut on_stage, &mut on_order)
-    } else if scan_options.orders.is_some() {
-        identify_with_scan(frf, era_opts, scan_options, &mut on_stage, &mut on_order)
-    } else {
-        identify_observed(frf, era_opts, &mut on_stage)
+    let (stage, order) = (&mut on_stage, &mut on_order);
+    let found = match (supplied, auto, scan_options.orders.is_some()) {
+        (None, true, _) => identify_auto(frf, era_opts, scan_options, stage, order),
+        (None, false, true) => identify_with_scan(frf, era_opts, scan_options, stage, order),
+        (None, false, false) => identify_observed(frf, era_opts, stage),
+        (Some(m), true, _) => identify_auto_supplied(frf, m, era_opts, scan_options, stage, order),
+        (Some(m), false, true) => {
+            identify_with_scan_supplied(frf, m, era_opts, scan_options, stage, order)
+        }
+        (Some(m), false, false) => identify_supplied(frf, m, era_opts, stage),
     }
     .map_err(|e| match e {
         era::EraError::InvalidParameter {
@@ -480,6 +539,11 @@ fn realize(
         } if name == "orders" || (name == "states" && value == "auto") => anyhow::Error::from(
             crate::error::UsageError(format!("--{name} {value}: {reason}")),
         ),
+        era::EraError::NotEnoughMarkovSamples {
+            needed, available, ..
+        } if supplied.is_some() => anyhow::Error::from(crate::error::UsageError(format!(
+            "--markov-samples {available}: the Hankel matrix needs {needed} Markov samples (states x hankel factor, plus the direct term): raise --markov-samples, or lower --states or --hankel-factor"
+        ))),
         other => anyhow::Error::from(other),
     })
     .with_context(|| format!("identifying {}", a.file.display()));
@@ -498,6 +562,10 @@ struct Check<'a> {
     scan_options: &'a ScanOptions,
     refine_options: &'a era::refine::RefineOptions,
     route: &'a era::identify::route::Route,
+    /// OKID's Markov parameters, which the second identification realizes again.
+    supplied: Option<&'a SuppliedMarkov<'a>>,
+    /// Samples per frame of the first estimate.
+    frame: usize,
 }
 
 /// With `--from-time`: the records are estimated again through frames twice as long
@@ -516,7 +584,7 @@ fn frame_check(
     let clock = Instant::now();
     // Twice the frame (finer lines, the modes better resolved); half of it when the
     // records are too short for that.
-    let frame = a.welch.frame;
+    let frame = check.frame;
     let mut second = None;
     let mut tried = Vec::new();
     for other in [frame.saturating_mul(2), frame / 2] {
@@ -524,15 +592,16 @@ fn frame_check(
             continue;
         }
         let mut welch = a.welch.clone();
-        welch.frame = other;
+        welch.frame = Some(other);
         // Too few frames for the inputs is one way for these records to be too short
         // at that frame: the check then tries the other.
         let Ok(estimate) = crate::commands::frf::estimate_from_time(
-            std::slice::from_ref(&a.file),
+            &record_paths(a),
             a.inputs.as_deref().unwrap_or_default(),
             a.outputs.as_deref().unwrap_or_default(),
             &welch,
             a.quantity.unwrap_or(era::Quantity::Acceleration),
+            false,
             &quiet,
         ) else {
             tried.push(format!("{other} samples give no estimate"));
@@ -590,8 +659,16 @@ fn second_identification(
     });
     // Zeroed lines are a count of lines: the same Hz at the other frame.
     let mut era_opts = check.era_opts.clone();
-    era_opts.zero_lines = (era_opts.zero_lines * other).div_ceil(a.welch.frame.max(1));
-    let again = realize(a, &frf, &era_opts, check.scan_options, true, quiet)?;
+    era_opts.zero_lines = (era_opts.zero_lines * other).div_ceil(check.frame.max(1));
+    let again = realize(
+        a,
+        &frf,
+        check.supplied,
+        &era_opts,
+        check.scan_options,
+        true,
+        quiet,
+    )?;
     crate::commands::refine::refine_found(
         again,
         &frf,
@@ -675,4 +752,148 @@ fn identify_band(
             )),
         },
     )
+}
+
+/// The time files: the first and any more records of the test.
+fn record_paths(a: &IdentifyArgs) -> Vec<std::path::PathBuf> {
+    std::iter::once(a.file.clone())
+        .chain(a.more.iter().cloned())
+        .collect()
+}
+
+/// The channels of a record as slices.
+fn channels(set: &[Vec<f64>]) -> Vec<&[f64]> {
+    set.iter().map(Vec::as_slice).collect()
+}
+
+/// OKID on the records (`--markov okid`), a spinner meanwhile; an input it cannot use
+/// is named by its channel.
+fn observe(
+    a: &IdentifyArgs,
+    records: &crate::commands::frf::TimeRecords,
+    settings: &Settings,
+) -> anyhow::Result<Observed> {
+    use crate::args::ObserverOrderArg;
+    use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
+    let mut options = OkidOptions::default();
+    options.observer_order = match a.observer_order {
+        Some(ObserverOrderArg::Fixed(p)) => ObserverOrder::Fixed(p),
+        Some(ObserverOrderArg::Auto) | None => ObserverOrder::Auto { max: None },
+    };
+    options.markov_samples = a.markov_samples.unwrap_or(a.welch.frame_or_default());
+    let inputs: Vec<Vec<&[f64]>> = records
+        .records
+        .iter()
+        .map(|r| channels(&r.inputs))
+        .collect();
+    let outputs: Vec<Vec<&[f64]>> = records
+        .records
+        .iter()
+        .map(|r| channels(&r.outputs))
+        .collect();
+    let recs: Vec<Record> = inputs
+        .iter()
+        .zip(&outputs)
+        .map(|(ins, outs)| Record {
+            inputs: ins,
+            outputs: outs,
+        })
+        .collect();
+    let spinner = crate::output::progress::spinner(settings);
+    spinner.set_message("OKID: the observer's least squares");
+    let clock = Instant::now();
+    let found = okid(&recs, &options);
+    spinner.finish_and_clear();
+    let found = found.map_err(|e| {
+        let named = match &e {
+            era::EraError::DeficientInput { input, .. } => Some(format!(
+                "--inputs: channel {} cannot drive OKID",
+                records.input_labels[input - 1]
+            )),
+            _ => None,
+        };
+        let files = records
+            .records
+            .iter()
+            .map(|r| r.path.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ");
+        let err = anyhow::Error::new(e).context(format!("OKID on {files}"));
+        match named {
+            Some(text) => err.context(text),
+            None => err,
+        }
+    })?;
+    Ok(Observed {
+        okid: found,
+        sample_time_s: 1.0 / records.rate,
+        seconds: clock.elapsed().as_secs_f64(),
+    })
+}
+
+/// The echo's OKID section: the observer, how the system's Markov parameters came from
+/// it, and the residual.
+fn okid_echo(o: &Observed) -> String {
+    use era::sources::okid::MarkovRoute;
+    let k = &o.okid;
+    let how = if k.criterion.is_empty() {
+        "as --observer-order says".to_string()
+    } else {
+        format!(
+            "the least BIC of orders 1..{}",
+            k.criterion.last().map_or(0, |c| c.0)
+        )
+    };
+    let route = match k.route {
+        MarkovRoute::Recursion => format!(
+            "from the recursion (observer roots within {:.3} of the origin)",
+            k.observer_radius
+        ),
+        MarkovRoute::UnitCircle { points } => format!(
+            "from the unit circle ({points} points): the least-squares observer has roots out to {:.2}, where the recursion would grow",
+            k.observer_radius
+        ),
+        _ => "other".into(),
+    };
+    let mut res = k.residual.clone();
+    res.sort_by(f64::total_cmp);
+    let median = res.get(res.len() / 2).copied().unwrap_or(f64::NAN);
+    format!(
+        "Markov parameters (--markov okid)\n  observer order          {} ({how})\n  equations               {} samples x {} unknowns per output (rank {})\n  Markov blocks           {}, {route}\n  one-step residual       {:.3} of the output RMS (median over outputs)\n",
+        k.observer_order,
+        k.equations,
+        k.regressors,
+        k.rank,
+        k.markov.samples(),
+        median
+    )
+}
+
+/// model.json's record of OKID: `markov: "okid"` and the observer's facts.
+fn okid_json(o: &Observed, model: &mut ModelJson) {
+    use era::sources::okid::MarkovRoute;
+    let k = &o.okid;
+    let (route, points) = match k.route {
+        MarkovRoute::Recursion => ("recursion", None),
+        MarkovRoute::UnitCircle { points } => ("unit_circle", Some(points)),
+        _ => ("other", None),
+    };
+    model
+        .parameters
+        .insert("markov".into(), serde_json::json!("okid"));
+    model.parameters.insert(
+        "okid".into(),
+        serde_json::json!({
+            "observer_order": k.observer_order,
+            "observer_order_chosen": !k.criterion.is_empty(),
+            "markov_samples": k.markov.samples(),
+            "equations": k.equations,
+            "regressors": k.regressors,
+            "rank": k.rank,
+            "observer_radius": k.observer_radius,
+            "route": route,
+            "unit_circle_points": points,
+            "residual": k.residual,
+        }),
+    );
 }

@@ -238,6 +238,12 @@ pub fn parameter_echo_states(o: &EraOptions, states: Option<&str>) -> String {
     };
     let _ = writeln!(s, "  direct term D           {d}");
     let _ = writeln!(s, "  SVD                     {}", o.svd.name());
+    if o.realizer == era::identify::Realizer::EraDc {
+        let _ = writeln!(
+            s,
+            "  realization             ERA/DC (shifted correlations of the Hankel blocks)"
+        );
+    }
     s
 }
 

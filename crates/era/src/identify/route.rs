@@ -64,6 +64,10 @@ pub struct RouteRequest {
     /// and time histories can; a bare array cannot): without, neither is used, and the
     /// echo says why.
     pub without_metadata: bool,
+    /// Where the Markov parameters come from: with OKID's, the measured preset does not
+    /// refine (the FRFs beside them are Welch estimates, whose bias a refinement
+    /// against them would bring back).
+    pub markov: crate::sources::MarkovSource,
 }
 
 /// One choice of the route: what was chosen and why.
@@ -130,12 +134,14 @@ impl RouteRequest {
             },
         });
 
-        let refine = self.refine.unwrap_or(measured);
+        let okid = self.markov == crate::sources::MarkovSource::Okid;
+        let refine = self.refine.unwrap_or(measured && !okid);
         choices.push(Choice {
             name: "refinement",
             value: if refine { "on" } else { "off" }.into(),
             reason: match self.refine {
                 Some(_) => given(),
+                None if measured && okid => format!("{preset} with OKID: the observer's Markov parameters carry no window and no leakage, and a refinement against the Welch FRFs would bring their bias back (ask for the refinement to refine anyway)"),
                 None if measured => format!("{preset}: poles, residues and residual terms by maximum likelihood over the band, with standard deviations"),
                 None => format!("{preset}: plain ERA"),
             },

@@ -9,3 +9,19 @@ pub mod frf;
 pub mod okid;
 
 pub use frf::MarkovSequence;
+
+/// Where the Markov sequence of time histories comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum MarkovSource {
+    /// Welch-averaged FRFs, inverse transformed ([`frf`]).
+    #[default]
+    Frf,
+    /// A least-squares observer on the records themselves ([`okid`]).
+    Okid,
+}
+
+crate::names::named!(display MarkovSource, "Markov source", [
+    MarkovSource::Frf => "frf",
+    MarkovSource::Okid => "okid",
+]);

@@ -246,25 +246,59 @@ fn check_records(records: &[Record]) -> Result<(usize, usize, Vec<usize>)> {
     Ok((r, q, lengths))
 }
 
-/// The records with each channel's mean removed (per record) and scaled to unit RMS over
-/// all records; the scales of the inputs and the outputs.
-struct Scaled {
-    /// `channels[record][c]`, inputs first.
-    channels: Vec<Vec<Vec<f64>>>,
+/// The records as the regression sees them: each channel less its mean (per record),
+/// over its RMS (over all records). The records are read in place, sample by sample, as
+/// the blocks of the data matrix are built: a long record is never copied.
+struct Scaled<'a> {
+    records: &'a [Record<'a>],
+    /// `means[record][c]`, inputs first.
+    means: Vec<Vec<f64>>,
     input_scale: Vec<f64>,
     output_scale: Vec<f64>,
 }
 
-fn scale_records(records: &[Record], r: usize, q: usize) -> Result<Scaled> {
-    let mut channels: Vec<Vec<Vec<f64>>> = records
+impl Scaled<'_> {
+    /// Channel `c` (inputs first) of record `n`.
+    fn channel(&self, n: usize, c: usize) -> &[f64] {
+        let rec = &self.records[n];
+        let r = rec.inputs.len();
+        if c < r {
+            rec.inputs[c]
+        } else {
+            rec.outputs[c - r]
+        }
+    }
+
+    fn scale(&self, c: usize) -> f64 {
+        let r = self.input_scale.len();
+        if c < r {
+            self.input_scale[c]
+        } else {
+            self.output_scale[c - r]
+        }
+    }
+
+    /// Samples of record `n`.
+    fn len(&self, n: usize) -> usize {
+        self.records[n].inputs[0].len()
+    }
+}
+
+fn scale_records<'a>(records: &'a [Record<'a>], r: usize, q: usize) -> Result<Scaled<'a>> {
+    let channel = |rec: &'a Record<'a>, c: usize| -> &'a [f64] {
+        if c < r {
+            rec.inputs[c]
+        } else {
+            rec.outputs[c - r]
+        }
+    };
+    let means: Vec<Vec<f64>> = records
         .iter()
         .map(|rec| {
-            rec.inputs
-                .iter()
-                .chain(rec.outputs.iter())
-                .map(|ch| {
-                    let mean = ch.iter().sum::<f64>() / ch.len().max(1) as f64;
-                    ch.iter().map(|v| v - mean).collect()
+            (0..r + q)
+                .map(|c| {
+                    let ch = channel(rec, c);
+                    ch.iter().sum::<f64>() / ch.len().max(1) as f64
                 })
                 .collect()
         })
@@ -272,17 +306,16 @@ fn scale_records(records: &[Record], r: usize, q: usize) -> Result<Scaled> {
     let total: usize = records.iter().map(|rec| rec.inputs[0].len()).sum();
     let mut scale = vec![0.0; r + q];
     for (c, s) in scale.iter_mut().enumerate() {
-        // Scaled by the largest magnitude first: the sum of squares cannot overflow.
-        let peak = channels
-            .iter()
-            .flat_map(|rec| rec[c].iter())
-            .fold(0.0f64, |m, v| m.max(v.abs()));
-        if peak > 0.0 {
-            let ss: f64 = channels
+        let centred = || {
+            records
                 .iter()
-                .flat_map(|rec| rec[c].iter())
-                .map(|v| (v / peak) * (v / peak))
-                .sum();
+                .zip(&means)
+                .flat_map(move |(rec, m)| channel(rec, c).iter().map(move |v| v - m[c]))
+        };
+        // Scaled by the largest magnitude first: the sum of squares cannot overflow.
+        let peak = centred().fold(0.0f64, |m, v| m.max(v.abs()));
+        if peak > 0.0 {
+            let ss: f64 = centred().map(|v| (v / peak) * (v / peak)).sum();
             *s = peak * (ss / total.max(1) as f64).sqrt();
         }
     }
@@ -300,15 +333,9 @@ fn scale_records(records: &[Record], r: usize, q: usize) -> Result<Scaled> {
             *s = 1.0;
         }
     }
-    for rec in channels.iter_mut() {
-        for (ch, s) in rec.iter_mut().zip(&scale) {
-            for v in ch.iter_mut() {
-                *v /= s;
-            }
-        }
-    }
     Ok(Scaled {
-        channels,
+        records,
+        means,
         output_scale: scale.split_off(r),
         input_scale: scale,
     })
@@ -319,9 +346,10 @@ fn regressors(r: usize, q: usize, p: usize) -> usize {
     r + p * (r + q)
 }
 
-/// Rows `ks` of record `rec` of the data matrix `[Φ | Y]` at order `p`.
+/// Rows `ks` of record `n` of the data matrix `[Φ | Y]` at order `p`.
 fn data_rows(
-    rec: &[Vec<f64>],
+    data: &Scaled,
+    n: usize,
     r: usize,
     q: usize,
     p: usize,
@@ -340,9 +368,10 @@ fn data_rows(
         } else {
             (r + col - m, 0)
         };
-        let src = &rec[channel];
+        let src = data.channel(n, channel);
+        let (mean, scale) = (data.means[n][channel], data.scale(channel));
         for (row, k) in ks.clone().enumerate() {
-            block[(row, col)] = src[k - lag];
+            block[(row, col)] = (src[k - lag] - mean) / scale;
         }
     }
     block
@@ -385,8 +414,8 @@ fn data_triangle(
     let cols = regressors(r, q, p) + q;
     let mut spans: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
     let step = block_rows(cols);
-    for (n, rec) in data.channels.iter().enumerate() {
-        let len = rec[0].len();
+    for n in 0..data.records.len() {
+        let len = data.len(n);
         let mut k = first;
         while k < len {
             let end = if naive { len } else { (k + step).min(len) };
@@ -399,7 +428,7 @@ fn data_triangle(
         let mut whole = Mat::<f64>::zeros(rows, cols);
         let mut at = 0;
         for (n, s) in &spans {
-            let b = data_rows(&data.channels[*n], r, q, p, s.clone());
+            let b = data_rows(data, *n, r, q, p, s.clone());
             for i in 0..b.nrows() {
                 for j in 0..cols {
                     whole[(at + i, j)] = b[(i, j)];
@@ -418,7 +447,7 @@ fn data_triangle(
         .map(|group| {
             let mut upper = None;
             for (n, s) in group {
-                let b = data_rows(&data.channels[*n], r, q, p, s.clone());
+                let b = data_rows(data, *n, r, q, p, s.clone());
                 upper = Some(stack_qr(upper, b));
             }
             upper.expect("a group has a block")
@@ -1119,15 +1148,11 @@ mod tests {
             }
         }
         let (ui, yi) = (refs(&u), refs(&y));
-        let data = scale_records(
-            &[Record {
-                inputs: &ui,
-                outputs: &yi,
-            }],
-            1,
-            2,
-        )
-        .unwrap();
+        let records = [Record {
+            inputs: &ui,
+            outputs: &yi,
+        }];
+        let data = scale_records(&records, 1, 2).unwrap();
         let (tri, _) = data_triangle(&data, 1, 2, 10, 10, false);
         let (theta, _) = coefficients(&tri, 1, 2, 10, 10).unwrap();
         let obs = unpack(&theta, 1, 2, 10);
