@@ -108,9 +108,11 @@ pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
 /// Samples per frame when `--frame` is not given.
 pub const DEFAULT_FRAME: usize = 2048;
 
-/// Averages the default frame of OKID's fit FRFs gives at least (when the records are
-/// long enough for frames of 256 samples).
-pub const OKID_FIT_AVERAGES: usize = 16;
+/// Fewest averages of an estimate that judges modes: fewer give FRFs too noisy to vouch
+/// for (or against) a mode. OKID's fit FRFs default to a frame that gives at least these
+/// many (when the records are long enough for frames of 256 samples), and the frame
+/// check's second estimate needs them.
+pub const JUDGING_AVERAGES: usize = 8;
 
 impl WelchArgs {
     /// `--frame`, or [`DEFAULT_FRAME`].
@@ -120,7 +122,7 @@ impl WelchArgs {
 
     /// The default frame for FRFs that only judge a model (OKID's): the largest power of
     /// two up to [`DEFAULT_FRAME`], and at least 256, that gives `samples` (per record,
-    /// `records` of them) at least [`OKID_FIT_AVERAGES`] averages at `--overlap`.
+    /// `records` of them) at least [`JUDGING_AVERAGES`] averages at `--overlap`.
     pub fn fit_frame(&self, samples: usize, records: usize) -> usize {
         let hop = |frame: usize| ((frame as f64 * (1.0 - self.overlap)).round() as usize).max(1);
         let averages = |frame: usize| {
@@ -131,7 +133,7 @@ impl WelchArgs {
             }
         };
         let mut frame = DEFAULT_FRAME;
-        while frame > 256 && averages(frame) < OKID_FIT_AVERAGES {
+        while frame > 256 && averages(frame) < JUDGING_AVERAGES {
             frame /= 2;
         }
         frame
@@ -143,7 +145,7 @@ impl WelchArgs {
 pub struct WelchArgs {
     /// Samples per frame (FFT length): lines are frame/2 + 1, spaced fs/frame. Default
     /// 2048; with --markov okid, where these FRFs only judge and refine the model, the
-    /// largest power of two up to 2048 that gives at least 16 averages.
+    /// largest power of two up to 2048 that gives at least 8 averages.
     #[arg(long, value_name = "N")]
     pub frame: Option<usize>,
     /// Window of each frame.

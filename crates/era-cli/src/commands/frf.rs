@@ -169,8 +169,8 @@ fn read_records(
         records.read_s += clock.elapsed().as_secs_f64();
         let (rate, rate_from) = sample_rate(path, &history, welch.sample_rate)?;
         if records.welch.frame.is_none() {
-            // Kept for OKID, the FRFs only judge the model: as many averages as a
-            // frame of 256 samples or more allows, up to 16.
+            // Kept for OKID, the FRFs only judge the model: enough averages to judge
+            // it (a frame of 256 samples or more).
             records.welch.frame = Some(if keep {
                 welch.fit_frame(history.samples(), paths.len())
             } else {

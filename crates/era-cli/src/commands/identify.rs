@@ -551,9 +551,8 @@ fn realize(
     found
 }
 
-/// Fewest averages the frame check's second estimate needs: fewer give an estimate too
-/// noisy to vouch for (or against) a mode.
-const CHECK_AVERAGES: u64 = 8;
+/// Fewest averages the frame check's second estimate needs.
+const CHECK_AVERAGES: u64 = crate::args::JUDGING_AVERAGES as u64;
 
 /// What the frame check repeats of the first identification.
 struct Check<'a> {

@@ -13,6 +13,7 @@ mod hostile_inputs;
 mod hostile_outputs;
 mod hostile_params;
 mod messages_cli;
+mod okid_cli;
 mod refine_cli;
 mod report_cli;
 mod trust;
