@@ -41,6 +41,7 @@ ROUTES = {
     "h1-plain": ("H1-ERA (auto)", ["--markov", "frf", "--states", "auto", "--no-refine"]),
     "okid": ("OKID-ERA (auto)", ["--markov", "okid", "--states", "auto"]),
     "okid-20": ("OKID-ERA (20 states)", ["--markov", "okid", "--states", "20"]),
+    "okid-dc": ("OKID-ERA/DC (auto)", ["--markov", "okid", "--era-dc", "--states", "auto"]),
     "okid-dc-20": ("OKID-ERA/DC (20 states)", ["--markov", "okid", "--era-dc", "--states", "20"]),
     "h1-dc-20": ("H1-ERA/DC (20 states)", ["--markov", "frf", "--era-dc", "--states", "20", "--no-refine"]),
 }
@@ -82,7 +83,7 @@ def score(model, truth):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--routes", default="h1,h1-plain,okid,okid-20,okid-dc-20")
+    ap.add_argument("--routes", default="h1,h1-plain,okid,okid-20,okid-dc,okid-dc-20")
     ap.add_argument("--excitations", default="white,burst")
     ap.add_argument("--durations", default="300,60")
     ap.add_argument("--noises", default="0.02")

@@ -176,11 +176,6 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     opts.direct_term = a.direct_term.unwrap_or(DirectTerm::Zero);
     opts.svd = a.svd;
     if a.era_dc {
-        if auto {
-            return crate::error::usage(
-                "--era-dc realizes at a fixed order only: give --states N (the stabilization scan and --states auto use ERA)",
-            );
-        }
         opts.realizer = era::identify::Realizer::EraDc;
     }
     check_time_flags(a)?;

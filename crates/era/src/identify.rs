@@ -60,7 +60,7 @@ pub struct EraOptions {
     pub direct_term: DirectTerm,
     /// Dense, matrix-free or automatic SVD.
     pub svd: SvdPath,
-    /// ERA, or ERA/DC on the correlations of the Hankel blocks (fixed order only).
+    /// ERA, or ERA/DC on the correlations of the Hankel blocks.
     pub realizer: Realizer,
 }
 
@@ -921,13 +921,6 @@ fn scan_front(
     progress: &mut dyn FnMut(usize, usize),
     timings: &mut StageTimings,
 ) -> Result<(Front, Factorization, OrderRange, Scan, f64)> {
-    if options.realizer != Realizer::Era {
-        return Err(EraError::InvalidParameter {
-            name: "states",
-            value: "auto".into(),
-            reason: "ERA/DC realizes at a fixed order only: give `states N` (the stabilization scan and the automatic order use ERA)".into(),
-        });
-    }
     let f = front(frf, supplied, options, Path::Fast, observer, timings)?;
     let range = match scan_options.orders.clone() {
         Some(r) => r,
@@ -957,17 +950,30 @@ fn scan_front(
     .max(1);
     let clock = Instant::now();
     observer(Stage::HankelSvd);
-    let factorization = Factorization::thesis(
-        &f.markov,
-        f.sample_time_s,
-        &FactorOptions {
-            hankel_states,
-            max_states: range.max,
-            hankel_factor: options.hankel_factor,
-            svd: options.svd,
-            svd_tolerance: scan_options.svd_tolerance,
-        },
-    )
+    let factorization = match options.realizer {
+        Realizer::Era => Factorization::thesis(
+            &f.markov,
+            f.sample_time_s,
+            &FactorOptions {
+                hankel_states,
+                max_states: range.max,
+                hankel_factor: options.hankel_factor,
+                svd: options.svd,
+                svd_tolerance: scan_options.svd_tolerance,
+            },
+        ),
+        Realizer::EraDc => crate::pipeline::realize_dc::factor_dc(
+            &f.markov,
+            f.sample_time_s,
+            &crate::pipeline::realize_dc::DcShape::new(
+                hankel_states,
+                options.hankel_factor,
+                f.markov.outputs(),
+            ),
+            range.max,
+            options.hankel_factor,
+        ),
+    }
     .map_err(|e| match e {
         EraError::NotEnoughMarkovSamples { needed, available, .. } => EraError::InvalidParameter {
             name: "orders",

@@ -127,7 +127,7 @@ pub struct IdentifyArgs {
     #[arg(long, value_parser = named::<DirectTerm>(), help_heading = "ERA")]
     pub direct_term: Option<DirectTerm>,
     /// Realize by ERA/DC (ERA on the shifted correlations of the Hankel blocks) instead
-    /// of ERA; at a fixed --states only.
+    /// of ERA, at a fixed order or in the stabilization scan (dense SVDs only).
     #[arg(long, help_heading = "ERA")]
     pub era_dc: bool,
     /// How the Hankel SVD is computed: dense (H0 formed, every singular value),

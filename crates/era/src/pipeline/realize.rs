@@ -264,7 +264,7 @@ fn plan(
 
 /// [`EraError::HankelTooSmall`] unless an `H0` of `rows × cols` has room for `states`
 /// (at least one).
-fn check_room(rows: usize, cols: usize, states: usize) -> Result<()> {
+pub(crate) fn check_room(rows: usize, cols: usize, states: usize) -> Result<()> {
     if states == 0 || rows.min(cols) < states {
         return Err(EraError::HankelTooSmall {
             rows,
@@ -613,9 +613,52 @@ pub struct Factorization {
     svd_iterations: Option<usize>,
     warnings: Vec<RealizeWarning>,
     seconds: f64,
+    /// ERA/DC's `U_Nᵀ H(0)`, from which `B` and the controllability tail come
+    /// ([`crate::pipeline::realize_dc`]); `None` for ERA, whose `V` gives them.
+    ut_h0: Option<Mat<f64>>,
+}
+
+/// What [`Factorization::from_parts`] assembles: an SVD `U Σ Vᵀ` of some `H0`, the
+/// product `U_Nᵀ H1 V_N`, and for ERA/DC `U_Nᵀ H(0)`.
+pub(crate) struct FactorParts {
+    pub u: Mat<f64>,
+    pub v: Mat<f64>,
+    pub ut_h1_v: Mat<f64>,
+    pub singular_values: Vec<f64>,
+    pub max_states: usize,
+    pub hankel_size: (usize, usize),
+    pub ut_h0: Option<Mat<f64>>,
 }
 
 impl Factorization {
+    /// A factorization of parts computed elsewhere (ERA/DC's correlations), dense.
+    pub(crate) fn from_parts(
+        markov: &MarkovSequence,
+        sample_time_s: f64,
+        parts: FactorParts,
+        seconds: f64,
+    ) -> Self {
+        let (rows, cols) = parts.hankel_size;
+        let (rank, _) = numerical_rank(&parts.singular_values, rows, cols);
+        let (q, p) = (markov.outputs(), markov.inputs());
+        Factorization {
+            u: parts.u,
+            v: parts.v,
+            ut_h1_v: parts.ut_h1_v,
+            y0: Mat::from_fn(q, p, |i, j| markov.get(0, i, j)),
+            singular_values: parts.singular_values,
+            max_states: parts.max_states,
+            rank,
+            sample_time_s,
+            hankel_size: parts.hankel_size,
+            svd_path: SvdPath::Dense,
+            svd_iterations: None,
+            warnings: Vec::new(),
+            seconds,
+            ut_h0: parts.ut_h0,
+        }
+    }
+
     /// Factors the thesis Hankel of `options.hankel_states` states at
     /// `options.hankel_factor` (the `H0` that [`realize`] would build at that order), and
     /// keeps what realizations up to `options.max_states` need.
@@ -761,6 +804,7 @@ impl Factorization {
             svd_iterations: iterations,
             warnings,
             seconds: clock.elapsed().as_secs_f64(),
+            ut_h0: None,
         })
     }
 
@@ -828,7 +872,15 @@ impl Factorization {
         let (q, p) = (self.y0.nrows(), self.y0.ncols());
         let sv = &self.singular_values[..n];
         let (un, vn) = (self.u.subcols(0, n), self.v.subcols(0, n));
-        let (a, b, c) = balanced_abc(sv, un, vn, self.ut_h1_v.as_ref(), q, p);
+        let (a, mut b, c) = balanced_abc(sv, un, vn, self.ut_h1_v.as_ref(), q, p);
+        let mut tails = HankelTails::of(sv, un, vn, q, p);
+        if let Some(ut_h0) = &self.ut_h0 {
+            // ERA/DC: Q_β = Σ^(−½) U_nᵀ H(0), and B its first p columns.
+            let controllability =
+                Mat::from_fn(n, ut_h0.ncols(), |r, j| ut_h0[(r, j)] / sv[r].sqrt());
+            b = controllability.get(.., ..p).to_owned();
+            tails.controllability = controllability;
+        }
         let d = match direct {
             DirectTerm::Zero => Mat::zeros(q, p),
             DirectTerm::FirstMarkov => self.y0.clone(),
@@ -858,7 +910,7 @@ impl Factorization {
             products_seconds: clock.elapsed().as_secs_f64(),
             svd_path: self.svd_path,
             svd_iterations: self.svd_iterations,
-            tails: HankelTails::of(sv, un, vn, q, p),
+            tails,
         })
     }
 }

@@ -28,7 +28,9 @@
 //! The products and the SVD are faer's.
 
 use crate::error::{EraError, Result};
-use crate::pipeline::realize::{DirectTerm, HankelTails, Realization, SvdPath};
+use crate::pipeline::realize::{
+    check_room, DirectTerm, FactorParts, Factorization, HankelTails, Realization, SvdPath,
+};
 use crate::sources::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
 use faer::linalg::solvers::SolveLstsq;
@@ -100,6 +102,77 @@ fn hankel_at(markov: &MarkovSequence, k: usize, alpha: usize, beta: usize) -> Ma
     })
 }
 
+/// The factorization of ERA/DC's correlation `R(0) = H(s) H(0)ᵀ` at a shape with `ξ = 0`
+/// (the default's), kept so that realizations of every order up to `max_states` cost
+/// small products: the stabilization scan and the automatic order run on it as on ERA's
+/// ([`Factorization::realize`]).
+///
+/// `R(0)` (`αq × αq`) is never formed. With the thin SVD `H(0) = U₀ S₀ V₀ᵀ`,
+/// `R(0) = (H(s) V₀ S₀) U₀ᵀ`, and the thin SVD `H(s) V₀ S₀ = U Σ Zᵀ` gives
+/// `R(0) = U Σ (U₀ Z)ᵀ`: two SVDs of the size of ERA's Hankel. Then
+/// `U_Nᵀ R(1) V_N = U_Nᵀ H(s+1) V₀ S₀ Z_N`, and `Q_β = Σ^(−½) U_nᵀ H(0)` gives `B`.
+///
+/// # Errors
+/// [`EraError::InvalidParameter`] for `ξ ≠ 0` ([`realize_dc_with`] takes any shape);
+/// as [`realize_dc`] otherwise, and [`EraError::HankelTooSmall`] when `R(0)` has fewer
+/// singular values than `max_states`.
+pub fn factor_dc(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    shape: &DcShape,
+    max_states: usize,
+    hankel_factor: usize,
+) -> Result<Factorization> {
+    if shape.xi != 0 {
+        return Err(EraError::InvalidParameter {
+            name: "states",
+            value: max_states.to_string(),
+            reason: format!(
+                "the factorization of ERA/DC takes the correlation itself (xi = 0), not {}",
+                shape.xi
+            ),
+        });
+    }
+    shape.check(markov, max_states, hankel_factor)?;
+    let clock = Instant::now();
+    let (q, p) = (markov.outputs(), markov.inputs());
+    let (alpha, beta, shift) = (shape.alpha, shape.beta, shape.shift);
+    let (rows, cols) = (alpha * q, beta * p);
+    check_room(rows, cols, max_states)?;
+    let numerical = |what: &str, e: faer::linalg::svd::SvdError| {
+        EraError::Numerical(format!("SVD of {what} (ERA/DC): {e:?}"))
+    };
+    let h0 = hankel_at(markov, 0, alpha, beta);
+    let svd0 = h0.thin_svd().map_err(|e| numerical("H(0)", e))?;
+    let k = rows.min(cols);
+    let v0s0 = Mat::from_fn(cols, k, |i, j| svd0.V()[(i, j)] * svd0.S()[j]);
+    let w = hankel_at(markov, shift, alpha, beta) * &v0s0;
+    let svdw = w.thin_svd().map_err(|e| numerical("H(s) V0 S0", e))?;
+    drop(w);
+    let singular_values: Vec<f64> = (0..k).map(|i| svdw.S()[i]).collect();
+    let u = svdw.U().to_owned();
+    let v = svd0.U() * svdw.V();
+    let un = u.subcols(0, max_states);
+    let zn = svdw.V().subcols(0, max_states);
+    let ut_h1_v = un.transpose() * (hankel_at(markov, shift + 1, alpha, beta) * (&v0s0 * zn));
+    let ut_h0 = un.transpose() * &h0;
+    let parts = FactorParts {
+        u,
+        v,
+        ut_h1_v,
+        singular_values,
+        max_states,
+        hankel_size: (rows, rows),
+        ut_h0: Some(ut_h0),
+    };
+    Ok(Factorization::from_parts(
+        markov,
+        sample_time_s,
+        parts,
+        clock.elapsed().as_secs_f64(),
+    ))
+}
+
 /// ERA/DC at `states` and `hankel_factor` on `markov` (samples `sample_time_s` apart).
 ///
 /// # Errors
@@ -114,11 +187,19 @@ pub fn realize_dc(
     hankel_factor: usize,
     direct: DirectTerm,
 ) -> Result<Realization> {
+    if states == 0 {
+        return Err(EraError::InvalidParameter {
+            name: "states",
+            value: "0".into(),
+            reason: "ERA/DC needs at least one state".into(),
+        });
+    }
     let shape = DcShape::new(states, hankel_factor, markov.outputs());
-    realize_dc_with(markov, sample_time_s, states, hankel_factor, &shape, direct)
+    factor_dc(markov, sample_time_s, &shape, states, hankel_factor)?.realize(states, direct)
 }
 
-/// [`realize_dc`] with the sizes given.
+/// [`realize_dc`] with the sizes given, any of the paper's shapes: the correlations
+/// formed and factored as they are (the reference of [`factor_dc`]).
 ///
 /// # Errors
 /// As [`realize_dc`].
@@ -343,6 +424,60 @@ mod tests {
 
     /// The paper's other sizes (few rows, long sums, a correlation Hankel of several
     /// lags) realize exact data exactly too.
+    /// The factorization (two thin SVDs, `R(0)` never formed) realizes what the
+    /// correlations formed and factored whole do, at every order it keeps, on noisy data:
+    /// the same transfer function (Markov blocks) and the same singular values.
+    #[test]
+    fn the_factorization_matches_the_formed_correlations() {
+        let (_, model) = structure(4, 2, 6, 7);
+        let mut markov = markov_of(&model, 400);
+        let mut rng = Minstd::new(77);
+        for k in 1..400 {
+            for i in 0..4 {
+                for j in 0..2 {
+                    let v = markov.get(k, i, j) + 1e-3 * rng.normal();
+                    markov.set(k, i, j, v);
+                }
+            }
+        }
+        let shape = DcShape::new(24, 5, 4);
+        let factored = factor_dc(&markov, 1.0 / 64.0, &shape, 24, 5).unwrap();
+        for states in [8, 12, 24] {
+            let fast = factored.realize(states, DirectTerm::Zero).unwrap();
+            let reference =
+                realize_dc_with(&markov, 1.0 / 64.0, states, 5, &shape, DirectTerm::Zero).unwrap();
+            for (a, b) in fast
+                .singular_values
+                .iter()
+                .zip(&reference.singular_values)
+                .take(30)
+            {
+                assert!(
+                    (a - b).abs() <= 1e-10 * reference.singular_values[0],
+                    "{a} vs {b}"
+                );
+            }
+            // Realizations differ by a state basis (signs): compare C A^k B.
+            let block = |m: &StateSpace, k: usize| {
+                let mut x = m.b.clone();
+                for _ in 0..k {
+                    x = &m.a * &x;
+                }
+                &m.c * &x
+            };
+            for k in [0, 1, 5, 40] {
+                let (f, r) = (block(&fast.model, k), block(&reference.model, k));
+                let scale = r.norm_l2().max(1e-300);
+                assert!(
+                    (&f - &r).norm_l2() <= 1e-8 * scale,
+                    "{states} states, block {k}: {:e}",
+                    (&f - &r).norm_l2() / scale
+                );
+            }
+        }
+        assert!(factor_dc(&markov, 1.0, &DcShape { xi: 1, ..shape }, 8, 5).is_err());
+    }
+
     #[test]
     fn every_shape_is_exact_on_exact_data() {
         let (truth, model) = structure(3, 2, 4, 5);
