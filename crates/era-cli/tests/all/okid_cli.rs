@@ -3,7 +3,7 @@
 //! and the time-history inputs OKID cannot take.
 
 use crate::common;
-use common::{data_file, era, expect_input_error, json_of, match_frequencies, s};
+use common::{data_file, expect_input_error, json_of, match_frequencies, s};
 use std::path::{Path, PathBuf};
 
 /// A simulated shaker test (10 modes 1.9–20 Hz, 2 shakers, 8 accelerometers, 64 Hz):
