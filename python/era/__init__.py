@@ -11,6 +11,11 @@ as the ``era`` command line, with numpy arrays in and out. The axis order is
 >>> [round(f, 2) for f in found.frequency_hz]   # Table 5.2
 [1748.64, 5031.8, 7709.75, 9458.39]
 
+Time histories of forces and responses, ``data`` of shape (channels, samples), go
+through ``era.identify_time(data, sample_rate_hz, inputs, outputs)``: the Markov
+parameters from OKID's observer (``markov="okid"``) or the Welch H1 FRFs
+(``markov="frf"``), the model fitted and judged against the H1 FRFs.
+
 Thesis names (Woods 1994, Appendix J) beside ours: ``states`` = ns, ``hankel_factor``
 = lh, ``integrations`` = ni, ``zero_lines`` = nz, ``pad_to`` = ndpts, ``lowpass`` =
 (ford, Hzbreak), ``time_domain`` = cord.
@@ -27,6 +32,7 @@ from ._era import (
     __version__,
     estimate_frf,
     identify,
+    identify_time,
     read_frf,
     read_time,
     simulate_modal,
@@ -43,6 +49,7 @@ __all__ = [
     "estimate_frf",
     "friction",
     "identify",
+    "identify_time",
     "read_frf",
     "read_time",
     "simulate_modal",

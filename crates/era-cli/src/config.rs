@@ -226,10 +226,7 @@ pub fn window_corrected(
     let Some((lag, why)) = lag_window(metadata) else {
         return Ok(None);
     };
-    let padded = era::frf::leading_zero_lines(frf);
-    let corrected =
-        era::sources::frf::preprocess::zero_leading_lines(&lag.correct_frf(frf)?, padded);
-    Ok(Some((corrected, why)))
+    Ok(Some((lag.correct_frf(frf)?, why)))
 }
 
 /// The lag window of the Welch estimate an FRF file came from, when its metadata (an

@@ -720,6 +720,31 @@ pub fn stabilization_json(st: &era::identification::Stabilization) -> serde_json
     })
 }
 
+/// model.json's record of OKID's observer (`parameters.okid`): its order and whether
+/// it was chosen, the Markov blocks, the regression's size and rank, the observer's
+/// largest root and how the system's Markov parameters came from it, and the one-step
+/// residual of each output relative to its RMS.
+pub fn okid_json(o: &era::sources::okid::Okid) -> serde_json::Value {
+    use era::sources::okid::MarkovRoute;
+    let (route, points) = match o.route {
+        MarkovRoute::Recursion => ("recursion", None),
+        MarkovRoute::UnitCircle { points } => ("unit_circle", Some(points)),
+        _ => ("other", None),
+    };
+    serde_json::json!({
+        "observer_order": o.observer_order,
+        "observer_order_chosen": !o.criterion.is_empty(),
+        "markov_samples": o.markov.samples(),
+        "equations": o.equations,
+        "regressors": o.regressors,
+        "rank": o.rank,
+        "observer_radius": o.observer_radius,
+        "route": route,
+        "unit_circle_points": points,
+        "residual": o.residual,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -298,7 +298,7 @@ pub fn write_frf(
     })
 }
 
-fn channels(name: &str, list: &[Int], available: usize) -> PyResult<Vec<usize>> {
+pub(crate) fn channels(name: &str, list: &[Int], available: usize) -> PyResult<Vec<usize>> {
     if list.is_empty() {
         return value_error(format!("{name}: give at least one channel"));
     }

@@ -13,7 +13,8 @@ use crate::frf::PyFrfData;
 use crate::{contiguous, era_error, guarded, value_error, vector, Int};
 use era::identification::Identification;
 use era::identify::{
-    identify as run_identify, identify_auto, EraOptions, ModelDomain, ScanOptions,
+    identify as run_identify, identify_auto, identify_auto_supplied, identify_supplied, EraOptions,
+    ModelDomain, ScanOptions, SuppliedMarkov,
 };
 use era::params::Naming;
 use era::pipeline::realize::{DirectTerm, SvdPath};
@@ -70,12 +71,14 @@ impl PyMode {
 /// and fit.
 #[pyclass(module = "era", name = "Identification", frozen)]
 pub struct PyIdentification {
-    found: Identification,
-    options: EraOptions,
+    pub(crate) found: Identification,
+    pub(crate) options: EraOptions,
     /// The refinement's settings, when `refine=True`.
-    refine: Option<era::refine::RefineOptions>,
+    pub(crate) refine: Option<era::refine::RefineOptions>,
     /// The route taken (era::identify::route), with its reasons.
-    route: era::identify::route::Route,
+    pub(crate) route: era::identify::route::Route,
+    /// What the Markov parameters' source adds to `parameters` (OKID's observer).
+    pub(crate) source: std::collections::BTreeMap<String, serde_json::Value>,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -266,6 +269,7 @@ impl PyIdentification {
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut params = parameters(&self.options);
         params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
+        params.extend(self.source.clone());
         let text = serde_json::to_string(&params)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         py.import("json")?.call_method1("loads", (text,))
@@ -378,7 +382,7 @@ impl PyIdentification {
 
 /// The number of states from `states`: an int, or `None` for "auto" (automatic order,
 /// docs/design.md §10).
-fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+pub(crate) fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
     if let Ok(text) = states.extract::<String>() {
         return if text.trim().eq_ignore_ascii_case("auto") {
             Ok(None)
@@ -415,12 +419,15 @@ fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 /// missed, found in its residual; `added_modes=False` fits the start's modes only
 /// (`--no-added-modes`).
 ///
+/// `era_dc=True` realizes by ERA/DC (ERA on the shifted correlations of the Hankel
+/// blocks) instead of ERA, at a fixed order or the automatic one.
+///
 /// `threads` sets the threads of this call (rayon's and faer's together); by default
 /// every core.
 #[pyfunction]
 #[pyo3(
-    signature = (frf, states=None, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain=None, direct_term=None, svd="auto", refine=None, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
-    text_signature = "(frf, states='auto', hankel_factor=5, integrations=0, zero_lines=0, pad_to=0, lowpass=None, time_domain=None, direct_term=None, svd='auto', refine=None, residuals='both', reciprocal=False, weighting='pair-noise', max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
+    signature = (frf, states=None, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain=None, direct_term=None, svd="auto", era_dc=false, refine=None, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
+    text_signature = "(frf, states='auto', hankel_factor=5, integrations=0, zero_lines=0, pad_to=0, lowpass=None, time_domain=None, direct_term=None, svd='auto', era_dc=False, refine=None, residuals='both', reciprocal=False, weighting='pair-noise', max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
@@ -435,6 +442,7 @@ pub fn identify(
     time_domain: Option<&str>,
     direct_term: Option<&str>,
     svd: &str,
+    era_dc: bool,
     refine: Option<bool>,
     residuals: &str,
     reciprocal: bool,
@@ -456,7 +464,7 @@ pub fn identify(
     let route = request.resolve(frf.get().inner.quantity(), integrations_n);
     let refine = route.refine;
     let mut refine_options = refine_options_of(
-        frf.get(),
+        (frf.get().inner.outputs(), frf.get().inner.inputs()),
         residuals,
         weighting,
         reciprocal,
@@ -472,6 +480,9 @@ pub fn identify(
     options.domain = route.domain;
     options.direct_term = route.direct_term;
     options.svd = svd_path(svd)?;
+    if era_dc {
+        options.realizer = era::identify::Realizer::EraDc;
+    }
     let checked = {
         let mut o = options.clone();
         o.states = states.max(usize::from(chosen.is_none()));
@@ -498,6 +509,7 @@ pub fn identify(
     };
     let run = Run {
         data: &data,
+        supplied: None,
         era: &era_run,
         fixed_order: chosen.is_some(),
         scan: &scan_options,
@@ -516,11 +528,12 @@ pub fn identify(
         options,
         refine: refine.then_some(refine_options),
         route,
+        source: Default::default(),
     })
 }
 
 /// `threads=`, checked as the CLI's `--threads`; `None` for every core.
-fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
+pub(crate) fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
     match threads {
         None => Ok(None),
         Some(n) => {
@@ -533,7 +546,7 @@ fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
 
 /// The route asked for: `preset` with the choices given (`None` leaves one to the
 /// preset). An FrfData carries no coherence and no window metadata.
-fn route_request(
+pub(crate) fn route_request(
     preset: &str,
     states: Option<usize>,
     refine: Option<bool>,
@@ -560,8 +573,8 @@ fn route_request(
 
 /// The refinement's settings from the keywords (its band is set once the lines are
 /// known); `reciprocal=True` needs a square set.
-fn refine_options_of(
-    frf: &PyFrfData,
+pub(crate) fn refine_options_of(
+    (outputs, inputs): (usize, usize),
     residuals: &str,
     weighting: &str,
     reciprocal: bool,
@@ -581,18 +594,16 @@ fn refine_options_of(
         .check("max_iterations", iterations as u64)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     refine_options.max_iterations = iterations;
-    if reciprocal && frf.inner.outputs() != frf.inner.inputs() {
+    if reciprocal && outputs != inputs {
         return value_error(format!(
-            "reciprocal=True: the set has {} outputs x {} inputs; reciprocity needs a square (collocated) set",
-            frf.inner.outputs(),
-            frf.inner.inputs()
+            "reciprocal=True: the set has {outputs} outputs x {inputs} inputs; reciprocity needs a square (collocated) set"
         ));
     }
     Ok(refine_options)
 }
 
 /// `lowpass=`: a cut-off in Hz (order 4), `(order, cut-off Hz)`, or `None`.
-fn lowpass_of(lowpass: Option<&Bound<'_, PyAny>>) -> PyResult<Option<(usize, f64)>> {
+pub(crate) fn lowpass_of(lowpass: Option<&Bound<'_, PyAny>>) -> PyResult<Option<(usize, f64)>> {
     Ok(match lowpass {
         None => None,
         Some(obj) if obj.is_none() => None,
@@ -612,34 +623,40 @@ fn lowpass_of(lowpass: Option<&Bound<'_, PyAny>>) -> PyResult<Option<(usize, f64
 }
 
 /// `svd=`: 'auto', 'dense' or 'matrix-free'.
-fn svd_path(svd: &str) -> PyResult<SvdPath> {
+pub(crate) fn svd_path(svd: &str) -> PyResult<SvdPath> {
     crate::named("svd", svd)
 }
 
 /// One identification as `identify` runs it, every input checked.
-struct Run<'a> {
-    data: &'a era::FrfData,
+pub(crate) struct Run<'a> {
+    pub(crate) data: &'a era::FrfData,
+    /// Markov parameters from a source other than the FRFs (OKID's).
+    pub(crate) supplied: Option<SuppliedMarkov<'a>>,
     /// The realization's options (its domain the route's realization domain).
-    era: &'a EraOptions,
+    pub(crate) era: &'a EraOptions,
     /// A fixed order (`states=` an int), else the automatic order.
-    fixed_order: bool,
-    scan: &'a ScanOptions,
+    pub(crate) fixed_order: bool,
+    pub(crate) scan: &'a ScanOptions,
     /// The refinement's settings, when the route refines.
-    refine: Option<&'a era::refine::RefineOptions>,
+    pub(crate) refine: Option<&'a era::refine::RefineOptions>,
     /// The domain of the model returned.
-    domain: ModelDomain,
+    pub(crate) domain: ModelDomain,
     /// The band identified over, Hz, for the band-edge suspects.
-    fitted_hz: (f64, f64),
+    pub(crate) fitted_hz: (f64, f64),
 }
 
 impl Run<'_> {
     /// ERA at the fixed or automatic order, the refinement when asked, then the
     /// suspects of a zero start and of the band's edges.
-    fn identify(&self) -> era::Result<Identification> {
-        let found = if self.fixed_order {
-            run_identify(self.data, self.era)
-        } else {
-            identify_auto(self.data, self.era, self.scan, &mut |_| {}, &mut |_, _| {})
+    pub(crate) fn identify(&self) -> era::Result<Identification> {
+        let (stage, order) = (&mut |_| {}, &mut |_, _| {});
+        let found = match (&self.supplied, self.fixed_order) {
+            (None, true) => run_identify(self.data, self.era),
+            (None, false) => identify_auto(self.data, self.era, self.scan, stage, order),
+            (Some(m), true) => identify_supplied(self.data, m, self.era, stage),
+            (Some(m), false) => {
+                identify_auto_supplied(self.data, m, self.era, self.scan, stage, order)
+            }
         }?;
         let mut at_order = self.era.clone();
         at_order.states = found.realization.model.states();

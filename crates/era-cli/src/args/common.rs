@@ -105,38 +105,12 @@ pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
     })
 }
 
-/// Samples per frame when `--frame` is not given.
-pub const DEFAULT_FRAME: usize = 2048;
-
-/// Fewest averages of an estimate that judges modes: fewer give FRFs too noisy to vouch
-/// for (or against) a mode. OKID's fit FRFs default to a frame that gives at least these
-/// many (when the records are long enough for frames of 256 samples), and the frame
-/// check's second estimate needs them.
-pub const JUDGING_AVERAGES: usize = 8;
+pub use era::frf::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
 
 impl WelchArgs {
     /// `--frame`, or [`DEFAULT_FRAME`].
     pub fn frame_or_default(&self) -> usize {
         self.frame.unwrap_or(DEFAULT_FRAME)
-    }
-
-    /// The default frame for FRFs that only judge a model (OKID's): the largest power of
-    /// two up to [`DEFAULT_FRAME`], and at least 256, that gives `samples` (per record,
-    /// `records` of them) at least [`JUDGING_AVERAGES`] averages at `--overlap`.
-    pub fn fit_frame(&self, samples: usize, records: usize) -> usize {
-        let hop = |frame: usize| ((frame as f64 * (1.0 - self.overlap)).round() as usize).max(1);
-        let averages = |frame: usize| {
-            if samples < frame {
-                0
-            } else {
-                records * ((samples - frame) / hop(frame) + 1)
-            }
-        };
-        let mut frame = DEFAULT_FRAME;
-        while frame > 256 && averages(frame) < JUDGING_AVERAGES {
-            frame /= 2;
-        }
-        frame
     }
 }
 

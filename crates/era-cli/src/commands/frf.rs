@@ -172,7 +172,7 @@ fn read_records(
             // Kept for OKID, the FRFs only judge the model: enough averages to judge
             // it (a frame of 256 samples or more).
             records.welch.frame = Some(if keep {
-                welch.fit_frame(history.samples(), paths.len())
+                era::frf::estimate::judging_frame(history.samples(), paths.len(), welch.overlap)
             } else {
                 crate::args::DEFAULT_FRAME
             });

@@ -870,29 +870,10 @@ fn okid_echo(o: &Observed) -> String {
 
 /// model.json's record of OKID: `markov: "okid"` and the observer's facts.
 fn okid_json(o: &Observed, model: &mut ModelJson) {
-    use era::sources::okid::MarkovRoute;
-    let k = &o.okid;
-    let (route, points) = match k.route {
-        MarkovRoute::Recursion => ("recursion", None),
-        MarkovRoute::UnitCircle { points } => ("unit_circle", Some(points)),
-        _ => ("other", None),
-    };
     model
         .parameters
         .insert("markov".into(), serde_json::json!("okid"));
-    model.parameters.insert(
-        "okid".into(),
-        serde_json::json!({
-            "observer_order": k.observer_order,
-            "observer_order_chosen": !k.criterion.is_empty(),
-            "markov_samples": k.markov.samples(),
-            "equations": k.equations,
-            "regressors": k.regressors,
-            "rank": k.rank,
-            "observer_radius": k.observer_radius,
-            "route": route,
-            "unit_circle_points": points,
-            "residual": k.residual,
-        }),
-    );
+    model
+        .parameters
+        .insert("okid".into(), era_io::model_json::okid_json(&o.okid));
 }

@@ -173,6 +173,30 @@ impl Estimator {
     }
 }
 
+/// Samples per frame when the caller does not say.
+pub const DEFAULT_FRAME: usize = 2048;
+
+/// Fewest averages of an estimate that judges modes: fewer give FRFs too noisy to vouch
+/// for (or against) a mode.
+pub const JUDGING_AVERAGES: usize = 8;
+
+/// The frame for FRFs that only judge and refine a model whose Markov parameters come
+/// from elsewhere (OKID's): the largest power of two up to [`DEFAULT_FRAME`], and at
+/// least 256, that gives `records` records of `samples` samples at least
+/// [`JUDGING_AVERAGES`] averages at `overlap`. On a simulated 60 s record at 64 Hz the
+/// default frame gives 2 averages, and the noise test then rejected 6 of 10 true modes.
+pub fn judging_frame(samples: usize, records: usize, overlap: f64) -> usize {
+    let mut frame = DEFAULT_FRAME;
+    loop {
+        let mut o = WelchOptions::new(1.0, frame);
+        o.overlap = overlap.clamp(0.0, 0.99);
+        if frame <= 256 || records.saturating_mul(o.frames(samples)) >= JUDGING_AVERAGES {
+            return frame;
+        }
+        frame /= 2;
+    }
+}
+
 /// Welch parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]

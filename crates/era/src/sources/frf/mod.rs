@@ -332,12 +332,20 @@ impl LagWindow {
     /// `c(t) ≥` [`LAG_CORRECTION_FLOOR`], and transformed back. In expectation this
     /// is the FRF without the window's smoothing, so that every stage (ERA, the
     /// refinement, the fit and the figures) sees the same debiased data. Lines
-    /// `0 … L−1` must start at 0 Hz (as an analyzer's do).
+    /// `0 … L−1` must start at 0 Hz (as an analyzer's do); leading lines that are zero
+    /// in every pair (a late start) stay zero.
     ///
     /// # Errors
     /// As [`impulse_responses`], and [`EraError::InvalidParameter`] when the lines do
     /// not start at 0 Hz.
     pub fn correct_frf(&self, frf: &FrfData) -> Result<FrfData> {
+        let corrected = self.correct_lines(frf)?;
+        // A late start stays zero (its lines were never measured).
+        let padded = crate::frf::leading_zero_lines(frf);
+        Ok(preprocess::zero_leading_lines(&corrected, padded))
+    }
+
+    fn correct_lines(&self, frf: &FrfData) -> Result<FrfData> {
         let lines = frf.lines();
         if frf.frequency_hz().first().copied() != Some(0.0) {
             return Err(EraError::InvalidParameter {
