@@ -1177,7 +1177,32 @@ fn auto(
     };
     let mut selection = select(&s, band_hz, &criteria_for(scan_options, &range));
     if scan_options.significance {
-        judge_significance(&mut selection, &s, frf, options, band_hz, f.sample_time_s)?;
+        // Supplied Markov parameters (OKID's) are judged against their own transfer
+        // function: the FRFs beside them are a Welch estimate whose resolution and
+        // averages they do not share.
+        let own;
+        let against = match supplied {
+            Some(_) => {
+                own =
+                    crate::sources::frf::frf_of_markov(&f.markov, f.sample_time_s, frf.quantity())?;
+                &own
+            }
+            None => frf,
+        };
+        judge_significance(
+            &mut selection,
+            &s,
+            against,
+            options,
+            band_hz,
+            f.sample_time_s,
+        )?;
+        if supplied.is_some() {
+            let factor = f
+                .scale
+                .map_or(1.0, |sc| MagnitudeScale::factor(sc.exponent));
+            drop_negligible(&mut selection, &s, frf, band_hz, f.sample_time_s, factor);
+        }
     }
     let chosen: Vec<&crate::modal::stabilization::ScanPole> = selection
         .physical()
@@ -1360,6 +1385,62 @@ fn judge_significance(
         cluster.rejection = Some(Rejection::Insignificant(significance.max(0.0), least));
     }
     Ok(())
+}
+
+/// Supplied Markov parameters are judged against their own transfer function
+/// ([`judge_significance`]), where the observer's own noise poles are significant too:
+/// they are told by their share of the measured FRFs, below
+/// [`SelectionCriteria::contribution_minimum`] (the bar the table applies to every
+/// mode), and leave the model before it is built. `factor` is the magnitude scale of
+/// the scan's poles against `frf`.
+///
+/// [`SelectionCriteria::contribution_minimum`]: crate::modal::stabilization::SelectionCriteria::contribution_minimum
+fn drop_negligible(
+    selection: &mut Selection,
+    scan: &Scan,
+    frf: &FrfData,
+    band_hz: (f64, f64),
+    sample_time_s: f64,
+    factor: f64,
+) {
+    use crate::modal::stabilization::Rejection;
+    let freq = frf.frequency_hz();
+    let (first, end) = crate::frf::band_lines(freq, band_hz, 0);
+    if end <= first {
+        return;
+    }
+    let lines = frf.lines();
+    let reference = (0..frf.outputs() * frf.inputs())
+        .flat_map(|pair| frf.values()[pair * lines + first..pair * lines + end].iter())
+        .map(|v| v.norm_sqr())
+        .sum::<f64>()
+        .sqrt();
+    if !(reference > 0.0 && reference.is_finite()) {
+        return;
+    }
+    let domain = crate::TimeDomain::Discrete { sample_time_s };
+    let points: Vec<crate::Complex64> = freq[first..end]
+        .iter()
+        .map(|f| crate::pipeline::fit::evaluation_point(domain, *f))
+        .collect();
+    let minimum = SelectionCriteria::default().contribution_minimum;
+    for cluster in selection.clusters.iter_mut().filter(|c| c.physical) {
+        let pole = &scan.poles[cluster.representative];
+        let share = crate::modal::indicators::term_energy(
+            &pole.shape,
+            &pole.participation,
+            pole.eigenvalue,
+            &points,
+        )
+        .max(0.0)
+        .sqrt()
+            / factor
+            / reference;
+        if share < minimum {
+            cluster.physical = false;
+            cluster.rejection = Some(Rejection::NoContribution(share));
+        }
+    }
 }
 
 /// A mode this close (relative frequency) to a stronger one may be its satellite

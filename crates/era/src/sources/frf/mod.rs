@@ -186,6 +186,41 @@ pub(crate) fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
     out
 }
 
+/// The FRFs of a Markov sequence sampled `sample_time_s` apart: the discrete transfer
+/// function `Y_0 + Σ_k Y_k e^(−jωk·Ts)` at the `K/2 + 1` lines `0 … 1/(2Ts)` spaced
+/// `1/(K·Ts)` (a real forward FFT of each pair's `K` samples, with no window: the
+/// sequence ends where its blocks end), tagged `quantity`. The inverse of
+/// [`impulse_responses`] for an even `K`.
+///
+/// # Errors
+/// [`EraError::TooFewLines`] for fewer than 2 samples, and [`FrfData::new`]'s.
+pub fn frf_of_markov(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    quantity: crate::frf::Quantity,
+) -> Result<FrfData> {
+    let n = markov.samples();
+    if n < 2 {
+        return Err(EraError::TooFewLines { lines: n });
+    }
+    let lines = n / 2 + 1;
+    let (q, p) = (markov.outputs(), markov.inputs());
+    let (r2c, _) = crate::linalg::fft::real_fft_plans(n);
+    let mut values = Vec::with_capacity(q * p * lines);
+    let mut spectrum = r2c.make_output_vec();
+    for i in 0..q {
+        for j in 0..p {
+            let mut series = markov.pair_series(i, j);
+            r2c.process(&mut series, &mut spectrum)
+                .map_err(|e| EraError::Numerical(format!("forward FFT: {e}")))?;
+            values.extend_from_slice(&spectrum[..lines]);
+        }
+    }
+    let df = 1.0 / (n as f64 * sample_time_s);
+    let frequency_hz = (0..lines).map(|k| k as f64 * df).collect();
+    FrfData::new(frequency_hz, q, p, values, quantity)
+}
+
 /// Markov parameters of the FRFs: [`impulse_responses`] woven into a [`MarkovSequence`].
 pub fn markov_from_frf(frf: &FrfData) -> Result<MarkovSequence> {
     let series = impulse_responses(frf)?;
@@ -223,6 +258,34 @@ mod tests {
                 assert!((x - y).abs() < 1e-14, "{x} vs {y}");
             }
         }
+    }
+
+    /// `frf_of_markov` is the forward transform whose inverse `impulse_responses` is:
+    /// a Markov sequence round-trips to rounding, at the sequence's lines.
+    #[test]
+    fn markov_to_frf_and_back_is_the_identity() {
+        let (q, p, k) = (3, 2, 64);
+        let markov = MarkovSequence::from_fn(q, p, k, |n, i, j| {
+            (0.9f64).powi(n as i32) * ((n * (i + 1) + j) as f64 * 0.37).cos()
+        });
+        let frf = frf_of_markov(&markov, 0.01, Quantity::Displacement).unwrap();
+        assert_eq!(frf.lines(), k / 2 + 1);
+        assert!((frf.spacing_hz() - 1.0 / (k as f64 * 0.01)).abs() < 1e-12);
+        let back = impulse_responses(&frf).unwrap();
+        for i in 0..q {
+            for j in 0..p {
+                let series = &back[i * p + j];
+                for n in 0..k {
+                    assert!(
+                        (series[n] - markov.get(n, i, j)).abs() < 1e-13,
+                        "{i} {j} {n}"
+                    );
+                }
+            }
+        }
+        assert!(
+            frf_of_markov(&MarkovSequence::zeros(1, 1, 1), 1.0, Quantity::Displacement).is_err()
+        );
     }
 
     #[test]
