@@ -274,12 +274,8 @@ mod tests {
         let back = impulse_responses(&frf).unwrap();
         for i in 0..q {
             for j in 0..p {
-                let series = &back[i * p + j];
-                for n in 0..k {
-                    assert!(
-                        (series[n] - markov.get(n, i, j)).abs() < 1e-13,
-                        "{i} {j} {n}"
-                    );
+                for (n, v) in back[i * p + j].iter().enumerate() {
+                    assert!((v - markov.get(n, i, j)).abs() < 1e-13, "{i} {j} {n}");
                 }
             }
         }
