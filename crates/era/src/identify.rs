@@ -512,6 +512,9 @@ fn run(
     if let Some(sc) = f.scale {
         sc.undo(&mut realization);
     }
+    if supplied.is_some() {
+        not_circular(&mut realization);
+    }
     let realize_call = clock.elapsed().as_secs_f64();
     timings.hankel_svd = realization.hankel_svd_seconds;
     timings.realize = realize_call - realization.hankel_svd_seconds;
@@ -526,6 +529,17 @@ fn run(
         discrete,
         f.sample_time_s,
     )
+}
+
+/// Supplied Markov parameters are a sequence, not one period of a circular impulse
+/// response: the warning about the FRFs' wrap-around does not apply to them.
+fn not_circular(realization: &mut Realization) {
+    realization.warnings.retain(|w| {
+        !matches!(
+            w,
+            crate::pipeline::realize::RealizeWarning::PastHalfPeriod { .. }
+        )
+    });
 }
 
 /// The back of the pipeline: continuous conversion, modes, indicators and fit of a
@@ -1222,6 +1236,9 @@ fn auto(
     // The realization at the highest order, for its diagnostics (singular values,
     // warnings); its model is replaced by the chosen modes.
     let mut realization = factorization.realize(top, options.direct_term)?;
+    if supplied.is_some() {
+        not_circular(&mut realization);
+    }
     let mut discrete = modal_model(&chosen, &realization.model.d, f.sample_time_s);
     if let Some(sc) = f.scale {
         sc.undo(&mut realization);

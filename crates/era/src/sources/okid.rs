@@ -398,8 +398,12 @@ fn stack_qr(upper: Option<Mat<f64>>, block: Mat<f64>) -> Mat<f64> {
 
 /// Rows of one block of the blocked QR.
 fn block_rows(columns: usize) -> usize {
-    (4 * columns).max(1024)
+    (4 * columns).max(BLOCK_BYTES / 8 / columns.max(1))
 }
+
+/// Bytes of one block of the data matrix: a record of up to this size (at the chosen
+/// order) is factored in one QR, a longer one block by block.
+const BLOCK_BYTES: usize = 32 << 20;
 
 /// The triangle of the whole data matrix of every record at order `p`, rows `k ≥ first`
 /// of each record, and the number of rows. `naive` factors the whole matrix at once.
