@@ -405,19 +405,36 @@ fn block_rows(columns: usize) -> usize {
 /// order) is factored in one QR, a longer one block by block.
 const BLOCK_BYTES: usize = 32 << 20;
 
+/// How the data matrix is factored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Blocks {
+    /// Whole, in one QR (the reference).
+    Whole,
+    /// In blocks of [`block_rows`] rows.
+    Budget,
+    /// In blocks of this many rows (tests of the merge).
+    #[cfg(test)]
+    Rows(usize),
+}
+
 /// The triangle of the whole data matrix of every record at order `p`, rows `k ≥ first`
-/// of each record, and the number of rows. `naive` factors the whole matrix at once.
+/// of each record, and the number of rows.
 fn data_triangle(
     data: &Scaled,
     r: usize,
     q: usize,
     p: usize,
     first: usize,
-    naive: bool,
+    blocks: Blocks,
 ) -> (Mat<f64>, usize) {
     let cols = regressors(r, q, p) + q;
     let mut spans: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
-    let step = block_rows(cols);
+    let naive = blocks == Blocks::Whole;
+    let step = match blocks {
+        Blocks::Whole | Blocks::Budget => block_rows(cols),
+        #[cfg(test)]
+        Blocks::Rows(n) => n.max(1),
+    };
     for n in 0..data.records.len() {
         let len = data.len(n);
         let mut k = first;
@@ -736,7 +753,7 @@ fn unscale(blocks: &[Mat<f64>], out_scale: &[f64], in_scale: &[f64]) -> MarkovSe
 /// order the records are too short for or beyond [`MAX_REGRESSORS`], or no samples;
 /// [`EraError::Numerical`] when a decomposition fails.
 pub fn okid(records: &[Record], options: &OkidOptions) -> Result<Okid> {
-    run(records, options, false)
+    run(records, options, Blocks::Budget)
 }
 
 /// [`okid`] with the whole data matrix factored at once (the reference of the blocked
@@ -745,10 +762,10 @@ pub fn okid(records: &[Record], options: &OkidOptions) -> Result<Okid> {
 /// # Errors
 /// As [`okid`].
 pub fn okid_naive(records: &[Record], options: &OkidOptions) -> Result<Okid> {
-    run(records, options, true)
+    run(records, options, Blocks::Whole)
 }
 
-fn run(records: &[Record], options: &OkidOptions, naive: bool) -> Result<Okid> {
+fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid> {
     let (r, q, lengths) = check_records(records)?;
     if options.markov_samples < 2 {
         return Err(EraError::InvalidParameter {
@@ -806,7 +823,7 @@ fn run(records: &[Record], options: &OkidOptions, naive: bool) -> Result<Okid> {
         }
     };
     let data = scale_records(records, r, q)?;
-    let (tri, rows) = data_triangle(&data, r, q, p_max, p_max, naive);
+    let (tri, rows) = data_triangle(&data, r, q, p_max, p_max, blocks);
     // Dependent inputs: the current inputs come first, so their diagonal says whether
     // input j adds anything to inputs 1..j−1.
     let norm = (rows as f64).sqrt();
@@ -1087,22 +1104,26 @@ mod tests {
                 markov_samples: 100,
                 ..OkidOptions::default()
             };
-            let fast = okid(&recs, &options).unwrap();
             let naive = okid_naive(&recs, &options).unwrap();
-            assert_eq!(fast.observer_order, naive.observer_order);
-            assert_eq!(fast.equations, naive.equations);
-            let mut worst = 0.0f64;
-            let mut scale = 0.0f64;
-            for k in 0..100 {
-                for i in 0..3 {
-                    for j in 0..2 {
-                        scale = scale.max(naive.markov.get(k, i, j).abs());
-                        worst =
-                            worst.max((fast.markov.get(k, i, j) - naive.markov.get(k, i, j)).abs());
+            // The default budget (one block here), and blocks of 300 rows merged in
+            // fixed groups.
+            for blocks in [Blocks::Budget, Blocks::Rows(300)] {
+                let fast = run(&recs, &options, blocks).unwrap();
+                assert_eq!(fast.observer_order, naive.observer_order);
+                assert_eq!(fast.equations, naive.equations);
+                let mut worst = 0.0f64;
+                let mut scale = 0.0f64;
+                for k in 0..100 {
+                    for i in 0..3 {
+                        for j in 0..2 {
+                            let (a, b) = (fast.markov.get(k, i, j), naive.markov.get(k, i, j));
+                            scale = scale.max(b.abs());
+                            worst = worst.max((a - b).abs());
+                        }
                     }
                 }
+                assert!(worst <= 1e-10 * scale, "{blocks:?}: {worst:e} of {scale:e}");
             }
-            assert!(worst <= 1e-10 * scale, "{worst:e} of {scale:e}");
         }
     }
 
@@ -1157,7 +1178,7 @@ mod tests {
             outputs: &yi,
         }];
         let data = scale_records(&records, 1, 2).unwrap();
-        let (tri, _) = data_triangle(&data, 1, 2, 10, 10, false);
+        let (tri, _) = data_triangle(&data, 1, 2, 10, 10, Blocks::Budget);
         let (theta, _) = coefficients(&tri, 1, 2, 10, 10).unwrap();
         let obs = unpack(&theta, 1, 2, 10);
         assert!(observer_radius(&obs).unwrap() < 0.99);
