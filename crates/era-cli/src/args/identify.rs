@@ -198,7 +198,7 @@ pub struct IdentifyArgs {
         help_heading = "Time histories (--from-time)"
     )]
     pub observer_order: Option<ObserverOrderArg>,
-    /// Markov blocks OKID returns (default: --frame, the length the FRF route gives).
+    /// Markov blocks OKID returns (default 2048, the FRF route's default frame).
     #[arg(long, value_name = "N", help_heading = "Time histories (--from-time)")]
     pub markov_samples: Option<usize>,
     #[command(flatten, next_help_heading = "Time histories (--from-time)")]

@@ -779,7 +779,9 @@ fn observe(
         Some(ObserverOrderArg::Fixed(p)) => ObserverOrder::Fixed(p),
         Some(ObserverOrderArg::Auto) | None => ObserverOrder::Auto { max: None },
     };
-    options.markov_samples = a.markov_samples.unwrap_or(a.welch.frame_or_default());
+    options.markov_samples = a
+        .markov_samples
+        .unwrap_or(era::frf::estimate::DEFAULT_FRAME);
     let inputs: Vec<Vec<&[f64]>> = records
         .records
         .iter()
