@@ -12,14 +12,7 @@
 # Creates a virtual environment with numpy, scipy and python-control from PyPI
 # (target/peers-venv, or $ERA_PEERS_VENV), as bench/peers.sh does.
 set -euo pipefail
-here=$(cd "$(dirname "$0")/.." && pwd)
-venv=${ERA_PEERS_VENV:-$here/target/peers-venv}
-if [ ! -x "$venv/bin/python" ]; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q numpy scipy control
-fi
-command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (apt-get install time)" >&2; exit 2; }
-cd "$here"
+. "$(dirname "$0")/peers_env.sh"
 cargo build --release -q -p era-cli --bin era
 era=${ERA:-$here/target/release/era}
 mat=data/daisy-steel-subframe/flexible_structure_dat.mat

@@ -18,14 +18,7 @@
 # python-control builds it.
 set -euo pipefail
 all=${1:-}
-here=$(cd "$(dirname "$0")/.." && pwd)
-venv=${ERA_PEERS_VENV:-$here/target/peers-venv}
-if [ ! -x "$venv/bin/python" ]; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install -q numpy scipy control
-fi
-command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (apt-get install time)" >&2; exit 2; }
-cd "$here"
+. "$(dirname "$0")/peers_env.sh"
 cargo build --release -q --example era_core
 target_dir=$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')
 core="${target_dir:-${CARGO_TARGET_DIR:-$here/target}}/release/examples/era_core"

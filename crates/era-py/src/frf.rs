@@ -298,6 +298,59 @@ pub fn write_frf(
     })
 }
 
+/// The Welch keywords of `estimate_frf` and `identify_time`, checked.
+pub(crate) struct WelchKeywords {
+    pub(crate) sample_rate_hz: f64,
+    pub(crate) window: Window,
+    pub(crate) overlap: f64,
+    pub(crate) estimator: Estimator,
+    pub(crate) detrend: Detrend,
+    pub(crate) quantity: era::Quantity,
+}
+
+impl WelchKeywords {
+    pub(crate) fn parse(
+        sample_rate_hz: f64,
+        window: &str,
+        overlap: f64,
+        estimator: &str,
+        detrend: &str,
+        quantity: &str,
+    ) -> PyResult<Self> {
+        let keywords = WelchKeywords {
+            sample_rate_hz,
+            window: crate::named("window", window)?,
+            overlap,
+            estimator: crate::named("estimator", estimator)?,
+            detrend: crate::named("detrend", detrend)?,
+            quantity: crate::frf::quantity("quantity", quantity)?,
+        };
+        if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+            return value_error(format!(
+                "sample_rate_hz {sample_rate_hz}: must be a positive number of samples per second"
+            ));
+        }
+        Ok(keywords)
+    }
+
+    /// The Welch options at `frame` samples per frame.
+    pub(crate) fn options(&self, frame: usize) -> WelchOptions {
+        let mut o = WelchOptions::new(self.sample_rate_hz, frame);
+        o.overlap = self.overlap;
+        o.window = self.window;
+        o.detrend = self.detrend;
+        o
+    }
+}
+
+/// Rows `channels` of a C-contiguous (channels, samples) block, borrowed in place.
+pub(crate) fn rows<'a>(flat: &'a [f64], samples: usize, channels: &[usize]) -> Vec<&'a [f64]> {
+    channels
+        .iter()
+        .map(|&c| &flat[c * samples..(c + 1) * samples])
+        .collect()
+}
+
 pub(crate) fn channels(name: &str, list: &[Int], available: usize) -> PyResult<Vec<usize>> {
     if list.is_empty() {
         return value_error(format!("{name}: give at least one channel"));
@@ -335,32 +388,25 @@ pub fn estimate_frf<'py>(
     detrend: &str,
     quantity: &str,
 ) -> PyResult<(PyFrfData, Bound<'py, PyArray3<f64>>)> {
-    let window: Window = crate::named("window", window)?;
-    let estimator: Estimator = crate::named("estimator", estimator)?;
-    let detrend: Detrend = crate::named("detrend", detrend)?;
-    let tag = crate::frf::quantity("quantity", quantity)?;
-    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
-        return value_error(format!(
-            "sample_rate_hz {sample_rate_hz}: must be a positive number of samples per second"
-        ));
-    }
+    let welch = WelchKeywords::parse(
+        sample_rate_hz,
+        window,
+        overlap,
+        estimator,
+        detrend,
+        quantity,
+    )?;
     let frame = frame.size("frame")?;
     let array = contiguous::<f64, Ix2>(data, "float64", 2, "data", "(channels, samples)")?;
     let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
     let inputs = channels("inputs", &inputs, n_channels)?;
     let outputs = channels("outputs", &outputs, n_channels)?;
-    let mut options = WelchOptions::new(sample_rate_hz, frame);
-    options.overlap = overlap;
-    options.window = window;
-    options.detrend = detrend;
-    // Borrowed in place: each channel is a row of the C-contiguous block.
+    let options = welch.options(frame);
     let view = array.readonly();
     let flat = view.as_slice()?;
-    let row = |c: usize| &flat[c * samples..(c + 1) * samples];
-    let xs: Vec<&[f64]> = inputs.iter().map(|&c| row(c)).collect();
-    let ys: Vec<&[f64]> = outputs.iter().map(|&c| row(c)).collect();
+    let (xs, ys) = (rows(flat, samples, &inputs), rows(flat, samples, &outputs));
     let found = guarded(py, || {
-        estimate(&xs, &ys, &options, estimator, tag).map_err(era_error)
+        estimate(&xs, &ys, &options, welch.estimator, welch.quantity).map_err(era_error)
     })?;
     let (q, p, l) = (found.frf.outputs(), found.frf.inputs(), found.frf.lines());
     let coherence = vector(py, found.ordinary_coherence).reshape([q, p, l])?;

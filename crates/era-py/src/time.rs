@@ -8,7 +8,7 @@ use crate::model::{
     PyIdentification, Run,
 };
 use crate::{contiguous, era_error, guarded, value_error, Int};
-use era::frf::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
+use era::frf::estimate::{estimate, Estimator, Window};
 use era::identify::{EraOptions, ScanOptions, SuppliedMarkov};
 use era::params::Naming;
 use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
@@ -93,15 +93,19 @@ pub fn identify_time(
             .check("markov_samples", n as u64)
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     }
-    let window: Window = crate::named("window", window)?;
-    let estimator: Estimator = crate::named("estimator", estimator)?;
-    let detrend: Detrend = crate::named("detrend", detrend)?;
-    let tag = crate::frf::quantity("quantity", quantity)?;
-    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
-        return value_error(format!(
-            "sample_rate_hz {sample_rate_hz}: must be a positive number of samples per second"
-        ));
-    }
+    let welch_keywords = crate::frf::WelchKeywords::parse(
+        sample_rate_hz,
+        window,
+        overlap,
+        estimator,
+        detrend,
+        quantity,
+    )?;
+    let (window, estimator, tag) = (
+        welch_keywords.window,
+        welch_keywords.estimator,
+        welch_keywords.quantity,
+    );
     let frame = frame.map(|f| f.size("frame")).transpose()?;
     let chosen = match states {
         Some(s) if !s.is_none() => states_of(s)?,
@@ -138,15 +142,11 @@ pub fn identify_time(
             era::frf::estimate::DEFAULT_FRAME
         }
     });
-    let mut welch = WelchOptions::new(sample_rate_hz, frame);
-    welch.overlap = overlap;
-    welch.window = window;
-    welch.detrend = detrend;
+    let welch = welch_keywords.options(frame);
     let view = array.readonly();
     let flat = view.as_slice()?;
-    let row = |c: usize| &flat[c * samples..(c + 1) * samples];
-    let xs: Vec<&[f64]> = inputs.iter().map(|&c| row(c)).collect();
-    let ys: Vec<&[f64]> = outputs.iter().map(|&c| row(c)).collect();
+    let rows = crate::frf::rows;
+    let (xs, ys) = (rows(flat, samples, &inputs), rows(flat, samples, &outputs));
     let mut refine_options = refine_options_of(
         (outputs.len(), inputs.len()),
         residuals,

@@ -3,7 +3,7 @@
 //! and the time-history inputs OKID cannot take.
 
 use crate::common;
-use common::{data_file, expect_input_error, json_of, match_frequencies, s};
+use common::{daisy_hits, data_file, expect_input_error, json_of, match_frequencies, modes_of, s};
 use std::path::{Path, PathBuf};
 
 /// A simulated shaker test (10 modes 1.9–20 Hz, 2 shakers, 8 accelerometers, 64 Hz):
@@ -32,17 +32,7 @@ fn shaker(
         s(&file),
         "--json",
     ]);
-    let truth = v["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| {
-            (
-                m["frequency_hz"].as_f64().unwrap(),
-                m["damping_ratio"].as_f64().unwrap(),
-            )
-        })
-        .collect();
+    let truth = modes_of(&v, false);
     (file, truth)
 }
 
@@ -65,18 +55,7 @@ fn identify(file: &Path, extra: &[&str]) -> serde_json::Value {
 
 /// (frequency, damping) of the modes marked physical.
 fn physical(v: &serde_json::Value) -> Vec<(f64, f64)> {
-    v["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|m| m["physical"].as_bool().unwrap())
-        .map(|m| {
-            (
-                m["frequency_hz"].as_f64().unwrap(),
-                m["damping_ratio"].as_f64().unwrap(),
-            )
-        })
-        .collect()
+    modes_of(v, true)
 }
 
 /// Found (within 2 % in frequency), spurious, and the median relative errors of the
@@ -170,23 +149,9 @@ fn daisy_subframe_through_okid_takes_the_unit_circle_and_finds_the_reference_mod
     assert_eq!(okid["route"], "unit_circle", "{okid}");
     assert!(okid["observer_radius"].as_f64().unwrap() > 1.5, "{okid}");
     let phys: Vec<f64> = physical(&v).iter().map(|m| m.0).collect();
-    let reference = [
-        62.1, 119.0, 154.7, 192.5, 215.0, 229.5, 239.3, 286.8, 321.2, 334.1, 352.2, 398.1, 417.5,
-        467.2,
-    ];
-    let hits = reference
-        .iter()
-        .filter(|r| phys.iter().any(|f| (f - *r).abs() < 0.5))
-        .count();
+    let (hits, extra) = daisy_hits(&phys);
     assert!(hits >= 12, "{hits} of 14 within 0.5 Hz among {phys:?}");
-    let extra = phys
-        .iter()
-        .filter(|f| !reference.iter().any(|r| (*f - r).abs() < 0.5))
-        .count();
-    assert!(
-        extra <= 2,
-        "{extra} physical modes match no reference: {phys:?}"
-    );
+    assert!(extra.len() <= 2, "{extra:?} match no reference: {phys:?}");
 }
 
 /// ERA/DC after OKID: at a fixed order, exact on exact data; at the automatic order
@@ -195,20 +160,7 @@ fn daisy_subframe_through_okid_takes_the_unit_circle_and_finds_the_reference_mod
 #[test]
 fn era_dc_realizes_okid_markov_parameters() {
     let dir = tempfile::tempdir().unwrap();
-    let modes = |v: &serde_json::Value, only_physical: bool| -> Vec<(f64, f64)> {
-        v["modes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|m| !only_physical || m["physical"].as_bool().unwrap())
-            .map(|m| {
-                (
-                    m["frequency_hz"].as_f64().unwrap(),
-                    m["damping_ratio"].as_f64().unwrap(),
-                )
-            })
-            .collect()
-    };
+    let modes = modes_of;
     let (exact, truth) = shaker(dir.path(), 44, "0", "60", "white");
     let fixed = identify(&exact, &["--markov", "okid", "--era-dc", "--states", "20"]);
     let found = modes(&fixed, false);

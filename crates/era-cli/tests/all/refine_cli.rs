@@ -13,18 +13,7 @@ fn modal_set(dir: &Path, name: &str, extra: &[&str]) -> (PathBuf, Vec<(f64, f64)
     let mut args = vec!["simulate", "modal", "--out", s(&file), "--json"];
     args.extend_from_slice(extra);
     let v = json_of(&args);
-    let truth = v["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| {
-            (
-                m["frequency_hz"].as_f64().unwrap(),
-                m["damping_ratio"].as_f64().unwrap(),
-            )
-        })
-        .collect();
-    (file, truth)
+    (file, crate::common::modes_of(&v, false))
 }
 
 const DTA_LIKE: [&str; 16] = [

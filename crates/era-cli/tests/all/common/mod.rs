@@ -85,4 +85,43 @@ pub fn match_frequencies(
     (out, left)
 }
 
+/// The DaISy subframe's 14 indicative frequencies, Hz (its PROVENANCE: spectral peaks,
+/// about ±0.1 Hz).
+pub const DAISY_REFERENCE_HZ: [f64; 14] = [
+    62.1, 119.0, 154.7, 192.5, 215.0, 229.5, 239.3, 286.8, 321.2, 334.1, 352.2, 398.1, 417.5, 467.2,
+];
+
+/// How many of [`DAISY_REFERENCE_HZ`] lie within 0.5 Hz of one of `found`, and the
+/// frequencies of `found` that match none.
+pub fn daisy_hits(found: &[f64]) -> (usize, Vec<f64>) {
+    let near = |a: f64, b: f64| (a - b).abs() < 0.5;
+    let hits = DAISY_REFERENCE_HZ
+        .iter()
+        .filter(|r| found.iter().any(|f| near(*f, **r)))
+        .count();
+    let extra = found
+        .iter()
+        .copied()
+        .filter(|f| !DAISY_REFERENCE_HZ.iter().any(|r| near(*f, *r)))
+        .collect();
+    (hits, extra)
+}
+
+/// (frequency Hz, damping ratio) of the modes of a JSON (`model.json`, or the truth
+/// `era simulate ... --json` prints), all of them or the physical ones.
+pub fn modes_of(v: &serde_json::Value, only_physical: bool) -> Vec<(f64, f64)> {
+    v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| !only_physical || m["physical"].as_bool().unwrap())
+        .map(|m| {
+            (
+                m["frequency_hz"].as_f64().unwrap(),
+                m["damping_ratio"].as_f64().unwrap(),
+            )
+        })
+        .collect()
+}
+
 pub mod hostile;
