@@ -213,12 +213,29 @@ fn era_pid(name: &str, prefix: &str, extension_allowed: bool) -> Option<u32> {
 }
 
 /// Whether process `pid` is running; `true` when that cannot be told (no `/proc`), so
-/// nothing is removed then.
+/// nothing is removed then. A zombie (state `Z` or `X` in `/proc/PID/stat`: dead, not
+/// yet reaped by its parent) is not running: its files are as abandoned as those of a
+/// process that is gone.
 fn process_alive(pid: u32) -> bool {
     if !Path::new("/proc/self").exists() {
         return true;
     }
-    pid == std::process::id() || Path::new("/proc").join(pid.to_string()).exists()
+    if pid == std::process::id() {
+        return true;
+    }
+    let entry = Path::new("/proc").join(pid.to_string());
+    match std::fs::read_to_string(entry.join("stat")) {
+        Ok(stat) => !matches!(process_state(&stat), Some('Z' | 'X' | 'x')),
+        // Gone between the listing and the read, or never there.
+        Err(_) => entry.exists(),
+    }
+}
+
+/// The state letter of a `/proc/PID/stat` line: the field after the command name, which
+/// is in parentheses and may itself hold spaces and parentheses (hence the last `)`).
+fn process_state(stat: &str) -> Option<char> {
+    let (_, after) = stat.rsplit_once(')')?;
+    after.trim_start().chars().next()
 }
 
 /// Removes from `folder` the temporary files (`.era-tmp-<pid>-…`, regular files) and
@@ -495,6 +512,31 @@ mod tests {
         let c = std::ffi::CString::new(path.as_os_str().as_encoded_bytes()).unwrap();
         // SAFETY: a valid NUL-terminated path.
         assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o644) }, 0);
+    }
+
+    /// A zombie's files are abandoned: its state letter is read past a command name with
+    /// spaces and parentheses, and a real zombie (a child killed and not yet reaped)
+    /// counts as dead.
+    #[test]
+    fn a_zombie_is_not_alive() {
+        assert_eq!(process_state("42 (era) R 1 42"), Some('R'));
+        assert_eq!(process_state("42 (a b) c)) Z 1 42"), Some('Z'));
+        assert_eq!(process_state("garbage"), None);
+        let mut child = std::process::Command::new("sleep")
+            .arg("30")
+            .spawn()
+            .expect("sleep runs");
+        let pid = child.id();
+        assert!(process_alive(pid));
+        child.kill().expect("kill");
+        // Not reaped yet: /proc/PID is still there, a zombie.
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+        while process_alive(pid) && std::time::Instant::now() < deadline {
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        assert!(Path::new("/proc").join(pid.to_string()).exists());
+        assert!(!process_alive(pid));
+        child.wait().expect("reaped");
     }
 
     /// A pid that is not running: above the kernel's pid_max.

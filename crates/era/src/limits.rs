@@ -19,6 +19,7 @@
 //! | [`INPUT_BYTES`]: bytes read from a pipe, standard input or a device | 1 GiB | `ERA_MAX_INPUT_BYTES` |
 //! | [`ITERATIONS`]: iterations or cycles of an iterative routine | 1 000 000 | `ERA_MAX_ITERATIONS` |
 //! | [`STEPS`]: integrator steps of one simulation (friction simulate, all tune trials) | 200 000 000 | `ERA_MAX_STEPS` |
+//! | [`DENSE`]: values a dense SVD holds at once (the Hankel, workspace, factors) | 268 435 456 (2 GiB) | `ERA_MAX_DENSE_VALUES` |
 //!
 //! The defaults let every real data set we know through (the thesis set is 8 × 8 × 801; a
 //! 28 × 2 × 16 385 analyzer set is 0.9 M values) while keeping the memory any one request
@@ -88,6 +89,16 @@ pub const STEPS: Limit = Limit {
     what: "integrator steps",
     default: 200_000_000,
     env: "ERA_MAX_STEPS",
+};
+
+/// Values (8 bytes each) a dense SVD holds at once: the Hankel matrix, its workspace and
+/// factors. A 3-line FRF padded to 300 000 lines at 2000 states asked a dense SVD of a
+/// 4999 × 4999 Hankel (2 GB); under a 4 GB address-space cap an allocation of it
+/// aborted the process.
+pub const DENSE: Limit = Limit {
+    what: "matrix values",
+    default: 1 << 28,
+    env: "ERA_MAX_DENSE_VALUES",
 };
 
 /// A count computed in floating point (samples = rate × duration, steps = cycles ×

@@ -6,9 +6,10 @@ use crate::args::{
 };
 use crate::config::Settings;
 use crate::error::usage;
-use crate::output::report::{finish_output, Human};
+use crate::output::report::{finish_output, fixed, Human};
 use anyhow::Context;
 use era::friction::estimate::{estimate_displacement, estimate_velocity, summarize, DecayEstimate};
+use era::friction::show;
 use era::friction::simulate::{free_decay_record, DecaySpec, Method};
 use era::friction::tune::{stability_margin, tune, TuneSpec};
 use era::friction::Oscillator;
@@ -50,7 +51,7 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
     let mut records = Vec::new();
     let mut table = format!(
         "era friction estimate (k = {}; Eq. 3.12: F_C = dy k / (8 pi f_n cycles); combined: friction and viscous damping fitted together)\n{:<28} {:>9} {:>7} {:>12} {:>11} {:>9} {:>9} {:>11} {:>9}\n",
-        a.stiffness, "record", "f_n (Hz)", "cycles", "drop/cycle", "F_C", "zeta", "model", "F_C comb.", "zeta comb."
+        show(a.stiffness), "record", "f_n (Hz)", "cycles", "drop/cycle", "F_C", "zeta", "model", "F_C comb.", "zeta comb."
     );
     for path in &a.files {
         let (e, signal) = estimate_file(path, a.stiffness)?;
@@ -60,16 +61,16 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
         );
         let _ = writeln!(
             table,
-            "{:<28} {:>9.4} {:>7.1} {:>12.5} {:>11.5} {:>9.5} {:>9} {:>11.5} {:>10.5}",
+            "{:<28} {:>9} {:>7} {:>12} {:>11} {:>9} {:>9} {:>11} {:>10}",
             name,
-            e.natural_frequency_hz,
-            e.cycles,
-            e.velocity_drop_per_cycle,
-            e.coulomb_force,
-            e.viscous_damping_ratio,
+            fixed(e.natural_frequency_hz, 4),
+            fixed(e.cycles, 1),
+            fixed(e.velocity_drop_per_cycle, 5),
+            fixed(e.coulomb_force, 5),
+            fixed(e.viscous_damping_ratio, 5),
             e.better_model.name(),
-            e.combined.coulomb_force,
-            e.combined.viscous_damping_ratio
+            fixed(e.combined.coulomb_force, 5),
+            fixed(e.combined.viscous_damping_ratio, 5)
         );
         records.push(record_json(path, &e, signal));
         estimates.push(e);
@@ -77,16 +78,17 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
     let s = summarize(&estimates);
     let _ = writeln!(
         table,
-        "\nF_C mean {:.5}, std {:.5} over {} record(s); f_n mean {:.4} Hz",
-        s.coulomb_force_mean,
-        s.coulomb_force_std,
+        "\nF_C mean {}, std {} over {} record(s); f_n mean {} Hz",
+        fixed(s.coulomb_force_mean, 5),
+        fixed(s.coulomb_force_std, 5),
         estimates.len(),
-        s.natural_frequency_hz_mean
+        fixed(s.natural_frequency_hz_mean, 4)
     );
     let _ = writeln!(
         table,
-        "combined law: F_C mean {:.5}, zeta mean {:.5} (Eq. 3.12 reads any viscous damping as friction; the combined fit does not)",
-        s.combined_coulomb_force_mean, s.combined_viscous_damping_ratio_mean
+        "combined law: F_C mean {}, zeta mean {} (Eq. 3.12 reads any viscous damping as friction; the combined fit does not)",
+        fixed(s.combined_coulomb_force_mean, 5),
+        fixed(s.combined_viscous_damping_ratio_mean, 5)
     );
     human.print(&table);
     let out = json!({
@@ -230,19 +232,24 @@ fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
     };
     let t = tune(&spec)?;
     let mut text = format!(
-        "era friction tune: k {}, f_n {:.4} Hz, F_C {:.5}, zeta {}, dead zone {}, {} Hz compensator\n",
-        osc.stiffness, osc.natural_frequency_hz, osc.coulomb_force, osc.viscous_damping_ratio, a.dead_zone, a.model.sample_rate
+        "era friction tune: k {}, f_n {} Hz, F_C {}, zeta {}, dead zone {}, {} Hz compensator\n",
+        show(osc.stiffness),
+        fixed(osc.natural_frequency_hz, 4),
+        fixed(osc.coulomb_force, 5),
+        show(osc.viscous_damping_ratio),
+        show(a.dead_zone),
+        show(a.model.sample_rate)
     );
     let _ = writeln!(
         text,
-        "neutral coefficient      {:.5}  (compensated free decay neither decays nor grows)",
-        t.neutral_coefficient
+        "neutral coefficient      {}  (compensated free decay neither decays nor grows)",
+        fixed(t.neutral_coefficient, 5)
     );
     let _ = writeln!(
         text,
-        "applied at {:>4.0} %       {:.5}  (stability margin {:.1} %)",
+        "applied at {:>4.0} %       {}  (stability margin {:.1} %)",
         100.0 * a.fraction,
-        t.applied_coefficient,
+        fixed(t.applied_coefficient, 5),
         100.0 * t.stability_margin
     );
     let mut out = json!({
@@ -259,7 +266,8 @@ fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
         let margin = stability_margin(raw, a.fraction, t.neutral_coefficient);
         let _ = writeln!(
             text,
-            "the free-decay estimate {raw:.5} at {:.0} %: margin {:.1} %{}",
+            "the free-decay estimate {} at {:.0} %: margin {:.1} %{}",
+            fixed(raw, 5),
             100.0 * a.fraction,
             100.0 * margin,
             if margin < 0.0 {

@@ -247,6 +247,18 @@ pub fn parameter_echo_states(o: &EraOptions, states: Option<&str>) -> String {
     s
 }
 
+/// `x` with `decimals` decimals while that stays short (`1e-3 ≤ |x| < 1e7`, or 0), in
+/// scientific notation with as many digits after the point otherwise: no number prints
+/// as a row of hundreds of digits.
+pub fn fixed(x: f64, decimals: usize) -> String {
+    let a = x.abs();
+    if !x.is_finite() || a == 0.0 || (1e-3..1e7).contains(&a) {
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.decimals$e}")
+    }
+}
+
 /// Singular values, modes, real poles, fit and warnings of one identification.
 pub fn identification_summary(found: &Identification, states: usize) -> String {
     let mut s = String::new();

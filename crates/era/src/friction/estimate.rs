@@ -383,11 +383,11 @@ pub fn estimate_velocity(
     velocity: &[f64],
     stiffness: f64,
 ) -> Result<DecayEstimate> {
-    if !(stiffness.is_finite() && stiffness > 0.0) {
+    if !(stiffness > 0.0 && super::physical(stiffness)) {
         return Err(FrictionError::InvalidParameter {
             name: "stiffness",
-            value: stiffness.to_string(),
-            reason: "must be positive".into(),
+            value: super::show(stiffness),
+            reason: super::range_reason("positive"),
         });
     }
     let dt = check_record(time_s, velocity, "velocity")?;

@@ -132,10 +132,10 @@ impl FrictionError {
 
     /// [`FrictionError::InvalidParameter`] from a parameter's field name, its value and
     /// the reason.
-    pub fn invalid(name: &'static str, value: impl ToString, reason: impl Into<String>) -> Self {
+    pub fn invalid(name: &'static str, value: f64, reason: impl Into<String>) -> Self {
         FrictionError::InvalidParameter {
             name,
-            value: value.to_string(),
+            value: show(value),
             reason: reason.into(),
         }
     }
@@ -148,20 +148,43 @@ impl FrictionError {
 /// # Errors
 /// [`crate::EraError::Invalid`] for zero, negative or non-finite values.
 pub fn check_stiffness(naming: crate::params::Naming, stiffness: f64) -> crate::Result<()> {
-    if !(stiffness.is_finite() && stiffness > 0.0) {
+    if !(stiffness.is_finite() && physical(stiffness)) {
         return crate::params::invalid(format!(
-            "{} {stiffness}: must be a positive stiffness (thesis: 1.0 lbf/in)",
-            naming.name("stiffness")
+            "{} {}: must be a positive stiffness from {:e} to {:e} (thesis: 1.0 lbf/in)",
+            naming.name("stiffness"),
+            show(stiffness),
+            PHYSICAL_RANGE.0,
+            PHYSICAL_RANGE.1
         ));
     }
     Ok(())
 }
 
-/// A parameter value for a message: plain for ordinary magnitudes, in exponent form
-/// beyond (`1e308`, not 309 digits).
+/// The magnitudes an actuator's parameters may take, in any consistent units: a
+/// stiffness, a frequency, a force, a displacement or a dead zone outside them is no
+/// actuator's (1e308 overflowed the estimate to inf, and 1e300 made the tuning run for
+/// 15 s and print coefficients of 300 digits).
+pub const PHYSICAL_RANGE: (f64, f64) = (1e-12, 1e12);
+
+/// Whether `x`'s magnitude lies in [`PHYSICAL_RANGE`].
+pub(crate) fn physical(x: f64) -> bool {
+    (PHYSICAL_RANGE.0..=PHYSICAL_RANGE.1).contains(&x.abs())
+}
+
+/// The reason a value outside [`PHYSICAL_RANGE`] is refused.
+pub(crate) fn range_reason(what: &str) -> String {
+    format!(
+        "must be {what} from {:e} to {:e} in magnitude (no actuator's value lies outside)",
+        PHYSICAL_RANGE.0, PHYSICAL_RANGE.1
+    )
+}
+
+/// A parameter value for a message or a table: plain for ordinary magnitudes
+/// (`1e-4 ≤ |x| < 1e7`), in exponent form beyond (`1e308`, not 309 digits; `1e11`, not
+/// twelve).
 pub fn show(x: f64) -> String {
     let a = x.abs();
-    if x.is_finite() && a != 0.0 && !(1e-4..1e15).contains(&a) {
+    if x.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
         format!("{x:e}")
     } else {
         x.to_string()
@@ -214,18 +237,24 @@ impl Oscillator {
     /// negative friction force, or a damping ratio outside `[0, 1)`.
     pub fn validate(&self) -> Result<()> {
         let bad = |name, value: f64, reason: &str| Err(FrictionError::invalid(name, value, reason));
-        if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
-            return bad("stiffness", self.stiffness, "must be positive");
+        if !(self.stiffness > 0.0 && physical(self.stiffness)) {
+            return bad("stiffness", self.stiffness, &range_reason("positive"));
         }
-        if !(self.natural_frequency_hz.is_finite() && self.natural_frequency_hz > 0.0) {
+        if !(self.natural_frequency_hz > 0.0 && physical(self.natural_frequency_hz)) {
             return bad(
                 "natural_frequency_hz",
                 self.natural_frequency_hz,
-                "must be positive",
+                &range_reason("positive"),
             );
         }
-        if !(self.coulomb_force.is_finite() && self.coulomb_force >= 0.0) {
-            return bad("coulomb_force", self.coulomb_force, "must be >= 0");
+        if !(self.coulomb_force == 0.0
+            || (self.coulomb_force > 0.0 && physical(self.coulomb_force)))
+        {
+            return bad(
+                "coulomb_force",
+                self.coulomb_force,
+                &range_reason("0, or positive"),
+            );
         }
         if !(self.viscous_damping_ratio.is_finite()
             && (0.0..1.0).contains(&self.viscous_damping_ratio))

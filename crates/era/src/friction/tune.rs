@@ -96,14 +96,18 @@ pub fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> {
 pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     spec.oscillator.validate()?;
     let bad = |name, value: f64, reason: &str| Err(FrictionError::invalid(name, value, reason));
-    if !(spec.x0.is_finite() && spec.x0 != 0.0) {
-        return bad("x0", spec.x0, "must be non-zero");
+    if !(spec.x0 != 0.0 && super::physical(spec.x0)) {
+        return bad("x0", spec.x0, &super::range_reason("non-zero"));
     }
     if !(spec.fraction.is_finite() && spec.fraction > 0.0 && spec.fraction <= 1.0) {
         return bad("fraction", spec.fraction, "must be in (0, 1]");
     }
-    if !(spec.dead_zone.is_finite() && spec.dead_zone >= 0.0) {
-        return bad("dead_zone", spec.dead_zone, "must be >= 0");
+    if !(spec.dead_zone == 0.0 || (spec.dead_zone > 0.0 && super::physical(spec.dead_zone))) {
+        return bad(
+            "dead_zone",
+            spec.dead_zone,
+            &super::range_reason("0, or positive"),
+        );
     }
     if spec.cycles < 2 {
         return bad(
@@ -129,7 +133,7 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     if o.stiffness * spec.x0.abs() <= o.coulomb_force {
         return Err(FrictionError::invalid(
             "coulomb_force",
-            super::show(o.coulomb_force),
+            o.coulomb_force,
             format!(
                 "the mass never moves: the spring force at release, stiffness {} x x0 {}, does not exceed the friction force, so no coefficient is neutral",
                 super::show(o.stiffness),
@@ -229,7 +233,7 @@ mod tests {
                 ..spec()
             },
             TuneSpec {
-                oscillator: Oscillator::coulomb(1.0, 1e-300, 0.05),
+                oscillator: Oscillator::coulomb(1.0, 1e-9, 0.05),
                 ..spec()
             },
         ] {
@@ -241,23 +245,44 @@ mod tests {
     }
 
     #[test]
-    fn an_infinite_or_meaningless_neutral_coefficient_is_an_error() {
-        // k·x0 overflows: the bracket started at infinity ("neutral coefficient inf").
-        let s = TuneSpec {
-            oscillator: Oscillator::coulomb(1e300, 1.5, 0.05),
-            x0: 1e300,
-            ..spec()
-        };
-        match tune(&s) {
-            Err(e @ FrictionError::NonFiniteResult { .. }) => {
-                assert!(e.to_string().contains("x0 1e300"), "{e}")
+    fn values_outside_any_actuator_and_a_meaningless_coefficient_are_errors() {
+        // k·x0 overflowed to an infinite bracket ("neutral coefficient inf"), and 1e300
+        // ran for 15 s: such values are refused before anything runs, by name.
+        for (s, name) in [
+            (
+                TuneSpec {
+                    oscillator: Oscillator::coulomb(1e300, 1.5, 0.05),
+                    ..spec()
+                },
+                "stiffness",
+            ),
+            (
+                TuneSpec {
+                    x0: 1e308,
+                    ..spec()
+                },
+                "x0",
+            ),
+            (
+                TuneSpec {
+                    dead_zone: 1e308,
+                    ..spec()
+                },
+                "dead_zone",
+            ),
+        ] {
+            match tune(&s) {
+                Err(e @ FrictionError::InvalidParameter { .. }) => {
+                    let text = e.to_string();
+                    assert!(text.contains(name) && text.contains("1e12"), "{text}")
+                }
+                other => panic!("{name}: {other:?}"),
             }
-            other => panic!("{other:?}"),
         }
         // Friction above the spring force: the mass never moves, any coefficient is
         // "neutral" (a bisection to nowhere gave 8.7e281).
         let s = TuneSpec {
-            oscillator: Oscillator::coulomb(1.0, 1.5, 1e300),
+            oscillator: Oscillator::coulomb(1.0, 1.5, 100.0),
             ..spec()
         };
         match tune(&s) {

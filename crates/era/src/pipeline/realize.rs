@@ -276,6 +276,27 @@ pub(crate) fn check_room(rows: usize, cols: usize, states: usize) -> Result<()> 
     Ok(())
 }
 
+/// Checks what a dense thin SVD of a `rows × cols` Hankel holds at once against
+/// [`crate::limits::DENSE`], before anything is allocated: the matrix, its `H1` partner's
+/// product and faer's workspace (about three copies) and the factors `U` and `V`.
+///
+/// # Errors
+/// [`EraError::Limit`] above the limit.
+pub(crate) fn check_dense_svd(rows: usize, cols: usize) -> Result<()> {
+    let (r, c) = (rows as u64, cols as u64);
+    let values = r
+        .saturating_mul(c)
+        .saturating_mul(3)
+        .saturating_add(r.saturating_add(c).saturating_mul(r.min(c)));
+    crate::limits::DENSE.check(
+        format!(
+            "a dense SVD of the {rows} x {cols} Hankel matrix (`svd` matrix-free holds a few of its columns instead)"
+        ),
+        values,
+    )?;
+    Ok(())
+}
+
 /// Numerical rank of a singular-value list: values above `max(rows, cols)·ε·σ₁`.
 pub fn numerical_rank(singular_values: &[f64], rows: usize, cols: usize) -> (usize, f64) {
     let threshold =
@@ -369,6 +390,10 @@ fn realize_shapes(
     if matrix_free {
         return realize_matrix_free(markov, sample_time_s, options, h0_shape, h1_shape, warnings);
     }
+    check_dense_svd(
+        h0_shape.block_rows * markov.outputs(),
+        h0_shape.block_cols * markov.inputs(),
+    )?;
     let clock = Instant::now();
     let h0 = hankel::build(markov, h0_shape)?;
     let svd = h0
@@ -416,6 +441,10 @@ pub fn realize_naive(
 ) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options)?;
     let clock = Instant::now();
+    check_dense_svd(
+        shapes.h0.block_rows * markov.outputs(),
+        shapes.h0.block_cols * markov.inputs(),
+    )?;
     let h0 = hankel::build_naive(markov, shapes.h0)?;
     let h1 = hankel::build_naive(markov, shapes.h1)?;
     let svd = h0
@@ -767,6 +796,7 @@ impl Factorization {
                 Some(svd.iterations),
             )
         } else {
+            check_dense_svd(rows, cols)?;
             let h0 = hankel::build(markov, h0_shape)?;
             let svd = h0
                 .thin_svd()

@@ -29,7 +29,8 @@
 
 use crate::error::{EraError, Result};
 use crate::pipeline::realize::{
-    check_room, DirectTerm, FactorParts, Factorization, HankelTails, Realization, SvdPath,
+    check_dense_svd, check_room, DirectTerm, FactorParts, Factorization, HankelTails, Realization,
+    SvdPath,
 };
 use crate::sources::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
@@ -139,6 +140,7 @@ pub fn factor_dc(
     let (alpha, beta, shift) = (shape.alpha, shape.beta, shape.shift);
     let (rows, cols) = (alpha * q, beta * p);
     check_room(rows, cols, max_states)?;
+    check_dense_svd(rows, cols)?;
     let numerical = |what: &str, e: faer::linalg::svd::SvdError| {
         EraError::Numerical(format!("SVD of {what} (ERA/DC): {e:?}"))
     };
@@ -228,6 +230,7 @@ pub fn realize_dc_with(
         tau,
         shift,
     } = *shape;
+    check_dense_svd((xi + 1) * alpha * q, (xi + 1) * alpha * q)?;
     let h0 = hankel_at(markov, 0, alpha, beta);
     let h0t = h0.transpose();
     // R(k) = H(s + k) H(0)ᵀ for the lags 𝓗(0) and 𝓗(1) read: k = τm and τm + 1.
