@@ -3,7 +3,7 @@
 //! on bad input.
 
 use crate::common;
-use common::{data_file, era, expect_input_error, json_of, s};
+use common::{era, expect_input_error, json_of, s};
 use std::path::Path;
 
 /// A DTA-like 8 x 8 set with the recipe; returns the true frequencies.
@@ -135,24 +135,7 @@ fn noisy_dta_like_set_finds_at_least_37_modes_and_no_spurious_one() {
 
 #[test]
 fn daisy_subframe_auto_finds_the_reference_modes() {
-    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
-    let v = json_of(&[
-        "identify",
-        "--from-time",
-        s(&mat),
-        "--inputs",
-        "1,2",
-        "--outputs",
-        "3-30",
-        "--sample-rate",
-        "1024",
-        "--frame",
-        "2048",
-        "--states",
-        "auto",
-        "--json",
-        "-q",
-    ]);
+    let v = common::daisy_json(&["--frame", "2048", "--states", "auto", "--json", "-q"]);
     let phys = physical(&v);
     let (hits, _) = common::daisy_hits(&phys);
     assert!(hits >= 12, "{hits} of 14 within 0.5 Hz among {phys:?}");

@@ -282,19 +282,9 @@ fn bad_time_data_exits_2_naming_the_problem() {
 
 #[test]
 fn daisy_steel_subframe_walkthrough_finds_the_stable_modes() {
-    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
     let dir = tempfile::tempdir().unwrap();
     let frf = dir.path().join("subframe.csv");
-    let v = json_of(&[
-        "identify",
-        "--from-time",
-        s(&mat),
-        "--inputs",
-        "1,2",
-        "--outputs",
-        "3-30",
-        "--sample-rate",
-        "1024",
+    let v = common::daisy_json(&[
         "--frame",
         "2048",
         "--states",

@@ -3,7 +3,7 @@
 //! and the time-history inputs OKID cannot take.
 
 use crate::common;
-use common::{daisy_hits, data_file, expect_input_error, json_of, match_frequencies, modes_of, s};
+use common::{daisy_hits, daisy_json, expect_input_error, json_of, match_frequencies, modes_of, s};
 use std::path::{Path, PathBuf};
 
 /// A simulated shaker test (10 modes 1.9–20 Hz, 2 shakers, 8 accelerometers, 64 Hz):
@@ -129,22 +129,7 @@ fn noisy_shaker_tests_give_every_mode_and_beat_h1_on_short_records() {
 /// frequencies among the physical modes.
 #[test]
 fn daisy_subframe_through_okid_takes_the_unit_circle_and_finds_the_reference_modes() {
-    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
-    let v = json_of(&[
-        "identify",
-        "--from-time",
-        s(&mat),
-        "--inputs",
-        "1,2",
-        "--outputs",
-        "3-30",
-        "--sample-rate",
-        "1024",
-        "--markov",
-        "okid",
-        "--json",
-        "-q",
-    ]);
+    let v = daisy_json(&["--markov", "okid", "--json", "-q"]);
     let okid = &v["parameters"]["okid"];
     assert_eq!(okid["route"], "unit_circle", "{okid}");
     assert!(okid["observer_radius"].as_f64().unwrap() > 1.5, "{okid}");

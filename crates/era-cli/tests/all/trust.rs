@@ -241,25 +241,8 @@ fn an_exact_receptance_refines_to_its_three_modes_in_either_time_domain() {
 /// reference frequencies within 0.5 Hz of physical modes, and at most 20 physical.
 #[test]
 fn the_daisy_subframe_gives_its_reference_modes_and_few_others() {
-    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
     for frame in ["1024", "4096"] {
-        let v = json_of(&[
-            "identify",
-            "--from-time",
-            s(&mat),
-            "--inputs",
-            "1,2",
-            "--outputs",
-            "3-30",
-            "--sample-rate",
-            "1024",
-            "--frame",
-            frame,
-            "--states",
-            "auto",
-            "--json",
-            "-q",
-        ]);
+        let v = common::daisy_json(&["--frame", frame, "--states", "auto", "--json", "-q"]);
         let phys: Vec<f64> = physical(&v).iter().map(|m| m.0).collect();
         let (hits, _) = common::daisy_hits(&phys);
         assert!(

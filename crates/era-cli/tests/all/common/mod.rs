@@ -107,6 +107,26 @@ pub fn daisy_hits(found: &[f64]) -> (usize, Vec<f64>) {
     (hits, extra)
 }
 
+/// `era identify --from-time` on the DaISy subframe (inputs 1–2, outputs 3–30, 1024 Hz),
+/// then `extra`, as JSON (the run must succeed).
+#[track_caller]
+pub fn daisy_json(extra: &[&str]) -> serde_json::Value {
+    let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
+    let mut args = vec![
+        "identify",
+        "--from-time",
+        s(&mat),
+        "--inputs",
+        "1,2",
+        "--outputs",
+        "3-30",
+        "--sample-rate",
+        "1024",
+    ];
+    args.extend_from_slice(extra);
+    json_of(&args)
+}
+
 /// (frequency Hz, damping ratio) of the modes of a JSON (`model.json`, or the truth
 /// `era simulate ... --json` prints), all of them or the physical ones.
 pub fn modes_of(v: &serde_json::Value, only_physical: bool) -> Vec<(f64, f64)> {
