@@ -58,6 +58,21 @@ def test_h1_route_and_era_dc(era_cli, tmp_path):
         assert all(any(abs(f - t) < 0.02 * t for f in freqs) for t in truth)
 
 
+def test_refined_okid_model_has_uncertainties(era_cli, tmp_path):
+    """refine=True refines OKID's model against the H1 FRFs (weighted by the coherence);
+    weighting='coherence' on the FRF route too, and a bad weighting is a ValueError."""
+    data, truth = shaker(era_cli, tmp_path, 54)
+    found = era.identify_time(data, 64.0, [0, 1], list(range(2, 10)), refine=True)
+    physical = [m for m in found.modes if m.physical]
+    assert len(physical) >= 8
+    assert all(m.frequency_std_hz is not None and m.frequency_std_hz > 0 for m in physical)
+    h1 = era.identify_time(data, 64.0, [0, 1], list(range(2, 10)), markov="frf", frame=512,
+                           refine=True, weighting="coherence")
+    assert any(m.physical for m in h1.modes)
+    with pytest.raises(ValueError, match="weighting"):
+        era.identify_time(data, 64.0, [0, 1], list(range(2, 10)), refine=True, weighting="arx")
+
+
 def test_what_okid_cannot_take_is_a_value_error(era_cli, tmp_path):
     data, _ = shaker(era_cli, tmp_path, 53, duration="20")
     ins, outs = [0, 1], list(range(2, 10))

@@ -269,7 +269,8 @@ pub fn refine_options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
     o.reciprocal = fit.reciprocal;
     o.rank_one = !fit.free_residues;
     o.add_missed = !fit.no_added_modes;
-    if let Some(w) = fit.weighting.clone() {
+    // The coherence's values come with time histories: `identify` sets them.
+    if let Some(crate::args::WeightingArg::Named(w)) = fit.weighting.clone() {
         o.weighting = w;
     }
     if let Some(n) = fit.max_iterations {

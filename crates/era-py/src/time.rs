@@ -31,12 +31,14 @@ use pyo3::prelude::*;
 /// out, and the band is where their coherence is at least 0.5 unless `band` says.
 ///
 /// The preset 'measured' does not refine OKID's model (a refinement against the
-/// Welch FRFs would bring their bias back); `refine=True` refines it. The other
-/// keywords are `identify`'s. OKID's observer is reported in `parameters['okid']`.
+/// Welch FRFs would bring their bias back); `refine=True` refines it, weighted by the
+/// estimate's multiple coherence unless `weighting` ('pair-noise', 'uniform',
+/// 'coherence') says otherwise. The other keywords are `identify`'s. OKID's observer is
+/// reported in `parameters['okid']`.
 #[pyfunction]
 #[pyo3(
-    signature = (data, sample_rate_hz, inputs, outputs, states=None, markov="okid", observer_order=None, markov_samples=None, era_dc=false, frame=None, window="hann", overlap=0.5, estimator="h1", detrend="mean", quantity="acceleration", hankel_factor=Int(5), lowpass=None, time_domain=None, direct_term=None, svd="auto", refine=None, residuals="both", weighting="pair-noise", max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
-    text_signature = "(data, sample_rate_hz, inputs, outputs, states='auto', markov='okid', observer_order='auto', markov_samples=None, era_dc=False, frame=None, window='hann', overlap=0.5, estimator='h1', detrend='mean', quantity='acceleration', hankel_factor=5, lowpass=None, time_domain=None, direct_term=None, svd='auto', refine=None, residuals='both', weighting='pair-noise', max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
+    signature = (data, sample_rate_hz, inputs, outputs, states=None, markov="okid", observer_order=None, markov_samples=None, era_dc=false, frame=None, window="hann", overlap=0.5, estimator="h1", detrend="mean", quantity="acceleration", hankel_factor=Int(5), lowpass=None, time_domain=None, direct_term=None, svd="auto", refine=None, residuals="both", weighting=None, max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
+    text_signature = "(data, sample_rate_hz, inputs, outputs, states='auto', markov='okid', observer_order='auto', markov_samples=None, era_dc=False, frame=None, window='hann', overlap=0.5, estimator='h1', detrend='mean', quantity='acceleration', hankel_factor=5, lowpass=None, time_domain=None, direct_term=None, svd='auto', refine=None, residuals='both', weighting=None, max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn identify_time(
@@ -63,7 +65,7 @@ pub fn identify_time(
     svd: &str,
     refine: Option<bool>,
     residuals: &str,
-    weighting: &str,
+    weighting: Option<&str>,
     max_iterations: Int,
     added_modes: bool,
     band: Option<(f64, f64)>,
@@ -147,10 +149,13 @@ pub fn identify_time(
     let flat = view.as_slice()?;
     let rows = crate::frf::rows;
     let (xs, ys) = (rows(flat, samples, &inputs), rows(flat, samples, &outputs));
-    let mut refine_options = refine_options_of(
+    let refine_options = refine_options_of(
         (outputs.len(), inputs.len()),
         residuals,
-        weighting,
+        match weighting {
+            Some(w) if !w.trim().eq_ignore_ascii_case("coherence") => w,
+            _ => "pair-noise",
+        },
         false,
         added_modes,
         max_iterations,
@@ -205,6 +210,20 @@ pub fn identify_time(
             era_run.domain = route.realization_domain();
             let mut refine_run = refine_options.clone();
             refine_run.band = fit.lines;
+            // The estimate's coherence weights the refinement when asked, and by default
+            // when OKID's model is refined (as the CLI's --weighting coherence).
+            let by_coherence = match weighting {
+                Some(w) => w.trim().eq_ignore_ascii_case("coherence"),
+                None => okid_route,
+            };
+            if by_coherence {
+                let (q, p) = (frf.outputs(), frf.inputs());
+                let weights: Vec<f64> = (0..q)
+                    .flat_map(|i| (0..p).map(move |_| i))
+                    .flat_map(|i| coherence[i].iter().map(|g| g.clamp(0.0, 1.0)))
+                    .collect();
+                refine_run.weighting = era::refine::Weighting::Coherence(weights);
+            }
             let run = Run {
                 data: &frf,
                 supplied: observed.as_ref().map(|o| SuppliedMarkov {
@@ -223,15 +242,14 @@ pub fn identify_time(
                 found,
                 (
                     observed.map(|o| era_io::model_json::okid_json(&o)),
-                    fit.lines,
+                    refine_run,
                 ),
             ))
         })
         .and_then(|r| r)
         .map_err(era_error)
     })?;
-    let (facts, lines) = source_facts;
-    refine_options.band = lines;
+    let (facts, refine_options) = source_facts;
     let mut source = std::collections::BTreeMap::new();
     source.insert("markov".to_string(), serde_json::json!(markov));
     source.insert("frame".to_string(), serde_json::json!(frame));

@@ -177,11 +177,34 @@ pub struct RefineFitArgs {
     /// Levenberg–Marquardt iterations of the refinement at most (default 100).
     #[arg(long, value_name = "N")]
     pub max_iterations: Option<usize>,
-    /// Weights of the refinement's cost: uniform (every pair and line alike) or
-    /// pair-noise (the default: each pair by the inverse of its noise variance, estimated
-    /// from a first uniform fit's residual).
-    #[arg(long, value_parser = named::<Weighting>(), value_name = "uniform|pair-noise")]
-    pub weighting: Option<Weighting>,
+    /// Weights of the refinement's cost: uniform (every pair and line alike), pair-noise
+    /// (the default: each pair by the inverse of its noise variance, estimated from a
+    /// first uniform fit's residual), or coherence (with --from-time: each line by the
+    /// estimate's multiple coherence; the default when --markov okid refines).
+    #[arg(long, value_parser = parse_weighting, value_name = "uniform|pair-noise|coherence")]
+    pub weighting: Option<WeightingArg>,
+}
+
+/// `--weighting`: one of the core's named weightings, or the estimate's coherence (its
+/// values come with the data).
+#[derive(Debug, Clone, PartialEq)]
+pub enum WeightingArg {
+    /// `uniform` or `pair-noise`.
+    Named(Weighting),
+    /// `coherence`.
+    Coherence,
+}
+
+fn parse_weighting(text: &str) -> Result<WeightingArg, String> {
+    if text.trim().eq_ignore_ascii_case("coherence") {
+        return Ok(WeightingArg::Coherence);
+    }
+    text.parse::<Weighting>()
+        .map(WeightingArg::Named)
+        .map_err(|e| {
+            let names: Vec<String> = e.expected.iter().map(|n| format!("'{n}'")).collect();
+            format!("'{text}': expected {} or 'coherence'", names.join(", "))
+        })
 }
 
 /// How the figures draw the phase.

@@ -100,6 +100,13 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     let fit = fit_lines(a, frf, source.coherence.as_ref(), &route, &human)?;
     let mut refine_options = refine_options;
     refine_options.band = fit.lines;
+    coherence_weighting(
+        a,
+        &route,
+        source.coherence.as_ref(),
+        frf,
+        &mut refine_options,
+    )?;
     let scan_options = {
         let mut o = ScanOptions::default();
         o.orders = scan_orders(a)?;
@@ -878,4 +885,60 @@ fn okid_json(o: &Observed, model: &mut ModelJson) {
     model
         .parameters
         .insert("okid".into(), era_io::model_json::okid_json(&o.okid));
+}
+
+/// `--weighting coherence`, and the refinement's default when it refines OKID's model:
+/// each line of a pair weighted by its output's multiple coherence from the estimate
+/// (the lines where the test carried information count, the rest hardly).
+fn coherence_weighting(
+    a: &IdentifyArgs,
+    route: &Route,
+    coherence: Option<&InputCoherence>,
+    frf: &era::FrfData,
+    options: &mut era::refine::RefineOptions,
+) -> anyhow::Result<()> {
+    use crate::args::WeightingArg;
+    let asked = a.refine_fit.weighting == Some(WeightingArg::Coherence);
+    let okid_default = a.refine_fit.weighting.is_none()
+        && a.markov == era::sources::MarkovSource::Okid
+        && route.refine;
+    if !(asked || okid_default) {
+        return Ok(());
+    }
+    // Estimated here, or the coherence file `era frf` wrote beside the FRFs.
+    let companion;
+    let c = match coherence {
+        Some(c) => c,
+        None => match InputCoherence::companion(&a.file, frf) {
+            Ok(Some(found)) => {
+                companion = found;
+                &companion
+            }
+            Ok(None) => {
+                return crate::error::usage(format!(
+                    "--weighting coherence weights by the estimate's coherence: use it with --from-time, or keep {} beside the FRFs",
+                    crate::output::coherence_path(&a.file).display()
+                ))
+            }
+            Err(why) => return crate::error::usage(format!("--weighting coherence: {why}")),
+        },
+    };
+    let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+    // One curve per output (multiple coherence, for every input) or per pair.
+    let per_output = c.curves.len() == q;
+    if !(per_output || c.curves.len() == q * p) || c.curves.iter().any(|(_, v)| v.len() != lines) {
+        return crate::error::usage(format!(
+            "--weighting coherence: the coherence ({} curves) does not match the FRFs ({q} outputs x {p} inputs x {lines} lines)",
+            c.curves.len()
+        ));
+    }
+    let mut weights = Vec::with_capacity(q * p * lines);
+    for i in 0..q {
+        for j in 0..p {
+            let curve = &c.curves[if per_output { i } else { i * p + j }].1;
+            weights.extend(curve.iter().map(|g| g.clamp(0.0, 1.0)));
+        }
+    }
+    options.weighting = era::refine::Weighting::Coherence(weights);
+    Ok(())
 }

@@ -122,6 +122,11 @@ fn count(model: &ModelJson, key: &str) -> usize {
 pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
     let settings = Settings::from(&a.common);
     let human = Human::new(&settings);
+    if a.fit.weighting == Some(crate::args::WeightingArg::Coherence) {
+        return crate::error::usage(
+            "--weighting coherence weights by an estimate's coherence, which era refine does not have: use it with era identify --from-time",
+        );
+    }
     let ropts = crate::config::refine_options(&a.fit)?;
     let model =
         ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;

@@ -162,6 +162,54 @@ fn era_dc_realizes_okid_markov_parameters() {
     assert_eq!(auto["parameters"]["realizer"], "era-dc");
 }
 
+/// Refinement of OKID's model, when asked, fits the H1 FRFs weighted by the estimate's
+/// multiple coherence (or as `--weighting` says); coherence weighting needs an estimate.
+#[test]
+fn a_refined_okid_model_is_weighted_by_the_coherence() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, truth) = shaker(dir.path(), 48, "0.02", "60", "white");
+    let v = identify(&file, &["--markov", "okid", "--refine"]);
+    assert_eq!(v["parameters"]["weighting"], "coherence");
+    let (found, _, _, _) = score(&truth, &physical(&v));
+    assert!(found >= 8, "{:?}", physical(&v));
+    assert!(v["modes"][0]["frequency_std_hz"].as_f64().is_some());
+    let v = identify(
+        &file,
+        &["--markov", "okid", "--refine", "--weighting", "pair-noise"],
+    );
+    assert_eq!(v["parameters"]["weighting"], "pair-noise");
+    let frf = dir.path().join("frf.csv");
+    json_of(&[
+        "frf",
+        s(&file),
+        "--inputs",
+        "1-2",
+        "--outputs",
+        "3-10",
+        "--out",
+        s(&frf),
+        "--json",
+        "-q",
+    ]);
+    // An FRF file with era frf's coherence beside it can be weighted by it; without, the
+    // weighting is refused by name.
+    let v = json_of(&[
+        "identify",
+        s(&frf),
+        "--refine",
+        "--weighting",
+        "coherence",
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(v["parameters"]["weighting"], "coherence");
+    std::fs::remove_file(dir.path().join("frf.coherence.csv")).unwrap();
+    expect_input_error(
+        &["identify", s(&frf), "--refine", "--weighting", "coherence"],
+        "--weighting coherence",
+    );
+}
+
 /// A shaker record rewritten by `edit(row, fields)` on every data row.
 fn edited(src: &Path, dst: &Path, edit: impl Fn(usize, &mut Vec<String>)) {
     let text = std::fs::read_to_string(src).unwrap();
