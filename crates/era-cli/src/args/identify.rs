@@ -18,14 +18,20 @@ pub enum StatesArg {
     Auto,
 }
 
-fn parse_states(text: &str) -> Result<StatesArg, String> {
+/// `N` as `Some(N)`, `auto` as `None`; anything else is neither a number of `what` nor
+/// `auto`.
+fn count_or_auto(text: &str, what: &str) -> Result<Option<usize>, String> {
     if text.trim().eq_ignore_ascii_case("auto") {
-        return Ok(StatesArg::Auto);
+        return Ok(None);
     }
     text.trim()
         .parse::<usize>()
-        .map(StatesArg::Fixed)
-        .map_err(|_| format!("'{text}' is neither a number of states nor 'auto'"))
+        .map(Some)
+        .map_err(|_| format!("'{text}' is neither a number of {what} nor 'auto'"))
+}
+
+fn parse_states(text: &str) -> Result<StatesArg, String> {
+    Ok(count_or_auto(text, "states")?.map_or(StatesArg::Auto, StatesArg::Fixed))
 }
 
 /// `--observer-order N` or `--observer-order auto`.
@@ -38,13 +44,7 @@ pub enum ObserverOrderArg {
 }
 
 fn parse_observer_order(text: &str) -> Result<ObserverOrderArg, String> {
-    if text.trim().eq_ignore_ascii_case("auto") {
-        return Ok(ObserverOrderArg::Auto);
-    }
-    text.trim()
-        .parse::<usize>()
-        .map(ObserverOrderArg::Fixed)
-        .map_err(|_| format!("'{text}' is neither a number of lags nor 'auto'"))
+    Ok(count_or_auto(text, "lags")?.map_or(ObserverOrderArg::Auto, ObserverOrderArg::Fixed))
 }
 
 /// What `era identify --help` shows before the flags.
