@@ -237,11 +237,12 @@ pub fn window_corrected(
 pub fn lag_window(
     metadata: &std::collections::BTreeMap<String, String>,
 ) -> Option<(era::sources::frf::LagWindow, String)> {
-    use era::frf::estimate::Window;
-    // The lag window is H1's bias (an output-noise estimator); H2 and Hv differ.
-    if metadata.get("estimator").map(|e| e.trim()) != Some("h1") {
-        return None;
-    }
+    use era::frf::estimate::{Estimator, Window};
+    // The words `era frf` writes; a file that says anything else is not corrected.
+    let estimator = match metadata.get("estimator")?.trim() {
+        "h1" => Estimator::H1,
+        _ => return None,
+    };
     let window = match metadata.get("window")?.trim() {
         "hann" => Window::Hann,
         "flattop" | "flat-top" => Window::FlatTop,
@@ -249,7 +250,7 @@ pub fn lag_window(
     };
     let frame: usize = metadata.get("frame")?.trim().parse().ok()?;
     let rate: f64 = metadata.get("sample_rate_hz")?.trim().parse().ok()?;
-    let lag = era::sources::frf::LagWindow::new(window, frame, rate).ok()?;
+    let lag = era::sources::frf::LagWindow::of_estimate(estimator, window, frame, rate).ok()??;
     Some((
         lag,
         format!(

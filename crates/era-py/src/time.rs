@@ -8,7 +8,7 @@ use crate::model::{
     PyIdentification, Run,
 };
 use crate::{contiguous, era_error, guarded, value_error, Int};
-use era::frf::estimate::{estimate, Estimator, Window};
+use era::frf::estimate::estimate;
 use era::identify::{EraOptions, ScanOptions, SuppliedMarkov};
 use era::params::Naming;
 use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
@@ -169,18 +169,22 @@ pub fn identify_time(
     let (found, source_facts) = guarded(py, || {
         era::parallel::with_threads(Naming::Keyword, threads, || -> era::Result<_> {
             let estimated = estimate(&xs, &ys, &welch, estimator, tag)?;
-            let mut frf = estimated.frf.clone();
-            // H1's lag window (a tapered window's bias), as the CLI divides it out.
-            if route.window_correction
-                && estimator == Estimator::H1
-                && window != Window::Rectangular
-            {
-                let lag = era::sources::frf::LagWindow::new(window, frame, sample_rate_hz)?;
-                frf = lag.correct_frf(&frf)?;
-            }
-            let coherence: Vec<Vec<f64>> = (0..frf.outputs())
+            let coherence: Vec<Vec<f64>> = (0..estimated.frf.outputs())
                 .map(|i| estimated.multiple(i).to_vec())
                 .collect();
+            let mut frf = estimated.frf;
+            // H1's lag window (a tapered window's bias), as the CLI divides it out.
+            if route.window_correction {
+                let lag = era::sources::frf::LagWindow::of_estimate(
+                    estimator,
+                    window,
+                    frame,
+                    sample_rate_hz,
+                )?;
+                if let Some(lag) = lag {
+                    frf = lag.correct_frf(&frf)?;
+                }
+            }
             let band = band.or_else(|| {
                 route
                     .coherence_band
@@ -217,12 +221,14 @@ pub fn identify_time(
                 None => okid_route,
             };
             if by_coherence {
-                let (q, p) = (frf.outputs(), frf.inputs());
-                let weights: Vec<f64> = (0..q)
-                    .flat_map(|i| (0..p).map(move |_| i))
-                    .flat_map(|i| coherence[i].iter().map(|g| g.clamp(0.0, 1.0)))
-                    .collect();
-                refine_run.weighting = era::refine::Weighting::Coherence(weights);
+                let curves: Vec<&[f64]> = coherence.iter().map(Vec::as_slice).collect();
+                refine_run.weighting =
+                    era::refine::Weighting::coherence_of(&curves, frf.outputs(), frf.inputs())
+                        .ok_or_else(|| {
+                            era::EraError::Numerical(
+                                "the estimate's coherence does not match its FRFs".into(),
+                            )
+                        })?;
             }
             let run = Run {
                 data: &frf,

@@ -266,7 +266,7 @@ pub fn estimate_from_time(
     let spinner = crate::output::progress::spinner(settings);
     let mut records = read_records(paths, inputs, outputs, welch, est, keep_records, &spinner)?;
     let mut estimate_s = records.estimate_s;
-    let welch = &records.welch.clone();
+    let welch = &records.welch;
     let Some(first) = records.first else {
         return crate::error::usage("no time-history file given");
     };

@@ -67,11 +67,12 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         _ => None,
     };
     let clock = Instant::now();
-    let source = read_source(a, frf_outputs, &human, &settings)?;
+    let mut source = read_source(a, frf_outputs, &human, &settings)?;
     let read_s = clock.elapsed().as_secs_f64() - source.estimate_s.unwrap_or(0.0);
     let frame_run = source.frame;
-    let observed = match &source.records {
-        Some(records) => Some(observe(a, records, &settings)?),
+    // The records' copies are OKID's alone: they go once it has run.
+    let observed = match source.records.take() {
+        Some(records) => Some(observe(a, &records, &settings)?),
         None => None,
     };
     let supplied = observed.as_ref().map(Observed::supplied);
@@ -924,21 +925,16 @@ fn coherence_weighting(
         },
     };
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
+    let curves: Vec<&[f64]> = c.curves.iter().map(|(_, v)| v.as_slice()).collect();
     // One curve per output (multiple coherence, for every input) or per pair.
-    let per_output = c.curves.len() == q;
-    if !(per_output || c.curves.len() == q * p) || c.curves.iter().any(|(_, v)| v.len() != lines) {
+    let weighting = era::refine::Weighting::coherence_of(&curves, q, p)
+        .filter(|_| curves.iter().all(|v| v.len() == lines));
+    let Some(weighting) = weighting else {
         return crate::error::usage(format!(
             "--weighting coherence: the coherence ({} curves) does not match the FRFs ({q} outputs x {p} inputs x {lines} lines)",
             c.curves.len()
         ));
-    }
-    let mut weights = Vec::with_capacity(q * p * lines);
-    for i in 0..q {
-        for j in 0..p {
-            let curve = &c.curves[if per_output { i } else { i * p + j }].1;
-            weights.extend(curve.iter().map(|g| g.clamp(0.0, 1.0)));
-        }
-    }
-    options.weighting = era::refine::Weighting::Coherence(weights);
+    };
+    options.weighting = weighting;
     Ok(())
 }

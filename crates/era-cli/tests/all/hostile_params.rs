@@ -485,14 +485,7 @@ fn friction_tune_work_is_bounded_and_its_result_finite() {
         ("--dead-zone", "1e308"),
         ("--coulomb-force", "1e300"),
     ] {
-        let mut args = vec![
-            "friction",
-            "tune",
-            "--stiffness",
-            "1",
-            "--coulomb-force",
-            "0.05",
-        ];
+        let mut args = base.to_vec();
         let own = args.iter().position(|a| *a == flag);
         if let Some(at) = own {
             args.drain(at..at + 2);

@@ -425,8 +425,6 @@ mod tests {
         );
     }
 
-    /// The paper's other sizes (few rows, long sums, a correlation Hankel of several
-    /// lags) realize exact data exactly too.
     /// The factorization (two thin SVDs, `R(0)` never formed) realizes what the
     /// correlations formed and factored whole do, at every order it keeps, on noisy data:
     /// the same transfer function (Markov blocks) and the same singular values.
@@ -481,6 +479,8 @@ mod tests {
         assert!(factor_dc(&markov, 1.0, &DcShape { xi: 1, ..shape }, 8, 5).is_err());
     }
 
+    /// The paper's other sizes (few rows, long sums, a correlation Hankel of several
+    /// lags) realize exact data exactly too.
     #[test]
     fn every_shape_is_exact_on_exact_data() {
         let (truth, model) = structure(3, 2, 4, 5);

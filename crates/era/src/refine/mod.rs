@@ -888,6 +888,28 @@ crate::names::named!(display Residuals, "residuals", [
     Residuals::Both => "both",
 ]);
 
+impl Weighting {
+    /// [`Weighting::Coherence`] from an estimate's coherence curves of one length: one per
+    /// output (multiple coherence, for every input of that output) or one per pair,
+    /// output by output, clamped to [0, 1]. `None` when the curves are neither.
+    pub fn coherence_of(curves: &[&[f64]], outputs: usize, inputs: usize) -> Option<Self> {
+        let per_output = curves.len() == outputs;
+        if !(per_output || curves.len() == outputs * inputs)
+            || curves.windows(2).any(|w| w[0].len() != w[1].len())
+        {
+            return None;
+        }
+        let mut weights = Vec::with_capacity(outputs * inputs * curves.first()?.len());
+        for i in 0..outputs {
+            for j in 0..inputs {
+                let curve = curves[if per_output { i } else { i * inputs + j }];
+                weights.extend(curve.iter().map(|g| g.clamp(0.0, 1.0)));
+            }
+        }
+        Some(Weighting::Coherence(weights))
+    }
+}
+
 crate::names::named!(display Weighting, "weighting", [
     Weighting::PairNoise => "pair-noise",
     Weighting::Uniform => "uniform",

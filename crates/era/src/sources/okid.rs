@@ -257,16 +257,22 @@ struct Scaled<'a> {
     output_scale: Vec<f64>,
 }
 
+impl<'a> Record<'a> {
+    /// Channel `c`, inputs first.
+    fn channel(&self, c: usize) -> &'a [f64] {
+        let r = self.inputs.len();
+        if c < r {
+            self.inputs[c]
+        } else {
+            self.outputs[c - r]
+        }
+    }
+}
+
 impl Scaled<'_> {
     /// Channel `c` (inputs first) of record `n`.
     fn channel(&self, n: usize, c: usize) -> &[f64] {
-        let rec = &self.records[n];
-        let r = rec.inputs.len();
-        if c < r {
-            rec.inputs[c]
-        } else {
-            rec.outputs[c - r]
-        }
+        self.records[n].channel(c)
     }
 
     fn scale(&self, c: usize) -> f64 {
@@ -285,19 +291,12 @@ impl Scaled<'_> {
 }
 
 fn scale_records<'a>(records: &'a [Record<'a>], r: usize, q: usize) -> Result<Scaled<'a>> {
-    let channel = |rec: &'a Record<'a>, c: usize| -> &'a [f64] {
-        if c < r {
-            rec.inputs[c]
-        } else {
-            rec.outputs[c - r]
-        }
-    };
     let means: Vec<Vec<f64>> = records
         .iter()
         .map(|rec| {
             (0..r + q)
                 .map(|c| {
-                    let ch = channel(rec, c);
+                    let ch = rec.channel(c);
                     ch.iter().sum::<f64>() / ch.len().max(1) as f64
                 })
                 .collect()
@@ -310,7 +309,7 @@ fn scale_records<'a>(records: &'a [Record<'a>], r: usize, q: usize) -> Result<Sc
             records
                 .iter()
                 .zip(&means)
-                .flat_map(move |(rec, m)| channel(rec, c).iter().map(move |v| v - m[c]))
+                .flat_map(move |(rec, m)| rec.channel(c).iter().map(move |v| v - m[c]))
         };
         // Scaled by the largest magnitude first: the sum of squares cannot overflow.
         let peak = centred().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -445,20 +444,17 @@ fn data_triangle(
     let cols = regressors(r, q, p) + q;
     let mut spans: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
     let naive = blocks == Blocks::Whole;
-    let step = match blocks {
-        Blocks::Whole | Blocks::Budget => block_rows(cols),
-        #[cfg(test)]
-        Blocks::Rows(n) => n.max(1),
-    };
     for n in 0..data.records.len() {
         let len = data.len(n);
         let step = match blocks {
-            Blocks::Budget => balanced_step(len.saturating_sub(first), step),
-            _ => step,
+            Blocks::Whole => len.max(1),
+            Blocks::Budget => balanced_step(len.saturating_sub(first), block_rows(cols)),
+            #[cfg(test)]
+            Blocks::Rows(rows) => rows.max(1),
         };
         let mut k = first;
         while k < len {
-            let end = if naive { len } else { (k + step).min(len) };
+            let end = (k + step).min(len);
             spans.push((n, k..end));
             k = end;
         }

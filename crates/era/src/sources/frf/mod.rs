@@ -335,6 +335,26 @@ pub struct LagWindow {
 pub const LAG_CORRECTION_FLOOR: f64 = 0.2;
 
 impl LagWindow {
+    /// The lag window to divide out of an estimate made by `estimator` with `window` over
+    /// frames of `frame` samples at `sample_rate_hz`: H1's with a tapered window, `None`
+    /// for a rectangular window (transients need no correction) or another estimator
+    /// (the lag window is H1's bias, an output-noise estimator's).
+    ///
+    /// # Errors
+    /// As [`LagWindow::new`].
+    pub fn of_estimate(
+        estimator: crate::frf::estimate::Estimator,
+        window: crate::frf::estimate::Window,
+        frame: usize,
+        sample_rate_hz: f64,
+    ) -> Result<Option<Self>> {
+        use crate::frf::estimate::{Estimator, Window};
+        if estimator != Estimator::H1 || window == Window::Rectangular {
+            return Ok(None);
+        }
+        Self::new(window, frame, sample_rate_hz).map(Some)
+    }
+
     /// The lag window of `window` over frames of `frame` samples at `sample_rate_hz`
     /// (the autocorrelation by FFT, zero-padded to `2N`).
     ///
