@@ -436,6 +436,9 @@ pub enum EraError {
     /// A dense decomposition failed to converge.
     #[error("numerical failure: {0}")]
     Numerical(String),
+    /// The caller stopped the call ([`crate::cancel`]): Ctrl-C in Python.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 impl EraError {
@@ -492,9 +495,9 @@ impl EraError {
     }
 
     /// True for problems with the caller's data or parameters (exit code 2 in the CLI),
-    /// false for internal numerical failures (exit code 1).
+    /// false for internal numerical failures (exit code 1) and an interrupted call.
     pub fn is_input_error(&self) -> bool {
-        !matches!(self, EraError::Numerical(_))
+        !matches!(self, EraError::Numerical(_) | EraError::Interrupted)
     }
 }
 

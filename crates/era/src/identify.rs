@@ -373,6 +373,7 @@ fn front(
     };
 
     observer(Stage::Preprocess);
+    crate::cancel::check()?;
     let pre = preprocess(
         working,
         options.integrations,
@@ -386,6 +387,7 @@ fn front(
     clock = Instant::now();
 
     observer(Stage::Markov);
+    crate::cancel::check()?;
     let mut series = match path {
         Path::Fast => impulse_responses(&pre.frf)?,
         Path::Naive => impulse_responses_naive(&pre.frf),
@@ -496,6 +498,7 @@ fn run(
         ..RealizeOptions::new(options.states, options.hankel_factor)
     };
     observer(Stage::HankelSvd);
+    crate::cancel::check()?;
     let mut realization = match (path, options.realizer) {
         (_, Realizer::EraDc) => crate::pipeline::realize_dc::realize_dc(
             &f.markov,
@@ -561,6 +564,7 @@ fn back(
         clock = Instant::now();
     };
     observer(Stage::Realize);
+    crate::cancel::check()?;
     let model = match options.domain {
         ModelDomain::Discrete => discrete.clone(),
         ModelDomain::Continuous => discrete.d2c()?,
@@ -598,11 +602,13 @@ fn assess(
         clock = Instant::now();
     };
     observer(Stage::Modes);
+    crate::cancel::check()?;
     let form = ModalForm::new(&model)?;
     let modal = modal_parameters_of(&form, model.domain);
     lap(&mut timings.modes);
 
     observer(Stage::Fit);
+    crate::cancel::check()?;
     let processed = integrate(frf, options.integrations)?;
     let measured = zero_leading_lines(&processed, options.zero_lines);
     let response = match path {
@@ -964,6 +970,7 @@ fn scan_front(
     .max(1);
     let clock = Instant::now();
     observer(Stage::HankelSvd);
+    crate::cancel::check()?;
     let factorization = match options.realizer {
         Realizer::Era => Factorization::thesis(
             &f.markov,

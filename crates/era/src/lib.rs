@@ -45,6 +45,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod cancel;
 pub mod error;
 pub mod frf;
 pub mod friction;

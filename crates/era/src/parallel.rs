@@ -51,7 +51,12 @@ pub fn with_threads<R: Send>(
         .num_threads(n)
         .build()
         .map_err(|e| EraError::Numerical(format!("cannot start {n} threads: {e}")))?;
-    Ok(pool.install(work))
+    // The call's cancel token follows it into the pool's thread.
+    let token = crate::cancel::current();
+    Ok(pool.install(|| match token {
+        Some(t) => t.run(work),
+        None => work(),
+    }))
 }
 
 #[cfg(test)]

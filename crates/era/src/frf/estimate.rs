@@ -480,6 +480,7 @@ pub fn spectra(
 
     let mut first = 0;
     while first < frames {
+        crate::cancel::check()?;
         let batch = BATCH_FRAMES.min(frames - first);
         // spectra[c][b][line] for this batch.
         let transformed: Vec<Vec<Complex64>> = channels

@@ -410,6 +410,7 @@ pub fn truncated_svd(
     };
     let columns = |passes: usize| before.1 + (passes - before.0) * k;
     loop {
+        crate::cancel::check()?;
         if step.residual <= options.tolerance {
             return Ok(TruncatedSvd {
                 u: step.u,
@@ -768,6 +769,7 @@ fn deep_krylov(
     let mut next_check = k.max(options.rank + 2 * b);
     let mut last: Option<(usize, f64)> = None;
     loop {
+        crate::cancel::check()?;
         pass += 1;
         let w = u.ncols();
         // Left: H V_j = U C + U_j R.

@@ -321,6 +321,7 @@ pub fn scan(
     let mut poles: Vec<ScanPole> = Vec::new();
     let mut previous: Vec<ScanPole> = Vec::new();
     for (k, &n) in wanted.iter().enumerate() {
+        crate::cancel::check()?;
         if n > factorization.rank() {
             skipped.push(n);
             progress(k + 1, wanted.len());

@@ -396,16 +396,20 @@ fn realize_shapes(
     )?;
     let clock = Instant::now();
     let h0 = hankel::build(markov, h0_shape)?;
-    let svd = h0
-        .thin_svd()
-        .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
-    let singular_values: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
-    check_rank(&singular_values, h0.nrows(), h0.ncols(), options.states)?;
+    let hankel_size = (h0.nrows(), h0.ncols());
+    let svd = crate::linalg::dense::thin_svd(h0, "H0")?;
+    let singular_values = svd.s;
+    check_rank(
+        &singular_values,
+        hankel_size.0,
+        hankel_size.1,
+        options.states,
+    )?;
     let hankel_svd_seconds = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     let n = options.states;
-    let un = svd.U().subcols(0, n);
-    let vn = svd.V().subcols(0, n);
+    let un = svd.u.subcols(0, n);
+    let vn = svd.v.subcols(0, n);
     let h1 = hankel::build(markov, h1_shape)?;
     let ut_h1_v = un.transpose() * (&h1 * vn);
     let (a, b, c, d) = balanced_matrices(&singular_values[..n], un, vn, &ut_h1_v, markov, options);
@@ -419,7 +423,7 @@ fn realize_shapes(
     Ok(Realization {
         model: StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s }),
         singular_values,
-        hankel_size: (h0.nrows(), h0.ncols()),
+        hankel_size,
         warnings,
         hankel_svd_seconds,
         products_seconds: clock.elapsed().as_secs_f64(),
@@ -798,25 +802,13 @@ impl Factorization {
         } else {
             check_dense_svd(rows, cols)?;
             let h0 = hankel::build(markov, h0_shape)?;
-            let svd = h0
-                .thin_svd()
-                .map_err(|e| EraError::Numerical(format!("SVD of H0: {e:?}")))?;
-            drop(h0);
-            let s: Vec<f64> = (0..svd.S().dim()).map(|k| svd.S()[k]).collect();
+            let svd = crate::linalg::dense::thin_svd(h0, "H0")?;
             let h1 = hankel::build(markov, h1_shape)?;
-            let (un, vn) = (
-                svd.U().subcols(0, max_states),
-                svd.V().subcols(0, max_states),
-            );
-            let ut_h1_v = un.transpose() * (&h1 * vn);
-            (
-                svd.U().to_owned(),
-                s,
-                svd.V().to_owned(),
-                ut_h1_v,
-                SvdPath::Dense,
-                None,
-            )
+            let ut_h1_v = {
+                let (un, vn) = (svd.u.subcols(0, max_states), svd.v.subcols(0, max_states));
+                un.transpose() * (&h1 * vn)
+            };
+            (svd.u, svd.s, svd.v, ut_h1_v, SvdPath::Dense, None)
         };
         let (rank, _) = numerical_rank(&s, rows, cols);
         let (q, p) = (markov.outputs(), markov.inputs());

@@ -308,6 +308,7 @@ fn settle(
     dropped: &mut Vec<(usize, String)>,
 ) -> Result<Evaluation> {
     loop {
+        crate::cancel::check()?;
         if state.ids.is_empty() {
             return Err(invalid(
                 "start poles",

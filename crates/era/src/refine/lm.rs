@@ -46,6 +46,7 @@ pub(crate) fn descend(
 ) -> Result<(usize, bool)> {
     let mut iterations = 0;
     while iterations < max_iterations {
+        crate::cancel::check()?;
         if problem.exact() {
             return Ok((iterations, true));
         }

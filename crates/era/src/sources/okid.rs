@@ -440,7 +440,7 @@ fn data_triangle(
     p: usize,
     first: usize,
     blocks: Blocks,
-) -> (Mat<f64>, usize) {
+) -> Result<(Mat<f64>, usize)> {
     let cols = regressors(r, q, p) + q;
     let mut spans: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
     let naive = blocks == Blocks::Whole;
@@ -472,23 +472,26 @@ fn data_triangle(
             }
             at += b.nrows();
         }
-        return (whole.qr().thin_R().to_owned(), rows);
+        return Ok((whole.qr().thin_R().to_owned(), rows));
     }
     // Fixed groups of consecutive blocks (independent of the thread count), each reduced
     // in order, then merged in order.
     const GROUPS: usize = 8;
     let per_group = spans.len().div_ceil(GROUPS).max(1);
+    // rayon's workers do not see the caller's cancel token: it is handed to them.
+    let token = crate::cancel::current();
     let partial: Vec<Mat<f64>> = spans
         .par_chunks(per_group)
         .map(|group| {
             let mut upper = None;
             for (n, s) in group {
+                crate::cancel::check_token(&token)?;
                 let b = data_rows(data, *n, r, q, p, s.clone());
                 upper = Some(stack_qr(upper, b));
             }
-            upper.expect("a group has a block")
+            Ok(upper.expect("a group has a block"))
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let mut upper: Option<Mat<f64>> = None;
     for t in partial {
         upper = Some(match upper {
@@ -496,7 +499,7 @@ fn data_triangle(
             Some(u) => stack_qr(Some(u), t),
         });
     }
-    (upper.expect("at least one block"), rows)
+    Ok((upper.expect("at least one block"), rows))
 }
 
 /// `ln det(S/N + floor·I)` for a symmetric positive semi-definite `S`.
@@ -838,7 +841,7 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
         }
     };
     let data = scale_records(records, r, q)?;
-    let (tri, rows) = data_triangle(&data, r, q, p_max, p_max, blocks);
+    let (tri, rows) = data_triangle(&data, r, q, p_max, p_max, blocks)?;
     // Dependent inputs: the current inputs come first, so their diagonal says whether
     // input j adds anything to inputs 1..j−1.
     let norm = (rows as f64).sqrt();
@@ -1197,7 +1200,7 @@ mod tests {
             outputs: &yi,
         }];
         let data = scale_records(&records, 1, 2).unwrap();
-        let (tri, _) = data_triangle(&data, 1, 2, 10, 10, Blocks::Budget);
+        let (tri, _) = data_triangle(&data, 1, 2, 10, 10, Blocks::Budget).unwrap();
         let (theta, _) = coefficients(&tri, 1, 2, 10, 10).unwrap();
         let obs = unpack(&theta, 1, 2, 10);
         assert!(observer_radius(&obs).unwrap() < 0.99);
