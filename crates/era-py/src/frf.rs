@@ -62,11 +62,23 @@ impl PyFrfData {
         quantity: &str,
     ) -> PyResult<Self> {
         let q_tag = crate::frf::quantity("quantity", quantity)?;
-        let f = contiguous::<f64, Ix1>(frequency_hz, "float64", 1, "frequency_hz", "(lines,)")?;
+        let f = contiguous::<f64, Ix1>(
+            frequency_hz,
+            "float64",
+            &[&era::limits::LINES],
+            None,
+            "frequency_hz",
+            "(lines,)",
+        )?;
         let v = contiguous::<Complex64, Ix3>(
             values,
             "complex128",
-            3,
+            &[
+                &era::limits::CHANNELS,
+                &era::limits::CHANNELS,
+                &era::limits::LINES,
+            ],
+            Some(&era::limits::VALUES),
             "values",
             "(outputs, inputs, lines)",
         )?;
@@ -397,7 +409,14 @@ pub fn estimate_frf<'py>(
         quantity,
     )?;
     let frame = frame.size("frame")?;
-    let array = contiguous::<f64, Ix2>(data, "float64", 2, "data", "(channels, samples)")?;
+    let array = contiguous::<f64, Ix2>(
+        data,
+        "float64",
+        &[&era::limits::CHANNELS, &era::limits::SAMPLES],
+        None,
+        "data",
+        "(channels, samples)",
+    )?;
     let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
     let inputs = channels("inputs", &inputs, n_channels)?;
     let outputs = channels("outputs", &outputs, n_channels)?;

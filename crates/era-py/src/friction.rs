@@ -19,8 +19,16 @@ pub fn friction_estimate<'py>(
     stiffness: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     era::friction::check_stiffness(Naming::Keyword, stiffness).map_err(crate::era_error)?;
-    let t = contiguous::<f64, Ix1>(time_s, "float64", 1, "time_s", "(samples,)")?;
-    let v = contiguous::<f64, Ix1>(velocity, "float64", 1, "velocity", "(samples,)")?;
+    let samples = [&era::limits::SAMPLES];
+    let t = contiguous::<f64, Ix1>(time_s, "float64", &samples, None, "time_s", "(samples,)")?;
+    let v = contiguous::<f64, Ix1>(
+        velocity,
+        "float64",
+        &samples,
+        None,
+        "velocity",
+        "(samples,)",
+    )?;
     let (t, v) = (t.readonly(), v.readonly());
     let (t, v) = (t.as_slice()?, v.as_slice()?);
     let found = guarded(py, || {

@@ -87,25 +87,74 @@ pub(crate) fn value_error<T>(message: impl Into<String>) -> PyResult<T> {
     Err(PyValueError::new_err(message.into()))
 }
 
-/// Runs `work` with the GIL released, turning a panic into a `RuntimeError` (a panic is
-/// a bug of ours, never an answer to bad input; it must not reach Python as pyo3's
+/// How often a waiting call looks for Ctrl-C (Python's signal handlers run only on the
+/// main thread, with the GIL, so the waiting thread polls them).
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Stack of the thread a call runs on: the main thread's usual 8 MB, not a spawned
+/// thread's 2 MB.
+const WORKER_STACK: usize = 8 << 20;
+
+/// Runs `work` with the GIL released, on a thread of its own under a cancel token
+/// ([`era::cancel`]), while the calling thread waits and runs Python's signal handlers
+/// every [`SIGNAL_POLL`]. Ctrl-C (any exception a handler raises) cancels the token;
+/// the core stops at its next check, the worker is joined, and the exception reaches
+/// the caller with nothing left running. A panic becomes a `RuntimeError` (a panic is a
+/// bug of ours, never an answer to bad input; it must not reach Python as pyo3's
 /// `PanicException`, which is not an `Exception`).
 pub(crate) fn guarded<T: Send>(
     py: Python<'_>,
     work: impl FnOnce() -> PyResult<T> + Send,
 ) -> PyResult<T> {
-    py.allow_threads(|| {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)).unwrap_or_else(|payload| {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
-            Err(PyRuntimeError::new_err(format!(
-                "era: internal error (please report it): {what}"
-            )))
-        })
+    let token = era::cancel::Cancel::new();
+    let token = &token;
+    // Set by the worker when it is done; the condition variable wakes the waiter.
+    let finished = &(std::sync::Mutex::new(false), std::sync::Condvar::new());
+    std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .name("era-call".into())
+            .stack_size(WORKER_STACK)
+            .spawn_scoped(scope, move || {
+                let result =
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| token.run(work)))
+                        .unwrap_or_else(|payload| Err(internal_error(payload.as_ref())));
+                let (flag, wake) = finished;
+                *flag.lock().unwrap_or_else(|e| e.into_inner()) = true;
+                wake.notify_all();
+                result
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("era: cannot start a thread: {e}")))?;
+        loop {
+            let ready = py.allow_threads(|| {
+                let (flag, wake) = finished;
+                let guard = flag.lock().unwrap_or_else(|e| e.into_inner());
+                let (guard, _) = wake
+                    .wait_timeout_while(guard, SIGNAL_POLL, |done| !*done)
+                    .unwrap_or_else(|e| e.into_inner());
+                *guard
+            });
+            if ready {
+                break;
+            }
+            if let Err(interrupt) = py.check_signals() {
+                token.cancel();
+                let _ = py.allow_threads(|| worker.join());
+                return Err(interrupt);
+            }
+        }
+        py.allow_threads(|| worker.join())
+            .unwrap_or_else(|payload| Err(internal_error(payload.as_ref())))
     })
+}
+
+/// A panic's payload as the `RuntimeError` that reports it.
+fn internal_error(payload: &(dyn std::any::Any + Send)) -> PyErr {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into());
+    PyRuntimeError::new_err(format!("era: internal error (please report it): {what}"))
 }
 
 /// A whole number given for a count or a seed, checked by the function that takes it
@@ -154,31 +203,100 @@ impl Int {
     }
 }
 
-/// `obj` as a C-contiguous numpy array of `dtype` with `ndim` dimensions: an array that
-/// already is one is returned as it is (no copy); anything else goes through
-/// `numpy.ascontiguousarray`. `what` names the argument in a `ValueError`.
+/// Conversion copies above this many bytes are announced with a `UserWarning` (the
+/// caller can pass the layout era reads in place and save the copy).
+const COPY_WARNING_BYTES: u64 = 256 << 20;
+
+/// `obj` as a C-contiguous numpy array of `dtype` (`"float64"` or `"complex128"`) with
+/// one dimension per entry of `axes`, each axis checked against its resource limit and
+/// the whole against `total`, before anything is converted or copied.
+///
+/// - An array that already has that dtype (native byte order) and is C-contiguous is
+///   returned as it is: no copy. Anything else (another numeric dtype, the other byte
+///   order, Fortran order, a strided or broadcast view, a list) goes through
+///   `numpy.ascontiguousarray`, and a copy of more than [`COPY_WARNING_BYTES`] says so
+///   with a `UserWarning`.
+/// - Booleans, integers and floats are read as real numbers; complex values only where
+///   `dtype` is complex. Anything else (complex for a real argument, objects, strings,
+///   dates, records) is a `TypeError` naming `what`; a wrong number of dimensions, a
+///   ragged list or a size above a limit is a `ValueError` naming it. NaN and inf are
+///   left to the core, which refuses them with their place.
 pub(crate) fn contiguous<'py, T: Element, D: numpy::ndarray::Dimension>(
     obj: &Bound<'py, PyAny>,
     dtype: &str,
-    ndim: usize,
+    axes: &[&era::limits::Limit],
+    total: Option<&era::limits::Limit>,
     what: &str,
     shape_words: &str,
 ) -> PyResult<Bound<'py, PyArray<T, D>>> {
     let py = obj.py();
     let np = py.import("numpy")?;
-    let kwargs = pyo3::types::PyDict::new(py);
-    kwargs.set_item("dtype", dtype)?;
     let array = np
-        .call_method("ascontiguousarray", (obj,), Some(&kwargs))
-        .map_err(|e| PyValueError::new_err(format!("{what}: cannot be read as {dtype}: {e}")))?;
-    let found = array.getattr("ndim")?.extract::<usize>()?;
-    if found != ndim {
-        let shape = array.getattr("shape")?.str()?.to_string();
+        .call_method1("asarray", (obj,))
+        .map_err(|e| PyValueError::new_err(format!("{what}: cannot be read as an array: {e}")))?;
+    let found_dtype = array.getattr("dtype")?;
+    let kind: String = found_dtype.getattr("kind")?.extract()?;
+    let complex = dtype == "complex128";
+    let numeric = matches!(kind.as_str(), "b" | "i" | "u" | "f") || (complex && kind == "c");
+    if !numeric {
+        let expected = if complex {
+            "real or complex numbers"
+        } else {
+            "real numbers"
+        };
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{what}: expected an array of {expected}, got dtype {}",
+            found_dtype.str()?
+        )));
+    }
+    let ndim = axes.len();
+    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+    if shape.len() != ndim {
         return value_error(format!(
-            "{what}: expected {ndim} dimensions {shape_words}, got shape {shape}"
+            "{what}: expected {ndim} dimension{} {shape_words}, got shape {}",
+            if ndim == 1 { "" } else { "s" },
+            array.getattr("shape")?.str()?
         ));
     }
-    array
+    let limit_error = |e: era::limits::LimitError| PyValueError::new_err(e.to_string());
+    for (k, (limit, &n)) in axes.iter().zip(&shape).enumerate() {
+        limit
+            .check(format!("{what} axis {k} {shape_words}"), n as u64)
+            .map_err(limit_error)?;
+    }
+    if let Some(limit) = total {
+        limit
+            .check_product(
+                format!("{what} {shape_words}"),
+                &shape.iter().map(|&n| n as u64).collect::<Vec<_>>(),
+            )
+            .map_err(limit_error)?;
+    }
+    let kwargs = pyo3::types::PyDict::new(py);
+    kwargs.set_item("dtype", dtype)?;
+    let converted = np
+        .call_method("ascontiguousarray", (&array,), Some(&kwargs))
+        .map_err(|e| PyValueError::new_err(format!("{what}: cannot be read as {dtype}: {e}")))?;
+    if !converted.is(&array) {
+        let bytes: u64 = converted.getattr("nbytes")?.extract()?;
+        if bytes > COPY_WARNING_BYTES {
+            let warnings = py.import("warnings")?;
+            warnings.call_method1(
+                "warn",
+                (
+                    format!(
+                        "{what}: a {} array of shape {} was copied to C-contiguous {dtype} ({:.0} MB); pass that layout to avoid the copy",
+                        found_dtype.str()?,
+                        array.getattr("shape")?.str()?,
+                        bytes as f64 / 1e6
+                    ),
+                    py.get_type::<pyo3::exceptions::PyUserWarning>(),
+                    3,
+                ),
+            )?;
+        }
+    }
+    converted
         .downcast_into::<PyArray<T, D>>()
         .map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
 }

@@ -306,7 +306,14 @@ impl PyIdentification {
         py: Python<'py>,
         frequency_hz: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<Complex64>>> {
-        let f = contiguous::<f64, Ix1>(frequency_hz, "float64", 1, "frequency_hz", "(lines,)")?;
+        let f = contiguous::<f64, Ix1>(
+            frequency_hz,
+            "float64",
+            &[&era::limits::LINES],
+            None,
+            "frequency_hz",
+            "(lines,)",
+        )?;
         let f = f.readonly().as_slice()?.to_vec();
         if let Some(k) = f.iter().position(|x| !x.is_finite()) {
             return value_error(format!(

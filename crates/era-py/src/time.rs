@@ -133,7 +133,14 @@ pub fn identify_time(
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
 
-    let array = contiguous::<f64, Ix2>(data, "float64", 2, "data", "(channels, samples)")?;
+    let array = contiguous::<f64, Ix2>(
+        data,
+        "float64",
+        &[&era::limits::CHANNELS, &era::limits::SAMPLES],
+        None,
+        "data",
+        "(channels, samples)",
+    )?;
     let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
     let inputs = crate::frf::channels("inputs", &inputs, n_channels)?;
     let outputs = crate::frf::channels("outputs", &outputs, n_channels)?;
