@@ -65,8 +65,35 @@ fn message(err: &anyhow::Error) -> String {
     parts.join(": ")
 }
 
+/// Ends the process on SIGINT, SIGTERM or SIGHUP (exit 128 + the signal: 130, 143,
+/// 129): era-io's clean-up first waits for a commit in progress, then removes this run's
+/// temporary files, staging folders and folder locks, so earlier outputs stay whole and
+/// nothing of the run is left. A thread waits for the signals; the work needs no check
+/// points, and the exit comes within milliseconds.
+fn exit_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    let _ = std::thread::Builder::new()
+        .name("era-signals".into())
+        .spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                era_io::atomic::abandon();
+                let name = match signal {
+                    SIGINT => "SIGINT",
+                    SIGTERM => "SIGTERM",
+                    _ => "SIGHUP",
+                };
+                eprintln!("era: stopped by {name}; outputs not yet in place were discarded, earlier ones are whole");
+                std::process::exit(128 + signal);
+            }
+        });
+}
+
 fn main() -> ExitCode {
     let cli = args::Cli::parse();
+    exit_on_signals();
     std::panic::set_hook(Box::new(|info| {
         // A panic inside the MAT parser is turned into a file error by era-io.
         if !era_io::mat::containing_panic() {

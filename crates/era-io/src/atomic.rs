@@ -23,14 +23,25 @@
 //!   era writes into that folder: only entries whose name has era's exact form, whose
 //!   process no longer exists, and which are a regular file (or a real folder for
 //!   staging), never following a symbolic link.
+//! - Every temporary file, staging folder and folder lock of the process is in one
+//!   registry. [`abandon`] (the CLI calls it on SIGINT, SIGTERM and SIGHUP, then exits)
+//!   waits for a commit in progress to end, removes them all, and holds the registry so
+//!   that nothing new is made or committed before the process is gone: earlier outputs
+//!   stay whole and nothing of era's is left behind.
+//! - An output folder ([`OutputSet::new`]) is held by one run at a time: an advisory
+//!   lock (`flock`) on the file [`LOCK_NAME`] inside it, which holds the run's process
+//!   id. A second run into the folder is refused with a message naming the first; the
+//!   lock file is removed when the set ends (and by [`abandon`]), and a lock file left by
+//!   a killed run holds nothing (the kernel released its lock).
 
 use crate::IoError;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::OsString;
 use std::fs::Metadata;
 use std::io::Write;
-use std::os::unix::fs::{FileTypeExt, MetadataExt, PermissionsExt};
+use std::os::unix::fs::{FileTypeExt, MetadataExt, OpenOptionsExt, PermissionsExt};
 use std::path::{Component, Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 
 /// Name prefix of a temporary file; the process id and [`RANDOM_CHARS`] characters
 /// follow.
@@ -40,6 +51,71 @@ pub const TEMPORARY_PREFIX: &str = ".era-tmp-";
 pub const STAGING_PREFIX: &str = ".era-staging-";
 /// Random alphanumeric characters in a temporary or staging name.
 pub const RANDOM_CHARS: usize = 12;
+/// Name of the lock file inside an output folder that a run holds.
+pub const LOCK_NAME: &str = ".era-lock";
+
+/// The era entries this process has made and not yet committed or removed: each with
+/// whether it is a folder.
+struct Live {
+    next: u64,
+    entries: BTreeMap<u64, (PathBuf, bool)>,
+}
+
+static LIVE: Mutex<Live> = Mutex::new(Live {
+    next: 0,
+    entries: BTreeMap::new(),
+});
+
+/// The registry, locked (a panic elsewhere while it was held does not matter to it).
+fn live() -> MutexGuard<'static, Live> {
+    LIVE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// An entry in the registry; dropping it takes the entry out.
+#[derive(Debug)]
+struct Registration(u64);
+
+impl Registration {
+    /// Registers `path` (made while `live` was held, so that [`abandon`] sees it).
+    fn under(live: &mut Live, path: &Path, folder: bool) -> Registration {
+        let id = live.next;
+        live.next += 1;
+        live.entries.insert(id, (path.to_path_buf(), folder));
+        Registration(id)
+    }
+
+    /// Takes the entry out while the registry is held (after a rename made it a real
+    /// output).
+    fn settle(&self, live: &mut Live) {
+        live.entries.remove(&self.0);
+    }
+}
+
+impl Drop for Registration {
+    fn drop(&mut self) {
+        self.settle(&mut live());
+    }
+}
+
+/// Removes every temporary file, staging folder and folder lock of this process, after
+/// any commit in progress has ended, and keeps the registry held for good: nothing new
+/// is made or committed afterwards. For a process about to exit on a signal. Returns
+/// how many entries were removed.
+pub fn abandon() -> usize {
+    let live = live();
+    let mut removed = 0;
+    for (path, folder) in live.entries.values() {
+        let gone = if *folder {
+            std::fs::remove_dir_all(path)
+        } else {
+            std::fs::remove_file(path)
+        };
+        removed += usize::from(gone.is_ok());
+    }
+    // Held until the process ends.
+    std::mem::forget(live);
+    removed
+}
 
 /// What a non-regular entry is, for messages.
 fn kind_of(meta: &Metadata) -> &'static str {
@@ -88,8 +164,9 @@ fn folder_of(path: &Path) -> &Path {
     }
 }
 
-/// A fresh temporary file for `path`, beside it, created exclusively.
-fn temporary_for(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
+/// A fresh temporary file for `path`, beside it, created exclusively, and its entry in
+/// the registry.
+fn temporary_for(path: &Path) -> Result<(tempfile::NamedTempFile, Registration), IoError> {
     let folder = folder_of(path);
     remove_stale(folder);
     let suffix = match path.extension() {
@@ -100,7 +177,8 @@ fn temporary_for(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
         }
         None => OsString::new(),
     };
-    tempfile::Builder::new()
+    let mut live = live();
+    let tmp = tempfile::Builder::new()
         .prefix(&format!("{TEMPORARY_PREFIX}{}-", std::process::id()))
         .rand_bytes(RANDOM_CHARS)
         .suffix(&suffix)
@@ -108,7 +186,9 @@ fn temporary_for(path: &Path) -> Result<tempfile::NamedTempFile, IoError> {
         // the output is the user's file.
         .permissions(std::fs::Permissions::from_mode(0o666))
         .tempfile_in(folder)
-        .map_err(|e| temporary_error(path, folder, e))
+        .map_err(|e| temporary_error(path, folder, e))?;
+    let registration = Registration::under(&mut live, tmp.path(), false);
+    Ok((tmp, registration))
 }
 
 /// Why the temporary file could not be made, said of the destination: a missing folder
@@ -134,7 +214,11 @@ fn temporary_error(path: &Path, folder: &Path, e: std::io::Error) -> IoError {
 }
 
 /// Syncs the temporary file, checks the target once more and renames over it.
-fn finish(tmp: tempfile::NamedTempFile, path: &Path) -> Result<(), IoError> {
+fn finish(
+    tmp: tempfile::NamedTempFile,
+    registration: Registration,
+    path: &Path,
+) -> Result<(), IoError> {
     // The writer was given the path: it must have written the file created for it, not
     // something put in its place.
     let ours = tmp.as_file().metadata().map_err(|e| IoError::io(path, e))?;
@@ -153,7 +237,9 @@ fn finish(tmp: tempfile::NamedTempFile, path: &Path) -> Result<(), IoError> {
     }
     tmp.as_file().sync_all().map_err(|e| IoError::io(path, e))?;
     check_target(path)?;
+    let mut live = live();
     tmp.persist(path).map_err(|e| IoError::io(path, e.error))?;
+    registration.settle(&mut live);
     Ok(())
 }
 
@@ -170,9 +256,9 @@ pub fn write_via<E: From<IoError>>(
     write: impl FnOnce(&Path) -> Result<(), E>,
 ) -> Result<(), E> {
     check_target(path)?;
-    let tmp = temporary_for(path)?;
+    let (tmp, registration) = temporary_for(path)?;
     write(tmp.path())?;
-    finish(tmp, path)?;
+    finish(tmp, registration, path)?;
     Ok(())
 }
 
@@ -184,12 +270,12 @@ pub fn write_via<E: From<IoError>>(
 /// full, or `path` is not a regular file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     check_target(path)?;
-    let mut tmp = temporary_for(path)?;
+    let (mut tmp, registration) = temporary_for(path)?;
     tmp.as_file_mut()
         .write_all(bytes)
         .and_then(|()| tmp.as_file_mut().flush())
         .map_err(|e| IoError::io(path, e))?;
-    finish(tmp, path)
+    finish(tmp, registration, path)
 }
 
 /// The process id in `name` when it has the exact form `PREFIX<pid>-<RANDOM_CHARS
@@ -298,17 +384,132 @@ fn plain_relative(name: &Path) -> bool {
 #[derive(Debug)]
 pub struct OutputSet {
     folder: PathBuf,
+    // Fields drop in this order: the staging folder, its registration, then the lock.
     staging: tempfile::TempDir,
+    _registration: Registration,
+    _lock: Option<FolderLock>,
     names: BTreeSet<PathBuf>,
 }
 
+/// The advisory lock a run holds on its output folder ([`LOCK_NAME`]).
+#[derive(Debug)]
+struct FolderLock {
+    path: PathBuf,
+    file: std::fs::File,
+    _registration: Registration,
+}
+
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        // Removed while still held (then unlocked as the file closes), and only while it
+        // is still the file locked: a run that opened it meanwhile finds it unlinked and
+        // opens the path again.
+        if let (Ok(ours), Ok(there)) = (self.file.metadata(), std::fs::symlink_metadata(&self.path))
+        {
+            if ours.dev() == there.dev() && ours.ino() == there.ino() {
+                let _ = std::fs::remove_file(&self.path);
+            }
+        }
+    }
+}
+
+/// Takes the lock of `folder` for this run: `None` where the file system has no locks.
+///
+/// # Errors
+/// [`IoError`] naming `folder` when another run holds it (with that run's process id),
+/// or the lock file when it cannot be opened (a symbolic link there is not followed).
+fn lock_folder(folder: &Path) -> Result<Option<FolderLock>, IoError> {
+    let path = folder.join(LOCK_NAME);
+    // A few tries: the holder may remove the file between our open and our lock.
+    for _ in 0..16 {
+        let mut live = live();
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .mode(0o644)
+            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
+            .open(&path)
+            .map_err(|e| IoError::io(&path, e))?;
+        let ours = file.metadata().map_err(|e| IoError::io(&path, e))?;
+        if !ours.file_type().is_file() {
+            return Err(IoError::format(
+                &path,
+                "",
+                format!(
+                    "is {}: era keeps its folder lock in a regular file",
+                    kind_of(&ours)
+                ),
+            ));
+        }
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let holder = std::fs::read_to_string(&path)
+                    .ok()
+                    .and_then(|s| s.trim().parse::<u32>().ok())
+                    .map(|pid| format!(" (process {pid})"))
+                    .unwrap_or_default();
+                return Err(IoError::format(
+                    folder,
+                    "",
+                    format!(
+                        "another era run{holder} is writing into this folder: wait for it to end, or choose another folder"
+                    ),
+                ));
+            }
+            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
+                return Ok(None)
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(IoError::io(&path, e)),
+        }
+        match std::fs::symlink_metadata(&path) {
+            Ok(m) if m.dev() == ours.dev() && m.ino() == ours.ino() => {
+                // Whose lock it is, for the message of a run refused.
+                let _ = file
+                    .set_len(0)
+                    .and_then(|()| writeln!(file, "{}", std::process::id()));
+                let registration = Registration::under(&mut live, &path, false);
+                return Ok(Some(FolderLock {
+                    path,
+                    file,
+                    _registration: registration,
+                }));
+            }
+            // Unlinked by the run that held it: open the path again.
+            _ => continue,
+        }
+    }
+    Err(IoError::format(
+        &path,
+        "",
+        "the folder lock keeps being replaced: is another program removing it?",
+    ))
+}
+
 impl OutputSet {
-    /// A set writing into `folder`, which must exist; stale era entries in it are
+    /// A set writing into `folder`, which must exist, holding the folder's lock
+    /// ([`LOCK_NAME`]) until it is committed or dropped; stale era entries in it are
     /// removed first ([`remove_stale`]).
     ///
     /// # Errors
-    /// [`IoError`] naming `folder` when it is not a folder or cannot take files.
+    /// [`IoError`] naming `folder` when it is not a folder, cannot take files, or
+    /// another era run is writing into it.
     pub fn new(folder: &Path) -> Result<Self, IoError> {
+        OutputSet::open(folder, true)
+    }
+
+    /// A set for the single file `path` (and any files beside it): its folder, which
+    /// must exist. The folder is not locked: many runs may each write their own file
+    /// into one folder.
+    ///
+    /// # Errors
+    /// As [`OutputSet::new`].
+    pub fn beside(path: &Path) -> Result<Self, IoError> {
+        OutputSet::open(folder_of(path), false)
+    }
+
+    fn open(folder: &Path, lock: bool) -> Result<Self, IoError> {
         let folder = if folder.as_os_str().is_empty() {
             Path::new(".")
         } else {
@@ -325,27 +526,23 @@ impl OutputSet {
             }
             Err(e) => return Err(IoError::io(folder, e)),
         }
+        let lock = if lock { lock_folder(folder)? } else { None };
         remove_stale(folder);
+        let mut live = live();
         let staging = tempfile::Builder::new()
             .prefix(&format!("{STAGING_PREFIX}{}-", std::process::id()))
             .rand_bytes(RANDOM_CHARS)
             .permissions(std::fs::Permissions::from_mode(0o700))
             .tempdir_in(folder)
             .map_err(|e| IoError::io(folder, e))?;
+        let registration = Registration::under(&mut live, staging.path(), true);
         Ok(OutputSet {
             folder: folder.to_path_buf(),
             staging,
+            _registration: registration,
+            _lock: lock,
             names: BTreeSet::new(),
         })
-    }
-
-    /// A set for the single file `path` (and any files beside it): its folder, which
-    /// must exist.
-    ///
-    /// # Errors
-    /// As [`OutputSet::new`].
-    pub fn beside(path: &Path) -> Result<Self, IoError> {
-        OutputSet::new(folder_of(path))
     }
 
     /// The destination folder.
@@ -438,6 +635,8 @@ impl OutputSet {
             }
             self.check(name)?;
         }
+        // A signal's clean-up waits until the renames (or their roll-back) are done.
+        let held = live();
         let mut moved: Vec<(PathBuf, Option<PathBuf>)> = Vec::new();
         let mut result = Ok(());
         for (k, name) in self.names.iter().enumerate() {
@@ -458,8 +657,10 @@ impl OutputSet {
                     None => std::fs::remove_file(&target),
                 };
             }
+            drop(held);
             return Err(e);
         }
+        drop(held);
         let mut folders: BTreeSet<PathBuf> = BTreeSet::new();
         for name in &self.names {
             folders.insert(folder_of(&self.target(name)).to_path_buf());
@@ -887,5 +1088,80 @@ mod tests {
             .to_string()
             .contains("not a folder"));
         assert!(OutputSet::new(&dir.path().join("missing")).is_err());
+    }
+
+    #[test]
+    fn one_run_at_a_time_holds_an_output_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut first = OutputSet::new(dir.path()).unwrap();
+        let lock = dir.path().join(LOCK_NAME);
+        assert_eq!(
+            std::fs::read_to_string(&lock).unwrap().trim(),
+            std::process::id().to_string()
+        );
+        // A second set (another run: flock locks are per open file) is refused, naming
+        // the holder, and leaves nothing behind.
+        let e = OutputSet::new(dir.path()).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!(
+                "another era run (process {}) is writing into this folder",
+                std::process::id()
+            )),
+            "{e}"
+        );
+        // A single-file set beside it is not held up.
+        let mut single = OutputSet::beside(&dir.path().join("x.csv")).unwrap();
+        write_atomic(&single.stage("x.csv").unwrap(), b"x").unwrap();
+        single.commit().unwrap();
+        write_atomic(&first.stage("a.txt").unwrap(), b"a").unwrap();
+        first.commit().unwrap();
+        // The lock went with the set; the next run takes the folder.
+        assert_eq!(names(dir.path()), ["a.txt", "x.csv"]);
+        let again = OutputSet::new(dir.path()).unwrap();
+        drop(again);
+        assert_eq!(names(dir.path()), ["a.txt", "x.csv"]);
+    }
+
+    #[test]
+    fn a_lock_file_left_by_a_killed_run_holds_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join(LOCK_NAME), "999999999\n").unwrap();
+        let set = OutputSet::new(dir.path()).unwrap();
+        drop(set);
+        assert!(names(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn a_planted_link_as_the_lock_is_not_followed() {
+        let dir = tempfile::tempdir().unwrap();
+        let decoy = dir.path().join("decoy");
+        std::fs::write(&decoy, "keep").unwrap();
+        symlink(&decoy, dir.path().join(LOCK_NAME)).unwrap();
+        let e = OutputSet::new(dir.path()).unwrap_err().to_string();
+        assert!(e.contains(LOCK_NAME), "{e}");
+        assert_eq!(std::fs::read_to_string(&decoy).unwrap(), "keep");
+    }
+
+    #[test]
+    fn the_registry_holds_what_a_signal_must_remove() {
+        let dir = tempfile::tempdir().unwrap();
+        let set = OutputSet::new(dir.path()).unwrap();
+        let staging = set.staging.path().to_path_buf();
+        let registered = |p: &Path| live().entries.values().any(|(q, _)| q == p);
+        assert!(registered(&staging));
+        assert!(registered(&dir.path().join(LOCK_NAME)));
+        drop(set);
+        assert!(!registered(&staging));
+        assert!(!registered(&dir.path().join(LOCK_NAME)));
+        let target = dir.path().join("t.txt");
+        write_via(&target, |p| -> Result<(), IoError> {
+            assert!(registered(p));
+            std::fs::write(p, "t").map_err(|e| IoError::io(p, e))
+        })
+        .unwrap();
+        assert!(!live()
+            .entries
+            .values()
+            .any(|(q, _)| q.starts_with(dir.path())));
     }
 }

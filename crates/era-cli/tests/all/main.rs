@@ -16,4 +16,5 @@ mod messages_cli;
 mod okid_cli;
 mod refine_cli;
 mod report_cli;
+mod signals;
 mod trust;
