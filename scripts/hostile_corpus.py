@@ -15,7 +15,13 @@ Cases:
 - absurd values for every numeric flag of every verb;
 - hostile output targets (a FIFO, a folder, a symlink to a decoy, character-device nodes
   made with mknod when root) and hostile inputs (a FIFO with no writer, /dev/zero, a
-  folder, standard input).
+  folder, standard input);
+- time histories through OKID (`identify --from-time --markov okid`), mutated and with
+  absurd observer flags;
+- signals: SIGINT, SIGTERM or SIGHUP at a random moment of a run (exit 0, or 128 + the
+  signal within 1 s; nothing of era's left; the earlier outputs whole, or the new set);
+- two runs into one `--out` folder at once (one is refused, or they run one after the
+  other; the folder is one run's whole set, nothing of era's left).
 
 Usage: scripts/hostile_corpus.py [--seed N] [--mutants N] [--era PATH] [--keep DIR]
 Prints a summary per category and every failing case; exits 1 if any case failed.
@@ -217,6 +223,147 @@ def binary_mutate(data, rng):
 # --- the corpus ---------------------------------------------------------------------
 
 
+def era_entries(folder):
+    return sorted(n for n in os.listdir(folder) if n.startswith(".era-"))
+
+
+def folder_state(folder):
+    """Every file under `folder` with its bytes, the run's time stamps taken out (the MAT
+    header, the report's UTC time), so that two runs of one command compare equal."""
+    import re
+
+    out = {}
+    for root, _, files in os.walk(folder):
+        for name in files:
+            path = os.path.join(root, name)
+            with open(path, "rb") as f:
+                data = f.read()
+            if name.endswith(".mat"):
+                data = data[128:]
+            elif name.endswith(".html"):
+                data = re.sub(rb"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d UTC", b"", data)
+            out[os.path.relpath(path, folder)] = data
+    return out
+
+
+def record_case(r, category, args, problems, err=""):
+    entry = r.results.setdefault(category, [0, 0])
+    entry[0] += 1
+    if problems:
+        entry[1] += 1
+        r.failures.append((category, " ".join(args), "", problems, err[-400:]))
+
+
+def signal_cases(r, era, work, rng, count=24):
+    """A signal at a random moment of a run: exit 0 (it had ended), or 128 + the signal
+    within 1 s; the output folder holds the earlier set or the new one, whole, and
+    nothing of era's."""
+    import signal as sig
+
+    sh(era, work, "simulate", "modal", "--collocated", "--noise", "0.05", "--out", "long.uff")
+    verbs = [
+        (["identify", "long.uff", "--states", "auto", "--refine", "-q", "--out", "{o}"],
+         ["identify", "truth.csv", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "-q", "--out", "{o}"]),
+        (["identify", "truth.csv", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "-q", "--out", "{o}"],
+         ["identify", "truth.csv", "--states", "6", "--hankel-factor", "4", "--pad-to", "1024", "-q", "--out", "{o}"]),
+        (["simulate", "shaker", "--duration", "4000", "-q", "--out", "{o}/record.csv"],
+         ["simulate", "shaker", "--duration", "20", "-q", "--out", "{o}/record.csv"]),
+        (["identify", "time.csv", "--from-time", "--inputs", "force", "--outputs", "acc", "--markov", "okid",
+          "--states", "2", "-q", "--out", "{o}"],
+         ["identify", "truth.csv", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "-q", "--out", "{o}"]),
+    ]
+    signals = [(sig.SIGINT, 130), (sig.SIGTERM, 143), (sig.SIGHUP, 129)]
+    for k in range(count):
+        new_args, earlier_args = verbs[k % len(verbs)]
+        signal, code_expected = signals[rng.randrange(len(signals))]
+        out = os.path.join(work, f"sig-out-{k}")
+        shutil.rmtree(out, ignore_errors=True)
+        os.mkdir(out)
+        fill = lambda a: [x.replace("{o}", out) for x in a]
+        sh(era, work, *fill(earlier_args))
+        earlier = folder_state(out)
+        p = subprocess.Popen([era] + fill(new_args), cwd=work, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE)
+        time.sleep(rng.uniform(0.0, 1.2))
+        sent = time.monotonic()
+        p.send_signal(signal)
+        problems = []
+        try:
+            _, err = p.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            _, err = p.communicate()
+            problems.append("still running 10 s after the signal")
+        latency = time.monotonic() - sent
+        err = err.decode("utf-8", "replace")
+        code = p.returncode
+        if code not in (0, code_expected):
+            problems.append(f"exit {code} after signal {signal}, expected 0 or {code_expected}")
+        if code == code_expected and latency > 1.0:
+            problems.append(f"ended {latency:.2f} s after the signal")
+        left = era_entries(out)
+        if left:
+            problems.append(f"left {left}")
+        now = folder_state(out)
+        if code != 0 and now != earlier:
+            # Interrupted: the earlier set, or (a signal after the commit) the new one.
+            sh(era, work, *fill(new_args))
+            if folder_state(out) != now:
+                problems.append("the folder is neither the earlier set nor the new one")
+        for bad in ("panicked", "internal error"):
+            if bad in err:
+                problems.append(f"'{bad}' in stderr")
+        record_case(r, "signal during a run", new_args, problems, err)
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def concurrency_cases(r, era, work, rng, count=8):
+    """Two runs into one --out folder at once: one is refused with a message naming the
+    other, or they ran one after the other; the folder is one run's whole set."""
+    a_args = ["identify", "long.uff", "--states", "auto", "-q", "--out", "{o}"]
+    b_args = ["identify", "truth.csv", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "-q",
+              "--out", "{o}"]
+    for k in range(count):
+        out = os.path.join(work, f"conc-out-{k}")
+        shutil.rmtree(out, ignore_errors=True)
+        fill = lambda a: [x.replace("{o}", out) for x in a]
+        first = subprocess.Popen([era] + fill(a_args), cwd=work, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE)
+        time.sleep(rng.uniform(0.0, 0.5))
+        second = subprocess.run([era] + fill(b_args), cwd=work, capture_output=True, timeout=60)
+        _, first_err = first.communicate(timeout=120)
+        problems = []
+        err = second.stderr.decode("utf-8", "replace")
+        if second.returncode == 2:
+            if "another era run" not in err:
+                problems.append(f"refused without saying why: {err[-200:]}")
+        elif second.returncode != 0:
+            problems.append(f"second run exit {second.returncode}")
+        if first.returncode != 0:
+            problems.append(f"first run exit {first.returncode}: {first_err[-200:]!r}")
+        if era_entries(out):
+            problems.append(f"left {era_entries(out)}")
+        # One run's whole set: the model's size names the run, and every output of that
+        # run is there with it.
+        state = folder_state(out)
+        try:
+            import json
+            outputs = json.loads(state["model.json"])["outputs"]
+        except (KeyError, ValueError) as e:
+            outputs = None
+            problems.append(f"no readable model.json: {e}")
+        if outputs is not None:
+            redo = os.path.join(work, f"conc-redo-{k}")
+            shutil.rmtree(redo, ignore_errors=True)
+            chosen = a_args if outputs == 8 else b_args
+            sh(era, work, *[x.replace("{o}", redo) for x in chosen])
+            if set(folder_state(redo)) != set(state):
+                problems.append("the folder's files are not one run's set")
+            shutil.rmtree(redo, ignore_errors=True)
+        record_case(r, "two runs into one --out", a_args + ["&"] + b_args, problems, err)
+        shutil.rmtree(out, ignore_errors=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=20261122)
@@ -257,7 +404,11 @@ def main():
         "modal.uff": [["info", "{f}"], ["identify", "{f}", "--states", "6"], ["convert", "{f}", "o.csv"]],
         "truth_b.uff": [["info", "{f}"], ["identify", "{f}", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024"]],
         "modal.mat": [["info", "{f}"], ["identify", "{f}", "--states", "6", "--outputs", "2"]],
-        "time.csv": [["frf", "{f}", "--inputs", "force", "--outputs", "acc", "--frame", "256", "--out", "o.csv"]],
+        "time.csv": [["frf", "{f}", "--inputs", "force", "--outputs", "acc", "--frame", "256", "--out", "o.csv"],
+                     ["identify", "{f}", "--from-time", "--inputs", "force", "--outputs", "acc",
+                      "--markov", "okid", "--states", "4", "--no-figures", "--out", "okid-out"],
+                     ["identify", "{f}", "--from-time", "--inputs", "force", "--outputs", "acc",
+                      "--markov", "okid", "--era-dc", "--states", "2", "--json", "-q"]],
         "decay.csv": [["friction", "estimate", "{f}", "--stiffness", "1"]],
         "model.json": [["plot", "truth.csv", "--model", "{f}", "--out", "plotdir"]],
     }
@@ -295,6 +446,10 @@ def main():
         (["frf", "time.csv", "--inputs", "force", "--outputs", "acc", "--out", "f.csv"],
          ["--frame", "--overlap", "--max-hz", "--sample-rate"], ["--frame", "256"]),
         (["demo"], ["--noise", "--seed"], []),
+        (["identify", "time.csv", "--from-time", "--inputs", "force", "--outputs", "acc", "--markov", "okid",
+          "--no-figures", "--out", "okid-out"],
+         ["--observer-order", "--markov-samples", "--states", "--frame", "--sample-rate"],
+         ["--states", "4"]),
         (["plot", "truth.csv", "--out", "p"], ["--integrations", "--zero-lines"], []),
     ]
     for base, flags, defaults in flag_cases:
@@ -376,6 +531,9 @@ def main():
     if code != 0:
         r.failures.append(("input: standard input", "info /dev/stdin", "", [f"exit {code} on a valid CSV"], err[-400:]))
         r.results["input: standard input"][1] += 1
+
+    signal_cases(r, era, work, rng)
+    concurrency_cases(r, era, work, rng)
 
     total = sum(v[0] for v in r.results.values())
     failed = sum(v[1] for v in r.results.values())

@@ -54,7 +54,7 @@ def test_frfdata_values_are_validated_like_a_file():
         era.FrfData([0, -12.5, -25], np.ones((1, 1, 3)))
     with pytest.raises(ValueError, match=r"values: expected 3 dimensions \(outputs, inputs, lines\), got shape \(2, 5\)"):
         era.FrfData(f, np.ones((2, 5)))
-    with pytest.raises(ValueError, match="frequency_hz: expected 1 dimensions"):
+    with pytest.raises(ValueError, match="frequency_hz: expected 1 dimension "):
         era.FrfData(np.zeros((2, 2)), np.ones((1, 1, 2)))
     with pytest.raises(ValueError, match="inconsistent shapes: frequency lines.*expected 5, got 4"):
         era.FrfData(f, np.ones((1, 1, 4)))
@@ -118,7 +118,7 @@ def test_response_refuses_non_finite_frequencies(truth):
     found = era.identify(truth, 8, **TRUTH)
     with pytest.raises(ValueError, match="frequency_hz: non-finite value NaN at index 1"):
         found.response([0.0, np.nan])
-    with pytest.raises(ValueError, match="frequency_hz: expected 1 dimensions"):
+    with pytest.raises(ValueError, match="frequency_hz: expected 1 dimension "):
         found.response(np.zeros((2, 2)))
 
 
