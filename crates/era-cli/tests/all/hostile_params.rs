@@ -259,7 +259,8 @@ fn verbs(dir: &Path, frf: &Path, time: &Path, decay: &Path) -> Vec<Verb> {
 
 /// Every verb × numeric flag × absurd value: exit 0 or 2, an exit 2 that names the
 /// flag, and nothing written with NaN or infinity. The runs go through a few threads
-/// (each is small); in all they take seconds.
+/// (each is small); in all they take seconds. Each thread writes into output folders of
+/// its own: two runs into one `--out` folder at once are refused (one run holds it).
 #[test]
 fn absurd_values_for_every_numeric_flag() {
     let dir = tempfile::tempdir().unwrap();
@@ -297,11 +298,13 @@ fn absurd_values_for_every_numeric_flag() {
     let cases = std::sync::Mutex::new(cases.into_iter());
     let failures = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|scope| {
-        for _ in 0..3 {
-            scope.spawn(|| loop {
+        for worker in 0..3 {
+            let (cases, failures) = (&cases, &failures);
+            scope.spawn(move || loop {
                 let Some((flag, args)) = cases.lock().unwrap().next() else {
                     break;
                 };
+                let args = own_outputs(&args, worker);
                 let refs: Vec<&str> = args.iter().map(String::as_str).collect();
                 let outcome = run_capped(&refs, None, None);
                 let check = std::panic::catch_unwind(|| {
@@ -336,6 +339,31 @@ fn absurd_values_for_every_numeric_flag() {
             }
         }
     }
+}
+
+/// `args` with the value of `--out` made the worker's own: `id` becomes `id-w1`,
+/// `s.csv` becomes `s-w1.csv`.
+fn own_outputs(args: &[String], worker: usize) -> Vec<String> {
+    let mut out = Vec::with_capacity(args.len());
+    let mut next_is_out = false;
+    for a in args {
+        if next_is_out {
+            let p = Path::new(a);
+            let stem = p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let name = match p.extension() {
+                Some(ext) => format!("{stem}-w{worker}.{}", ext.to_string_lossy()),
+                None => format!("{stem}-w{worker}"),
+            };
+            out.push(p.with_file_name(name).to_string_lossy().into_owned());
+        } else {
+            out.push(a.clone());
+        }
+        next_is_out = a == "--out";
+    }
+    out
 }
 
 fn walk(dir: &Path) -> Vec<PathBuf> {
