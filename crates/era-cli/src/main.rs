@@ -69,9 +69,17 @@ fn message(err: &anyhow::Error) -> String {
 /// 129): era-io's clean-up first waits for a commit in progress, then removes this run's
 /// temporary files, staging folders and folder locks, so earlier outputs stay whole and
 /// nothing of the run is left. A thread waits for the signals; the work needs no check
-/// points, and the exit comes within milliseconds.
+/// points, and the exit comes within milliseconds. A second signal, should the clean-up
+/// ever hang on the file system, ends the process at once (the signal's default).
 fn exit_on_signals() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    use std::io::Write;
+    let caught = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM, SIGHUP] {
+        // Order matters: the default action is armed by the flag the first signal sets.
+        let _ = signal_hook::flag::register_conditional_default(signal, caught.clone());
+        let _ = signal_hook::flag::register(signal, caught.clone());
+    }
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
         return;
     };
@@ -85,7 +93,11 @@ fn exit_on_signals() {
                     SIGTERM => "SIGTERM",
                     _ => "SIGHUP",
                 };
-                eprintln!("era: stopped by {name}; outputs not yet in place were discarded, earlier ones are whole");
+                // After a hang-up stderr may be gone: a failed write is no reason to stay.
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "era: stopped by {name}; outputs not yet in place were discarded, earlier ones are whole"
+                );
                 std::process::exit(128 + signal);
             }
         });
@@ -97,7 +109,8 @@ fn main() -> ExitCode {
     std::panic::set_hook(Box::new(|info| {
         // A panic inside the MAT parser is turned into a file error by era-io.
         if !era_io::mat::containing_panic() {
-            eprintln!("era: internal error: {info}");
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "era: internal error: {info}");
         }
     }));
     let run = || match &cli.command {

@@ -54,11 +54,22 @@ pub const RANDOM_CHARS: usize = 12;
 /// Name of the lock file inside an output folder that a run holds.
 pub const LOCK_NAME: &str = ".era-lock";
 
-/// The era entries this process has made and not yet committed or removed: each with
-/// whether it is a folder.
+/// What an entry of the registry is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    /// A temporary file.
+    File,
+    /// A staging folder.
+    Folder,
+    /// A folder lock: the file with this device and inode (removed only while the path
+    /// is still that file).
+    Lock(u64, u64),
+}
+
+/// The era entries this process has made and not yet committed or removed.
 struct Live {
     next: u64,
-    entries: BTreeMap<u64, (PathBuf, bool)>,
+    entries: BTreeMap<u64, (PathBuf, Kind)>,
 }
 
 static LIVE: Mutex<Live> = Mutex::new(Live {
@@ -77,10 +88,10 @@ struct Registration(u64);
 
 impl Registration {
     /// Registers `path` (made while `live` was held, so that [`abandon`] sees it).
-    fn under(live: &mut Live, path: &Path, folder: bool) -> Registration {
+    fn under(live: &mut Live, path: &Path, kind: Kind) -> Registration {
         let id = live.next;
         live.next += 1;
-        live.entries.insert(id, (path.to_path_buf(), folder));
+        live.entries.insert(id, (path.to_path_buf(), kind));
         Registration(id)
     }
 
@@ -102,19 +113,51 @@ impl Drop for Registration {
 /// is made or committed afterwards. For a process about to exit on a signal. Returns
 /// how many entries were removed.
 pub fn abandon() -> usize {
-    let live = live();
-    let mut removed = 0;
-    for (path, folder) in live.entries.values() {
-        let gone = if *folder {
-            std::fs::remove_dir_all(path)
-        } else {
-            std::fs::remove_file(path)
-        };
-        removed += usize::from(gone.is_ok());
-    }
+    let mut live = live();
+    let removed = remove_entries(&mut live);
     // Held until the process ends.
     std::mem::forget(live);
     removed
+}
+
+/// [`abandon`]'s work on a registry: removes its entries and empties it.
+fn remove_entries(live: &mut Live) -> usize {
+    let mut removed = 0;
+    for (path, kind) in std::mem::take(&mut live.entries).into_values() {
+        let gone = match kind {
+            Kind::File => std::fs::remove_file(&path).is_ok(),
+            Kind::Folder => remove_staging(&path),
+            Kind::Lock(dev, ino) => match std::fs::symlink_metadata(&path) {
+                Ok(m) if m.dev() == dev && m.ino() == ino => std::fs::remove_file(&path).is_ok(),
+                // Not ours any more: another run's lock now.
+                _ => false,
+            },
+        };
+        removed += usize::from(gone);
+    }
+    removed
+}
+
+/// Removes a staging folder that a writer of this process may still be writing into:
+/// renamed first to a fresh name of era's form, so that no file can be created at its
+/// old path while it is removed (a file created during the removal would leave it).
+fn remove_staging(path: &Path) -> bool {
+    let folder = folder_of(path);
+    let seed = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64);
+    let moved = (0..8u64).find_map(|k| {
+        // Twelve digits are twelve alphanumerics: the name has era's exact form.
+        let name = format!(
+            "{STAGING_PREFIX}{}-{:012}",
+            std::process::id(),
+            seed.wrapping_add(k) % 1_000_000_000_000
+        );
+        let target = folder.join(name);
+        (!target.exists() && std::fs::rename(path, &target).is_ok()).then_some(target)
+    });
+    let doomed = moved.as_deref().unwrap_or(path);
+    (0..3).any(|_| std::fs::remove_dir_all(doomed).is_ok())
 }
 
 /// What a non-regular entry is, for messages.
@@ -187,7 +230,7 @@ fn temporary_for(path: &Path) -> Result<(tempfile::NamedTempFile, Registration),
         .permissions(std::fs::Permissions::from_mode(0o666))
         .tempfile_in(folder)
         .map_err(|e| temporary_error(path, folder, e))?;
-    let registration = Registration::under(&mut live, tmp.path(), false);
+    let registration = Registration::under(&mut live, tmp.path(), Kind::File);
     Ok((tmp, registration))
 }
 
@@ -395,22 +438,35 @@ pub struct OutputSet {
 #[derive(Debug)]
 struct FolderLock {
     path: PathBuf,
-    file: std::fs::File,
-    _registration: Registration,
+    // Closed last (releasing the lock), after the file is unlinked and the entry gone.
+    file: Option<std::fs::File>,
+    registration: Registration,
 }
 
 impl Drop for FolderLock {
     fn drop(&mut self) {
-        // Removed while still held (then unlocked as the file closes), and only while it
-        // is still the file locked: a run that opened it meanwhile finds it unlinked and
-        // opens the path again.
-        if let (Ok(ours), Ok(there)) = (self.file.metadata(), std::fs::symlink_metadata(&self.path))
-        {
-            if ours.dev() == there.dev() && ours.ino() == there.ino() {
-                let _ = std::fs::remove_file(&self.path);
+        // Under the registry (so a signal's clean-up cannot act between), while the
+        // lock is still held: unlink the file if it is still ours, take the entry out,
+        // then release the lock by closing the file. A run that opened the path meanwhile
+        // finds it unlinked after its lock and opens the path again.
+        let mut live = live();
+        if let Some(file) = &self.file {
+            if let (Ok(ours), Ok(there)) = (file.metadata(), std::fs::symlink_metadata(&self.path))
+            {
+                if ours.dev() == there.dev() && ours.ino() == there.ino() {
+                    let _ = std::fs::remove_file(&self.path);
+                }
             }
         }
+        self.registration.settle(&mut live);
+        drop(self.file.take());
     }
+}
+
+/// Whether a lock error means the file system has no locks (then the folder is not
+/// locked): `ENOTSUP`, and `ENOLCK` (NFS without its lock daemon).
+fn no_locks_here(e: &std::io::Error) -> bool {
+    e.kind() == std::io::ErrorKind::Unsupported || e.raw_os_error() == Some(libc::ENOLCK)
 }
 
 /// Takes the lock of `folder` for this run: `None` where the file system has no locks.
@@ -419,18 +475,27 @@ impl Drop for FolderLock {
 /// [`IoError`] naming `folder` when another run holds it (with that run's process id),
 /// or the lock file when it cannot be opened (a symbolic link there is not followed).
 fn lock_folder(folder: &Path) -> Result<Option<FolderLock>, IoError> {
+    use std::io::{Read, Seek};
     let path = folder.join(LOCK_NAME);
     // A few tries: the holder may remove the file between our open and our lock.
     for _ in 0..16 {
-        let mut live = live();
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .mode(0o644)
-            .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
-            .open(&path)
-            .map_err(|e| IoError::io(&path, e))?;
+        let open = |write: bool| {
+            std::fs::OpenOptions::new()
+                .read(true)
+                .write(write)
+                .create(write)
+                .mode(0o644)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC | libc::O_NONBLOCK)
+                .open(&path)
+        };
+        // A lock file another user left is locked read-only (flock needs no write).
+        let (mut file, writable) = match open(true) {
+            Ok(f) => (f, true),
+            Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => {
+                (open(false).map_err(|e| IoError::io(&path, e))?, false)
+            }
+            Err(e) => return Err(IoError::io(&path, e)),
+        };
         let ours = file.metadata().map_err(|e| IoError::io(&path, e))?;
         if !ours.file_type().is_file() {
             return Err(IoError::format(
@@ -445,9 +510,12 @@ fn lock_folder(folder: &Path) -> Result<Option<FolderLock>, IoError> {
         match file.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
-                let holder = std::fs::read_to_string(&path)
-                    .ok()
-                    .and_then(|s| s.trim().parse::<u32>().ok())
+                // The holder's process id, read through the file we opened.
+                let mut text = String::new();
+                let _ = Read::by_ref(&mut file).take(32).read_to_string(&mut text);
+                let holder = text
+                    .trim()
+                    .parse::<u32>()
                     .map(|pid| format!(" (process {pid})"))
                     .unwrap_or_default();
                 return Err(IoError::format(
@@ -458,22 +526,31 @@ fn lock_folder(folder: &Path) -> Result<Option<FolderLock>, IoError> {
                     ),
                 ));
             }
-            Err(std::fs::TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
-                return Ok(None)
+            Err(std::fs::TryLockError::Error(e)) if no_locks_here(&e) => {
+                // Leave no empty lock file of ours behind.
+                if ours.len() == 0 {
+                    let _ = std::fs::remove_file(&path);
+                }
+                return Ok(None);
             }
             Err(std::fs::TryLockError::Error(e)) => return Err(IoError::io(&path, e)),
         }
+        let mut live = live();
         match std::fs::symlink_metadata(&path) {
             Ok(m) if m.dev() == ours.dev() && m.ino() == ours.ino() => {
-                // Whose lock it is, for the message of a run refused.
-                let _ = file
-                    .set_len(0)
-                    .and_then(|()| writeln!(file, "{}", std::process::id()));
-                let registration = Registration::under(&mut live, &path, false);
+                if writable {
+                    // Whose lock it is, for the message of a run refused.
+                    let _ = file
+                        .set_len(0)
+                        .and_then(|()| file.rewind())
+                        .and_then(|()| writeln!(file, "{}", std::process::id()));
+                }
+                let registration =
+                    Registration::under(&mut live, &path, Kind::Lock(ours.dev(), ours.ino()));
                 return Ok(Some(FolderLock {
                     path,
-                    file,
-                    _registration: registration,
+                    file: Some(file),
+                    registration,
                 }));
             }
             // Unlinked by the run that held it: open the path again.
@@ -535,7 +612,7 @@ impl OutputSet {
             .permissions(std::fs::Permissions::from_mode(0o700))
             .tempdir_in(folder)
             .map_err(|e| IoError::io(folder, e))?;
-        let registration = Registration::under(&mut live, staging.path(), true);
+        let registration = Registration::under(&mut live, staging.path(), Kind::Folder);
         Ok(OutputSet {
             folder: folder.to_path_buf(),
             staging,
@@ -576,6 +653,9 @@ impl OutputSet {
         self.check(name)?;
         let staged = self.staging.path().join(name);
         if let Some(parent) = staged.parent() {
+            // Under the registry: after a signal's clean-up this never runs, so the
+            // removed staging folder is not made again.
+            let _live = live();
             std::fs::create_dir_all(parent).map_err(|e| IoError::io(&target, e))?;
         }
         self.names.insert(name.to_path_buf());
@@ -1163,5 +1243,47 @@ mod tests {
             .entries
             .values()
             .any(|(q, _)| q.starts_with(dir.path())));
+    }
+
+    #[test]
+    fn a_signal_s_clean_up_removes_what_the_registry_holds_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("earlier.txt"), "earlier").unwrap();
+        let tmp = d.join(".era-tmp-1-abcdefghijkl.csv");
+        std::fs::write(&tmp, "half").unwrap();
+        let staging = d.join(".era-staging-1-abcdefghijkl");
+        std::fs::create_dir_all(staging.join("pairs")).unwrap();
+        std::fs::write(staging.join("pairs/p.png"), "half").unwrap();
+        let lock = d.join(LOCK_NAME);
+        std::fs::write(&lock, "1\n").unwrap();
+        let meta = std::fs::metadata(&lock).unwrap();
+        // A lock file that is another run's by now (a new inode at the path) stays.
+        let replaced = d.join("other").join(LOCK_NAME);
+        std::fs::create_dir(d.join("other")).unwrap();
+        std::fs::write(&replaced, "2\n").unwrap();
+        let mut private = Live {
+            next: 0,
+            entries: BTreeMap::new(),
+        };
+        let registrations = [
+            Registration::under(&mut private, &tmp, Kind::File),
+            Registration::under(&mut private, &staging, Kind::Folder),
+            Registration::under(&mut private, &lock, Kind::Lock(meta.dev(), meta.ino())),
+            Registration::under(
+                &mut private,
+                &replaced,
+                Kind::Lock(meta.dev(), meta.ino() + 1),
+            ),
+        ];
+        // Their drops would settle ids of the process's registry: these are the private
+        // one's.
+        for r in registrations {
+            std::mem::forget(r);
+        }
+        assert_eq!(remove_entries(&mut private), 3);
+        assert!(private.entries.is_empty());
+        assert_eq!(names(d), ["earlier.txt", "other"]);
+        assert!(replaced.exists());
     }
 }

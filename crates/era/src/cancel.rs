@@ -11,7 +11,7 @@
 //!
 //! The token lives in a thread-local of the calling thread. rayon's workers do not see
 //! it, so a loop run across the pool captures [`current`] first and checks that. The CLI
-//! does not use this: a signal there ends the process (see era-io's `atomic::interrupt`),
+//! does not use this: a signal there ends the process (see era-io's `atomic::abandon`),
 //! which is immediate and needs no check points.
 //!
 //! Why our own and not a crate: what is needed is one atomic flag and a thread-local, and

@@ -1365,6 +1365,7 @@ fn judge_significance(
                 // The domain that fits better, decided once on the full set.
                 let (c, z) = (fit(None), fit(Some(sample_time_s)));
                 match (c, z) {
+                    (_, Err(EraError::Interrupted)) => Err(EraError::Interrupted),
                     (Ok(c), Ok(z)) => {
                         let zoh = z.cost_before < c.cost_before;
                         domain = Some(zoh.then_some(sample_time_s));

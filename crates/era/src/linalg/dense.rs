@@ -47,6 +47,7 @@ pub(crate) fn thin_svd(h: Mat<f64>, what: &str) -> Result<ThinSvd> {
     let (send, receive) = std::sync::mpsc::channel();
     let spawned = std::thread::Builder::new()
         .name("era-svd".into())
+        .stack_size(8 << 20)
         .spawn(move || {
             // The receiver is gone when the call was cancelled: the result is dropped.
             let _ = send.send(compute(&h, par));
@@ -129,5 +130,24 @@ mod tests {
         token.cancel();
         let r = token.run(|| thin_svd(matrix(), "H"));
         assert_eq!(r.unwrap_err(), EraError::Interrupted);
+    }
+
+    #[test]
+    fn a_call_cancelled_while_its_svd_runs_returns_interrupted() {
+        // A 1200 x 1200 SVD takes a good fraction of a second on any machine; the call is
+        // cancelled a millisecond in, and returns while the abandoned SVD still runs.
+        let h = Mat::from_fn(1200, 1200, |i, j| {
+            ((i * 31 + j * 17) % 101) as f64 + f64::from(u8::from(i == j))
+        });
+        let token = cancel::Cancel::new();
+        let remote = token.clone();
+        let result = std::thread::scope(|s| {
+            s.spawn(move || {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+                remote.cancel();
+            });
+            token.run(|| thin_svd(h, "H"))
+        });
+        assert_eq!(result.unwrap_err(), EraError::Interrupted);
     }
 }

@@ -229,6 +229,8 @@ pub fn refine_identification_in(
     // data (`FitDomain`).
     let discrete_ts = requested_sample_time(&found, domain);
     let (ropts, fit_domain) = fit_setup(&found, options, &start.poles, discrete_ts);
+    // The domain probe treats a failure as "keep the asked domain"; an interrupt is not one.
+    crate::cancel::check()?;
     let fitted = fitted_data(&found, frf, &fit_domain)?;
     let refinement = crate::refine::refine(fitted, &start.poles, &ropts, progress)?;
     let quantity = found.processed.quantity();
