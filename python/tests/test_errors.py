@@ -62,7 +62,8 @@ def test_frfdata_values_are_validated_like_a_file():
         era.FrfData(f, np.ones((0, 1, 5)))
     with pytest.raises(ValueError, match="quantity 'force': expected 'acceleration', 'velocity' or 'displacement'"):
         era.FrfData(f, np.ones((1, 1, 5)), quantity="force")
-    with pytest.raises(ValueError, match="values: cannot be read as complex128"):
+    # Text is not a number: the wrong type, named (issue 36).
+    with pytest.raises(TypeError, match="values: expected an array of real or complex numbers, got dtype <U1"):
         era.FrfData(f, [[["a"] * 5]])
 
 

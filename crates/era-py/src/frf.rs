@@ -13,7 +13,7 @@ use era::{Complex64, FrfData, Quantity};
 use era_io::format::{read_frf_file, write_frf_file, FrfFormat, ReadOptions};
 use era_io::frf_file::FrfFile;
 use era_io::uff::UffWriteOptions;
-use numpy::ndarray::{Ix1, Ix2, Ix3};
+use numpy::ndarray::Ix3;
 use numpy::{PyArray1, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::sync::GILOnceCell;
@@ -62,14 +62,7 @@ impl PyFrfData {
         quantity: &str,
     ) -> PyResult<Self> {
         let q_tag = crate::frf::quantity("quantity", quantity)?;
-        let f = contiguous::<f64, Ix1>(
-            frequency_hz,
-            "float64",
-            &[&era::limits::LINES],
-            None,
-            "frequency_hz",
-            "(lines,)",
-        )?;
+        let f = crate::frequency_lines(frequency_hz)?;
         let v = contiguous::<Complex64, Ix3>(
             values,
             "complex128",
@@ -409,14 +402,7 @@ pub fn estimate_frf<'py>(
         quantity,
     )?;
     let frame = frame.size("frame")?;
-    let array = contiguous::<f64, Ix2>(
-        data,
-        "float64",
-        &[&era::limits::CHANNELS, &era::limits::SAMPLES],
-        None,
-        "data",
-        "(channels, samples)",
-    )?;
+    let array = crate::time_block(data)?;
     let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
     let inputs = channels("inputs", &inputs, n_channels)?;
     let outputs = channels("outputs", &outputs, n_channels)?;

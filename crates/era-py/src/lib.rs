@@ -301,6 +301,35 @@ pub(crate) fn contiguous<'py, T: Element, D: numpy::ndarray::Dimension>(
         .map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
 }
 
+/// The argument `frequency_hz`, shape (lines,), as [`contiguous`] reads it.
+pub(crate) fn frequency_lines<'py>(
+    frequency_hz: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    contiguous(
+        frequency_hz,
+        "float64",
+        &[&era::limits::LINES],
+        None,
+        "frequency_hz",
+        "(lines,)",
+    )
+}
+
+/// The argument `data`, a time-history block of shape (channels, samples), as
+/// [`contiguous`] reads it (in place when it is C-contiguous float64).
+pub(crate) fn time_block<'py>(
+    data: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray<f64, numpy::ndarray::Ix2>>> {
+    contiguous(
+        data,
+        "float64",
+        &[&era::limits::CHANNELS, &era::limits::SAMPLES],
+        None,
+        "data",
+        "(channels, samples)",
+    )
+}
+
 /// A 1-D float64 array of `values` (moved, not copied).
 pub(crate) fn vector<'py, T: Element>(py: Python<'py>, values: Vec<T>) -> Bound<'py, PyArray1<T>> {
     PyArray1::from_vec(py, values)

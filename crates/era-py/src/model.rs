@@ -10,7 +10,7 @@
 //! checked by [`era::EraOptions::check`] with the CLI's messages.
 
 use crate::frf::PyFrfData;
-use crate::{contiguous, era_error, guarded, value_error, vector, Int};
+use crate::{era_error, guarded, value_error, vector, Int};
 use era::identification::Identification;
 use era::identify::{
     identify as run_identify, identify_auto, identify_auto_supplied, identify_supplied, EraOptions,
@@ -20,7 +20,6 @@ use era::params::Naming;
 use era::pipeline::realize::{DirectTerm, SvdPath};
 use era::{Complex64, TimeDomain};
 use era_io::model_json::{parameters, FitJson, ModelJson};
-use numpy::ndarray::Ix1;
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::PyImportError;
 use pyo3::prelude::*;
@@ -306,14 +305,7 @@ impl PyIdentification {
         py: Python<'py>,
         frequency_hz: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<Complex64>>> {
-        let f = contiguous::<f64, Ix1>(
-            frequency_hz,
-            "float64",
-            &[&era::limits::LINES],
-            None,
-            "frequency_hz",
-            "(lines,)",
-        )?;
+        let f = crate::frequency_lines(frequency_hz)?;
         let f = f.readonly().as_slice()?.to_vec();
         if let Some(k) = f.iter().position(|x| !x.is_finite()) {
             return value_error(format!(

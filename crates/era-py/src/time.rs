@@ -7,13 +7,12 @@ use crate::model::{
     lowpass_of, refine_options_of, route_request, states_of, svd_path, thread_count,
     PyIdentification, Run,
 };
-use crate::{contiguous, era_error, guarded, value_error, Int};
+use crate::{era_error, guarded, value_error, Int};
 use era::frf::estimate::estimate;
 use era::identify::{EraOptions, ScanOptions, SuppliedMarkov};
 use era::params::Naming;
 use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
 use era::sources::MarkovSource;
-use numpy::ndarray::Ix2;
 use numpy::{PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
@@ -133,14 +132,7 @@ pub fn identify_time(
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
 
-    let array = contiguous::<f64, Ix2>(
-        data,
-        "float64",
-        &[&era::limits::CHANNELS, &era::limits::SAMPLES],
-        None,
-        "data",
-        "(channels, samples)",
-    )?;
+    let array = crate::time_block(data)?;
     let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
     let inputs = crate::frf::channels("inputs", &inputs, n_channels)?;
     let outputs = crate::frf::channels("outputs", &outputs, n_channels)?;

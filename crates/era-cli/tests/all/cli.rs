@@ -2,7 +2,7 @@
 
 use crate::common;
 
-use common::{era, expect_input_error, s};
+use common::{era, expect_input_error, s, simulated_truth};
 use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -15,17 +15,6 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     p
-}
-
-/// Writes the truth model's FRFs into `dir` with `era simulate truth-model`.
-fn simulated_truth(dir: &Path) -> PathBuf {
-    let frf = dir.join("truth.csv");
-    era()
-        .args(["simulate", "truth-model", "-q", "--out"])
-        .arg(&frf)
-        .assert()
-        .success();
-    frf
 }
 
 #[test]
@@ -863,20 +852,7 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
 #[test]
 fn threads_sets_the_run_and_refuses_absurd_counts() {
     let dir = tempfile::tempdir().unwrap();
-    let frf = dir.path().join("dta.csv");
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "--collocated",
-            "--noise",
-            "0.05",
-            "-q",
-            "--out",
-        ])
-        .arg(&frf)
-        .assert()
-        .success();
+    let frf = crate::common::dta_like_set(dir.path(), "dta.csv");
     let run = |threads: &[&str]| {
         let out = era()
             .args(threads)

@@ -136,53 +136,35 @@ fn kill(child: &Child, signal: i32) -> Instant {
     sent
 }
 
-/// A thesis-size set (8 x 8, 40 modes, 5 % noise) whose `--states auto --refine` takes
-/// seconds.
-fn long_set(dir: &Path) -> PathBuf {
-    let path = dir.join("dta.uff");
-    crate::common::era()
-        .args([
-            "simulate",
-            "modal",
-            "--collocated",
-            "--noise",
-            "0.05",
-            "-q",
-            "--out",
-        ])
-        .arg(&path)
-        .assert()
-        .success();
-    path
-}
-
-fn small_set(dir: &Path) -> PathBuf {
-    let path = dir.join("truth.csv");
-    crate::common::era()
-        .args(["simulate", "truth-model", "-q", "--out"])
-        .arg(&path)
-        .assert()
-        .success();
-    path
+/// `era identify` of the truth model at `states` into `out`: a run of a tenth of a
+/// second with a full set of outputs.
+fn small_identify(small: &Path, states: &str, out: &Path) -> Vec<String> {
+    [
+        "identify",
+        s(small),
+        "--states",
+        states,
+        "--hankel-factor",
+        "4",
+        "--pad-to",
+        "1024",
+        "-q",
+        "--out",
+        s(out),
+    ]
+    .map(String::from)
+    .to_vec()
 }
 
 #[test]
 fn a_signal_ends_a_long_run_within_a_second_and_leaves_the_earlier_set_whole() {
     let inputs = tempfile::tempdir().unwrap();
-    let long = long_set(inputs.path());
-    let small = small_set(inputs.path());
+    let long = crate::common::dta_like_set(inputs.path(), "dta.uff");
+    let small = crate::common::simulated_truth(inputs.path());
     let out = tempfile::tempdir().unwrap();
     let o = out.path();
     crate::common::era()
-        .args([
-            "identify",
-            s(&small),
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-        ])
-        .args(["--pad-to", "1024", "-q", "--out", s(o)])
+        .args(small_identify(&small, "8", o))
         .assert()
         .success();
     let earlier = snapshot(o);
@@ -264,8 +246,8 @@ fn a_signal_while_a_large_file_is_written_removes_its_staged_file() {
 #[test]
 fn a_second_run_into_a_held_folder_is_refused_and_the_first_run_s_set_is_whole() {
     let inputs = tempfile::tempdir().unwrap();
-    let long = long_set(inputs.path());
-    let small = small_set(inputs.path());
+    let long = crate::common::dta_like_set(inputs.path(), "dta.uff");
+    let small = crate::common::simulated_truth(inputs.path());
     let out = tempfile::tempdir().unwrap();
     let o = out.path();
     let mut first = spawn(&[
@@ -283,15 +265,7 @@ fn a_second_run_into_a_held_folder_is_refused_and_the_first_run_s_set_is_whole()
         "no staging folder"
     );
     let second = crate::common::era()
-        .args([
-            "identify",
-            s(&small),
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-        ])
-        .args(["--pad-to", "1024", "-q", "--out", s(o)])
+        .args(small_identify(&small, "8", o))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&second.stderr);
@@ -312,15 +286,7 @@ fn a_second_run_into_a_held_folder_is_refused_and_the_first_run_s_set_is_whole()
     no_era_leftovers(o);
     // The folder is free again.
     crate::common::era()
-        .args([
-            "identify",
-            s(&small),
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-        ])
-        .args(["--pad-to", "1024", "-q", "--out", s(o)])
+        .args(small_identify(&small, "8", o))
         .assert()
         .success();
 }
@@ -330,24 +296,10 @@ fn a_second_run_into_a_held_folder_is_refused_and_the_first_run_s_set_is_whole()
 #[test]
 fn a_signal_at_any_moment_leaves_one_whole_set() {
     let inputs = tempfile::tempdir().unwrap();
-    let small = small_set(inputs.path());
+    let small = crate::common::simulated_truth(inputs.path());
     let out = tempfile::tempdir().unwrap();
     let o = out.path();
-    let identify = |states: &str| {
-        vec![
-            "identify".to_string(),
-            s(&small).to_string(),
-            "--states".into(),
-            states.into(),
-            "--hankel-factor".into(),
-            "4".into(),
-            "--pad-to".into(),
-            "1024".into(),
-            "-q".into(),
-            "--out".into(),
-            s(o).to_string(),
-        ]
-    };
+    let identify = |states: &str| small_identify(&small, states, o);
     let run = |states: &str| {
         crate::common::era()
             .args(identify(states))

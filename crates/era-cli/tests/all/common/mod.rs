@@ -14,6 +14,37 @@ pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Writes the truth model's FRFs into `dir/truth.csv` with `era simulate truth-model`.
+pub fn simulated_truth(dir: &Path) -> PathBuf {
+    let frf = dir.join("truth.csv");
+    era()
+        .args(["simulate", "truth-model", "-q", "--out"])
+        .arg(&frf)
+        .assert()
+        .success();
+    frf
+}
+
+/// A thesis-size set written to `dir/name` (8 x 8, 40 modes, collocated, 5 % noise),
+/// whose `--states auto --refine` takes seconds.
+pub fn dta_like_set(dir: &Path, name: &str) -> PathBuf {
+    let path = dir.join(name);
+    era()
+        .args([
+            "simulate",
+            "modal",
+            "--collocated",
+            "--noise",
+            "0.05",
+            "-q",
+            "--out",
+        ])
+        .arg(&path)
+        .assert()
+        .success();
+    path
+}
+
 /// Runs `era`, expects success, and parses its stdout as JSON (`--json` runs).
 #[track_caller]
 pub fn json_of(args: &[&str]) -> serde_json::Value {
