@@ -70,17 +70,23 @@ fn message(err: &anyhow::Error) -> String {
 /// temporary files, staging folders and folder locks, so earlier outputs stay whole and
 /// nothing of the run is left. A thread waits for the signals; the work needs no check
 /// points, and the exit comes within milliseconds. A second signal, should the clean-up
-/// ever hang on the file system, ends the process at once (the signal's default).
+/// ever hang on the file system, ends the process at once (the signal's default). A
+/// signal the process was started with ignored stays ignored (`nohup era …` ignores
+/// SIGHUP; a background job of a script ignores SIGINT).
 fn exit_on_signals() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     use std::io::Write;
+    let watched: Vec<i32> = [SIGINT, SIGTERM, SIGHUP]
+        .into_iter()
+        .filter(|&s| !ignored(s))
+        .collect();
     let caught = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    for signal in [SIGINT, SIGTERM, SIGHUP] {
+    for &signal in &watched {
         // Order matters: the default action is armed by the flag the first signal sets.
         let _ = signal_hook::flag::register_conditional_default(signal, caught.clone());
         let _ = signal_hook::flag::register(signal, caught.clone());
     }
-    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+    let Ok(mut signals) = signal_hook::iterator::Signals::new(&watched) else {
         return;
     };
     let _ = std::thread::Builder::new()
@@ -101,6 +107,17 @@ fn exit_on_signals() {
                 std::process::exit(128 + signal);
             }
         });
+}
+
+/// Whether `signal` is ignored (`SIG_IGN`), as the process was started.
+fn ignored(signal: i32) -> bool {
+    // SAFETY: sigaction with a null new action only reads the current one into `old`,
+    // a zeroed sigaction owned here.
+    unsafe {
+        let mut old: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(signal, std::ptr::null(), &mut old) == 0
+            && old.sa_sigaction == libc::SIG_IGN
+    }
 }
 
 fn main() -> ExitCode {

@@ -12,13 +12,26 @@ use std::time::{Duration, Instant};
 /// The longest any run here may take before the test calls it hung.
 const HANG: Duration = Duration::from_secs(120);
 
+/// Starts era with SIGINT, SIGTERM and SIGHUP at their defaults: a test runner started
+/// in the background of a script has SIGINT ignored, and era keeps a signal it was
+/// started with ignored.
 fn spawn(args: &[&str]) -> Child {
-    Command::new(assert_cmd::cargo::cargo_bin("era"))
+    use std::os::unix::process::CommandExt;
+    let mut command = Command::new(assert_cmd::cargo::cargo_bin("era"));
+    command
         .args(args)
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap()
+        .stderr(Stdio::piped());
+    // SAFETY: between fork and exec only async-signal-safe calls (signal(2)).
+    unsafe {
+        command.pre_exec(|| {
+            for s in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+                libc::signal(s, libc::SIG_DFL);
+            }
+            Ok(())
+        });
+    }
+    command.spawn().unwrap()
 }
 
 /// Waits for `child`; its exit code (128 + signal when a signal ended it uncaught), its
@@ -200,6 +213,33 @@ fn a_signal_ends_a_long_run_within_a_second_and_leaves_the_earlier_set_whole() {
         assert_eq!(snapshot(o), earlier);
         no_era_leftovers(o);
     }
+}
+
+/// A signal ignored when era starts stays ignored (`nohup era …`): the run completes.
+#[test]
+fn a_signal_ignored_at_the_start_stays_ignored() {
+    use std::os::unix::process::CommandExt;
+    let inputs = tempfile::tempdir().unwrap();
+    let small = crate::common::simulated_truth(inputs.path());
+    let out = tempfile::tempdir().unwrap();
+    let mut command = Command::new(assert_cmd::cargo::cargo_bin("era"));
+    command
+        .args(small_identify(&small, "8", out.path()))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    // SAFETY: between fork and exec only async-signal-safe calls (signal(2)).
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGHUP, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let mut child = command.spawn().unwrap();
+    assert!(wait_for_entry(out.path(), ".era-staging-", &mut child));
+    let _ = kill(&child, libc::SIGHUP);
+    let (exit, err, _) = finish(child);
+    assert_eq!(exit, 0, "{err}");
+    assert!(out.path().join("model.json").exists());
 }
 
 #[test]
