@@ -98,3 +98,10 @@ def test_what_okid_cannot_take_is_a_value_error(era_cli, tmp_path):
         era.identify_time(data, float("nan"), ins, outs)
     with pytest.raises(ValueError, match="outputs: channel 12"):
         era.identify_time(data, 64.0, ins, [2, 12])
+    # More Markov blocks than the record holds (10**8 once aborted on 16 GB); the
+    # default follows a record shorter than 2048 samples.
+    for n in (1281, 10**8):
+        with pytest.raises(ValueError, match=f"markov_samples = {n}: the longest record has 1280 samples"):
+            era.identify_time(data, 64.0, ins, outs, markov_samples=n)
+    short = era.identify_time(data, 64.0, ins, outs, states=20, refine=False)
+    assert short.parameters["okid"]["markov_samples"] == 1280

@@ -162,7 +162,8 @@ pub fn identify_time(
     let okid_options = {
         let mut o = OkidOptions::default();
         o.observer_order = observer.unwrap_or(ObserverOrder::Auto { max: None });
-        o.markov_samples = markov_samples.unwrap_or(era::frf::estimate::DEFAULT_FRAME);
+        o.markov_samples =
+            markov_samples.unwrap_or_else(|| era::sources::okid::default_markov_samples(samples));
         o
     };
     let (found, source_facts) = guarded(py, || {

@@ -79,6 +79,8 @@ pub const OPTION_KEYS: &[&str] = &[
     "duration",
     "cycles",
     "threads",
+    "observer_order",
+    "markov_samples",
 ];
 
 /// `message` with each `` `key` `` or `` `key value` `` quote of an [`OPTION_KEYS`]

@@ -787,9 +787,15 @@ fn observe(
         Some(ObserverOrderArg::Fixed(p)) => ObserverOrder::Fixed(p),
         Some(ObserverOrderArg::Auto) | None => ObserverOrder::Auto { max: None },
     };
+    let longest = records
+        .records
+        .iter()
+        .filter_map(|r| r.inputs.first().map(|c| c.len()))
+        .max()
+        .unwrap_or(0);
     options.markov_samples = a
         .markov_samples
-        .unwrap_or(era::frf::estimate::DEFAULT_FRAME);
+        .unwrap_or_else(|| era::sources::okid::default_markov_samples(longest));
     let inputs: Vec<Vec<&[f64]>> = records
         .records
         .iter()

@@ -265,6 +265,26 @@ fn time_histories_okid_cannot_take_are_refused_with_their_channel_or_file() {
         "needs at least 2004 samples",
     );
     run(base(&file), &["--observer-order", "100"], "observer-order");
+    // More Markov blocks than the record has samples (the hostile corpus's 1e8 aborted on
+    // a 4 GB allocation): refused, naming the flag and the record's length. The default
+    // (2048) follows a shorter record.
+    for n in ["1281", "100000000", "18446744073709551614"] {
+        run(base(&file), &["--markov-samples", n], "--markov-samples");
+    }
+    run(
+        base(&file),
+        &["--markov-samples", "1281"],
+        "the longest record has 1280 samples",
+    );
+    let mut fits: Vec<String> = base(&file);
+    fits.extend(["--states", "20", "--json", "-q", "--no-figures", "--out"].map(String::from));
+    fits.push(s(&dir.path().join("fits")).to_string());
+    let v = crate::common::json_of(&fits.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(
+        v["parameters"]["okid"]["markov_samples"], 1280,
+        "{}",
+        v["parameters"]
+    );
     // An input with no energy (constant).
     let dead = dir.path().join("dead.csv");
     edited(&file, &dead, |_, f| f[2] = "0.5".into());

@@ -125,6 +125,25 @@ impl Default for OkidOptions {
 /// Default number of system Markov blocks.
 pub const DEFAULT_MARKOV_SAMPLES: usize = 1024;
 
+/// The front ends' default number of Markov blocks for records whose longest has
+/// `longest` samples: the judging frame ([`crate::frf::estimate::DEFAULT_FRAME`]), or
+/// the record when it is shorter (blocks past the record are not in the data).
+pub fn default_markov_samples(longest: usize) -> usize {
+    crate::frf::estimate::DEFAULT_FRAME.min(longest)
+}
+
+/// Points on the unit circle at which the observer's transfer function is evaluated for
+/// `samples` Markov blocks at observer order `p`: enough that the inverse transform's
+/// aliasing stays below the blocks' own decay.
+fn unit_circle_points(samples: usize, p: usize) -> usize {
+    samples
+        .saturating_mul(8)
+        .max(4 * p + 4)
+        .checked_next_power_of_two()
+        .unwrap_or(usize::MAX)
+        .max(4096)
+}
+
 /// The most regressors (`r + p(r+q)`) an observer may have: its triangle and the SVD
 /// of it stay below a second and 40 MB.
 pub const MAX_REGRESSORS: usize = 2000;
@@ -792,11 +811,20 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
             reason: "need at least 2 Markov blocks (the direct term and one more)".into(),
         });
     }
+    let longest = lengths.iter().copied().max().unwrap_or(0);
+    if options.markov_samples > longest {
+        return Err(EraError::InvalidParameter {
+            name: "markov_samples",
+            value: options.markov_samples.to_string(),
+            reason: format!(
+                "the longest record has {longest} samples: Markov blocks past it are not in the data"
+            ),
+        });
+    }
     crate::limits::VALUES.check_product(
-        "markov_samples",
+        "`markov_samples`",
         &[options.markov_samples as u64, r as u64, q as u64],
     )?;
-    let longest = lengths.iter().copied().max().unwrap_or(0);
     let equations = |p: usize| -> usize { lengths.iter().map(|&l| l.saturating_sub(p)).sum() };
     // An order is usable when the regression has at least twice as many equations as
     // unknowns.
@@ -840,6 +868,16 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
             (p, false)
         }
     };
+    // The unit circle's transfer function (the route an unstable observer takes) holds
+    // `points` values per input-output pair: checked before anything is built.
+    crate::limits::VALUES.check_product(
+        "`markov_samples` (the observer's transfer function on the unit circle)",
+        &[
+            unit_circle_points(options.markov_samples, p_max) as u64,
+            r as u64,
+            q as u64,
+        ],
+    )?;
     let data = scale_records(records, r, q)?;
     let (tri, rows) = data_triangle(&data, r, q, p_max, p_max, blocks)?;
     // Dependent inputs: the current inputs come first, so their diagonal says whether
@@ -876,7 +914,7 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
     let residual = residual_rms(&tri, rows, r, q, p, p_max);
     let obs = unpack(&theta, r, q, p);
     let samples = options.markov_samples;
-    let points = (8 * samples).max(4 * p + 4).next_power_of_two().max(4096);
+    let points = unit_circle_points(samples, p);
     // The roots decide the route. Their eigenvalue problem runs on one thread while the
     // other computes the unit circle's sequence (the recursion's is cheap and follows),
     // so a route that needs the circle does not wait for the roots first.
@@ -1268,6 +1306,36 @@ mod tests {
         };
         let (_, u, y) = test_record(&spec, 64.0, 2000, 1);
         let yi = refs(&y);
+        // More Markov blocks than the record has samples: refused by name, before any
+        // allocation (10^8 once asked for 16 GB on the unit circle).
+        for n in [2001, 100_000_000, usize::MAX / 2] {
+            let e = okid(
+                &[Record {
+                    inputs: &refs(&u),
+                    outputs: &yi,
+                }],
+                &OkidOptions {
+                    markov_samples: n,
+                    ..OkidOptions::default()
+                },
+            )
+            .unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    EraError::InvalidParameter {
+                        name: "markov_samples",
+                        ..
+                    }
+                ),
+                "{e}"
+            );
+            assert!(
+                e.to_string()
+                    .contains("the longest record has 2000 samples"),
+                "{e}"
+            );
+        }
         // An input with no energy.
         let flat = vec![3.0; 2000];
         let ui = [u[0].as_slice(), flat.as_slice()];
@@ -1333,6 +1401,7 @@ mod tests {
             }],
             &OkidOptions {
                 observer_order: ObserverOrder::Fixed(10),
+                markov_samples: 20,
                 ..OkidOptions::default()
             },
         )
