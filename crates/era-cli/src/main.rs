@@ -121,6 +121,7 @@ fn ignored(signal: i32) -> bool {
 }
 
 fn main() -> ExitCode {
+    output::report::mark_start();
     let cli = args::Cli::parse();
     exit_on_signals();
     std::panic::set_hook(Box::new(|info| {

@@ -479,8 +479,12 @@ pub fn timings_map(t: &StageTimings) -> BTreeMap<String, f64> {
         ("realize", t.realize),
         ("modes", t.modes),
         ("fit", t.fit),
+        ("scan", t.scan),
+        ("selection", t.selection),
     ]
     .into_iter()
+    // The scan's stages only where a scan ran.
+    .filter(|&(k, v)| v > 0.0 || !matches!(k, "scan" | "selection"))
     .map(|(k, v)| (k.to_string(), v))
     .collect()
 }

@@ -62,6 +62,12 @@ pub struct StageTimings {
     pub fit: f64,
     /// The refinement ([`crate::refine::identification::refine_identification`]), 0 when none ran.
     pub refine: f64,
+    /// The order scan's realizations and eigenvalues (after its factorization, which is
+    /// counted in `hankel_svd` and `realize`), 0 when no scan ran.
+    pub scan: f64,
+    /// The automatic order's choice: clustering, significance, the modal model of the
+    /// chosen poles; the scan's matching of a fixed-order model. 0 when no scan ran.
+    pub selection: f64,
 }
 
 /// Everything `identify` found.

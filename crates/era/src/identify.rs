@@ -1013,7 +1013,10 @@ fn scan_front(
         },
         other => other,
     })?;
-    timings.hankel_svd = factorization.seconds();
+    // The factorization's SVD, and its products (H1's projection) as the realization's.
+    let factored = clock.elapsed().as_secs_f64();
+    timings.hankel_svd += factorization.seconds();
+    timings.realize += (factored - factorization.seconds()).max(0.0);
     // Exact low-order data: the default range starts above the Hankel's rank, or most of
     // it lies above (a range bounded by the data's order starts at half of it); scan up
     // to the rank instead (an explicit --orders is taken as given).
@@ -1026,7 +1029,9 @@ fn scan_front(
     } else {
         range
     };
+    let scan_clock = Instant::now();
     let s = scan(&factorization, &range, &scan_options.diagram, progress)?;
+    timings.scan = scan_clock.elapsed().as_secs_f64();
     Ok((f, factorization, range, s, clock.elapsed().as_secs_f64()))
 }
 
@@ -1100,6 +1105,7 @@ fn with_scan(
         progress,
         &mut timings,
     )?;
+    let clock = Instant::now();
     let selection = select(&s, found.band_hz, &criteria_for(scan_options, &range));
     for (m, q) in found.modal.modes.iter().zip(found.quality.iter_mut()) {
         let cluster = selection.clusters.iter().filter(|c| c.physical).find(|c| {
@@ -1128,6 +1134,14 @@ fn with_scan(
         seconds,
         None,
     ));
+    // The scan's own front, factorization and realizations beside the fixed order's.
+    let t = &mut found.timings;
+    t.preprocess += timings.preprocess;
+    t.markov += timings.markov;
+    t.hankel_svd += timings.hankel_svd;
+    t.realize += timings.realize;
+    t.scan = timings.scan;
+    t.selection = clock.elapsed().as_secs_f64();
     Ok(found)
 }
 
@@ -1190,6 +1204,7 @@ fn auto(
         progress,
         &mut timings,
     )?;
+    let clock = Instant::now();
     // The band needs the lines only: the data is integrated once, in `assess`.
     let (_, band_hz) = fit_band(frf.frequency_hz(), options);
     let band_hz = match scan_options.band_hz {
@@ -1251,6 +1266,7 @@ fn auto(
         sc.undo(&mut realization);
         sc.undo_model(&mut discrete);
     }
+    timings.selection = clock.elapsed().as_secs_f64();
     let note = format!(
         "a modal model of the {} physical modes ({} states), each pole taken from the highest order its cluster reached (of the realizations {range} from one factorization of H0 at {} states)",
         chosen.len(),

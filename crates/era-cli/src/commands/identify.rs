@@ -501,6 +501,9 @@ fn write(
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
     }
     if settings.timings {
+        if let Some(wall) = crate::output::report::process_seconds() {
+            timings.insert(crate::output::report::WALL.into(), wall);
+        }
         human.print(&timings_table(&timings));
         human.print(&svd_path_line(&found.realization));
         model.timings_s = Some(timings);

@@ -330,24 +330,55 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
     let order = [
         "simulate",
         "read",
+        "frf_estimate",
+        "okid",
         "preprocess",
         "markov",
         "hankel_svd",
         "realize",
+        "scan",
+        "selection",
         "modes",
         "fit",
+        "refine",
         "write",
     ];
     let mut s = String::from("\ntimings (s)\n");
-    let others = t.keys().map(String::as_str).filter(|k| !order.contains(k));
+    let others = t
+        .keys()
+        .map(String::as_str)
+        .filter(|k| !order.contains(k) && *k != WALL);
     for key in order.into_iter().chain(others) {
         if let Some(v) = t.get(key) {
-            let _ = writeln!(s, "  {key:<11} {v:.6}");
+            let _ = writeln!(s, "  {key:<12} {v:.6}");
         }
     }
-    let total: f64 = t.values().sum();
-    let _ = writeln!(s, "  {:<11} {total:.6}", "total");
+    let total: f64 = t.iter().filter(|(k, _)| *k != WALL).map(|(_, v)| v).sum();
+    let _ = writeln!(s, "  {:<12} {total:.6}", "total");
+    if let Some(&wall) = t.get(WALL) {
+        let _ = writeln!(
+            s,
+            "  {:<12} {wall:.6}  (the process so far; {:.1} % of it in no stage above)",
+            WALL,
+            100.0 * (wall - total).max(0.0) / wall.max(f64::MIN_POSITIVE)
+        );
+    }
     s
+}
+
+/// The key of the process's wall time in a timings map: not a stage, not in the total.
+pub const WALL: &str = "wall";
+
+static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+
+/// Marks the start of the process (the first thing `main` does).
+pub fn mark_start() {
+    let _ = START.set(std::time::Instant::now());
+}
+
+/// Seconds since [`mark_start`].
+pub fn process_seconds() -> Option<f64> {
+    START.get().map(|t| t.elapsed().as_secs_f64())
 }
 
 /// The end of a verb: with `--timings`, the table and `timings_s` in the JSON; with

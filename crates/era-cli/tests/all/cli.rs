@@ -155,6 +155,17 @@ fn simulate_then_identify_the_truth_model() {
     ] {
         assert!(v["timings_s"][stage].as_f64().is_some(), "{stage}");
     }
+    // No scan at a fixed order: no scan stages. The process's wall time is beside the
+    // stages, not among them.
+    assert!(v["timings_s"].get("scan").is_none());
+    let stages: f64 = v["timings_s"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(k, _)| *k != "wall")
+        .map(|(_, t)| t.as_f64().unwrap())
+        .sum();
+    assert!(stages <= v["timings_s"]["wall"].as_f64().unwrap());
     let model: Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("model.json")).unwrap())
             .unwrap();
@@ -847,6 +858,42 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
         .output()
         .unwrap();
     assert_eq!(json_of(&out)["warnings"], serde_json::json!([]));
+}
+
+/// `--states auto --timings`: the scan and the selection are stages of their own, and
+/// the table says how much of the process's wall time no stage holds.
+#[test]
+fn the_automatic_order_times_its_scan_and_selection() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    let out = era()
+        .args([
+            "identify",
+            s(&frf),
+            "--states",
+            "auto",
+            "--timings",
+            "--no-figures",
+        ])
+        .args(["--out", s(&dir.path().join("o"))])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for stage in ["scan ", "selection ", "hankel_svd ", "total ", "wall "] {
+        assert!(text.contains(&format!("  {stage}")), "{stage}: {text}");
+    }
+    assert!(text.contains("% of it in no stage above"), "{text}");
+    let model: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("o/model.json")).unwrap()).unwrap();
+    let t = model["timings_s"].as_object().unwrap();
+    assert!(t["scan"].as_f64().unwrap() > 0.0 && t["selection"].as_f64().unwrap() > 0.0);
+    let stages: f64 = t
+        .iter()
+        .filter(|(k, _)| *k != "wall")
+        .map(|(_, v)| v.as_f64().unwrap())
+        .sum();
+    assert!(stages <= t["wall"].as_f64().unwrap(), "{t:?}");
 }
 
 #[test]
