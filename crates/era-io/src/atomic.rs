@@ -160,6 +160,11 @@ fn remove_staging(path: &Path) -> bool {
     (0..3).any(|_| std::fs::remove_dir_all(doomed).is_ok())
 }
 
+/// Whether two metadata describe the same file (device and inode).
+fn same_file(a: &Metadata, b: &Metadata) -> bool {
+    a.dev() == b.dev() && a.ino() == b.ino()
+}
+
 /// What a non-regular entry is, for messages.
 fn kind_of(meta: &Metadata) -> &'static str {
     let t = meta.file_type();
@@ -266,7 +271,7 @@ fn finish(
     // something put in its place.
     let ours = tmp.as_file().metadata().map_err(|e| IoError::io(path, e))?;
     match std::fs::symlink_metadata(tmp.path()) {
-        Ok(m) if m.file_type().is_file() && m.dev() == ours.dev() && m.ino() == ours.ino() => {}
+        Ok(m) if m.file_type().is_file() && same_file(&m, &ours) => {}
         _ => {
             return Err(IoError::format(
                 path,
@@ -453,7 +458,7 @@ impl Drop for FolderLock {
         if let Some(file) = &self.file {
             if let (Ok(ours), Ok(there)) = (file.metadata(), std::fs::symlink_metadata(&self.path))
             {
-                if ours.dev() == there.dev() && ours.ino() == there.ino() {
+                if same_file(&ours, &there) {
                     let _ = std::fs::remove_file(&self.path);
                 }
             }
@@ -537,7 +542,7 @@ fn lock_folder(folder: &Path) -> Result<Option<FolderLock>, IoError> {
         }
         let mut live = live();
         match std::fs::symlink_metadata(&path) {
-            Ok(m) if m.dev() == ours.dev() && m.ino() == ours.ino() => {
+            Ok(m) if same_file(&m, &ours) => {
                 if writable {
                     // Whose lock it is, for the message of a run refused.
                     let _ = file

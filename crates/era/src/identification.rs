@@ -31,6 +31,16 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// The pipeline enters this stage: `observer` is told, and a cancelled call
+    /// ([`crate::cancel`]) stops here.
+    ///
+    /// # Errors
+    /// [`crate::EraError::Interrupted`] when the call's token was cancelled.
+    pub(crate) fn enter(self, observer: &mut dyn FnMut(Stage)) -> crate::Result<()> {
+        observer(self);
+        crate::cancel::check()
+    }
+
     /// Human name.
     pub fn name(self) -> &'static str {
         match self {

@@ -372,8 +372,7 @@ fn front(
         None => frf,
     };
 
-    observer(Stage::Preprocess);
-    crate::cancel::check()?;
+    Stage::Preprocess.enter(observer)?;
     let pre = preprocess(
         working,
         options.integrations,
@@ -386,8 +385,7 @@ fn front(
     timings.preprocess = clock.elapsed().as_secs_f64();
     clock = Instant::now();
 
-    observer(Stage::Markov);
-    crate::cancel::check()?;
+    Stage::Markov.enter(observer)?;
     let mut series = match path {
         Path::Fast => impulse_responses(&pre.frf)?,
         Path::Naive => impulse_responses_naive(&pre.frf),
@@ -497,8 +495,7 @@ fn run(
         svd: options.svd,
         ..RealizeOptions::new(options.states, options.hankel_factor)
     };
-    observer(Stage::HankelSvd);
-    crate::cancel::check()?;
+    Stage::HankelSvd.enter(observer)?;
     let mut realization = match (path, options.realizer) {
         (_, Realizer::EraDc) => crate::pipeline::realize_dc::realize_dc(
             &f.markov,
@@ -563,8 +560,7 @@ fn back(
         *slot = clock.elapsed().as_secs_f64();
         clock = Instant::now();
     };
-    observer(Stage::Realize);
-    crate::cancel::check()?;
+    Stage::Realize.enter(observer)?;
     let model = match options.domain {
         ModelDomain::Discrete => discrete.clone(),
         ModelDomain::Continuous => discrete.d2c()?,
@@ -601,14 +597,12 @@ fn assess(
         *slot = clock.elapsed().as_secs_f64();
         clock = Instant::now();
     };
-    observer(Stage::Modes);
-    crate::cancel::check()?;
+    Stage::Modes.enter(observer)?;
     let form = ModalForm::new(&model)?;
     let modal = modal_parameters_of(&form, model.domain);
     lap(&mut timings.modes);
 
-    observer(Stage::Fit);
-    crate::cancel::check()?;
+    Stage::Fit.enter(observer)?;
     let processed = integrate(frf, options.integrations)?;
     let measured = zero_leading_lines(&processed, options.zero_lines);
     let response = match path {
@@ -969,8 +963,7 @@ fn scan_front(
     }
     .max(1);
     let clock = Instant::now();
-    observer(Stage::HankelSvd);
-    crate::cancel::check()?;
+    Stage::HankelSvd.enter(observer)?;
     let factorization = match options.realizer {
         Realizer::Era => Factorization::thesis(
             &f.markov,

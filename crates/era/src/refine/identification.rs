@@ -221,8 +221,7 @@ pub fn refine_identification_in(
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Identification> {
-    observer(Stage::Refine);
-    crate::cancel::check()?;
+    Stage::Refine.enter(observer)?;
     let clock = Instant::now();
     let start = Start::of(&found)?;
     // The domain the user asked the model in, and the domain of the fit, chosen for the
