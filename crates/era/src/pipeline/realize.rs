@@ -397,7 +397,7 @@ fn realize_shapes(
     let clock = Instant::now();
     let h0 = hankel::build(markov, h0_shape)?;
     let hankel_size = (h0.nrows(), h0.ncols());
-    let svd = crate::linalg::dense::thin_svd(h0, "H0")?;
+    let svd = crate::linalg::dense::thin_svd_leading(h0, options.states, "H0")?;
     let singular_values = svd.s;
     check_rank(
         &singular_values,
@@ -802,7 +802,9 @@ impl Factorization {
         } else {
             check_dense_svd(rows, cols)?;
             let h0 = hankel::build(markov, h0_shape)?;
-            let svd = crate::linalg::dense::thin_svd(h0, "H0")?;
+            // Only the realized columns of U and V are kept (and, for a tall or wide
+            // Hankel, computed).
+            let svd = crate::linalg::dense::thin_svd_leading(h0, max_states, "H0")?;
             let h1 = hankel::build(markov, h1_shape)?;
             let ut_h1_v = {
                 let (un, vn) = (svd.u.subcols(0, max_states), svd.v.subcols(0, max_states));
