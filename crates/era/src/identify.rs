@@ -843,39 +843,66 @@ pub fn default_orders(
 /// ([`signal_order`]).
 pub(crate) const PROBE_STATES: usize = 100;
 
-/// The order the data supports: the number of singular values of a small Hankel of
-/// the Markov sequence ([`PROBE_STATES`] states at `hankel_factor`, a dense SVD) above
-/// the noise floor. The floor is Gavish & Donoho's (2014) optimal hard threshold for a
-/// matrix of unknown white noise, `ω(β)·σ_med` with `β` the aspect ratio and
-/// `ω(β) ≈ 0.56β³ − 0.95β² + 1.82β + 1.43`: the median singular value measures the
-/// noise when most singular values are noise. `None` when the probe cannot tell (too
-/// few samples, or more than a third of its singular values above the floor, so that
-/// the median is not noise).
-pub(crate) fn signal_order(
+/// The most rows and columns of the probe Hankel on both sides: a probe of more outputs
+/// and inputs keeps its span of samples but takes fewer block rows, so that its SVD
+/// stays a fraction of the scan's (an 8 x 8 probe of 1992 x 1992 took 1.0–1.4 s, as
+/// 800 x 3184 it takes 0.1 s and finds the same order or one nearer the truth).
+pub(crate) const PROBE_SIDE: usize = 800;
+
+/// The probe's `H0` over the span of a thesis Hankel of [`PROBE_STATES`] states at
+/// `hankel_factor`: square in blocks, unless both sides would exceed [`PROBE_SIDE`],
+/// when it has `PROBE_SIDE / outputs` block rows and the rest of the span in columns.
+/// `None` when the samples support fewer than 8 states.
+fn probe_shape(
     markov: &MarkovSequence,
-    sample_time_s: f64,
     hankel_factor: usize,
-) -> Option<usize> {
+) -> Option<crate::pipeline::hankel::HankelShape> {
     let states = supported_hankel_states(markov.samples(), hankel_factor).min(PROBE_STATES);
     if states < 8 {
         return None;
     }
-    let probe = Factorization::thesis(
-        markov,
-        sample_time_s,
-        &FactorOptions {
-            hankel_states: states,
-            max_states: 1,
-            hankel_factor,
-            svd: SvdPath::Dense,
-            svd_tolerance: 1e-12,
-        },
-    )
-    .ok()?;
-    let sv = probe.singular_values();
-    let (rows, cols) = probe.hankel_size();
+    let square = crate::pipeline::hankel::ThesisHankel::new(states, hankel_factor)
+        .ok()?
+        .h0;
+    let blocks = square.block_rows;
+    let (q, p) = (markov.outputs(), markov.inputs());
+    if q * blocks <= PROBE_SIDE || p * blocks <= PROBE_SIDE {
+        return Some(square);
+    }
+    let rows = PROBE_SIDE.div_ceil(q).min(blocks);
+    Some(crate::pipeline::hankel::HankelShape {
+        block_rows: rows,
+        block_cols: 2 * blocks - rows,
+        ..square
+    })
+}
+
+/// The order the data supports: the number of singular values of a small Hankel of
+/// the Markov sequence ([`probe_shape`], its singular values only) above the noise
+/// floor. The floor is Gavish & Donoho's (2014) optimal hard threshold for a matrix of
+/// unknown white noise, `ω(β)·σ_med` with `β` the aspect ratio and
+/// `ω(β) ≈ 0.56β³ − 0.95β² + 1.82β + 1.43`: the median singular value measures the
+/// noise when most singular values are noise. `None` when the probe cannot tell (too
+/// few samples, or more than a third of its singular values above the floor, so that
+/// the median is not noise).
+///
+/// # Errors
+/// [`EraError::Interrupted`] when the call is cancelled while the probe runs.
+pub(crate) fn signal_order(markov: &MarkovSequence, hankel_factor: usize) -> Result<Option<usize>> {
+    let Some(shape) = probe_shape(markov, hankel_factor) else {
+        return Ok(None);
+    };
+    let Ok(h) = crate::pipeline::hankel::build(markov, shape) else {
+        return Ok(None);
+    };
+    let (rows, cols) = h.shape();
+    let sv = match crate::linalg::dense::singular_values(h, "the probe Hankel") {
+        Ok(sv) => sv,
+        Err(EraError::Interrupted) => return Err(EraError::Interrupted),
+        Err(_) => return Ok(None),
+    };
     if sv.len() < 8 || sv[0] <= 0.0 {
-        return None;
+        return Ok(None);
     }
     let beta = rows.min(cols) as f64 / rows.max(cols) as f64;
     let omega = 0.56 * beta.powi(3) - 0.95 * beta.powi(2) + 1.82 * beta + 1.43;
@@ -885,7 +912,7 @@ pub(crate) fn signal_order(
     // Exact data: the floor is rounding, far below the signal.
     let floor = (omega * median).max(1e-13 * sv[0]);
     let rank = sv.iter().take_while(|&&v| v > floor).count();
-    (rank * 3 <= sv.len()).then_some(rank)
+    Ok((rank * 3 <= sv.len()).then_some(rank))
 }
 
 /// The default scan bounded by the data's order `rank` ([`signal_order`]): from half of
@@ -946,7 +973,7 @@ fn scan_front(
                 frf.inputs(),
             )?;
             let clock = Instant::now();
-            let bounded = signal_order(&f.markov, f.sample_time_s, options.hankel_factor)
+            let bounded = signal_order(&f.markov, options.hankel_factor)?
                 .and_then(|rank| orders_for_rank(rank, &default));
             timings.hankel_svd += clock.elapsed().as_secs_f64();
             bounded.unwrap_or(default)
@@ -1710,5 +1737,66 @@ mod tests {
                 "x {factor:e}: fit {rel} vs {rel0}"
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod probe_tests {
+    use super::*;
+    use crate::sim::{add_noise, ModalSpec, ModalStructure};
+
+    fn markov_of(frf: &FrfData) -> MarkovSequence {
+        let options = EraOptions::new(80, 5);
+        let mut t = StageTimings::default();
+        front(frf, None, &options, Path::Fast, &mut |_| {}, &mut t)
+            .unwrap()
+            .markov
+    }
+
+    #[test]
+    fn the_probe_is_capped_for_many_channels_and_finds_the_order_of_noisy_data() {
+        // The DTA-like set: 8 x 8, 40 modes (80 states), 5 % noise.
+        let structure = ModalStructure::random(&ModalSpec {
+            seed: 7,
+            ..ModalSpec::default()
+        })
+        .unwrap();
+        let clean = structure
+            .frf(801, 0.025, crate::Quantity::Acceleration)
+            .unwrap();
+        let markov = markov_of(&add_noise(&clean, 0.05, 7).unwrap());
+        let shape = probe_shape(&markov, 5).unwrap();
+        // The square probe would be 249 x 249 blocks (1992 x 1992): the same span of
+        // samples in 100 block rows.
+        assert_eq!((shape.block_rows, shape.block_cols), (100, 398));
+        let rank = signal_order(&markov, 5).unwrap().unwrap();
+        assert!(
+            (78..=90).contains(&rank),
+            "order {rank}, 80 states in truth"
+        );
+        // Exact data: the sampled FRFs' truncation stands above rounding in many more
+        // singular values, and the scan keeps its default range.
+        let exact = markov_of(&clean);
+        let default = default_orders(exact.samples(), 5, 8, 8).unwrap();
+        if let Some(r) = signal_order(&exact, 5).unwrap() {
+            assert!(orders_for_rank(r, &default).is_none(), "order {r}");
+        }
+    }
+
+    #[test]
+    fn a_probe_of_few_channels_stays_square() {
+        let structure = ModalStructure::random(&ModalSpec {
+            seed: 3,
+            outputs: 2,
+            inputs: 2,
+            modes: 6,
+            ..ModalSpec::default()
+        })
+        .unwrap();
+        let frf = structure
+            .frf(801, 0.025, crate::Quantity::Acceleration)
+            .unwrap();
+        let shape = probe_shape(&markov_of(&frf), 5).unwrap();
+        assert_eq!(shape.block_rows, shape.block_cols);
     }
 }

@@ -126,6 +126,20 @@ pub(crate) fn thin_svd_leading(h: Mat<f64>, keep: usize, what: &str) -> Result<T
     on_own_thread(token, work, what)?.map_err(failed)
 }
 
+/// The singular values of `h` (consumed), descending: faer's, stoppable as
+/// [`thin_svd`].
+///
+/// # Errors
+/// As [`thin_svd`].
+pub(crate) fn singular_values(h: Mat<f64>, what: &str) -> Result<Vec<f64>> {
+    let failed = |e: svd::SvdError| EraError::Numerical(format!("SVD of {what}: {e:?}"));
+    let work = move || h.singular_values();
+    let Some(token) = cancel::current() else {
+        return work().map_err(failed);
+    };
+    on_own_thread(token, work, what)?.map_err(failed)
+}
+
 /// faer's ratio of sides above which its SVD starts with a QR (`SvdParams`'s default).
 const QR_RATIO: f64 = 11.0 / 6.0;
 
