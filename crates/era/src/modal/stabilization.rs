@@ -56,6 +56,7 @@ use crate::modal::indicators::{emac, mpc};
 use crate::pipeline::modes::{continuous_pole, ModalForm};
 use crate::pipeline::realize::{DirectTerm, Factorization};
 use num_complex::Complex64;
+use rayon::prelude::*;
 
 /// Orders `min, min + step, …, ≤ max` of a scan, or an explicit list.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -320,45 +321,39 @@ pub fn scan(
     let mut skipped = Vec::new();
     let mut poles: Vec<ScanPole> = Vec::new();
     let mut previous: Vec<ScanPole> = Vec::new();
-    for (k, &n) in wanted.iter().enumerate() {
+    // The orders are realized side by side, as many at a time as the pool has threads
+    // (each order's work is independent of the others'); their statuses against the
+    // order below, and the progress, follow in order.
+    let token = crate::cancel::current();
+    let at_once = rayon::current_num_threads().max(1);
+    let mut done = 0;
+    for chunk in wanted.chunks(at_once) {
         crate::cancel::check()?;
-        if n > factorization.rank() {
-            skipped.push(n);
-            progress(k + 1, wanted.len());
-            continue;
-        }
-        let r = factorization.realize(n, DirectTerm::Zero)?;
-        let form = ModalForm::new(&r.model)?;
-        let e = emac(&form, &r.tails);
-        let mut here: Vec<ScanPole> = form
-            .eigenvalues
-            .iter()
-            .enumerate()
-            .filter(|(_, z)| z.im > 0.0)
-            .map(|(i, z)| {
-                let s = continuous_pole(*z, r.model.domain);
-                ScanPole {
-                    order: n,
-                    frequency_hz: s.norm() / (2.0 * std::f64::consts::PI),
-                    damping_ratio: -s.re / s.norm(),
-                    continuous_pole: s,
-                    eigenvalue: *z,
-                    shape: form.shapes[i].clone(),
-                    participation: form.participations[i].clone(),
-                    mpc: mpc(&form.shapes[i]),
-                    emac: e[i].0 * e[i].1,
-                    status: PoleStatus::New,
+        let found: Vec<Result<Option<Vec<ScanPole>>>> = chunk
+            .par_iter()
+            .map(|&n| {
+                crate::cancel::check_token(&token)?;
+                if n > factorization.rank() {
+                    return Ok(None);
                 }
+                order_poles(factorization, n).map(Some)
             })
             .collect();
-        here.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-        for p in &mut here {
-            p.status = status_against(p, &previous, criteria);
+        for (&n, here) in chunk.iter().zip(found) {
+            match here? {
+                None => skipped.push(n),
+                Some(mut here) => {
+                    for p in &mut here {
+                        p.status = status_against(p, &previous, criteria);
+                    }
+                    done_orders.push(n);
+                    poles.extend(here.iter().cloned());
+                    previous = here;
+                }
+            }
+            done += 1;
+            progress(done, wanted.len());
         }
-        done_orders.push(n);
-        poles.extend(here.iter().cloned());
-        previous = here;
-        progress(k + 1, wanted.len());
     }
     if done_orders.is_empty() {
         return Err(EraError::InvalidParameter {
@@ -375,6 +370,37 @@ pub fn scan(
         poles,
         skipped,
     })
+}
+
+/// The poles of the realization at `n` states (status [`PoleStatus::New`]), by
+/// frequency.
+fn order_poles(factorization: &Factorization, n: usize) -> Result<Vec<ScanPole>> {
+    let r = factorization.realize(n, DirectTerm::Zero)?;
+    let form = ModalForm::new(&r.model)?;
+    let e = emac(&form, &r.tails);
+    let mut here: Vec<ScanPole> = form
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .filter(|(_, z)| z.im > 0.0)
+        .map(|(i, z)| {
+            let s = continuous_pole(*z, r.model.domain);
+            ScanPole {
+                order: n,
+                frequency_hz: s.norm() / (2.0 * std::f64::consts::PI),
+                damping_ratio: -s.re / s.norm(),
+                continuous_pole: s,
+                eigenvalue: *z,
+                shape: form.shapes[i].clone(),
+                participation: form.participations[i].clone(),
+                mpc: mpc(&form.shapes[i]),
+                emac: e[i].0 * e[i].1,
+                status: PoleStatus::New,
+            }
+        })
+        .collect();
+    here.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    Ok(here)
 }
 
 /// The diagram status of `pole` against the previous order's poles.
