@@ -9,6 +9,7 @@ use crate::config::{apply_route, era_options, options, route_request, scan_order
 use crate::input::InputFrf;
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
 use crate::output::identification::{write_bundle, write_model, Bundle};
+use crate::output::report::PART;
 use crate::output::report::{
     identification_summary, parameter_echo_states, print_json, stabilization_summary,
     svd_path_line, timings_table, Human,
@@ -222,6 +223,11 @@ fn timings(
     }
     if refined {
         timings.insert("refine".into(), found.timings.refine);
+        if let Some(r) = &found.refinement {
+            for (k, t) in r.round_seconds.iter().enumerate() {
+                timings.insert(format!("refine{PART}round {}", k + 1), *t);
+            }
+        }
     }
     timings
 }

@@ -344,16 +344,34 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
         "write",
     ];
     let mut s = String::from("\ntimings (s)\n");
+    let part = |k: &str| k.contains(PART);
     let others = t
         .keys()
         .map(String::as_str)
-        .filter(|k| !order.contains(k) && *k != WALL);
+        .filter(|k| !order.contains(k) && *k != WALL && !part(k));
     for key in order.into_iter().chain(others) {
         if let Some(v) = t.get(key) {
             let _ = writeln!(s, "  {key:<12} {v:.6}");
+            // The stage's parts, under it (in the order of their keys' numbers).
+            let prefix = format!("{key}{PART}");
+            let mut parts: Vec<(&str, f64)> = t
+                .iter()
+                .filter_map(|(k, v)| k.strip_prefix(&prefix).map(|name| (name, *v)))
+                .collect();
+            parts.sort_by_key(|(name, _)| {
+                let digits: String = name.chars().filter(char::is_ascii_digit).collect();
+                digits.parse::<usize>().unwrap_or(0)
+            });
+            for (name, v) in parts {
+                let _ = writeln!(s, "    {name:<10} {v:.6}");
+            }
         }
     }
-    let total: f64 = t.iter().filter(|(k, _)| *k != WALL).map(|(_, v)| v).sum();
+    let total: f64 = t
+        .iter()
+        .filter(|(k, _)| *k != WALL && !part(k))
+        .map(|(_, v)| v)
+        .sum();
     let _ = writeln!(s, "  {:<12} {total:.6}", "total");
     if let Some(&wall) = t.get(WALL) {
         let _ = writeln!(
@@ -368,6 +386,10 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
 
 /// The key of the process's wall time in a timings map: not a stage, not in the total.
 pub const WALL: &str = "wall";
+
+/// Between a stage and the name of one of its parts in a timings key (`refine.round 1`):
+/// a part is printed under its stage and is not added to the total.
+pub const PART: &str = ".";
 
 static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
 

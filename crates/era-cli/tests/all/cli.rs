@@ -888,9 +888,21 @@ fn the_automatic_order_times_its_scan_and_selection() {
         serde_json::from_slice(&std::fs::read(dir.path().join("o/model.json")).unwrap()).unwrap();
     let t = model["timings_s"].as_object().unwrap();
     assert!(t["scan"].as_f64().unwrap() > 0.0 && t["selection"].as_f64().unwrap() > 0.0);
+    // The refinement's rounds are parts of its stage: under it in the table, within it
+    // in the JSON, and not counted twice.
+    assert!(text.contains("\n    round 1 "), "{text}");
+    let rounds: f64 = t
+        .iter()
+        .filter(|(k, _)| k.starts_with("refine.round "))
+        .map(|(_, v)| v.as_f64().unwrap())
+        .sum();
+    assert!(
+        rounds > 0.0 && rounds <= t["refine"].as_f64().unwrap(),
+        "{t:?}"
+    );
     let stages: f64 = t
         .iter()
-        .filter(|(k, _)| *k != "wall")
+        .filter(|(k, _)| *k != "wall" && !k.contains('.'))
         .map(|(_, v)| v.as_f64().unwrap())
         .sum();
     assert!(stages <= t["wall"].as_f64().unwrap(), "{t:?}");

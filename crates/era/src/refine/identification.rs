@@ -231,7 +231,8 @@ pub fn refine_identification_in(
     // The domain probe treats a failure as "keep the asked domain"; an interrupt is not one.
     crate::cancel::check()?;
     let fitted = fitted_data(&found, frf, &fit_domain)?;
-    let refinement = crate::refine::refine(fitted, &start.poles, &ropts, progress)?;
+    let (refinement, round_seconds) =
+        crate::refine::refine_rounds(fitted, &start.poles, &ropts, progress)?;
     let quantity = found.processed.quantity();
     let continuous = refinement.to_state_space(quantity)?;
     let model = match discrete_ts {
@@ -275,6 +276,7 @@ pub fn refine_identification_in(
         refinement,
         residual_states,
         fit_domain,
+        round_seconds,
     });
     Ok(found)
 }

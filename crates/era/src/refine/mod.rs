@@ -407,7 +407,38 @@ pub fn refine(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    run(frf, start_poles, options, progress, varpro::evaluate)
+    run(
+        frf,
+        start_poles,
+        options,
+        progress,
+        varpro::evaluate,
+        &mut Vec::new(),
+    )
+}
+
+/// [`refine`], and the seconds of each of its rounds: the first fit, then each look
+/// for modes the start missed with its refit (the last look, which found none or whose
+/// refit was not kept, included).
+///
+/// # Errors
+/// As [`refine`].
+pub fn refine_rounds(
+    frf: &FrfData,
+    start_poles: &[Complex64],
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<(Refinement, Vec<f64>)> {
+    let mut rounds = Vec::new();
+    let refinement = run(
+        frf,
+        start_poles,
+        options,
+        progress,
+        varpro::evaluate,
+        &mut rounds,
+    )?;
+    Ok((refinement, rounds))
 }
 
 /// The relative decrease that ends a fit that is only the start of another: the uniform
@@ -425,13 +456,25 @@ fn run(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
     evaluate: varpro::Evaluator,
+    rounds: &mut Vec<f64>,
 ) -> Result<Refinement> {
+    let mut clock = std::time::Instant::now();
     let mut result = run_once(frf, start_poles, &[], options, progress, evaluate)?;
+    rounds.push(clock.elapsed().as_secs_f64());
     if !options.add_missed {
         return Ok(result);
     }
     let n_start = start_poles.len();
+    // Each round's seconds, however it ends.
+    struct Round<'a>(&'a mut Vec<f64>, std::time::Instant);
+    impl Drop for Round<'_> {
+        fn drop(&mut self) {
+            self.0.push(self.1.elapsed().as_secs_f64());
+        }
+    }
     for _ in 0..MISSED_ROUNDS {
+        clock = std::time::Instant::now();
+        let _round = Round(rounds, clock);
         let missed = scan::missed_modes(frf, &result);
         if missed.is_empty() {
             break;
@@ -602,7 +645,14 @@ pub fn refine_naive(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    run(frf, start_poles, options, progress, naive::evaluate)
+    run(
+        frf,
+        start_poles,
+        options,
+        progress,
+        naive::evaluate,
+        &mut Vec::new(),
+    )
 }
 
 /// Singular values of a mode's residue below this fraction of its largest are left out
