@@ -3,7 +3,7 @@
 //! two phases: an unrestarted one in narrow blocks while its basis fits, then, if that
 //! has not converged, the restarted iteration in blocks as wide as the answer.
 //!
-//! **The unrestarted phase** ([`TruncatedSvdOptions::block`], `b ≈ rank/6`). From
+//! **The unrestarted phase** ([`TruncatedSvdOptions::block`], `b ≈ rank/6`, 8 … 13). From
 //! `V_0 = orth(HᵀH Ω)` with `b` random columns, the recurrence below runs without
 //! restarts, each new block orthogonalised against the whole basis so far (held as one
 //! matrix: one GEMM per sweep). A narrow block buys a higher polynomial degree per column
@@ -97,8 +97,13 @@
 //! rank-deficient block (exact low-rank data) falls back to faer's Householder QR, and its
 //! arbitrary completing columns are orthogonalised against the basis once more.
 //!
-//! These are written here rather than taken from a crate: faer has dense SVD and QR but no
-//! truncated or matrix-free SVD, and the products come from [`crate::pipeline::hankel_op`].
+//! Why ours: faer 0.24 has a matrix-free partial SVD (`faer::matrix_free::eigen::partial_svd`,
+//! Lanczos bidiagonalization with thick restarts), but it multiplies one vector at a time,
+//! so the Hankel products (from [`crate::pipeline::hankel_op`]) run on one core and the
+//! reorthogonalisation is vector by vector. On the DTA-like Hankels at era's tolerances
+//! (`cargo run --release -p era --example partial_svd_peer`) this iteration was 1.6–7×
+//! faster in five of six cases (1592² at 80 triplets and 3192² at 180, noise-free, 5 %
+//! and 15 %); faer's was faster at 1592² with 15 % noise (0.036 s against 0.044 s).
 
 use crate::error::{EraError, Result};
 use crate::linalg::rng::Minstd;
@@ -707,11 +712,16 @@ fn krylov(
 }
 
 /// The default [`TruncatedSvdOptions::block`] for `rank` triplets: `rank/6` clamped to
-/// 8 … 32. Narrow blocks raise the polynomial degree a column of basis buys; the floor
+/// 8 … 13. Narrow blocks raise the polynomial degree a column of basis buys; the floor
 /// keeps a cluster of up to 8 equal singular values within one block (a block Krylov
-/// space finds at most `b` copies of a repeated singular value).
+/// space finds at most `b` copies of a repeated singular value). The ceiling is the
+/// thesis size's width (80 triplets): on the DTA-like Hankels (`cargo run --release -p
+/// era --example partial_svd_peer`, `BLOCK=b`) wider blocks were slower at every larger
+/// rank measured: at 3192², 180 triplets and 5–15 % noise 0.40–0.49 s at 13 (0.34–0.36 s
+/// at 8) against 0.66–0.69 s at 30; at 240 triplets 0.54 s at 12 against 0.80–0.91 s
+/// at 32.
 pub fn default_block(rank: usize) -> usize {
-    (rank / 6).clamp(8, 32)
+    (rank / 6).clamp(8, 13)
 }
 
 /// The widest basis of the unrestarted phase: both bases within
