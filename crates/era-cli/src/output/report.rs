@@ -166,11 +166,12 @@ pub fn stabilization_summary(st: &era::identification::Stabilization) -> String 
         .count();
     let _ = writeln!(
         s,
-        "\nstabilization: {} orders ({}) from one SVD of a {} x {} H0 in {:.2} s; {} poles, {} clusters of 3+ poles, {} physical",
+        "\nstabilization: {} orders ({}) from one SVD of a {} x {} H0 in {:.2} s ({:.2} s with the scan); {} poles, {} clusters of 3+ poles, {} physical",
         st.scan.orders.len(),
         st.range,
         st.hankel_size.0,
         st.hankel_size.1,
+        st.factor_seconds,
         st.seconds,
         st.scan.poles.len(),
         candidates,
