@@ -3,7 +3,7 @@
 //! two phases: an unrestarted one in narrow blocks while its basis fits, then, if that
 //! has not converged, the restarted iteration in blocks as wide as the answer.
 //!
-//! **The unrestarted phase** ([`TruncatedSvdOptions::block`], `b ≈ rank/6`, 8 … 13). From
+//! **The unrestarted phase** ([`TruncatedSvdOptions::block`], `b ≈ rank/6`, 8 … 20). From
 //! `V_0 = orth(HᵀH Ω)` with `b` random columns, the recurrence below runs without
 //! restarts, each new block orthogonalised against the whole basis so far (held as one
 //! matrix: one GEMM per sweep). A narrow block buys a higher polynomial degree per column
@@ -101,9 +101,9 @@
 //! Lanczos bidiagonalization with thick restarts), but it multiplies one vector at a time,
 //! so the Hankel products (from [`crate::pipeline::hankel_op`]) run on one core and the
 //! reorthogonalisation is vector by vector. On the DTA-like Hankels at era's tolerances
-//! (`cargo run --release -p era --example partial_svd_peer`) this iteration was 1.6–7×
+//! (`cargo run --release -p era --example partial_svd_peer`) this iteration was 1.7–7.6×
 //! faster in five of six cases (1592² at 80 triplets and 3192² at 180, noise-free, 5 %
-//! and 15 %); faer's was faster at 1592² with 15 % noise (0.036 s against 0.044 s).
+//! and 15 %); faer's was faster at 1592² with 15 % noise (0.036 s against 0.042 s).
 
 use crate::error::{EraError, Result};
 use crate::linalg::rng::Minstd;
@@ -712,16 +712,17 @@ fn krylov(
 }
 
 /// The default [`TruncatedSvdOptions::block`] for `rank` triplets: `rank/6` clamped to
-/// 8 … 13. Narrow blocks raise the polynomial degree a column of basis buys; the floor
+/// 8 … 20. Narrow blocks raise the polynomial degree a column of basis buys; the floor
 /// keeps a cluster of up to 8 equal singular values within one block (a block Krylov
-/// space finds at most `b` copies of a repeated singular value). The ceiling is the
-/// thesis size's width (80 triplets): on the DTA-like Hankels (`cargo run --release -p
-/// era --example partial_svd_peer`, `BLOCK=b`) wider blocks were slower at every larger
-/// rank measured: at 3192², 180 triplets and 5–15 % noise 0.40–0.49 s at 13 (0.34–0.36 s
-/// at 8) against 0.66–0.69 s at 30; at 240 triplets 0.54 s at 12 against 0.80–0.91 s
-/// at 32.
+/// space finds at most `b` copies of a repeated singular value). The ceiling: wider
+/// blocks were slower at every rank above the thesis size's 80 that was measured (the
+/// DTA-like 3192² Hankel at 180 triplets and 5–15 % noise, `cargo run --release -p era
+/// --example partial_svd_peer` with `BLOCK=b`: 0.38–0.47 s at 20 against 0.66–0.69 s at
+/// 30), but much narrower ones can be far slower: the lightly damped 4800² case of
+/// `cargo bench -p era --bench scale` at 240 triplets took 0.14 s at 20 and 32, and 3.7 s
+/// at 13.
 pub fn default_block(rank: usize) -> usize {
-    (rank / 6).clamp(8, 13)
+    (rank / 6).clamp(8, 20)
 }
 
 /// The widest basis of the unrestarted phase: both bases within
