@@ -47,11 +47,21 @@ const POLL: std::time::Duration = std::time::Duration::from_millis(20);
 /// when the call's token is cancelled while it runs.
 pub(crate) fn thin_svd(h: Mat<f64>, what: &str) -> Result<ThinSvd> {
     let par = faer::get_global_parallelism();
+    stoppable(what, move || compute(&h, par))
+}
+
+/// Runs the decomposition `work` under the calling thread's cancel token: right here when
+/// there is none, on a thread of its own ([`on_own_thread`]) when there is; a failure of
+/// faer's is an [`EraError::Numerical`] naming `what`.
+fn stoppable<T: Send + 'static>(
+    what: &str,
+    work: impl FnOnce() -> std::result::Result<T, svd::SvdError> + Send + 'static,
+) -> Result<T> {
     let failed = |e: svd::SvdError| EraError::Numerical(format!("SVD of {what}: {e:?}"));
-    let Some(token) = cancel::current() else {
-        return compute(&h, par).map_err(failed);
-    };
-    on_own_thread(token, move || compute(&h, par), what)?.map_err(failed)
+    match cancel::current() {
+        None => work().map_err(failed),
+        Some(token) => on_own_thread(token, work, what)?.map_err(failed),
+    }
 }
 
 /// Runs `work` on a thread of its own while the caller watches `token`: the work's result,
@@ -107,23 +117,18 @@ pub(crate) fn thin_svd_leading(h: Mat<f64>, keep: usize, what: &str) -> Result<T
         return Ok(svd);
     }
     let par = faer::get_global_parallelism();
-    let failed = |e: svd::SvdError| EraError::Numerical(format!("SVD of {what}: {e:?}"));
-    let work = move || {
+    stoppable(what, move || {
         if m >= n {
-            tall_leading(&h, keep, par)
+            tall_leading(h, keep, par)
         } else {
             // Hᵀ = V S Uᵀ: the tall route on the transpose, the factors swapped back.
-            tall_leading(&h.transpose().to_owned(), keep, par).map(|t| ThinSvd {
+            tall_leading(h.transpose().to_owned(), keep, par).map(|t| ThinSvd {
                 u: t.v,
                 s: t.s,
                 v: t.u,
             })
         }
-    };
-    let Some(token) = cancel::current() else {
-        return work().map_err(failed);
-    };
-    on_own_thread(token, work, what)?.map_err(failed)
+    })
 }
 
 /// The singular values of `h` (consumed), descending: faer's, stoppable as
@@ -132,29 +137,23 @@ pub(crate) fn thin_svd_leading(h: Mat<f64>, keep: usize, what: &str) -> Result<T
 /// # Errors
 /// As [`thin_svd`].
 pub(crate) fn singular_values(h: Mat<f64>, what: &str) -> Result<Vec<f64>> {
-    let failed = |e: svd::SvdError| EraError::Numerical(format!("SVD of {what}: {e:?}"));
-    let work = move || h.singular_values();
-    let Some(token) = cancel::current() else {
-        return work().map_err(failed);
-    };
-    on_own_thread(token, work, what)?.map_err(failed)
+    stoppable(what, move || h.singular_values())
 }
 
 /// faer's ratio of sides above which its SVD starts with a QR (`SvdParams`'s default).
 const QR_RATIO: f64 = 11.0 / 6.0;
 
-/// The SVD of a tall `h` (rows > cols) with `keep` leading columns of `U` and `V`: the
-/// steps of faer's tall SVD (QR, the triangle's SVD, the reflectors on `U`) with the
-/// reflectors applied to `keep` columns only.
+/// The SVD of a tall `qr` (rows > cols, factored in place) with `keep` leading columns
+/// of `U` and `V`: the steps of faer's tall SVD (QR, the triangle's SVD, the reflectors
+/// on `U`) with the reflectors applied to `keep` columns only.
 fn tall_leading(
-    h: &Mat<f64>,
+    mut qr: Mat<f64>,
     keep: usize,
     par: Par,
 ) -> std::result::Result<ThinSvd, svd::SvdError> {
     use faer::linalg::{householder, qr::no_pivoting::factor};
-    let (m, n) = h.shape();
+    let (m, n) = qr.shape();
     let block = factor::recommended_block_size::<f64>(m, n);
-    let mut qr = h.clone();
     let mut coeff = Mat::<f64>::zeros(block, n);
     factor::qr_in_place(
         qr.as_mut(),
