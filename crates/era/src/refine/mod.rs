@@ -407,14 +407,7 @@ pub fn refine(
     options: &RefineOptions,
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
-    run(
-        frf,
-        start_poles,
-        options,
-        progress,
-        varpro::evaluate,
-        &mut Vec::new(),
-    )
+    refine_rounds(frf, start_poles, options, progress).map(|(refinement, _)| refinement)
 }
 
 /// [`refine`], and the seconds of each of its rounds: the first fit, then each look
@@ -458,7 +451,7 @@ fn run(
     evaluate: varpro::Evaluator,
     rounds: &mut Vec<f64>,
 ) -> Result<Refinement> {
-    let mut clock = std::time::Instant::now();
+    let clock = std::time::Instant::now();
     let mut result = run_once(frf, start_poles, &[], options, progress, evaluate)?;
     rounds.push(clock.elapsed().as_secs_f64());
     if !options.add_missed {
@@ -473,8 +466,7 @@ fn run(
         }
     }
     for _ in 0..MISSED_ROUNDS {
-        clock = std::time::Instant::now();
-        let _round = Round(rounds, clock);
+        let _round = Round(rounds, std::time::Instant::now());
         let missed = scan::missed_modes(frf, &result);
         if missed.is_empty() {
             break;
