@@ -9,6 +9,7 @@ use crate::modal::stabilization::{
 };
 use crate::pipeline::filter::LowPass;
 use crate::pipeline::fit::{fit_metrics, frequency_response_naive, frequency_response_with};
+use crate::pipeline::hankel::HankelShape;
 use crate::pipeline::modes::{continuous_pole, modal_parameters_of, ModalForm, ModalParameters};
 use crate::pipeline::realize::{
     realize, realize_naive, DirectTerm, FactorOptions, Factorization, Realization, RealizeOptions,
@@ -853,10 +854,7 @@ pub(crate) const PROBE_SIDE: usize = 800;
 /// `hankel_factor`: square in blocks, unless both sides would exceed [`PROBE_SIDE`],
 /// when it has `PROBE_SIDE / outputs` block rows and the rest of the span in columns.
 /// `None` when the samples support fewer than 8 states.
-fn probe_shape(
-    markov: &MarkovSequence,
-    hankel_factor: usize,
-) -> Option<crate::pipeline::hankel::HankelShape> {
+fn probe_shape(markov: &MarkovSequence, hankel_factor: usize) -> Option<HankelShape> {
     let states = supported_hankel_states(markov.samples(), hankel_factor).min(PROBE_STATES);
     if states < 8 {
         return None;
@@ -870,7 +868,7 @@ fn probe_shape(
         return Some(square);
     }
     let rows = PROBE_SIDE.div_ceil(q).min(blocks);
-    Some(crate::pipeline::hankel::HankelShape {
+    Some(HankelShape {
         block_rows: rows,
         block_cols: 2 * blocks - rows,
         ..square
@@ -1753,17 +1751,21 @@ mod probe_tests {
             .markov
     }
 
+    /// The accelerance of the seeded structure of `spec`, 801 lines at 0.025 Hz.
+    fn modal_frf(spec: ModalSpec) -> FrfData {
+        ModalStructure::random(&spec)
+            .unwrap()
+            .frf(801, 0.025, crate::Quantity::Acceleration)
+            .unwrap()
+    }
+
     #[test]
     fn the_probe_is_capped_for_many_channels_and_finds_the_order_of_noisy_data() {
         // The DTA-like set: 8 x 8, 40 modes (80 states), 5 % noise.
-        let structure = ModalStructure::random(&ModalSpec {
+        let clean = modal_frf(ModalSpec {
             seed: 7,
             ..ModalSpec::default()
-        })
-        .unwrap();
-        let clean = structure
-            .frf(801, 0.025, crate::Quantity::Acceleration)
-            .unwrap();
+        });
         let markov = markov_of(&add_noise(&clean, 0.05, 7).unwrap());
         let shape = probe_shape(&markov, 5).unwrap();
         // The square probe would be 249 x 249 blocks (1992 x 1992): the same span of
@@ -1785,17 +1787,13 @@ mod probe_tests {
 
     #[test]
     fn a_probe_of_few_channels_stays_square() {
-        let structure = ModalStructure::random(&ModalSpec {
+        let frf = modal_frf(ModalSpec {
             seed: 3,
             outputs: 2,
             inputs: 2,
             modes: 6,
             ..ModalSpec::default()
-        })
-        .unwrap();
-        let frf = structure
-            .frf(801, 0.025, crate::Quantity::Acceleration)
-            .unwrap();
+        });
         let shape = probe_shape(&markov_of(&frf), 5).unwrap();
         assert_eq!(shape.block_rows, shape.block_cols);
     }
