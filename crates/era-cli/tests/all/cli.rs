@@ -2,7 +2,7 @@
 
 use crate::common;
 
-use common::{era, expect_input_error, s, simulated_truth};
+use common::{era, expect_input_error, s, simulated_truth, truth_identify};
 use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -585,19 +585,7 @@ fn plot_overlays_a_file_with_a_model_or_alone() {
     let frf = simulated_truth(dir.path());
     let model_dir = dir.path().join("model");
     era()
-        .arg("identify")
-        .arg(&frf)
-        .args([
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
-            "-q",
-            "--out",
-        ])
-        .arg(&model_dir)
+        .args(truth_identify(&frf, "8", &model_dir))
         .assert()
         .success();
     let with = dir.path().join("with");
@@ -742,19 +730,7 @@ fn identify_reads_mat_files_by_content() {
     // A MAT file with no FRF layout is refused, naming what it holds.
     let model_dir = dir.path().join("m");
     era()
-        .arg("identify")
-        .arg(&csv)
-        .args([
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
-            "-q",
-            "--out",
-        ])
-        .arg(&model_dir)
+        .args(truth_identify(&csv, "8", &model_dir))
         .assert()
         .success();
     expect_input_error(

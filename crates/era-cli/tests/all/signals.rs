@@ -3,7 +3,7 @@
 //! two runs into one `--out` folder never mix, the second is refused while the first
 //! holds it.
 
-use crate::common::s;
+use crate::common::{s, truth_identify};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -149,26 +149,6 @@ fn kill(child: &Child, signal: i32) -> Instant {
     sent
 }
 
-/// `era identify` of the truth model at `states` into `out`: a run of a tenth of a
-/// second with a full set of outputs.
-fn small_identify(small: &Path, states: &str, out: &Path) -> Vec<String> {
-    [
-        "identify",
-        s(small),
-        "--states",
-        states,
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "-q",
-        "--out",
-        s(out),
-    ]
-    .map(String::from)
-    .to_vec()
-}
-
 #[test]
 fn a_signal_ends_a_long_run_within_a_second_and_leaves_the_earlier_set_whole() {
     let inputs = tempfile::tempdir().unwrap();
@@ -177,7 +157,7 @@ fn a_signal_ends_a_long_run_within_a_second_and_leaves_the_earlier_set_whole() {
     let out = tempfile::tempdir().unwrap();
     let o = out.path();
     crate::common::era()
-        .args(small_identify(&small, "8", o))
+        .args(truth_identify(&small, "8", o))
         .assert()
         .success();
     let earlier = snapshot(o);
@@ -224,7 +204,7 @@ fn a_signal_ignored_at_the_start_stays_ignored() {
     let out = tempfile::tempdir().unwrap();
     let mut command = Command::new(assert_cmd::cargo::cargo_bin("era"));
     command
-        .args(small_identify(&small, "8", out.path()))
+        .args(truth_identify(&small, "8", out.path()))
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
     // SAFETY: between fork and exec only async-signal-safe calls (signal(2)).
@@ -305,7 +285,7 @@ fn a_second_run_into_a_held_folder_is_refused_and_the_first_run_s_set_is_whole()
         "no staging folder"
     );
     let second = crate::common::era()
-        .args(small_identify(&small, "8", o))
+        .args(truth_identify(&small, "8", o))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&second.stderr);
@@ -326,7 +306,7 @@ fn a_second_run_into_a_held_folder_is_refused_and_the_first_run_s_set_is_whole()
     no_era_leftovers(o);
     // The folder is free again.
     crate::common::era()
-        .args(small_identify(&small, "8", o))
+        .args(truth_identify(&small, "8", o))
         .assert()
         .success();
 }
@@ -339,7 +319,7 @@ fn a_signal_at_any_moment_leaves_one_whole_set() {
     let small = crate::common::simulated_truth(inputs.path());
     let out = tempfile::tempdir().unwrap();
     let o = out.path();
-    let identify = |states: &str| small_identify(&small, states, o);
+    let identify = |states: &str| truth_identify(&small, states, o);
     let run = |states: &str| {
         crate::common::era()
             .args(identify(states))

@@ -176,3 +176,23 @@ pub fn modes_of(v: &serde_json::Value, only_physical: bool) -> Vec<(f64, f64)> {
 }
 
 pub mod hostile;
+
+/// The arguments of `era identify` of the truth model `frf` at `states` into `out`, at the
+/// thesis's truth-model settings: a run of a tenth of a second with a full set of outputs.
+pub fn truth_identify(frf: &Path, states: &str, out: &Path) -> Vec<String> {
+    [
+        "identify",
+        s(frf),
+        "--states",
+        states,
+        "--hankel-factor",
+        "4",
+        "--pad-to",
+        "1024",
+        "-q",
+        "--out",
+        s(out),
+    ]
+    .map(String::from)
+    .to_vec()
+}
