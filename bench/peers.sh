@@ -36,7 +36,9 @@ run() {
 
 median3() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
 echo "thesis case: DTA-like 8x8 FRFs, ns 80, lh 5, ni 1, nz 3, ndpts 1024 (H0 1592 x 1592), $(uptime | sed 's/.*load/load/')"
-printf '%-22s %12s %8s %14s %9s\n' "data" "era (s)" "passes" "python (s)" "speed-up"
+echo
+echo "| data | era | passes | python-control $("$venv/bin/python" -c 'import control; print(control.__version__)') | speed-up |"
+echo "|---|---:|---:|---:|---:|"
 for noise in 0 0.05; do
   "$core" dta "$work/dta.bin" "$noise"
   e=(); pyt=()
@@ -47,12 +49,14 @@ for noise in 0 0.05; do
     pyt+=("$("$venv/bin/python" "$here/bench/pc_era.py" "$work/dta.bin" 8 8 2048 80 199 | sed -n 's/.*"seconds": \([0-9.e+-]*\).*/\1/p')")
   done
   es=$(median3 "${e[@]}"); ps=$(median3 "${pyt[@]}")
-  printf '%-22s %12.4f %8s %14.3f %8.0fx\n' "noise $noise" "$es" "$passes" "$ps" "$(awk -v a="$ps" -v b="$es" 'BEGIN { print a / b }')"
+  printf '| %s | %.3f s | %s | %.3f s | %.0f× |\n' "$(awk -v n="$noise" 'BEGIN { print n == 0 ? "noise-free" : 100 * n " % noise" }')" \
+    "$es" "$passes" "$ps" "$(awk -v a="$ps" -v b="$es" 'BEGIN { print a / b }')"
 done
 [ "$all" = --thesis ] && exit 0
 echo
 
-printf '%-28s %-12s %10s %9s %12s %9s %9s\n' "case (q x p, m, states)" "H0" "era (s)" "era MB" "python (s)" "py MB" "speed-up"
+echo "| case (q × p, m, states) | H0 | era (matrix-free) | era RSS | python-control | its RSS | speed-up |"
+echo "|---|---|---:|---:|---:|---:|---:|"
 # q p modes m python?
 cases="8 8 40 200 yes
 8 8 120 600 yes
@@ -65,28 +69,31 @@ while read -r q p modes m py; do
   read -r es em < <(run "$core" realize "$work/y.bin" "$q" "$p" "$k" "$n" "$m" auto)
   if [ "$py" = yes ]; then
     read -r ps pm < <(run "$venv/bin/python" "$here/bench/pc_era.py" "$work/y.bin" "$q" "$p" "$k" "$n" "$m")
-    speed=$(awk -v a="$ps" -v b="$es" 'BEGIN { if (a+0 > 0 && b+0 > 0) printf "%.0fx", a / b; else print "-" }')
+    speed=$(awk -v a="$ps" -v b="$es" 'BEGIN { if (a+0 > 0 && b+0 > 0) printf "%.0f×", a / b; else print "-" }')
   else
     ps="skipped"; pm="-"; speed="-"
   fi
-  [ "$ps" = skipped ] || ps=$(printf '%.3f' "$ps")
-  printf '%-28s %-12s %10.3f %9s %12s %9s %9s\n' "${q}x${p}, m=${m}, n=${n}" "$((m * q))x$((m * p))" "$es" "$em" "$ps" "$pm" "$speed"
+  [ "$ps" = skipped ] || ps=$(printf '%.3f s' "$ps")
+  [ "$pm" = - ] || pm="$pm MB"
+  printf '| %s | %s | %.3f s | %s MB | %s | %s | %s |\n' "${q} × ${p}, m = ${m}, ${n} states" "$((m * q)) × $((m * p))" "$es" "$em" "$ps" "$pm" "$speed"
 done <<< "$cases"
-echo "(python skipped: its dense Hankel plus full U and V would need >= 6 GB at 16000^2, and a 60400^2 U for 151 outputs)"
+echo
+echo "md: python-control is skipped where its dense Hankel plus full U and V would need 6 GB or more (16000², and a 60400² U for 151 outputs), and at 8000² unless \`--all\` is given."
 
 echo
-echo "growth with m at 80 states (8x8, matrix-free):"
+echo "| growth with m at 80 states (8 × 8, matrix-free) | H0 | era | era RSS |"
+echo "|---|---|---:|---:|"
 : > "$work/growth"
 for m in 200 400 800 1600 3200; do
   k=$((2 * m + 2))
   "$core" generate "$work/y.bin" 8 8 40 "$k" 7
   read -r es em < <(run "$core" realize "$work/y.bin" 8 8 "$k" 80 "$m" matrix-free)
-  printf '  m=%-5s H0 %6sx%-6s %8.3f s %6s MB\n' "$m" $((8 * m)) $((8 * m)) "$es" "$em"
+  printf '| m = %s | %s² | %.3f s | %s MB |\n' "$m" $((8 * m)) "$es" "$em"
   echo "$m $es" >> "$work/growth"
 done
 "$venv/bin/python" - "$work/growth" <<'PY'
 import sys, numpy as np
 d = np.loadtxt(sys.argv[1])
 slope = np.polyfit(np.log(d[:, 0]), np.log(d[:, 1]), 1)[0]
-print(f"  fitted exponent: time ~ m^{slope:.2f} (m log m would read about 1.1 over this range; a dense SVD 3)")
+print(f"\nmd: The fitted exponent of the growth is time ∝ m^{slope:.2f} (m log m would read about 1.1 over this range; a dense SVD 3).")
 PY

@@ -12,7 +12,8 @@ lines; ns 80, lh 5, ni 1, nz 3, ndpts 1024):
     python python/bench/bench_python.py [--repeats 15] [--control-repeats 1] [--era PATH]
                                         [--noise 0.05] [--seed 1]
 
-Prints a table and a JSON line. Not a test: timings go here, never into assertions.
+Prints markdown tables and a JSON line (`bench/tables.sh python` writes the tables into
+the book). Not a test: timings go here, never into assertions.
 """
 
 import argparse
@@ -67,10 +68,11 @@ def main() -> None:
         timings = json.loads(done.stdout)["timings_s"]
         rust_s.append(sum(timings[s] for s in STAGES))
     py, rs = statistics.median(python_s), statistics.median(rust_s)
-    print(f"thesis size, {args.repeats} runs each (medians):")
-    print(f"  era.identify from Python   {1e3 * py:8.1f} ms")
-    print(f"  the same stages in Rust    {1e3 * rs:8.1f} ms   (era identify --timings)")
-    print(f"  Python / Rust              {py / rs:8.3f}     (overhead {100 * (py / rs - 1):+.1f} %)")
+    print(f"| thesis size, {args.repeats} runs each (medians) | time |")
+    print("|---|---:|")
+    print(f"| `era.identify` from Python | {1e3 * py:.1f} ms |")
+    print(f"| the same stages in Rust (`era identify --timings`) | {1e3 * rs:.1f} ms |")
+    print(f"| Python / Rust | {py / rs:.3f} (overhead {100 * (py / rs - 1):+.1f} %) |")
 
     result = {"python_ms": 1e3 * py, "rust_ms": 1e3 * rs, "python_over_rust": py / rs}
     try:
@@ -96,11 +98,13 @@ def main() -> None:
         gap = np.max(np.abs(np.sort_complex(np.linalg.eigvals(found.a))
                             - np.sort_complex(sys_.poles())))
         e, c = min(era_s), min(ctrl_s)
-        print(f"era vs python-control {control.__version__} on the same Markov data "
-              f"(H0 {found.hankel_size[0]} x {found.hankel_size[1]}, best of {args.control_repeats}):")
-        print(f"  era.identify               {1e3 * e:8.1f} ms")
-        print(f"  eigensys_realization       {1e3 * c:8.1f} ms")
-        print(f"  ratio                      {c / e:8.1f} x   (eigenvalues agree to {gap:.1e})")
+        print()
+        print(f"| era against python-control {control.__version__} on the same Markov data "
+              f"(H0 {found.hankel_size[0]} × {found.hankel_size[1]}, best of {args.control_repeats}) | time |")
+        print("|---|---:|")
+        print(f"| `era.identify` (Markov data, Hankel SVD, realization, modes, fit) | {1e3 * e:.1f} ms |")
+        print(f"| `control.eigensys_realization` | {1e3 * c:.1f} ms |")
+        print(f"| ratio | {c / e:.1f}× (eigenvalues {gap:.1e} apart) |")
         result.update({"era_ms": 1e3 * e, "control_ms": 1e3 * c, "control_over_era": c / e,
                        "eigenvalue_gap": gap})
     print(json.dumps(result))

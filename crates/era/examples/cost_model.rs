@@ -3,7 +3,8 @@
 //! order `n`, one varied at a time around the thesis case, with the fitted exponent of
 //! each, and the ratio of the time to its floor.
 //!
-//! `cargo run --release -p era --example cost_model [-- REPEATS]` (default 3, medians).
+//! `cargo run --release -p era --example cost_model [-- REPEATS]` (default 3, medians)
+//! prints markdown tables; `bench/tables.sh cost_model` writes them into the book.
 //!
 //! **The floor** of a run is what its truncated SVD cannot avoid: the FFT Hankel
 //! products alone ([`era::pipeline::hankel_op::HankelOperator`]), one `H·X` and one `Hᵀ·Y` with as
@@ -129,22 +130,22 @@ fn exponent(points: &[(f64, f64)]) -> f64 {
     sxy / sxx
 }
 
+/// One markdown row: the case, its Hankel, the time, the passes, the floor and the
+/// split of the SVD's time.
 fn print(row: &Row) {
+    let parts = row.parts.0 + row.parts.1 + row.parts.2;
     println!(
-        "{:<28} {:>6} {:>4} {:>4} {:>5} {:>11} {:>9.4} {:>6} {:>9.4} {:>7.1}   {:>3.0} {:>3.0} {:>3.0}",
+        "| {} | {} × {} | {:.4} s | {} | {:.4} s | {:.1} | {:.0} / {:.0} / {:.0} % |",
         row.label,
-        row.m,
-        row.q,
-        row.p,
-        row.n,
-        format!("{}x{}", row.m * row.q, row.m * row.p),
+        row.m * row.q,
+        row.m * row.p,
         row.seconds,
         row.passes,
         row.floor,
         row.seconds / row.floor,
-        100.0 * row.parts.0 / (row.parts.0 + row.parts.1 + row.parts.2),
-        100.0 * row.parts.1 / (row.parts.0 + row.parts.1 + row.parts.2),
-        100.0 * row.parts.2 / (row.parts.0 + row.parts.1 + row.parts.2),
+        100.0 * row.parts.0 / parts,
+        100.0 * row.parts.1 / parts,
+        100.0 * row.parts.2 / parts,
     );
 }
 
@@ -153,9 +154,9 @@ fn main() {
         .nth(1)
         .map_or(3, |r| r.parse().expect("REPEATS: a count"));
     println!(
-        "{:<28} {:>6} {:>4} {:>4} {:>5} {:>11} {:>9} {:>6} {:>9} {:>7}   SVD time %: products, orth, Ritz",
-        "case", "m", "q", "p", "n", "H0", "time (s)", "passes", "floor (s)", "x floor"
+        "| case | H0 | time | passes | floor (products) | × floor | SVD: products / orth. / Ritz |"
     );
+    println!("|---|---|---:|---:|---:|---:|---:|");
     // The thesis case first.
     let structure = ModalStructure::random(&ModalSpec::default()).expect("DTA-like set");
     let clean = structure
@@ -188,7 +189,15 @@ fn main() {
         "m (8x8, n 80)",
         [200, 400, 800, 1600]
             .into_iter()
-            .map(|m| measure(format!("m {m}"), &data(8, 8, 80, m), m, 80, repeats))
+            .map(|m| {
+                measure(
+                    format!("m {m} (8×8, n 80)"),
+                    &data(8, 8, 80, m),
+                    m,
+                    80,
+                    repeats,
+                )
+            })
             .collect(),
         |r| r.m,
     );
@@ -196,7 +205,15 @@ fn main() {
         "q (p 8, m 200, n 80)",
         [4, 8, 16, 32]
             .into_iter()
-            .map(|q| measure(format!("q {q}"), &data(q, 8, 80, 200), 200, 80, repeats))
+            .map(|q| {
+                measure(
+                    format!("q {q} (p 8, m 200, n 80)"),
+                    &data(q, 8, 80, 200),
+                    200,
+                    80,
+                    repeats,
+                )
+            })
             .collect(),
         |r| r.q,
     );
@@ -204,7 +221,15 @@ fn main() {
         "p (q 8, m 200, n 80)",
         [2, 4, 8, 16]
             .into_iter()
-            .map(|p| measure(format!("p {p}"), &data(8, p, 80, 200), 200, 80, repeats))
+            .map(|p| {
+                measure(
+                    format!("p {p} (q 8, m 200, n 80)"),
+                    &data(8, p, 80, 200),
+                    200,
+                    80,
+                    repeats,
+                )
+            })
             .collect(),
         |r| r.p,
     );
@@ -212,12 +237,21 @@ fn main() {
         "n (8x8, m 400)",
         [40, 80, 160, 320]
             .into_iter()
-            .map(|n| measure(format!("n {n}"), &data(8, 8, n, 400), 400, n, repeats))
+            .map(|n| {
+                measure(
+                    format!("n {n} (8×8, m 400)"),
+                    &data(8, 8, n, 400),
+                    400,
+                    n,
+                    repeats,
+                )
+            })
             .collect(),
         |r| r.n,
     );
-    println!("\nfitted exponents (time ~ x^k), the whole core and the FFT products alone:");
+    println!("\n| fitted exponent (time ∝ xᵏ) | the whole core | the FFT products alone |");
+    println!("|---|---:|---:|");
     for (name, k, kf) in fits {
-        println!("  {name:<24} k = {k:.2}   floor k = {kf:.2}");
+        println!("| {name} | {k:.2} | {kf:.2} |");
     }
 }

@@ -9,10 +9,8 @@
 //! matrix: one GEMM per sweep). A narrow block buys a higher polynomial degree per column
 //! of basis, and a basis that is never thrown away keeps every direction it found, so
 //! the wanted triplets converge in far fewer columns of products and of dense work than
-//! with wide blocks and restarts. On the DTA-like set at the thesis size (1592², 80
-//! triplets, `b = 13`) it converges at about 230 columns each way with 5 % noise and 270
-//! with 15 %, where the restarted iteration took 6–7 passes of 120 columns and four
-//! small SVDs of up to 480². The Rayleigh–Ritz step (the small SVD of `T`) runs only at
+//! with wide blocks and restarts (`cargo run --release -p era --example tsvd_probe`
+//! prints the passes and columns of each variant on the thesis set). The Rayleigh–Ritz step (the small SVD of `T`) runs only at
 //! checkpoints: first when the basis holds `rank + oversample` columns (and at least
 //! `rank + 2b`), then where the
 //! residual's geometric decrease between the last two checkpoints predicts convergence
@@ -100,10 +98,10 @@
 //! Why ours: faer 0.24 has a matrix-free partial SVD (`faer::matrix_free::eigen::partial_svd`,
 //! Lanczos bidiagonalization with thick restarts), but it multiplies one vector at a time,
 //! so the Hankel products (from [`crate::pipeline::hankel_op`]) run on one core and the
-//! reorthogonalisation is vector by vector. On the DTA-like Hankels at era's tolerances
-//! (`cargo run --release -p era --example partial_svd_peer`) this iteration was 1.7–7.6×
-//! faster in five of six cases (1592² at 80 triplets and 3192² at 180, noise-free, 5 %
-//! and 15 %); faer's was faster at 1592² with 15 % noise (0.036 s against 0.042 s).
+//! reorthogonalisation is vector by vector. `cargo run --release -p era --example
+//! partial_svd_peer` compares the two on the DTA-like Hankels at era's tolerances (the
+//! book's performance chapter has its table); this iteration is the faster in most of
+//! those cases.
 
 use crate::error::{EraError, Result};
 use crate::linalg::rng::Minstd;

@@ -68,8 +68,7 @@
 //! fit (`‖y_ij − ŷ_ij‖²/L`, floored at 1e-12 of the mean) and refits with `1/σ²_ij`
 //! from the first fit's poles (one step of iteratively reweighted least squares). With
 //! rank-one residues the refit's free stage takes no step: the rank-one stage moves
-//! every pole again, with the weights (on the DTA-like sets at 5 % noise, seeds 1–16,
-//! this took the refinement from 12.2 s to 11.3 s in all, the modes found unchanged). An
+//! every pole again, with the weights. An
 //! exact fit (`fit_after` below 1e-9) has no noise to weight by and is returned as it
 //! is. The costs reported are of the second pass's weights; `fit_before` is the
 //! unweighted fit at the start poles, as always. On the truth model with 15 % noise this
