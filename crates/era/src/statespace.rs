@@ -9,9 +9,12 @@
 //! converting back.
 
 use crate::error::{EraError, Result};
-use faer::linalg::solvers::{DenseSolveCore, Solve};
+use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 use num_complex::Complex64;
+
+use crate::linalg::eigen::balanced_eigen;
+pub use crate::linalg::expm::expm;
 
 /// Continuous or discrete time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -175,25 +178,6 @@ impl StateSpace {
     }
 }
 
-/// Eigenvalues and right eigenvectors of `a`, computed on the balanced matrix
-/// `D⁻¹ a D` (see [`expm`]) and mapped back, `V = D V_b`. `faer`'s eigen solver does not
-/// balance, and a physical model with entries from 1 to 1e9 (the truth model) otherwise
-/// loses 8 digits in its poles.
-///
-/// # Errors
-/// [`EraError::Numerical`] when the eigen solver does not converge.
-pub(crate) fn balanced_eigen(a: &Mat<f64>) -> Result<(Vec<Complex64>, Mat<Complex64>)> {
-    let n = a.nrows();
-    let d = balancing_scale(a);
-    let ab = Mat::from_fn(n, n, |i, j| a[(i, j)] * d[j] / d[i]);
-    let eig = ab
-        .eigen()
-        .map_err(|e| EraError::Numerical(format!("eigendecomposition of A: {e:?}")))?;
-    let values = (0..n).map(|k| eig.S()[k]).collect();
-    let vectors = Mat::from_fn(n, n, |i, k| eig.U()[(i, k)] * d[i]);
-    Ok((values, vectors))
-}
-
 fn positive_sample_time(ts: f64) -> Result<()> {
     if ts.is_finite() && ts > 0.0 {
         Ok(())
@@ -246,139 +230,9 @@ pub fn relative_difference(x: &Mat<f64>, y: &Mat<f64>) -> f64 {
     (x - y).norm_l2() / y.norm_l2().max(f64::MIN_POSITIVE)
 }
 
-/// Matrix exponential by scaling and squaring with the degree-13 Padé approximant
-/// (N. J. Higham, "The scaling and squaring method for the matrix exponential
-/// revisited", SIAM J. Matrix Anal. Appl. 26(4), 2005, Algorithm 2.3 with m = 13).
-///
-/// # Panics
-/// If `m` is not square.
-#[track_caller]
-pub fn expm(m: &Mat<f64>) -> Mat<f64> {
-    assert_eq!(m.nrows(), m.ncols(), "expm needs a square matrix");
-    const B: [f64; 14] = [
-        64764752532480000.0,
-        32382376266240000.0,
-        7771770303897600.0,
-        1187353796428800.0,
-        129060195264000.0,
-        10559470521600.0,
-        670442572800.0,
-        33522128640.0,
-        1323241920.0,
-        40840800.0,
-        960960.0,
-        16380.0,
-        182.0,
-        1.0,
-    ];
-    const THETA_13: f64 = 5.371920351148152;
-    let n = m.nrows();
-    // Balance first: D⁻¹ M D with D a diagonal of powers of 2 (exact in floating point),
-    // then exp(M) = D exp(D⁻¹ M D) D⁻¹. A mechanical model such as the truth model has
-    // entries from 1e-5 to 1e5 in `A·Ts`, and without balancing the squarings lose 8
-    // digits.
-    let scale = balancing_scale(m);
-    let m = &Mat::from_fn(n, n, |i, j| m[(i, j)] * scale[j] / scale[i]);
-    let norm1 = (0..n)
-        .map(|j| (0..n).map(|i| m[(i, j)].abs()).sum::<f64>())
-        .fold(0.0, f64::max);
-    let squarings = if norm1 > THETA_13 {
-        (norm1 / THETA_13).log2().ceil() as i32
-    } else {
-        0
-    };
-    let a = m * faer::Scale(0.5f64.powi(squarings));
-    let ident = Mat::<f64>::identity(n, n);
-    let a2 = &a * &a;
-    let a4 = &a2 * &a2;
-    let a6 = &a2 * &a4;
-    let lin = |c6: f64, c4: f64, c2: f64, c0: f64| -> Mat<f64> {
-        &a6 * faer::Scale(c6)
-            + &a4 * faer::Scale(c4)
-            + &a2 * faer::Scale(c2)
-            + &ident * faer::Scale(c0)
-    };
-    let u_inner = &a6
-        * (&a6 * faer::Scale(B[13]) + &a4 * faer::Scale(B[11]) + &a2 * faer::Scale(B[9]))
-        + lin(B[7], B[5], B[3], B[1]);
-    let u = &a * u_inner;
-    let v = &a6 * (&a6 * faer::Scale(B[12]) + &a4 * faer::Scale(B[10]) + &a2 * faer::Scale(B[8]))
-        + lin(B[6], B[4], B[2], B[0]);
-    let denominator = &v - &u;
-    let mut r = &v + &u;
-    denominator.partial_piv_lu().solve_in_place(&mut r);
-    for _ in 0..squarings {
-        r = &r * &r;
-    }
-    Mat::from_fn(n, n, |i, j| r[(i, j)] * scale[i] / scale[j])
-}
-
-/// Diagonal scaling `d` (powers of 2) that makes the off-diagonal row and column norms
-/// of `D⁻¹ M D` comparable: the scaling loop of LAPACK's `dgebal` (Parlett & Reinsch),
-/// without the permutations.
-pub(crate) fn balancing_scale(m: &Mat<f64>) -> Vec<f64> {
-    let n = m.nrows();
-    let mut d = vec![1.0f64; n];
-    const RADIX: f64 = 2.0;
-    // LAPACK's loop converges for finite matrices in a few sweeps; the cap (and the
-    // skip of non-finite norms below, where halving infinity never ends) makes sure a
-    // matrix with overflowed entries cannot keep it running.
-    const MAX_SWEEPS: usize = 1000;
-    for _ in 0..MAX_SWEEPS {
-        let mut converged = true;
-        for i in 0..n {
-            let (mut c, mut r) = (0.0, 0.0);
-            for k in (0..n).filter(|&k| k != i) {
-                c += (m[(k, i)] * d[i] / d[k]).abs();
-                r += (m[(i, k)] * d[k] / d[i]).abs();
-            }
-            if c == 0.0 || r == 0.0 || !(c + r).is_finite() {
-                continue;
-            }
-            let total = c + r;
-            let mut f = 1.0;
-            let (mut cc, mut rr) = (c, r);
-            while cc < rr / RADIX {
-                cc *= RADIX;
-                rr /= RADIX;
-                f *= RADIX;
-            }
-            while cc >= rr * RADIX {
-                cc /= RADIX;
-                rr *= RADIX;
-                f /= RADIX;
-            }
-            if cc + rr < 0.95 * total {
-                d[i] *= f;
-                converged = false;
-            }
-        }
-        if converged {
-            return d;
-        }
-    }
-    d
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn expm_of_rotation_generator() {
-        let t = 2.5;
-        let m = Mat::from_fn(2, 2, |i, j| match (i, j) {
-            (0, 1) => -t,
-            (1, 0) => t,
-            _ => 0.0,
-        });
-        let e = expm(&m);
-        assert!((e[(0, 0)] - t.cos()).abs() < 1e-14);
-        assert!((e[(1, 0)] - t.sin()).abs() < 1e-14);
-        // A large norm exercises the squarings.
-        let big = Mat::from_fn(1, 1, |_, _| 30.0);
-        assert!((expm(&big)[(0, 0)] / 30f64.exp() - 1.0).abs() < 1e-13);
-    }
 
     #[test]
     fn d2c_rejects_negative_real_pole() {

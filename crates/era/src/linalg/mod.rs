@@ -1,7 +1,10 @@
 //! Linear algebra and numerics the pipeline shares: the truncated SVD ([`tsvd`]) over a
-//! [`LinearOperator`], one FFT plan cache ([`fft`]) and the random generator ([`rng`]).
+//! [`LinearOperator`], one FFT plan cache ([`fft`]), the random generator ([`rng`]), the
+//! balanced eigendecomposition (`eigen`) and the matrix exponential ([`expm`]).
 
 pub(crate) mod dense;
+pub(crate) mod eigen;
+pub mod expm;
 pub mod fft;
 mod operator;
 pub mod rng;

@@ -24,8 +24,9 @@
 
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
+use crate::linalg::eigen::balancing_scale;
 use crate::pipeline::modes::ModalForm;
-use crate::statespace::{balancing_scale, StateSpace, TimeDomain};
+use crate::statespace::{StateSpace, TimeDomain};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::hessenberg;
 use faer::linalg::householder;
@@ -678,7 +679,7 @@ mod tests {
             }
         }
         let mut expected = model.poles().unwrap();
-        let mut got = crate::statespace::balanced_eigen(h).unwrap().0;
+        let mut got = crate::linalg::eigen::balanced_eigen(h).unwrap().0;
         for v in [&mut expected, &mut got] {
             v.sort_by(|a, b| a.im.total_cmp(&b.im));
         }

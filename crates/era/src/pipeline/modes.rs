@@ -8,7 +8,8 @@
 //! how `φ` is scaled. Shapes are scaled so their largest entry is `1 + 0i`.
 
 use crate::error::Result;
-use crate::statespace::{balanced_eigen, StateSpace, TimeDomain};
+use crate::linalg::eigen::balanced_eigen;
+use crate::statespace::{StateSpace, TimeDomain};
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 use num_complex::Complex64;
