@@ -94,7 +94,7 @@ pub fn check() -> Result<()> {
 ///
 /// # Errors
 /// [`EraError::Interrupted`] when `token` was cancelled.
-pub fn check_token(token: &Option<Cancel>) -> Result<()> {
+pub(crate) fn check_token(token: &Option<Cancel>) -> Result<()> {
     match token {
         Some(t) => t.check(),
         None => Ok(()),

@@ -380,7 +380,7 @@ pub fn coherence_band(frequency_hz: &[f64], curves: &[Vec<f64>]) -> Option<(f64,
 }
 
 /// Leading lines of `frf` that are zero in every pair.
-pub fn leading_zero_lines(frf: &FrfData) -> usize {
+pub(crate) fn leading_zero_lines(frf: &FrfData) -> usize {
     let lines = frf.lines();
     let pairs = frf.outputs() * frf.inputs();
     (0..lines)

@@ -114,7 +114,7 @@ pub struct CombinedFit {
 }
 
 /// Minimum usable half-cycles for the fits.
-pub const MIN_USABLE_HALF_CYCLES: usize = 3;
+pub(crate) const MIN_USABLE_HALF_CYCLES: usize = 3;
 
 fn check_record(time_s: &[f64], values: &[f64], column: &'static str) -> Result<f64> {
     if time_s.len() != values.len() {

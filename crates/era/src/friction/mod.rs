@@ -287,7 +287,7 @@ impl Oscillator {
 }
 
 /// Eq. 3.12: `F_C = Δy · k / (8π f_n · cycles)`.
-pub fn coulomb_force_from_decay(
+pub(crate) fn coulomb_force_from_decay(
     velocity_drop: f64,
     stiffness: f64,
     natural_frequency_hz: f64,

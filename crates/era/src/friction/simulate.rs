@@ -152,7 +152,7 @@ fn advance(osc: &Oscillator, mass: f64, c: f64, force: f64, mut state: State, mu
 /// # Errors
 /// [`FrictionError::Limit`] when one sample period would need more steps than
 /// [`crate::limits::STEPS`] allows (a natural frequency far above the sample rate).
-pub fn substeps_per_sample(osc: &Oscillator, sample_rate_hz: f64) -> Result<usize> {
+pub(crate) fn substeps_per_sample(osc: &Oscillator, sample_rate_hz: f64) -> Result<usize> {
     let ratio = 2000.0 * osc.natural_frequency_hz / sample_rate_hz;
     let n = crate::limits::STEPS.check(
         format!(

@@ -53,14 +53,14 @@ const BRACKET_DOUBLINGS: usize = 20;
 const BISECTIONS: usize = 60;
 /// Trials of one tuning run at most: the bracket's first try, its doublings, the
 /// bisections.
-pub const MAX_TRIALS: usize = 1 + BRACKET_DOUBLINGS + BISECTIONS;
+pub(crate) const MAX_TRIALS: usize = 1 + BRACKET_DOUBLINGS + BISECTIONS;
 
 /// Velocity amplitude trend of the compensated free decay with coefficient `c`:
 /// (last peak − first peak) / first peak over the simulated cycles.
 ///
 /// # Errors
 /// From the integrator.
-pub fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> {
+pub(crate) fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> {
     let channel = ChannelConfig {
         coefficient,
         dead_zone: spec.dead_zone,

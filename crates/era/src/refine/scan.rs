@@ -51,7 +51,7 @@ use std::f64::consts::PI;
 pub const F_MINIMUM: f64 = 4.0;
 
 /// Candidates returned at most per scan.
-pub const MAX_ADDED: usize = 8;
+pub(crate) const MAX_ADDED: usize = 8;
 
 /// The chance that noise alone sets off a scan of the whole band.
 const FALSE_ALARM: f64 = 1e-3;

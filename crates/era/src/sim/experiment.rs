@@ -111,11 +111,11 @@ pub const REST_SPEED: f64 = 1e-3;
 
 /// Relative speed (in/s) below which a sliding mass's velocity of the wrong sign is
 /// roundoff, not motion.
-pub const GRAZING_SPEED: f64 = 1e-9;
+pub(crate) const GRAZING_SPEED: f64 = 1e-9;
 
 /// Events allowed within one grid step before the simulation gives up (a chattering
 /// that the event logic cannot resolve).
-pub const MAX_EVENTS_PER_STEP: usize = 10_000;
+pub(crate) const MAX_EVENTS_PER_STEP: usize = 10_000;
 
 /// One reaction-mass actuator.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -592,7 +592,7 @@ impl ExperimentSpec {
 }
 
 /// Excitation samples per analyzer sample.
-pub const KNOTS_PER_SAMPLE: usize = 4;
+pub(crate) const KNOTS_PER_SAMPLE: usize = 4;
 
 /// The recorded channels of one run, at the analyzer rate (after the settling time).
 #[derive(Debug, Clone, Default)]
@@ -752,7 +752,7 @@ fn estimate_lines(spec: &ExperimentSpec) -> Vec<f64> {
 ///
 /// # Errors
 /// From the frequency response.
-pub fn exact_frf(spec: &ExperimentSpec, frequency_hz: &[f64]) -> Result<FrfData> {
+pub(crate) fn exact_frf(spec: &ExperimentSpec, frequency_hz: &[f64]) -> Result<FrfData> {
     let sys = System::new(spec)?;
     let (am, bm, cm, dm) = sys.matrices(0);
     let a = spec.actuators.len();
