@@ -2,19 +2,13 @@
 
 use crate::common;
 
-use common::{era, expect_input_error, s, simulated_truth, truth_identify};
+use common::{era, expect_input_error, s, simulated_truth, truth_identify, write, TRUTH_SETTINGS};
 use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 fn json_of(output: &std::process::Output) -> Value {
     serde_json::from_slice(&output.stdout).expect("stdout is JSON")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
 }
 
 #[test]
@@ -112,19 +106,9 @@ fn simulate_then_identify_the_truth_model() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args([
-            "--preset",
-            "thesis",
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
-            "--json",
-            "--timings",
-            "--out",
-        ])
+        .args(["--preset", "thesis", "--states", "8"])
+        .args(TRUTH_SETTINGS)
+        .args(["--json", "--timings", "--out"])
         .arg(&out_dir)
         .output()
         .unwrap();
@@ -438,20 +422,12 @@ fn simulate_reports_timings_and_the_true_modes() {
 fn identify_reports_the_svd_path() {
     let dir = tempfile::tempdir().unwrap();
     let frf = simulated_truth(dir.path());
-    let base = [
-        "--states",
-        "8",
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "--timings",
-    ];
+    let base = [&["--states", "8"][..], &TRUTH_SETTINGS, &["--timings"]].concat();
     // auto: a 45 x 45 Hankel stays dense.
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(base)
+        .args(&base)
         .arg("--json")
         .output()
         .unwrap();
@@ -463,7 +439,7 @@ fn identify_reports_the_svd_path() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(base)
+        .args(&base)
         .args(["--svd", "matrix-free", "--json"])
         .output()
         .unwrap();
@@ -653,16 +629,11 @@ fn quantity_flag_overrides_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let frf = simulated_truth(dir.path()); // "# quantity: displacement"
     let base = [
-        "--states",
-        "8",
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "--integrations",
-        "1",
-        "-q",
-    ];
+        &["--states", "8"][..],
+        &TRUTH_SETTINGS,
+        &["--integrations", "1", "-q"],
+    ]
+    .concat();
     expect_input_error(
         &[
             "identify",
@@ -677,7 +648,7 @@ fn quantity_flag_overrides_the_file() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(base)
+        .args(&base)
         .args(["--quantity", "velocity", "--json"])
         .output()
         .unwrap();
@@ -698,28 +669,27 @@ fn identify_reads_mat_files_by_content() {
     let mat = dir.path().join("truth.dat");
     era_io::mat::write_frf_mat(&mat, &frf).unwrap();
     let args = [
-        "--states",
-        "8",
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "--quantity",
-        "displacement",
-        "--json",
-        "-q",
-    ];
+        &["--states", "8"][..],
+        &TRUTH_SETTINGS,
+        &["--quantity", "displacement", "--json", "-q"],
+    ]
+    .concat();
     let from_csv: Value = serde_json::from_slice(
         &era()
             .arg("identify")
             .arg(&csv)
-            .args(args)
+            .args(&args)
             .output()
             .unwrap()
             .stdout,
     )
     .unwrap();
-    let out = era().arg("identify").arg(&mat).args(args).output().unwrap();
+    let out = era()
+        .arg("identify")
+        .arg(&mat)
+        .args(&args)
+        .output()
+        .unwrap();
     assert!(
         out.status.success(),
         "{}",
@@ -810,7 +780,8 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
     era()
         .arg("identify")
         .arg(&frf)
-        .args(["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"])
+        .args(["--states", "8"])
+        .args(TRUTH_SETTINGS)
         .args(["-q", "--out"])
         .arg(&clean)
         .assert()
@@ -821,16 +792,9 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args([
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
-            "--json",
-            "-q",
-        ])
+        .args(["--states", "8"])
+        .args(TRUTH_SETTINGS)
+        .args(["--json", "-q"])
         .output()
         .unwrap();
     assert_eq!(json_of(&out)["warnings"], serde_json::json!([]));
@@ -1064,9 +1028,9 @@ fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
     }
     // --preset thesis is plain ERA: the same model, bit for bit, as every thesis
     // choice spelled out.
-    let thesis = ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"];
+    let thesis = [&["--states", "8"][..], &TRUTH_SETTINGS].concat();
     let mut preset = vec!["--preset", "thesis"];
-    preset.extend(thesis);
+    preset.extend(&thesis);
     let (a, text) = identify_json(&frf, &preset);
     assert!(
         text.contains("refinement: off (the thesis preset: plain ERA)"),
@@ -1082,7 +1046,7 @@ fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
         "all",
         "--no-window-correction",
     ];
-    spelled.extend(thesis);
+    spelled.extend(&thesis);
     let (b, _) = identify_json(&frf, &spelled);
     assert_eq!(a["time_domain"], "discrete");
     assert!(a["refinement"].is_null(), "{}", a["refinement"]);

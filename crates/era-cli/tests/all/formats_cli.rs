@@ -5,17 +5,7 @@ use crate::common;
 use common::{era, expect_input_error, s};
 use std::path::{Path, PathBuf};
 
-fn golden(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../era-io/tests/golden_uff")
-        .join(name)
-}
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../era-io/tests/fixtures")
-        .join(name)
-}
+use era_testkit::paths::{io_fixture as fixture, uff_golden as golden};
 
 fn stdout_of(args: &[&str]) -> String {
     let out = era().args(args).output().unwrap();

@@ -6,14 +6,7 @@
 
 use crate::common;
 use common::hostile::run_capped;
-use common::{data_file, era, expect_input_error, json_of, s};
-use std::path::{Path, PathBuf};
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
+use common::{data_file, era, expect_input_error, json_of, s, write};
 
 /// A 2 x 1 velocity FRF in SI units at nodes 11 -Y and 12 +Z, driven at node 101 +X.
 const SI_CSV: &str = "# quantity: velocity\n# response_unit: m/s\n# force_unit: N\n\

@@ -4,7 +4,7 @@
 
 use crate::common;
 use common::hostile::run_capped;
-use common::{era, json_of, s};
+use common::{era, json_of, s, DTA_SETTINGS as THESIS, TRUTH_SETTINGS};
 use std::path::{Path, PathBuf};
 
 /// A seeded modal set (acceleration): returns the file and the true (frequency, damping).
@@ -33,17 +33,6 @@ const DTA_LIKE: [&str; 16] = [
     "0.025",
     "--collocated",
     "--quiet",
-];
-
-const THESIS: [&str; 8] = [
-    "--hankel-factor",
-    "5",
-    "--integrations",
-    "1",
-    "--zero-lines",
-    "3",
-    "--pad-to",
-    "1024",
 ];
 
 /// The nearest refined mode to each true one: (relative frequency error, relative
@@ -153,15 +142,9 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
         .assert()
         .success();
     let out = era()
+        .args(["identify", s(&file), "--states", "8"])
+        .args(TRUTH_SETTINGS)
         .args([
-            "identify",
-            s(&file),
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
             "--refine",
             "--time-domain",
             "discrete",

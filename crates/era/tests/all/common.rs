@@ -12,22 +12,10 @@ pub fn golden(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Reads a golden CSV: skips `#` lines, returns the header and the rows as strings.
+/// Reads a golden CSV of this crate: skips `#` lines, returns the header and the rows as
+/// strings.
 pub fn read_csv(name: &str) -> (Vec<String>, Vec<Vec<String>>) {
-    let text = std::fs::read_to_string(golden(name)).expect("golden file");
-    let mut lines = text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
-    let header = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|c| c.trim().to_string()).collect())
-        .collect();
-    (header, rows)
+    era_testkit::files::read_golden_csv(golden(name))
 }
 
 /// Largest distance from each expected value to its nearest found value, relative to
