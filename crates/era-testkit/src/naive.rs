@@ -9,6 +9,9 @@
 //! constant times ε, the size over which rounding errors accumulate, and the condition
 //! number that amplifies them. The bound of a backward-stable computation has that form
 //! (Higham, *Accuracy and Stability of Numerical Algorithms*, §1.6 and §3.1).
+//!
+//! With `ERA_SHOW_NAIVE=1` in the environment every comparison prints its worst
+//! difference and tolerance on stderr (with `--nocapture`): the margin a tolerance keeps.
 
 use faer::{Mat, MatRef};
 use num_complex::Complex64;
@@ -22,7 +25,7 @@ pub fn tol(c: f64, n: usize, cond: f64) -> f64 {
 }
 
 /// How a difference `|fast − naive|` is made relative.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Scale {
     /// Each difference over the largest `|naive|`: the norm-wise error of a stable
     /// algorithm, which small entries share with the large ones.
@@ -34,6 +37,9 @@ pub enum Scale {
     Norm,
     /// The differences as they are.
     Absolute,
+    /// Each difference over `max(|naive|, floor)`: relative for the entries above the
+    /// floor, absolute below it (eigenvalues, some of which may be near 0).
+    Mixed(f64),
 }
 
 /// Values compared entry by entry, with a name for an entry's place.
@@ -178,6 +184,7 @@ pub fn difference<A: Values + ?Sized, B: Values + ?Sized>(
     let rel = |k: usize| match scale {
         Scale::Entry if d[k] == 0.0 => 0.0,
         Scale::Entry => d[k] / n[k].norm(),
+        Scale::Mixed(floor) => d[k] / n[k].norm().max(floor),
         _ => d[k],
     };
     let k = (0..d.len())
@@ -192,7 +199,7 @@ pub fn difference<A: Values + ?Sized, B: Values + ?Sized>(
         f64::NAN
     } else {
         match scale {
-            Scale::Absolute | Scale::Entry => rel(k),
+            Scale::Absolute | Scale::Entry | Scale::Mixed(_) => rel(k),
             Scale::Largest => d[k] / n.iter().map(|x| x.norm()).fold(0.0, f64::max),
             Scale::Norm => {
                 let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
@@ -226,6 +233,9 @@ pub fn assert_matches_naive<A: Values + ?Sized, B: Values + ?Sized>(
     tol: f64,
 ) {
     let diff = difference(fast, naive, scale);
+    if std::env::var_os("ERA_SHOW_NAIVE").is_some() {
+        eprintln!("SHOW {what}: {diff}, tolerance {tol:.3e}");
+    }
     assert!(
         diff.within(tol),
         "{what}: the fast path differs from its naive reference: {diff}, tolerance {tol:.3e}"
@@ -255,6 +265,9 @@ mod tests {
         assert_eq!(d.at, "(1, 2)");
         // ‖d‖ = 1 over ‖n‖ = √(0 + 1 + 4 + 1 + 4 + 16).
         assert!((d.worst - 1.0 / 26f64.sqrt()).abs() < 1e-15);
+        let d = difference(&[0.5 + 1e-9, 10.0 + 1e-9], &[0.5, 10.0], Scale::Mixed(1.0));
+        assert_eq!(d.at, "[0]");
+        assert!((d.worst - 1e-9).abs() < 1e-18);
         let rows = vec![vec![1.0], vec![2.0, 3.0]];
         let mut other = rows.clone();
         other[1][1] = 4.0;

@@ -1171,18 +1171,21 @@ mod tests {
                 let fast = run(&recs, &options, blocks).unwrap();
                 assert_eq!(fast.observer_order, naive.observer_order);
                 assert_eq!(fast.equations, naive.equations);
-                let mut worst = 0.0f64;
-                let mut scale = 0.0f64;
-                for k in 0..100 {
-                    for i in 0..3 {
-                        for j in 0..2 {
-                            let (a, b) = (fast.markov.get(k, i, j), naive.markov.get(k, i, j));
-                            scale = scale.max(b.abs());
-                            worst = worst.max((a - b).abs());
-                        }
-                    }
-                }
-                assert!(worst <= 1e-10 * scale, "{blocks:?}: {worst:e} of {scale:e}");
+                let blocks_of = |o: &Okid| -> Vec<f64> {
+                    (0..100)
+                        .flat_map(|k| (0..3).flat_map(move |i| (0..2).map(move |j| (k, i, j))))
+                        .map(|(k, i, j)| o.markov.get(k, i, j))
+                        .collect()
+                };
+                // Two least-squares solutions of the observer equations: their agreement
+                // is bounded by the equations' conditioning, which is not computed here.
+                era_testkit::assert_matches_naive(
+                    &format!("OKID Markov blocks, {blocks:?}"),
+                    &blocks_of(&fast),
+                    &blocks_of(&naive),
+                    era_testkit::Scale::Largest,
+                    1e-10,
+                );
             }
         }
     }
