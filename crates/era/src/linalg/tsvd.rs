@@ -933,7 +933,7 @@ mod tests {
         );
         let a = &q1 * &d * q2.transpose();
         let t = truncated_svd(&a, &TruncatedSvdOptions::new(8)).unwrap();
-        let known: Vec<f64> = (0..8).map(|i| 0.7f64.powi(i as i32)).collect();
+        let known: Vec<f64> = (0..8).map(|i| 0.7f64.powi(i)).collect();
         // Converged to the options' tolerance (1e-12 of σ₁ = 1), not to rounding.
         let (fast, scale) = (&t.s[..8], Scale::Absolute);
         assert_matches_naive("truncated σ, known", fast, &known, scale, 1e-12);
