@@ -33,16 +33,22 @@ pub fn s(p: &Path) -> &str {
     p.to_str().expect("a UTF-8 path")
 }
 
-/// Runs `era ARGS`, expects success, and parses its stdout as JSON (`--json` runs).
+/// Runs `era ARGS`, expects success (else fails with its stderr), and returns stdout.
 #[track_caller]
-pub fn json_of(args: &[&str]) -> serde_json::Value {
+pub fn stdout_of(args: &[&str]) -> String {
     let out = era().args(args).output().unwrap();
     assert!(
         out.status.success(),
         "{args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).unwrap()
+    String::from_utf8(out.stdout).expect("UTF-8 stdout")
+}
+
+/// Runs `era ARGS`, expects success, and parses its stdout as JSON (`--json` runs).
+#[track_caller]
+pub fn json_of(args: &[&str]) -> serde_json::Value {
+    serde_json::from_str(&stdout_of(args)).expect("stdout is JSON")
 }
 
 /// Runs `era ARGS` and expects exit code 2 with `needle` in stderr, and no panic.

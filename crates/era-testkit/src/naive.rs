@@ -267,7 +267,7 @@ mod tests {
         assert!((d.worst - 1.0 / 26f64.sqrt()).abs() < 1e-15);
         let d = difference(&[0.5 + 1e-9, 10.0 + 1e-9], &[0.5, 10.0], Scale::Mixed(1.0));
         assert_eq!(d.at, "[0]");
-        assert!((d.worst - 1e-9).abs() < 1e-18);
+        assert!((d.worst - 1e-9).abs() < 1e-15);
         let rows = vec![vec![1.0], vec![2.0, 3.0]];
         let mut other = rows.clone();
         other[1][1] = 4.0;

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 pub use era_testkit::cli::{
-    dta_like_set, era, expect_input_error, json_of, s, simulated_truth, truth_identify,
+    dta_like_set, era, expect_input_error, json_of, s, simulated_truth, stdout_of, truth_identify,
     DTA_SETTINGS, TRUTH_SETTINGS,
 };
 pub use era_testkit::data_file;
