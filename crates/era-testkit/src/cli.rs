@@ -33,6 +33,16 @@ pub fn s(p: &Path) -> &str {
     p.to_str().expect("a UTF-8 path")
 }
 
+/// Asserts that a run succeeded, failing with its stderr.
+#[track_caller]
+pub fn assert_success(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Runs `era ARGS`, expects success (else fails with its stderr), and returns stdout.
 #[track_caller]
 pub fn stdout_of(args: &[&str]) -> String {

@@ -3,6 +3,7 @@
 //! on bad input.
 
 use crate::common;
+use common::assert_success;
 use common::{era, expect_input_error, json_of, s, DTA_SETTINGS as THESIS};
 use std::path::Path;
 
@@ -146,11 +147,7 @@ fn a_fixed_order_is_judged_against_the_scan_and_flags_suspect_modes() {
     ];
     args.extend(THESIS);
     let out = era().args(&args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("stabilization: 11 orders (40..120:8)"),

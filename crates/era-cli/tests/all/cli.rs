@@ -1,6 +1,7 @@
 //! End-to-end tests of the `era` binary.
 
 use crate::common;
+use common::assert_success;
 
 use common::{era, expect_input_error, s, simulated_truth, truth_identify, write, TRUTH_SETTINGS};
 use era::sim::TABLE_5_2_TRUTH;
@@ -112,11 +113,7 @@ fn simulate_then_identify_the_truth_model() {
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["states"], 8);
     assert_eq!(v["time_domain"], "discrete");
@@ -210,11 +207,7 @@ fn continuous_model_from_a_noisy_modal_set() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["time_domain"], "continuous");
     assert!(v["sample_time_s"].is_null());
@@ -443,11 +436,7 @@ fn identify_reports_the_svd_path() {
         .args(["--svd", "matrix-free", "--json"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let w: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(w["hankel"]["path"], "matrix-free");
     assert!(w["hankel"]["svd_iterations"].as_u64().unwrap() >= 1);
@@ -652,11 +641,7 @@ fn quantity_flag_overrides_the_file() {
         .args(["--quantity", "velocity", "--json"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
 }
 
 #[test]
@@ -690,11 +675,7 @@ fn identify_reads_mat_files_by_content() {
         .args(&args)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let from_mat: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(from_mat["modes"], from_csv["modes"]);
     // A MAT file with no FRF layout is refused, naming what it holds.
@@ -870,11 +851,7 @@ fn threads_sets_the_run_and_refuses_absurd_counts() {
             .args(["--zero-lines", "3", "--pad-to", "1024", "--json", "-q"])
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         json_of(&out)
     };
     let all = run(&[]);

@@ -2,7 +2,7 @@
 //! of issue 3: each exits 2 naming the file and the record or line, without a panic.
 
 use crate::common;
-use common::{era, expect_input_error, s, stdout_of};
+use common::{expect_input_error, s, stdout_of};
 use std::path::{Path, PathBuf};
 
 use era_testkit::paths::{io_fixture as fixture, uff_golden as golden};

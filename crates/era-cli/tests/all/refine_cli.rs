@@ -3,6 +3,7 @@
 //! input exits 2 naming the flag or file.
 
 use crate::common;
+use common::assert_success;
 use common::hostile::run_capped;
 use common::{era, json_of, s, DTA_SETTINGS as THESIS, TRUTH_SETTINGS};
 use std::path::{Path, PathBuf};
@@ -157,11 +158,7 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let human = String::from_utf8_lossy(&out.stderr);
     assert!(human.contains("refinement (z-domain model"), "{human}");
     assert!(human.contains("± (Hz)"), "the mode table shows ±: {human}");
@@ -215,11 +212,7 @@ fn modes_the_start_missed_are_added_and_said() {
         ];
         a.extend_from_slice(extra);
         let out = era().args(&a).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         (v, String::from_utf8_lossy(&out.stderr).into_owned())
     };

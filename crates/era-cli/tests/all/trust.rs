@@ -3,6 +3,7 @@
 //! time domains, the real DaISy subframe and the real LADISK plate.
 
 use crate::common;
+use common::assert_success;
 use common::{data_file, era, json_of, s, stdout_of};
 use std::path::Path;
 
@@ -203,11 +204,7 @@ fn an_exact_receptance_refines_to_its_three_modes_in_either_time_domain() {
             ])
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let modes = v["modes"].as_array().unwrap();
         assert_eq!(modes.len(), 3, "{domain}: {} modes", modes.len());
@@ -282,11 +279,7 @@ fn the_ladisk_plate_over_its_swept_band_gives_its_four_peaks() {
         "-q",
     ]);
     let out = era().args(&args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     for refine in [false, true] {
         let mut args = vec![
             "identify",
