@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import era
+from settings import DTA_FLAGS, DTA_SETTINGS, TRUTH_FLAGS, TRUTH_SETTINGS
 
 
 def eigenvalues_of(model: dict) -> np.ndarray:
@@ -22,17 +23,17 @@ def cli_model(era_cli, path, *flags) -> dict:
 THESIS = ["--preset", "thesis"]
 CASES = [
     # file written by, CLI flags, Python keywords
-    ("truth.csv", THESIS + ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
-     dict(states=8, hankel_factor=4, pad_to=1024, preset="thesis")),
-    ("truth.uff", THESIS + ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "--time-domain", "continuous"],
-     dict(states=8, hankel_factor=4, pad_to=1024, time_domain="continuous", preset="thesis")),
-    ("dta.mat", THESIS + ["--states", "80", "--hankel-factor", "5", "--integrations", "1", "--zero-lines", "3", "--pad-to", "1024"],
-     dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024, preset="thesis")),
+    ("truth.csv", THESIS + ["--states", "8", *TRUTH_FLAGS],
+     dict(states=8, **TRUTH_SETTINGS, preset="thesis")),
+    ("truth.uff", THESIS + ["--states", "8", *TRUTH_FLAGS, "--time-domain", "continuous"],
+     dict(states=8, **TRUTH_SETTINGS, time_domain="continuous", preset="thesis")),
+    ("dta.mat", THESIS + ["--states", "80", *DTA_FLAGS],
+     dict(states=80, **DTA_SETTINGS, preset="thesis")),
     ("dta.csv", THESIS + ["--states", "40", "--lowpass-hz", "12", "--lowpass-order", "6", "--direct-term", "markov0", "--svd", "matrix-free"],
      dict(states=40, lowpass=(6, 12.0), direct_term="markov0", svd="matrix-free", preset="thesis")),
     # The default route (measured: refinement, continuous time) gives the same model too.
-    ("truth.csv", ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
-     dict(states=8, hankel_factor=4, pad_to=1024)),
+    ("truth.csv", ["--states", "8", *TRUTH_FLAGS],
+     dict(states=8, **TRUTH_SETTINGS)),
 ]
 
 
@@ -75,9 +76,9 @@ def test_python_equals_cli_model_json(files, era_cli, name, flags, keywords):
 
 def test_fit_matches_fit_json(files, era_cli, tmp_path):
     path = files / "truth.csv"
-    era_cli("identify", path, "--states", "8", "--hankel-factor", "4", "--pad-to", "1024", "--out", tmp_path / "out", "--quiet")
+    era_cli("identify", path, "--states", "8", *TRUTH_FLAGS, "--out", tmp_path / "out", "--quiet")
     expected = json.loads((tmp_path / "out" / "fit.json").read_text())
-    found = era.identify(era.read_frf(path), 8, hankel_factor=4, pad_to=1024)
+    found = era.identify(era.read_frf(path), 8, **TRUTH_SETTINGS)
     fit = found.fit
     assert fit["lines"] == expected["lines"] and fit["first_line"] == expected["first_line"]
     assert [(p["output"], p["input"]) for p in fit["pairs"]] == [(p["output"], p["input"]) for p in expected["pairs"]]

@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 import era
-
-TRUTH = dict(hankel_factor=4, pad_to=1024)
+from settings import TRUTH_SETTINGS as TRUTH
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import era
+from settings import TRUTH_SETTINGS
 
 
 def small(q=2, p=3, lines=65, seed=0):
@@ -87,7 +88,7 @@ def test_simulators_match_their_cli_shapes():
 
 
 def test_identification_results_are_plain_numpy():
-    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024, preset="thesis")
+    found = era.identify(era.simulate_truth_model(), 8, **TRUTH_SETTINGS, preset="thesis")
     n, q, p = 8, 3, 3
     assert found.a.shape == (n, n) and found.b.shape == (n, p)
     assert found.c.shape == (q, n) and found.d.shape == (q, p)
@@ -104,7 +105,7 @@ def test_identification_results_are_plain_numpy():
     assert mode.indicators["mpc"] > 0.999
     assert mode.indicators["emac"] > 0.9 and mode.indicators["reason"] is None
     # states="auto" scans the orders and keeps the same four modes.
-    auto = era.identify(era.simulate_truth_model(), "auto", hankel_factor=4, pad_to=1024)
+    auto = era.identify(era.simulate_truth_model(), "auto", **TRUTH_SETTINGS)
     physical = [m.frequency_hz for m in auto.modes if m.physical]
     assert np.allclose(physical, [1748.64, 5031.80, 7709.75, 9458.39], atol=0.01)
     assert found.hankel_size[0] > 0 and isinstance(found.warnings, list)
@@ -120,19 +121,19 @@ def test_identification_results_are_plain_numpy():
 
 def test_to_control_state_space():
     control = pytest.importorskip("control")
-    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024, preset="thesis")
+    found = era.identify(era.simulate_truth_model(), 8, **TRUTH_SETTINGS, preset="thesis")
     sys = found.to_control()
     assert isinstance(sys, control.StateSpace)
     assert sys.dt == found.sample_time_s
     assert np.allclose(np.sort_complex(sys.poles()), np.sort_complex(np.linalg.eigvals(found.a)))
-    cont = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024, time_domain="continuous")
+    cont = era.identify(era.simulate_truth_model(), 8, **TRUTH_SETTINGS, time_domain="continuous")
     assert cont.to_control().dt == 0
 
 
 def test_to_control_without_python_control_is_an_import_error(monkeypatch):
     import sys
     monkeypatch.setitem(sys.modules, "control", None)  # import control now fails
-    found = era.identify(era.simulate_truth_model(), 8, hankel_factor=4, pad_to=1024)
+    found = era.identify(era.simulate_truth_model(), 8, **TRUTH_SETTINGS)
     with pytest.raises(ImportError, match="pip install control"):
         found.to_control()
 

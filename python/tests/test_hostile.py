@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import era
+from settings import TRUTH_SETTINGS
 
 # --- the callers: one array argument each, the others fixed --------------------------
 
@@ -36,7 +37,7 @@ TRUTH = era.simulate_truth_model(noise=0.02, seed=3)
 FREQ = np.array(TRUTH.frequency_hz)
 VALUES = np.array(TRUTH.values)
 RECORD = _record()
-MODEL = era.identify(TRUTH, 8, hankel_factor=4, pad_to=1024, preset="thesis")
+MODEL = era.identify(TRUTH, 8, **TRUTH_SETTINGS, preset="thesis")
 DECAY_T = np.linspace(0, 10, 2001)
 DECAY_V = np.exp(-0.1 * DECAY_T) * np.sin(2 * np.pi * 1.5 * DECAY_T)
 
@@ -245,7 +246,7 @@ def interrupted_after(delay, call):
 
 def test_ctrl_c_stops_a_long_identify_within_a_second():
     frf = era.simulate_modal(collocated=True, noise=0.05)
-    small = era.identify(TRUTH, 8, hankel_factor=4, pad_to=1024, preset="thesis")
+    small = era.identify(TRUTH, 8, **TRUTH_SETTINGS, preset="thesis")
     # `--states auto --refine` on the thesis-size set takes about a second: the signal
     # lands early (in the probe or the scan's factorization) and half way (in the scan,
     # the choice of modes or the refinement), timed from an uninterrupted run so that the
@@ -258,7 +259,7 @@ def test_ctrl_c_stops_a_long_identify_within_a_second():
         print(f"identify: Ctrl-C after {delay} s reached Python in {latency:.3f} s")
         assert latency <= 1.0
         # The next call works, and gives what it gave before.
-        again = era.identify(TRUTH, 8, hankel_factor=4, pad_to=1024, preset="thesis")
+        again = era.identify(TRUTH, 8, **TRUTH_SETTINGS, preset="thesis")
         assert again.to_json() == small.to_json()
 
 

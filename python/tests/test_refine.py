@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import era
+from settings import TRUTH_FLAGS, TRUTH_SETTINGS
 
 
 @pytest.fixture(scope="module")
@@ -19,9 +20,9 @@ def noisy_truth(tmp_path_factory, era_cli):
 
 def test_refine_gives_the_cli_refined_model(noisy_truth, era_cli):
     frf = era.read_frf(str(noisy_truth))
-    found = era.identify(frf, 8, hankel_factor=4, pad_to=1024, refine=True, preset="thesis")
-    done = era_cli("identify", noisy_truth, "--states", "8", "--hankel-factor", "4",
-                   "--pad-to", "1024", "--refine", "--preset", "thesis", "--json", "--quiet")
+    found = era.identify(frf, 8, **TRUTH_SETTINGS, refine=True, preset="thesis")
+    done = era_cli("identify", noisy_truth, "--states", "8", *TRUTH_FLAGS,
+                   "--refine", "--preset", "thesis", "--json", "--quiet")
     cli = json.loads(done.stdout)
     ours = np.array([m.eigenvalue for m in found.modes])
     theirs = np.array([m["eigenvalue_re"] + 1j * m["eigenvalue_im"] for m in cli["modes"]])
@@ -39,9 +40,9 @@ def test_refine_gives_the_cli_refined_model(noisy_truth, era_cli):
 
 def test_refine_options_and_plain_identify_have_no_std(noisy_truth):
     frf = era.read_frf(str(noisy_truth))
-    plain = era.identify(frf, 8, hankel_factor=4, pad_to=1024, preset="thesis")
+    plain = era.identify(frf, 8, **TRUTH_SETTINGS, preset="thesis")
     assert all(m.frequency_std_hz is None for m in plain.modes)
-    refined = era.identify(frf, 8, hankel_factor=4, pad_to=1024, refine=True,
+    refined = era.identify(frf, 8, **TRUTH_SETTINGS, refine=True,
                            residuals="none", reciprocal=True, weighting="uniform",
                            max_iterations=30, preset="thesis")
     assert len(refined.modes) == 4

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import era
+from settings import TRUTH_SETTINGS
 
 TRUTH_HZ = [1748.64, 5031.80, 7709.75, 9458.39]
 
@@ -31,14 +32,14 @@ def test_the_default_route_refines_in_continuous_time_and_says_why():
 
 def test_the_thesis_preset_is_plain_era_and_explicit_keywords_win():
     truth = era.simulate_truth_model()
-    plain = era.identify(truth, 8, hankel_factor=4, pad_to=1024, preset="thesis")
+    plain = era.identify(truth, 8, **TRUTH_SETTINGS, preset="thesis")
     route = route_of(plain)
     assert route["refinement"] == "off" and plain.time_domain == "discrete"
     assert all(m.frequency_std_hz is None for m in plain.modes)
     assert np.allclose(plain.frequency_hz, TRUTH_HZ, atol=0.01)
-    refined = era.identify(truth, 8, hankel_factor=4, pad_to=1024, preset="thesis", refine=True)
+    refined = era.identify(truth, 8, **TRUTH_SETTINGS, preset="thesis", refine=True)
     assert route_of(refined)["refinement"] == "on" and refined.time_domain == "discrete"
-    cautioned = era.identify(truth, 8, hankel_factor=4, pad_to=1024, refine=False, time_domain="continuous")
+    cautioned = era.identify(truth, 8, **TRUTH_SETTINGS, refine=False, time_domain="continuous")
     assert any("without refinement" in w for w in cautioned.warnings)
     with pytest.raises(ValueError, match="preset 'fast': expected 'measured' or 'thesis'"):
         era.identify(truth, preset="fast")

@@ -225,11 +225,7 @@ fn mutated_mat_files_never_panic() {
     assert_bounded("MAT");
 }
 
-fn fixture(name: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
+use era_testkit::paths::io_fixture as fixture;
 
 /// Rewrites the abscissa minimum and increment of every record 7 of an ASCII UFF.
 fn uff_starting_at(start_hz: f64, inc_hz: f64) -> Vec<u8> {

@@ -3,7 +3,8 @@
 //! on bad input.
 
 use crate::common;
-use common::{era, expect_input_error, json_of, s};
+use common::assert_success;
+use common::{era, expect_input_error, json_of, s, DTA_SETTINGS as THESIS};
 use std::path::Path;
 
 /// A DTA-like 8 x 8 set with the recipe; returns the true frequencies.
@@ -65,17 +66,6 @@ fn score(truth: &[f64], found: &[f64], tolerance: f64) -> (usize, Vec<f64>) {
     let (pairs, left) = common::match_frequencies(truth, found, tolerance);
     (pairs.len(), left.iter().map(|&j| found[j]).collect())
 }
-
-const THESIS: [&str; 8] = [
-    "--hankel-factor",
-    "5",
-    "--integrations",
-    "1",
-    "--zero-lines",
-    "3",
-    "--pad-to",
-    "1024",
-];
 
 #[test]
 fn noise_free_dta_like_set_finds_every_mode_and_writes_the_diagram() {
@@ -157,11 +147,7 @@ fn a_fixed_order_is_judged_against_the_scan_and_flags_suspect_modes() {
     ];
     args.extend(THESIS);
     let out = era().args(&args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("stabilization: 11 orders (40..120:8)"),

@@ -6,6 +6,7 @@
 //! without a browser can still run the suite, and CI always has one.
 
 use crate::common;
+use common::assert_success;
 
 use common::era;
 use std::path::{Path, PathBuf};
@@ -62,11 +63,7 @@ fn report_renders_in_a_headless_browser() {
     let page = out.join("noisy").join("report.html");
 
     let dom = headless(&browser, &dir.path().join("p1"), &page, &["--dump-dom"]);
-    assert!(
-        dom.status.success(),
-        "{}",
-        String::from_utf8_lossy(&dom.stderr)
-    );
+    assert_success(&dom);
     let dom = String::from_utf8_lossy(&dom.stdout);
     // Singular values + grid + 9 overlays, each a rendered <svg> in its <figure>.
     assert_eq!(dom.matches("<svg").count(), 11, "rendered SVG elements");
@@ -107,11 +104,7 @@ fn report_renders_in_a_headless_browser() {
             &format!("--screenshot={}", shot.display()),
         ],
     );
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    assert_success(&run);
     let img = image::open(&shot).expect("a PNG screenshot").to_rgb8();
     let total = (img.width() * img.height()) as f64;
     let inked = img

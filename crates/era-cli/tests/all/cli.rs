@@ -1,20 +1,15 @@
 //! End-to-end tests of the `era` binary.
 
 use crate::common;
+use common::assert_success;
 
-use common::{era, expect_input_error, s, simulated_truth, truth_identify};
+use common::{era, expect_input_error, s, simulated_truth, truth_identify, write, TRUTH_SETTINGS};
 use era::sim::TABLE_5_2_TRUTH;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 fn json_of(output: &std::process::Output) -> Value {
     serde_json::from_slice(&output.stdout).expect("stdout is JSON")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
 }
 
 #[test]
@@ -112,27 +107,13 @@ fn simulate_then_identify_the_truth_model() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args([
-            "--preset",
-            "thesis",
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
-            "--json",
-            "--timings",
-            "--out",
-        ])
+        .args(["--preset", "thesis", "--states", "8"])
+        .args(TRUTH_SETTINGS)
+        .args(["--json", "--timings", "--out"])
         .arg(&out_dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["states"], 8);
     assert_eq!(v["time_domain"], "discrete");
@@ -226,11 +207,7 @@ fn continuous_model_from_a_noisy_modal_set() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v = json_of(&out);
     assert_eq!(v["time_domain"], "continuous");
     assert!(v["sample_time_s"].is_null());
@@ -438,20 +415,12 @@ fn simulate_reports_timings_and_the_true_modes() {
 fn identify_reports_the_svd_path() {
     let dir = tempfile::tempdir().unwrap();
     let frf = simulated_truth(dir.path());
-    let base = [
-        "--states",
-        "8",
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "--timings",
-    ];
+    let base = [&["--states", "8"][..], &TRUTH_SETTINGS, &["--timings"]].concat();
     // auto: a 45 x 45 Hankel stays dense.
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(base)
+        .args(&base)
         .arg("--json")
         .output()
         .unwrap();
@@ -463,15 +432,11 @@ fn identify_reports_the_svd_path() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(base)
+        .args(&base)
         .args(["--svd", "matrix-free", "--json"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let w: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(w["hankel"]["path"], "matrix-free");
     assert!(w["hankel"]["svd_iterations"].as_u64().unwrap() >= 1);
@@ -653,16 +618,11 @@ fn quantity_flag_overrides_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let frf = simulated_truth(dir.path()); // "# quantity: displacement"
     let base = [
-        "--states",
-        "8",
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "--integrations",
-        "1",
-        "-q",
-    ];
+        &["--states", "8"][..],
+        &TRUTH_SETTINGS,
+        &["--integrations", "1", "-q"],
+    ]
+    .concat();
     expect_input_error(
         &[
             "identify",
@@ -677,15 +637,11 @@ fn quantity_flag_overrides_the_file() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args(base)
+        .args(&base)
         .args(["--quantity", "velocity", "--json"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
 }
 
 #[test]
@@ -698,33 +654,28 @@ fn identify_reads_mat_files_by_content() {
     let mat = dir.path().join("truth.dat");
     era_io::mat::write_frf_mat(&mat, &frf).unwrap();
     let args = [
-        "--states",
-        "8",
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "--quantity",
-        "displacement",
-        "--json",
-        "-q",
-    ];
+        &["--states", "8"][..],
+        &TRUTH_SETTINGS,
+        &["--quantity", "displacement", "--json", "-q"],
+    ]
+    .concat();
     let from_csv: Value = serde_json::from_slice(
         &era()
             .arg("identify")
             .arg(&csv)
-            .args(args)
+            .args(&args)
             .output()
             .unwrap()
             .stdout,
     )
     .unwrap();
-    let out = era().arg("identify").arg(&mat).args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = era()
+        .arg("identify")
+        .arg(&mat)
+        .args(&args)
+        .output()
+        .unwrap();
+    assert_success(&out);
     let from_mat: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(from_mat["modes"], from_csv["modes"]);
     // A MAT file with no FRF layout is refused, naming what it holds.
@@ -810,7 +761,8 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
     era()
         .arg("identify")
         .arg(&frf)
-        .args(["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"])
+        .args(["--states", "8"])
+        .args(TRUTH_SETTINGS)
         .args(["-q", "--out"])
         .arg(&clean)
         .assert()
@@ -821,16 +773,9 @@ fn suspect_results_are_warned_of_in_the_summary_and_the_json() {
     let out = era()
         .arg("identify")
         .arg(&frf)
-        .args([
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
-            "--json",
-            "-q",
-        ])
+        .args(["--states", "8"])
+        .args(TRUTH_SETTINGS)
+        .args(["--json", "-q"])
         .output()
         .unwrap();
     assert_eq!(json_of(&out)["warnings"], serde_json::json!([]));
@@ -906,11 +851,7 @@ fn threads_sets_the_run_and_refuses_absurd_counts() {
             .args(["--zero-lines", "3", "--pad-to", "1024", "--json", "-q"])
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         json_of(&out)
     };
     let all = run(&[]);
@@ -1064,9 +1005,9 @@ fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
     }
     // --preset thesis is plain ERA: the same model, bit for bit, as every thesis
     // choice spelled out.
-    let thesis = ["--states", "8", "--hankel-factor", "4", "--pad-to", "1024"];
+    let thesis = [&["--states", "8"][..], &TRUTH_SETTINGS].concat();
     let mut preset = vec!["--preset", "thesis"];
-    preset.extend(thesis);
+    preset.extend(&thesis);
     let (a, text) = identify_json(&frf, &preset);
     assert!(
         text.contains("refinement: off (the thesis preset: plain ERA)"),
@@ -1082,7 +1023,7 @@ fn the_default_route_is_echoed_and_the_thesis_preset_is_plain_era() {
         "all",
         "--no-window-correction",
     ];
-    spelled.extend(thesis);
+    spelled.extend(&thesis);
     let (b, _) = identify_json(&frf, &spelled);
     assert_eq!(a["time_domain"], "discrete");
     assert!(a["refinement"].is_null(), "{}", a["refinement"]);

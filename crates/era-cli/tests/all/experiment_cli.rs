@@ -3,6 +3,7 @@
 //! sets (zero difference, MAC 1).
 
 use crate::common;
+use common::assert_success;
 
 use common::era;
 use common::hostile::run_capped;
@@ -98,11 +99,7 @@ fn frictionless_experiment_matches_its_exact_frfs_through_the_files() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let median = v["median_difference_percent"][0].as_f64().unwrap();
     assert!(median < 10.0, "median difference {median} %");
@@ -284,11 +281,7 @@ fn time_histories_come_with_figures_and_the_stick_share() {
             "--json",
         ]);
         let out = era().current_dir(d).args(&args).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         for run in 1..=3 {
             let png = std::fs::read(d.join(folder).join(format!("run{run}.png"))).unwrap();

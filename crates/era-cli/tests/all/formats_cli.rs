@@ -2,30 +2,10 @@
 //! of issue 3: each exits 2 naming the file and the record or line, without a panic.
 
 use crate::common;
-use common::{era, expect_input_error, s};
+use common::{expect_input_error, s, stdout_of};
 use std::path::{Path, PathBuf};
 
-fn golden(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../era-io/tests/golden_uff")
-        .join(name)
-}
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../era-io/tests/fixtures")
-        .join(name)
-}
-
-fn stdout_of(args: &[&str]) -> String {
-    let out = era().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use era_testkit::paths::{io_fixture as fixture, uff_golden as golden};
 
 /// The golden ASCII file with `edit` applied to its text.
 fn edited(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf {

@@ -241,25 +241,23 @@ fn bad_time_data_exits_2_naming_the_problem() {
         &["--inputs", "1", "--outputs", "3", "--binary"],
         "--binary applies to UFF output",
     );
-    let mat =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../era-io/tests/fixtures/time_two.mat");
-    if mat.is_file() {
-        expect_input_error(
-            &[
-                "frf",
-                s(&mat),
-                "--inputs",
-                "1",
-                "--outputs",
-                "2",
-                "--variable",
-                "u",
-                "--out",
-                s(&out),
-            ],
-            "set --sample-rate",
-        );
-    }
+    // The fixture is in the repository: a missing one fails here instead of skipping.
+    let mat = era_testkit::paths::io_fixture("time_two.mat");
+    expect_input_error(
+        &[
+            "frf",
+            s(&mat),
+            "--inputs",
+            "1",
+            "--outputs",
+            "2",
+            "--variable",
+            "u",
+            "--out",
+            s(&out),
+        ],
+        "set --sample-rate",
+    );
     // The good file works.
     era()
         .args([

@@ -1,6 +1,7 @@
 //! End-to-end tests of `era friction`.
 
 use crate::common;
+use common::assert_success;
 
 use common::{era, expect_input_error};
 use serde_json::Value;
@@ -47,11 +48,7 @@ fn estimate_reads_simulated_records_and_reports_the_schema() {
         .args(&files)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     let records = v["records"].as_array().unwrap();
     assert_eq!(records.len(), 4);
@@ -88,11 +85,7 @@ fn viscous_record_is_called_viscous() {
         .arg(&f)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["records"][0]["better_model"], "viscous");
 }
@@ -125,11 +118,7 @@ fn tune_from_a_model_and_from_records() {
         .arg(&f)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!((v["neutral_coefficient"].as_f64().unwrap() - 0.0353).abs() / 0.0353 < 0.02);
     assert!(v["free_decay_estimate_margin"].as_f64().is_some());
@@ -297,11 +286,7 @@ fn timings_name_the_friction_stages() {
             cmd.arg("--out").arg(&out_file);
         }
         let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let v: Value = serde_json::from_slice(&out.stdout).unwrap();
         assert!(v["timings_s"][stage].as_f64().is_some(), "{stage}");
         // The table on stderr lists the stage itself, not only the total.

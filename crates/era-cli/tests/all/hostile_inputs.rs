@@ -8,11 +8,7 @@ use common::hostile::*;
 use common::s;
 use std::path::{Path, PathBuf};
 
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../era-io/tests/fixtures")
-        .join(name)
-}
+use era_testkit::paths::io_fixture as fixture;
 
 const FRF_CSV: &str =
     "# quantity: velocity\nfrequency_hz,H1_1_re,H1_1_im\n0,1,0\n0.5,2,-1\n1,3,0.5\n1.5,1,1\n";

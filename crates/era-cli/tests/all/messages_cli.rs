@@ -5,15 +5,9 @@
 //! the units and the channel table.
 
 use crate::common;
+use common::assert_success;
 use common::hostile::run_capped;
-use common::{data_file, era, expect_input_error, json_of, s};
-use std::path::{Path, PathBuf};
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
+use common::{data_file, era, expect_input_error, json_of, s, write};
 
 /// A 2 x 1 velocity FRF in SI units at nodes 11 -Y and 12 +Z, driven at node 101 +X.
 const SI_CSV: &str = "# quantity: velocity\n# response_unit: m/s\n# force_unit: N\n\
@@ -93,11 +87,7 @@ fn a_late_start_is_padded_in_csv_and_mat_and_an_off_grid_one_refused() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     assert!(
         stdout.contains("the lines start at 1 Hz; the 2 lines below were added as zeros"),
         "{stdout}"
@@ -161,11 +151,7 @@ fn units_flag_sets_the_units_every_writer_keeps() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    assert_success(&run);
     assert!(
         stdout.contains("units m/s^2 / N from --units; the file says m/s / N"),
         "{stdout}"

@@ -3,8 +3,9 @@
 //! input exits 2 naming the flag or file.
 
 use crate::common;
+use common::assert_success;
 use common::hostile::run_capped;
-use common::{era, json_of, s};
+use common::{era, json_of, s, DTA_SETTINGS as THESIS, TRUTH_SETTINGS};
 use std::path::{Path, PathBuf};
 
 /// A seeded modal set (acceleration): returns the file and the true (frequency, damping).
@@ -33,17 +34,6 @@ const DTA_LIKE: [&str; 16] = [
     "0.025",
     "--collocated",
     "--quiet",
-];
-
-const THESIS: [&str; 8] = [
-    "--hankel-factor",
-    "5",
-    "--integrations",
-    "1",
-    "--zero-lines",
-    "3",
-    "--pad-to",
-    "1024",
 ];
 
 /// The nearest refined mode to each true one: (relative frequency error, relative
@@ -153,15 +143,9 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
         .assert()
         .success();
     let out = era()
+        .args(["identify", s(&file), "--states", "8"])
+        .args(TRUTH_SETTINGS)
         .args([
-            "identify",
-            s(&file),
-            "--states",
-            "8",
-            "--hankel-factor",
-            "4",
-            "--pad-to",
-            "1024",
             "--refine",
             "--time-domain",
             "discrete",
@@ -174,11 +158,7 @@ fn refined_truth_model_is_discrete_and_keeps_table_5_2() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let human = String::from_utf8_lossy(&out.stderr);
     assert!(human.contains("refinement (z-domain model"), "{human}");
     assert!(human.contains("± (Hz)"), "the mode table shows ±: {human}");
@@ -232,11 +212,7 @@ fn modes_the_start_missed_are_added_and_said() {
         ];
         a.extend_from_slice(extra);
         let out = era().args(&a).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         (v, String::from_utf8_lossy(&out.stderr).into_owned())
     };

@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use common::{era, s};
+use common::{era, read, s, DTA_SETTINGS};
 use std::path::{Path, PathBuf};
 
 /// A 2 x 2 acceleration set (3 modes) with SI units and a channel table in which
@@ -49,11 +49,6 @@ fn si_set(dir: &Path) -> PathBuf {
     )
     .unwrap();
     file
-}
-
-fn read(path: impl AsRef<Path>) -> String {
-    std::fs::read_to_string(path.as_ref())
-        .unwrap_or_else(|e| panic!("{}: {e}", path.as_ref().display()))
 }
 
 #[test]
@@ -235,23 +230,9 @@ fn an_8x8_report_stays_under_2_mb() {
         .success();
     let out = dir.path().join("out");
     era()
-        .args([
-            "identify",
-            s(&file),
-            "-q",
-            "--states",
-            "80",
-            "--hankel-factor",
-            "5",
-            "--integrations",
-            "1",
-            "--zero-lines",
-            "3",
-            "--pad-to",
-            "1024",
-            "--out",
-            s(&out),
-        ])
+        .args(["identify", s(&file), "-q", "--states", "80"])
+        .args(DTA_SETTINGS)
+        .args(["--out", s(&out)])
         .assert()
         .success();
     let size = std::fs::metadata(out.join("report.html")).unwrap().len();

@@ -3,7 +3,8 @@
 //! time domains, the real DaISy subframe and the real LADISK plate.
 
 use crate::common;
-use common::{data_file, era, json_of, s};
+use common::assert_success;
+use common::{data_file, era, json_of, s, stdout_of};
 use std::path::Path;
 
 /// (frequency Hz, damping ratio) of every mode of a JSON (`model.json`, or the truth
@@ -108,17 +109,6 @@ fn from_time<'a>(file: &'a str, frame: &'a str, extra: &[&'a str]) -> Vec<&'a st
     args
 }
 
-/// The human text (stdout) of an era run that must succeed.
-fn human_text(args: &[&str]) -> String {
-    let out = era().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
 #[test]
 fn the_window_correction_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
@@ -128,7 +118,7 @@ fn the_window_correction_is_said_and_can_be_turned_off() {
         args.extend_from_slice(extra);
         args
     };
-    let run = |extra: &[&'static str]| human_text(&args(extra));
+    let run = |extra: &[&'static str]| stdout_of(&args(extra));
     let on = run(&[]);
     assert!(
         on.contains("window correction: the Welch estimate's hann lag window"),
@@ -214,11 +204,7 @@ fn an_exact_receptance_refines_to_its_three_modes_in_either_time_domain() {
             ])
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_success(&out);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         let modes = v["modes"].as_array().unwrap();
         assert_eq!(modes.len(), 3, "{domain}: {} modes", modes.len());
@@ -293,11 +279,7 @@ fn the_ladisk_plate_over_its_swept_band_gives_its_four_peaks() {
         "-q",
     ]);
     let out = era().args(&args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     for refine in [false, true] {
         let mut args = vec![
             "identify",
@@ -342,7 +324,7 @@ fn the_ladisk_plate_over_its_swept_band_gives_its_four_peaks() {
 fn the_frame_check_is_said_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
     let (file, _) = shaker_test(dir.path(), 29);
-    let run = |extra: &[&str]| human_text(&from_time(s(&file), "1024", extra));
+    let run = |extra: &[&str]| stdout_of(&from_time(s(&file), "1024", extra));
     let on = run(&[]);
     assert!(
         on.contains("frame check: identified again from frames of 2048 samples"),

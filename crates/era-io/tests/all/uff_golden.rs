@@ -20,9 +20,7 @@ fn floats(v: &Value) -> Vec<f64> {
 
 #[test]
 fn every_pyuff_file_reads_identically() {
-    let expected: Value =
-        serde_json::from_str(&std::fs::read_to_string(golden().join("expected.json")).unwrap())
-            .unwrap();
+    let expected: Value = era_testkit::files::read_json(golden().join("expected.json"));
     let files = expected.as_object().unwrap();
     assert_eq!(
         files.len(),

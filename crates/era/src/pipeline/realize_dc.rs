@@ -304,6 +304,7 @@ mod tests {
     use crate::linalg::rng::Minstd;
     use crate::pipeline::modes::modal_parameters;
     use crate::sim::{ModalSpec, ModalStructure};
+    use era_testkit::{assert_matches_naive, Scale};
 
     fn markov_of(model: &StateSpace, samples: usize) -> MarkovSequence {
         let mut seq = MarkovSequence::zeros(model.outputs(), model.inputs(), samples);
@@ -447,17 +448,12 @@ mod tests {
             let fast = factored.realize(states, DirectTerm::Zero).unwrap();
             let reference =
                 realize_dc_with(&markov, 1.0 / 64.0, states, 5, &shape, DirectTerm::Zero).unwrap();
-            for (a, b) in fast
-                .singular_values
-                .iter()
-                .zip(&reference.singular_values)
-                .take(30)
-            {
-                assert!(
-                    (a - b).abs() <= 1e-10 * reference.singular_values[0],
-                    "{a} vs {b}"
-                );
-            }
+            // Two routes to the factors (the formed correlations square the data's
+            // conditioning): a fixed bound, not a rounding one.
+            let (sv, reference_sv) = (&fast.singular_values, &reference.singular_values);
+            let k = sv.len().min(reference_sv.len()).min(30);
+            let what = format!("{states} states, singular values");
+            assert_matches_naive(&what, &sv[..k], &reference_sv[..k], Scale::Largest, 1e-10);
             // Realizations differ by a state basis (signs): compare C A^k B.
             let block = |m: &StateSpace, k: usize| {
                 let mut x = m.b.clone();
@@ -468,12 +464,8 @@ mod tests {
             };
             for k in [0, 1, 5, 40] {
                 let (f, r) = (block(&fast.model, k), block(&reference.model, k));
-                let scale = r.norm_l2().max(1e-300);
-                assert!(
-                    (&f - &r).norm_l2() <= 1e-8 * scale,
-                    "{states} states, block {k}: {:e}",
-                    (&f - &r).norm_l2() / scale
-                );
+                let what = format!("{states} states, block {k}");
+                assert_matches_naive(&what, &f, &r, Scale::Norm, 1e-8);
             }
         }
         assert!(factor_dc(&markov, 1.0, &DcShape { xi: 1, ..shape }, 8, 5).is_err());

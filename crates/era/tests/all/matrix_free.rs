@@ -5,18 +5,21 @@
 
 use crate::common;
 
-use common::worst_match;
+use common::{assert_eigenvalues_match, eigenvalue_difference};
 use era::identify::{identify, EraOptions};
 use era::linalg::rng::Minstd;
-use era::pipeline::realize::{realize, RealizeOptions, SvdPath};
+use era::pipeline::realize::{realize, realize_naive, RealizeOptions, SvdPath};
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::sources::frf::MarkovSequence;
 use era::Quantity;
+use era_testkit::{difference, tol, Scale};
 use faer::Mat;
 use proptest::prelude::*;
 
-/// Worst eigenvalue mismatch between the paths, and the matrix-free path's passes.
-fn both_paths(frf: &era::FrfData) -> (f64, usize) {
+/// Checks the matrix-free path's eigenvalues against the dense path's within `tol`, and
+/// returns its passes.
+#[track_caller]
+fn both_paths(frf: &era::FrfData, what: &str, tol: f64) -> usize {
     let run = |svd| {
         identify(frf, &{
             let mut o = EraOptions::thesis_dta();
@@ -28,22 +31,18 @@ fn both_paths(frf: &era::FrfData) -> (f64, usize) {
     let (dense, free) = (run(SvdPath::Dense), run(SvdPath::MatrixFree));
     assert_eq!(free.realization.svd_path, SvdPath::MatrixFree);
     assert_eq!(free.realization.singular_values.len(), 80);
-    let passes = free.realization.svd_iterations.unwrap();
-    (
-        worst_match(&dense.model.poles().unwrap(), &free.model.poles().unwrap()),
-        passes,
-    )
+    let (dense_poles, free_poles) = (dense.model.poles().unwrap(), free.model.poles().unwrap());
+    assert_eigenvalues_match(what, &free_poles, &dense_poles, tol);
+    free.realization.svd_iterations.unwrap()
 }
 
 #[test]
 fn dta_like_set_without_and_with_noise() {
     let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
     let clean = structure.frf(801, 0.025, Quantity::Acceleration).unwrap();
-    let (err, _) = both_paths(&clean);
-    assert!(err <= 1e-8, "noise-free: {err:e}");
+    both_paths(&clean, "noise-free", 1e-8);
     let noisy = add_noise(&clean, 0.15, 42).unwrap();
-    let (err, passes) = both_paths(&noisy);
-    assert!(err <= 1e-6, "15 % noise: {err:e}");
+    let passes = both_paths(&noisy, "15 % noise", 1e-6);
     // σ81/σ80 = 0.995: subspace iteration needed 24 passes of 120 columns each way here,
     // the restarted block Krylov iteration 7–8. The unrestarted phase (era::linalg::tsvd) in
     // blocks of 13 finishes within 480 columns each way, without a restart (its room is
@@ -125,9 +124,20 @@ proptest! {
         });
         let dense = run(SvdPath::Dense).unwrap();
         let free = run(SvdPath::MatrixFree).unwrap();
-        let err = worst_match(&dense.model.poles().unwrap(), &free.model.poles().unwrap());
+        let dense_poles = dense.model.poles().unwrap();
+        let diff = eigenvalue_difference(&dense_poles, &free.model.poles().unwrap());
         let bound = if noisy { 1e-6 } else { 1e-8 };
-        prop_assert!(err <= bound, "seed {}, {}x{}, {} states, noise {}: {:e}", seed, q, p, states, noise, err);
+        prop_assert!(diff.within(bound), "seed {}, {}x{}, {} states, noise {}: {}, tolerance {:e}", seed, q, p, states, noise, diff, bound);
+        // The dense path against its naive reference (element-wise Hankels, the full SVD,
+        // plain loops): singular values to rounding (Weyl: c · ε · n · σ₁ for n rows),
+        // poles within the bound above.
+        let naive = realize_naive(&markov, 1.0, &RealizeOptions::new(states, hankel_factor)).unwrap();
+        let (sv, naive_sv) = (&dense.singular_values, &naive.singular_values);
+        let rows = dense.hankel_size.0;
+        let diff = difference(&sv[..], &naive_sv[..], Scale::Largest);
+        prop_assert!(diff.within(tol(2.0, rows, 1.0)), "seed {}: singular values {}", seed, diff);
+        let diff = eigenvalue_difference(&naive.model.poles().unwrap(), &dense_poles);
+        prop_assert!(diff.within(bound), "seed {}: poles against the naive reference {}", seed, diff);
     }
 }
 

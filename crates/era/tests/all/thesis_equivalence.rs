@@ -3,12 +3,13 @@
 
 use crate::common;
 
-use common::{read_csv, worst_match};
+use common::{assert_eigenvalues_match, read_csv, worst_match};
 use era::identification::Identification;
 use era::identify::{identify, identify_naive, EraOptions};
 use era::pipeline::realize::SvdPath;
 use era::sim::{ModalSpec, ModalStructure};
 use era::{Complex64, Quantity};
+use era_testkit::{assert_matches_naive, tol, Scale};
 
 #[test]
 fn dta_like_set_fast_equals_naive_reference() {
@@ -34,20 +35,25 @@ fn check_against_references(
     naive: &Identification,
 ) {
     assert_eq!(fast.realization.hankel_size, (1592, 1592));
-    let err = worst_match(&naive.model.poles().unwrap(), &fast.model.poles().unwrap());
-    assert!(
-        err <= 1e-8,
-        "eigenvalues differ from the naive reference by {err:e}"
+    // The eigenvalues' sensitivity to the Hankel's rounding is not computed: a fixed bound.
+    let (fast_poles, naive_poles) = (fast.model.poles().unwrap(), naive.model.poles().unwrap());
+    assert_eigenvalues_match("poles", &fast_poles, &naive_poles, 1e-8);
+    // Singular values are perfectly conditioned (Weyl): |Δσ| ≤ ‖ΔH‖₂, a rounding of
+    // c · ε · n · σ₁ for the n = 1592 columns; the truncated SVD gives its leading ones.
+    let (sv, naive_sv) = (
+        &fast.realization.singular_values,
+        &naive.realization.singular_values,
     );
-    let s1 = naive.realization.singular_values[0];
-    for (a, b) in fast
-        .realization
-        .singular_values
-        .iter()
-        .zip(&naive.realization.singular_values)
-    {
-        assert!((a - b).abs() <= 1e-12 * s1);
-    }
+    let k = sv.len().min(naive_sv.len());
+    let (rows, _) = fast.realization.hankel_size;
+    let what = format!("singular values, {:?}", fast.realization.svd_path);
+    assert_matches_naive(
+        &what,
+        &sv[..k],
+        &naive_sv[..k],
+        Scale::Largest,
+        tol(2.0, rows, 1.0),
+    );
     // Against the thesis routines run by the Octave peer on the same set
     // (scripts/octave_peer.sh golden): same eigenvalues.
     // First line "sample_time_s,Ts", then "re_z,im_z" and one eigenvalue per row.

@@ -13,8 +13,7 @@ use serde_json::Value;
 const REL: f64 = 1e-10;
 
 fn load() -> Value {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/welch_scipy.json");
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    era_testkit::files::read_json(crate::common::golden("welch_scipy.json"))
 }
 
 fn rows(v: &Value) -> Vec<Vec<f64>> {

@@ -1,89 +1,13 @@
-//! Helpers shared by the CLI tests.
+//! Helpers shared by the CLI tests: what only these tests use. The ones every crate's
+//! tests share (the binary, data files, argument lists, JSON readers) are in era-testkit.
 #![allow(dead_code)]
 
-use assert_cmd::Command;
-use std::path::{Path, PathBuf};
-
-/// The `era` binary under test.
-pub fn era() -> Command {
-    Command::cargo_bin("era").unwrap()
-}
-
-/// A path as the `&str` an argument list takes (the tests' paths are UTF-8).
-pub fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-/// Writes the truth model's FRFs into `dir/truth.csv` with `era simulate truth-model`.
-pub fn simulated_truth(dir: &Path) -> PathBuf {
-    let frf = dir.join("truth.csv");
-    era()
-        .args(["simulate", "truth-model", "-q", "--out"])
-        .arg(&frf)
-        .assert()
-        .success();
-    frf
-}
-
-/// A thesis-size set written to `dir/name` (8 x 8, 40 modes, collocated, 5 % noise),
-/// whose `--states auto --refine` takes seconds.
-pub fn dta_like_set(dir: &Path, name: &str) -> PathBuf {
-    let path = dir.join(name);
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "--collocated",
-            "--noise",
-            "0.05",
-            "-q",
-            "--out",
-        ])
-        .arg(&path)
-        .assert()
-        .success();
-    path
-}
-
-/// Runs `era`, expects success, and parses its stdout as JSON (`--json` runs).
-#[track_caller]
-pub fn json_of(args: &[&str]) -> serde_json::Value {
-    let out = era().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-/// Runs `era` and expects exit code 2 with `needle` in stderr, and no panic.
-pub fn expect_input_error(args: &[&str], needle: &str) {
-    let out = era().args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(needle),
-        "{args:?}: expected '{needle}' in: {stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
-}
-
-/// A file under the workspace's `data/` folder (the real data sets shipped with the repo,
-/// see data/README.md). A missing file fails the test with its path: the data tests never
-/// skip silently.
-#[track_caller]
-pub fn data_file(rel: &str) -> PathBuf {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data")
-        .join(rel);
-    assert!(
-        p.is_file(),
-        "data file {} is missing: the repository's data/ folder should hold it (see data/README.md)",
-        p.display()
-    );
-    p
-}
+pub use era_testkit::cli::{
+    assert_success, dta_like_set, era, expect_input_error, json_of, s, simulated_truth, stdout_of,
+    truth_identify, DTA_SETTINGS, TRUTH_SETTINGS,
+};
+pub use era_testkit::data_file;
+pub use era_testkit::files::{modes_of, read, write};
 
 /// One-to-one matching of `found` frequencies to `truth` within `tolerance` (relative),
 /// nearest pairs first: the matched (truth index, found index) pairs and the found
@@ -158,41 +82,4 @@ pub fn daisy_json(extra: &[&str]) -> serde_json::Value {
     json_of(&args)
 }
 
-/// (frequency Hz, damping ratio) of the modes of a JSON (`model.json`, or the truth
-/// `era simulate ... --json` prints), all of them or the physical ones.
-pub fn modes_of(v: &serde_json::Value, only_physical: bool) -> Vec<(f64, f64)> {
-    v["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|m| !only_physical || m["physical"].as_bool().unwrap())
-        .map(|m| {
-            (
-                m["frequency_hz"].as_f64().unwrap(),
-                m["damping_ratio"].as_f64().unwrap(),
-            )
-        })
-        .collect()
-}
-
 pub mod hostile;
-
-/// The arguments of `era identify` of the truth model `frf` at `states` into `out`, at the
-/// thesis's truth-model settings: a run of a tenth of a second with a full set of outputs.
-pub fn truth_identify(frf: &Path, states: &str, out: &Path) -> Vec<String> {
-    [
-        "identify",
-        s(frf),
-        "--states",
-        states,
-        "--hankel-factor",
-        "4",
-        "--pad-to",
-        "1024",
-        "-q",
-        "--out",
-        s(out),
-    ]
-    .map(String::from)
-    .to_vec()
-}

@@ -252,12 +252,14 @@ mod tests {
         .unwrap();
         let fast = impulse_responses(&d).unwrap();
         let slow = impulse_responses_naive(&d);
-        for (a, b) in fast.iter().zip(&slow) {
-            assert_eq!(a.len(), 32);
-            for (x, y) in a.iter().zip(b) {
-                assert!((x - y).abs() < 1e-14, "{x} vs {y}");
-            }
-        }
+        assert!(fast.iter().all(|a| a.len() == 32));
+        era_testkit::assert_matches_naive(
+            "impulse responses",
+            &fast,
+            &slow,
+            era_testkit::Scale::Absolute,
+            era_testkit::tol(1.0, 32, 1.0),
+        );
     }
 
     /// `frf_of_markov` is the forward transform whose inverse `impulse_responses` is:
