@@ -17,27 +17,28 @@ use clap::Parser;
 use error::UsageError;
 use std::process::ExitCode;
 
-/// 2 when any cause is the user's (bad data, bad flag, unreadable or unwritable file),
-/// 1 otherwise.
+/// 2 when the first cause of era's own ([`era::error::InputError`]) is the user's (bad
+/// data, bad flag, unreadable or unwritable file), 1 otherwise: each error type decides
+/// by its `is_input_error()`.
 fn exit_code(err: &anyhow::Error) -> u8 {
-    for cause in err.chain() {
-        if let Some(e) = cause.downcast_ref::<era::EraError>() {
-            return if e.is_input_error() { 2 } else { 1 };
-        }
-        if cause.downcast_ref::<era_plot::PlotError>().is_some() {
-            return 1;
-        }
-        if cause.downcast_ref::<era_io::IoError>().is_some()
-            || cause.downcast_ref::<UsageError>().is_some()
-            || cause.downcast_ref::<era::limits::LimitError>().is_some()
-            || cause
-                .downcast_ref::<era::friction::FrictionError>()
-                .is_some()
-        {
-            return 2;
-        }
+    match err.chain().find_map(input_error) {
+        Some(true) => 2,
+        Some(false) | None => 1,
     }
-    1
+}
+
+/// `cause`'s `is_input_error()` when it is one of era's errors.
+fn input_error(cause: &(dyn std::error::Error + 'static)) -> Option<bool> {
+    use era::error::InputError;
+    fn ask<E: InputError + 'static>(cause: &(dyn std::error::Error + 'static)) -> Option<bool> {
+        cause.downcast_ref::<E>().map(E::is_input_error)
+    }
+    ask::<era::EraError>(cause)
+        .or_else(|| ask::<era_io::IoError>(cause))
+        .or_else(|| ask::<UsageError>(cause))
+        .or_else(|| ask::<era::limits::LimitError>(cause))
+        .or_else(|| ask::<era::friction::FrictionError>(cause))
+        .or_else(|| ask::<era_plot::PlotError>(cause))
 }
 
 /// The error and its causes, `: `-joined as anyhow's `{:#}` does, with the core's

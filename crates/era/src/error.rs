@@ -501,6 +501,35 @@ impl EraError {
     }
 }
 
+/// Whose fault an error is: the caller's (bad data, a refused value, an unreadable
+/// file: the CLI exits 2, Python raises `ValueError`) or the program's (exit 1). Every
+/// error type of era's crates says it here, so a front end asks one question of any
+/// error it meets.
+pub trait InputError: std::error::Error {
+    /// True when the caller can mend it by changing what it passed.
+    fn is_input_error(&self) -> bool;
+}
+
+impl InputError for EraError {
+    fn is_input_error(&self) -> bool {
+        EraError::is_input_error(self)
+    }
+}
+
+/// A size above a limit is the caller's to lower (or to raise the limit).
+impl InputError for crate::limits::LimitError {
+    fn is_input_error(&self) -> bool {
+        true
+    }
+}
+
+/// Friction records and parameters are the caller's.
+impl InputError for crate::friction::FrictionError {
+    fn is_input_error(&self) -> bool {
+        true
+    }
+}
+
 /// `invalid parameter {name} = {value}: {reason}`, the name spelled by `spell` when it is a
 /// [`Param`] (a front end's flag or keyword), as given otherwise (`record`, `structure`):
 /// the words of every refused parameter, [`EraError`]'s and the friction module's.
