@@ -3,7 +3,8 @@
 //! read. The core names option fields ([`Naming`]); this module adds the flag names, so
 //! other front ends (Python) can word the same checks their own way.
 
-use crate::args::{CommonArgs, IdentifyArgs, RefineFitArgs, StatesArg};
+use crate::args::{CommonArgs, IdentifyArgs, RefineFitArgs, StatesArg, WelchArgs};
+use era::frf::estimate::WelchOptions;
 use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
 use era::modal::stabilization::OrderRange;
@@ -308,7 +309,84 @@ pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
     }
 }
 
+/// The Welch settings of the flags at `rate` samples per second.
+pub fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
+    let mut o = WelchOptions::new(rate, welch.frame_or_default());
+    o.overlap = welch.overlap;
+    o.window = welch.window;
+    o.detrend = welch.detrend;
+    o
+}
+
 /// `--noise`, checked by the simulator's rule.
 pub fn check_noise(noise: f64) -> anyhow::Result<()> {
     Ok(era::sim::check_noise(era::params::Naming::Flag, noise)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    fn parsed(args: &[&str]) -> crate::args::Command {
+        let argv = ["era"].iter().chain(args);
+        crate::args::Cli::try_parse_from(argv).unwrap().command
+    }
+
+    fn identify_args(args: &[&str]) -> IdentifyArgs {
+        let argv: Vec<&str> = ["identify", "frf.csv"]
+            .iter()
+            .chain(args)
+            .copied()
+            .collect();
+        match parsed(&argv) {
+            crate::args::Command::Identify(a) => *a,
+            _ => unreachable!(),
+        }
+    }
+
+    /// Every flag left out is the core's default: clap reads them from the core, and
+    /// this fails when one is written out again and drifts.
+    #[test]
+    fn flags_left_out_are_the_cores_defaults() {
+        let a = identify_args(&["--states", "8"]);
+        let mut expected = EraOptions::default();
+        expected.states = 8;
+        assert_eq!(options(&a).unwrap(), expected);
+        assert_eq!(a.lowpass_order, EraOptions::DEFAULT_LOWPASS_ORDER);
+        let a = identify_args(&["--states", "8", "--lowpass-hz", "100"]);
+        assert_eq!(
+            options(&a).unwrap().lowpass,
+            Some((EraOptions::DEFAULT_LOWPASS_ORDER, 100.0))
+        );
+        assert_eq!(
+            refine_options(&a.refine_fit).unwrap(),
+            RefineOptions::default()
+        );
+        assert_eq!(a.preset, era::identify::route::Preset::default());
+        assert_eq!(a.markov, era::sources::MarkovSource::default());
+        assert_eq!(a.welch.estimator, era::frf::estimate::Estimator::default());
+        assert_eq!(
+            welch_options(&a.welch, 100.0),
+            WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
+        );
+        let crate::args::Command::Frf(f) = parsed(&[
+            "frf",
+            "rec.csv",
+            "--inputs",
+            "1",
+            "--outputs",
+            "2",
+            "--out",
+            "f.csv",
+        ]) else {
+            unreachable!()
+        };
+        assert_eq!(f.welch.estimator, era::frf::estimate::Estimator::default());
+        assert_eq!(
+            welch_options(&f.welch, 100.0),
+            WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
+        );
+        assert_eq!(f.quantity, era::Quantity::default());
+    }
 }

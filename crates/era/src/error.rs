@@ -523,13 +523,6 @@ impl InputError for crate::limits::LimitError {
     }
 }
 
-/// Friction records and parameters are the caller's.
-impl InputError for crate::friction::FrictionError {
-    fn is_input_error(&self) -> bool {
-        true
-    }
-}
-
 /// `invalid parameter {name} = {value}: {reason}`, the name spelled by `spell` when it is a
 /// [`Param`] (a front end's flag or keyword), as given otherwise (`record`, `structure`):
 /// the words of every refused parameter, [`EraError`]'s and the friction module's.

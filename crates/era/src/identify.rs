@@ -1667,6 +1667,22 @@ pub fn assess_model(
     )
 }
 
+/// The defaults a front end offers: the thesis's ERA ([`EraOptions::new`]) at a Hankel
+/// factor of [`EraOptions::DEFAULT_HANKEL_FACTOR`]; the order (0 here) is always the
+/// caller's.
+impl Default for EraOptions {
+    fn default() -> Self {
+        EraOptions::new(0, Self::DEFAULT_HANKEL_FACTOR)
+    }
+}
+
+impl EraOptions {
+    /// The Hankel factor when a front end is given none (thesis `lh = 5`).
+    pub const DEFAULT_HANKEL_FACTOR: usize = 5;
+    /// The Butterworth order of a low-pass given by its cut-off alone.
+    pub const DEFAULT_LOWPASS_ORDER: usize = 4;
+}
+
 crate::names::named!(display Realizer, "realizer", [
     Realizer::Era => "era",
     Realizer::EraDc => "era-dc",

@@ -66,11 +66,13 @@ pub const UNEXCITED_FRACTION: f64 = 1e-20;
 
 /// Window applied to each frame. All are the periodic (DFT-even) forms, as an analyzer
 /// and scipy's `get_window` use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Window {
     /// No window (`w = 1`): for transients and periodic signals that fit the frame.
     Rectangular,
-    /// Hann (`0.5 − 0.5 cos 2πn/N`): the analyzer default for random excitation.
+    /// Hann (`0.5 − 0.5 cos 2πn/N`): the analyzer default for random excitation, and
+    /// era's.
+    #[default]
     Hann,
     /// Five-term flat-top (scipy's `flattop` coefficients): accurate amplitudes of sines.
     FlatTop,
@@ -113,11 +115,12 @@ impl Window {
 }
 
 /// Trend removed from each frame before windowing.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Detrend {
     /// Nothing removed.
     None,
-    /// The frame's mean (scipy's `detrend="constant"`, its default).
+    /// The frame's mean (scipy's `detrend="constant"`, its default, and era's).
+    #[default]
     Mean,
     /// The frame's least-squares straight line (scipy's `"linear"`).
     Linear,
@@ -156,9 +159,10 @@ impl Detrend {
 }
 
 /// FRF estimator (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Estimator {
-    /// `Gyx Gxx⁻¹`: noise on the outputs.
+    /// `Gyx Gxx⁻¹`: noise on the outputs (the default).
+    #[default]
     H1,
     /// `Gyy Gyx (Gyx^H Gyx)⁻¹`: noise on the inputs.
     H2,
@@ -215,15 +219,18 @@ pub struct WelchOptions {
 }
 
 impl WelchOptions {
+    /// The overlap of [`WelchOptions::new`]: half a frame.
+    pub const DEFAULT_OVERLAP: f64 = 0.5;
+
     /// `frame`-sample frames of time histories sampled at `sample_rate_hz`, with the
     /// usual choices: half overlap, a Hann window, each frame's mean removed.
     pub fn new(sample_rate_hz: f64, frame: usize) -> Self {
         WelchOptions {
             sample_rate_hz,
             frame,
-            overlap: 0.5,
-            window: Window::Hann,
-            detrend: Detrend::Mean,
+            overlap: Self::DEFAULT_OVERLAP,
+            window: Window::default(),
+            detrend: Detrend::default(),
         }
     }
 
