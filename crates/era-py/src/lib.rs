@@ -83,6 +83,15 @@ where
         .or_else(|e| value_error(format!("{keyword} {e}")))
 }
 
+/// `named(keyword, text)`, or the type's default (the core's) when the keyword is
+/// `None`.
+pub(crate) fn named_or_default<T>(keyword: &str, text: Option<&str>) -> PyResult<T>
+where
+    T: std::str::FromStr<Err = era::names::UnknownName> + Default,
+{
+    text.map_or_else(|| Ok(T::default()), |t| named(keyword, t))
+}
+
 pub(crate) fn value_error<T>(message: impl Into<String>) -> PyResult<T> {
     Err(PyValueError::new_err(message.into()))
 }
