@@ -211,8 +211,8 @@ pub fn scan_orders(a: &IdentifyArgs) -> anyhow::Result<Option<OrderRange>> {
 
 fn reason_of(e: &era::EraError) -> String {
     match e {
-        era::EraError::InvalidParameter { reason, .. } => reason.clone(),
-        other => other.to_string(),
+        era::EraError::InvalidParameter { reason, .. } => reason.message(Naming::Flag),
+        other => other.message(Naming::Flag),
     }
 }
 

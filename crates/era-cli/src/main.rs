@@ -53,6 +53,8 @@ fn message(err: &anyhow::Error) -> String {
             e.message(era::params::Naming::Flag)
         } else if let Some(e) = cause.downcast_ref::<era::friction::FrictionError>() {
             e.message(era::params::Naming::Flag)
+        } else if let Some(e) = cause.downcast_ref::<era::limits::LimitError>() {
+            e.message(era::params::Naming::Flag)
         } else {
             cause.to_string()
         };
@@ -154,10 +156,8 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(err)) => {
-            // Core errors spell options as flags (EraError::message), and options quoted
-            // in other core messages are rendered as flags too (era::params::render).
-            let text = era::params::render(era::params::Naming::Flag, &message(&err));
-            eprintln!("era: error: {text}");
+            // Core errors spell the parameters they name as flags (EraError::message).
+            eprintln!("era: error: {}", message(&err));
             ExitCode::from(exit_code(&err))
         }
         Err(_) => ExitCode::from(1),

@@ -265,7 +265,7 @@ impl Job<'_> {
             era::EraError::InvalidParameter {
                 name: "band",
                 value: format!("({lo}, {hi})"),
-                reason: why,
+                reason: why.into(),
             }
         })?;
         let observed = match self.okid {

@@ -554,7 +554,10 @@ fn realize(
             value,
             reason,
         } if name == "orders" || (name == "states" && value == "auto") => anyhow::Error::from(
-            crate::error::UsageError(format!("--{name} {value}: {reason}")),
+            crate::error::UsageError(format!(
+                "--{name} {value}: {}",
+                reason.message(era::params::Naming::Flag)
+            )),
         ),
         era::EraError::NotEnoughMarkovSamples {
             needed, available, ..

@@ -53,7 +53,8 @@ pub fn refine_found(
                     value,
                     reason,
                 } => anyhow::Error::from(crate::error::UsageError(format!(
-                    "--max-iterations {value}: {reason}"
+                    "--max-iterations {value}: {}",
+                    reason.message(era::params::Naming::Flag)
                 ))),
                 other => anyhow::Error::from(other),
             })

@@ -284,16 +284,18 @@ impl WelchOptions {
                     "rounds to {} of the {} samples of a frame: frames would not advance",
                     self.overlap_samples(),
                     self.frame
-                ),
+                )
+                .into(),
             });
         }
         if samples < self.frame {
             return Err(EraError::InvalidParameter {
                 name: "frame",
                 value: self.frame.to_string(),
-                reason: format!(
-                    "the time histories have only {samples} samples, fewer than one frame: use a shorter `frame`"
-                ),
+                reason: crate::names::Prose::from(format!(
+                    "the time histories have only {samples} samples, fewer than one frame: use a shorter "
+                ))
+                .param(crate::names::Param::Frame),
             });
         }
         Ok(())
@@ -603,7 +605,7 @@ impl FrfEstimate {
             return Err(EraError::InvalidParameter {
                 name: "max_hz",
                 value: format!("{lines} lines"),
-                reason: format!("keeps fewer than 2 or more than the {total} lines"),
+                reason: format!("keeps fewer than 2 or more than the {total} lines").into(),
             });
         }
         let cut_c = |v: &[Complex64], pairs: usize| -> Vec<Complex64> {
@@ -673,7 +675,8 @@ pub fn estimate(
                 "H2 needs at least as many outputs as inputs ({} outputs, {} inputs): use h1 or hv",
                 outputs.len(),
                 inputs.len()
-            ),
+            )
+            .into(),
         });
     }
     let s = spectra(inputs, outputs, options, estimator == Estimator::H2)?;
@@ -699,7 +702,7 @@ pub fn estimate_from_spectra(
             reason: format!(
                 "H2 needs the full output cross-spectral matrix and at least as many outputs as inputs ({} outputs, {} inputs)",
                 s.outputs, s.inputs
-            ),
+            ).into(),
         });
     }
     let unexcited = check_input_matrix(&s)?;
@@ -849,7 +852,8 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
             reason: format!(
                 "input {} has no power at any line (a constant or silent channel)",
                 j + 1
-            ),
+            )
+            .into(),
         });
     }
     let unexcited: Vec<usize> = (0..lines)
@@ -875,10 +879,13 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
         return Ok(unexcited);
     };
     let reason = if s.frames < p {
-        format!(
-            "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter `frame` or more `overlap`",
+        crate::names::Prose::from(format!(
+            "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter ",
             s.frames, s.frames
-        )
+        ))
+        .param(crate::names::Param::Frame)
+        .text(" or more ")
+        .param(crate::names::Param::Overlap)
     } else {
         let mut worst = (0, 1, -1.0);
         for a in 0..p {
@@ -890,12 +897,12 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
                 }
             }
         }
-        format!(
+        crate::names::Prose::from(format!(
             "inputs {} and {} are fully coherent (coherence {:.9}): two identical or proportional inputs cannot be told apart, drop one",
             worst.0 + 1,
             worst.1 + 1,
             worst.2
-        )
+        ))
     };
     Err(EraError::SingularInputSpectrum {
         singular_lines: bad.len(),
