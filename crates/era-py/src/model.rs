@@ -19,7 +19,7 @@ use era::identify::{
 use era::params::Naming;
 use era::pipeline::realize::{DirectTerm, SvdPath};
 use era::{Complex64, TimeDomain};
-use era_io::model_json::{parameters, FitJson, ModelJson};
+use era_io::model_json::{FitJson, ModelJson, ModelParameters};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::PyImportError;
 use pyo3::prelude::*;
@@ -76,8 +76,9 @@ pub struct PyIdentification {
     pub(crate) refine: Option<era::refine::RefineOptions>,
     /// The route taken (era::identify::route), with its reasons.
     pub(crate) route: era::identify::route::Route,
-    /// What the Markov parameters' source adds to `parameters` (OKID's observer).
-    pub(crate) source: std::collections::BTreeMap<String, serde_json::Value>,
+    /// What the Markov parameters' source adds to `parameters` (the source, the Welch
+    /// frame, OKID's observer); nothing else is set in it.
+    pub(crate) source: ModelParameters,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -266,9 +267,9 @@ impl PyIdentification {
     /// Every parameter of the run by its model.json name.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let mut params = parameters(&self.options);
-        params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
-        params.extend(self.source.clone());
+        let mut params = self.source.clone();
+        params.era = Some(self.options.clone());
+        params.preset = Some(self.route.preset.name().to_string());
         let text = serde_json::to_string(&params)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         py.import("json")?.call_method1("loads", (text,))
@@ -322,27 +323,23 @@ impl PyIdentification {
     }
     /// model.json's text (as `era identify --out` writes it, without timings).
     fn to_json(&self) -> PyResult<String> {
-        let mut params = parameters(&self.options);
-        params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
+        let mut params = ModelParameters::new(&self.options);
+        params.preset = Some(self.route.preset.name().to_string());
         // As the CLI writes them: the automatic order and its scan.
         if self.route.states.is_none() {
-            params.insert("states".into(), serde_json::json!("auto"));
-            params.insert(
-                "model_states".into(),
-                serde_json::json!(self.found.model.states()),
-            );
+            params.automatic_order = true;
+            params.model_states = Some(self.found.model.states());
         }
-        if let Some(st) = &self.found.stabilization {
-            params.insert("orders".into(), serde_json::json!(st.range.to_string()));
-        }
+        params.orders = self
+            .found
+            .stabilization
+            .as_ref()
+            .map(|st| st.range.to_string());
         if let Some(r) = &self.refine {
-            era_io::model_json::refine_parameters(r, &mut params);
-            params.insert(
-                "model_states".into(),
-                serde_json::json!(self.found.model.states()),
-            );
+            params.refinement = Some(r.clone());
+            params.model_states = Some(self.found.model.states());
         }
-        let model = ModelJson::from_identification(&self.found, params, None);
+        let model = ModelJson::from_run(&self.found, &params);
         let mut text = serde_json::to_string_pretty(&model)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         text.push('\n');

@@ -158,12 +158,10 @@ pub fn identify_time(
             .and_then(|r| r)
             .map_err(era_error)
     })?;
-    let mut source_facts = std::collections::BTreeMap::new();
-    source_facts.insert("markov".to_string(), serde_json::json!(markov));
-    source_facts.insert("frame".to_string(), serde_json::json!(frame));
-    if let Some(f) = facts {
-        source_facts.insert("okid".to_string(), f);
-    }
+    let mut source_facts = era_io::model_json::ModelParameters::default();
+    source_facts.markov = Some(source);
+    source_facts.frame = Some(frame);
+    source_facts.okid = facts;
     Ok(PyIdentification {
         found,
         options,
@@ -227,7 +225,7 @@ impl Job<'_> {
         &self,
     ) -> era::Result<(
         era::Identification,
-        Option<serde_json::Value>,
+        Option<era_io::model_json::OkidJson>,
         era::refine::RefineOptions,
     )> {
         let (welch, route) = (self.welch, self.route);
