@@ -3,7 +3,11 @@
 //! read. The core names option fields ([`Naming`]); this module adds the flag names, so
 //! other front ends (Python) can word the same checks their own way.
 
-use crate::args::{CommonArgs, IdentifyArgs, RefineFitArgs, StatesArg, WelchArgs};
+use crate::args::{
+    CommonArgs, ConvertArgs, DemoArgs, IdentifyArgs, InfoArgs, PlotArgs, RefineFitArgs, StatesArg,
+    WelchArgs,
+};
+use crate::input::FrfFlags;
 use era::frf::estimate::WelchOptions;
 use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
@@ -11,6 +15,7 @@ use era::modal::stabilization::OrderRange;
 use era::params::Naming;
 use era::pipeline::realize::DirectTerm;
 use era::refine::RefineOptions;
+use std::path::PathBuf;
 
 /// How much a verb says on the terminal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,6 +63,117 @@ impl From<&CommonArgs> for Settings {
             progress: !a.quiet,
             json: a.json,
             timings: a.timings,
+        }
+    }
+}
+
+/// `era demo`: the noise of the truth model's FRFs, its seed, and where to write.
+#[derive(Debug, Clone)]
+pub struct Demo {
+    /// Seed of the noise generator.
+    pub seed: u64,
+    /// Noise RMS as a fraction of each FRF's RMS.
+    pub noise: f64,
+    /// Folder for the files, when asked for.
+    pub out: Option<PathBuf>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&DemoArgs> for Demo {
+    fn from(a: &DemoArgs) -> Self {
+        Demo {
+            seed: a.seed,
+            noise: a.noise,
+            out: a.out.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era info`: the file, and how to find a MAT file's frequencies.
+#[derive(Debug, Clone)]
+pub struct Info {
+    /// The file.
+    pub file: PathBuf,
+    /// A MAT file's frequency variable, when not `FreqV`.
+    pub freq_variable: Option<String>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&InfoArgs> for Info {
+    fn from(a: &InfoArgs) -> Self {
+        Info {
+            file: a.file.clone(),
+            freq_variable: a.freq_variable.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era convert`: the file read, how to read it, and the file written.
+#[derive(Debug, Clone)]
+pub struct Convert<'a> {
+    /// FRF file to read.
+    pub input: PathBuf,
+    /// File to write (its extension picks the format).
+    pub output: PathBuf,
+    /// UFF output: binary 58b.
+    pub binary: bool,
+    /// UFF output: single precision.
+    pub single: bool,
+    /// How to read the input.
+    pub read: FrfFlags<'a>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> From<&'a ConvertArgs> for Convert<'a> {
+    fn from(a: &'a ConvertArgs) -> Self {
+        Convert {
+            input: a.input.clone(),
+            output: a.output.clone(),
+            binary: a.binary,
+            single: a.single,
+            read: FrfFlags::from(&a.read),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era plot`: the FRF file, the model to overlay, and where the figures go.
+#[derive(Debug, Clone)]
+pub struct Plot<'a> {
+    /// FRF file.
+    pub file: PathBuf,
+    /// model.json to overlay.
+    pub model: Option<PathBuf>,
+    /// Integrations before plotting (the model's, or 0, when `None`).
+    pub integrations: Option<usize>,
+    /// Leading lines left out (the model's, or 0, when `None`).
+    pub zero_lines: Option<usize>,
+    /// How to read the file.
+    pub read: FrfFlags<'a>,
+    /// How the phase is drawn.
+    pub phase: era_plot::PhaseView,
+    /// Folder for the figures.
+    pub out: PathBuf,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> From<&'a PlotArgs> for Plot<'a> {
+    fn from(a: &'a PlotArgs) -> Self {
+        Plot {
+            file: a.file.clone(),
+            model: a.model.clone(),
+            integrations: a.integrations,
+            zero_lines: a.zero_lines,
+            read: FrfFlags::from(&a.read),
+            phase: a.phase.into(),
+            out: a.out.clone(),
+            settings: Settings::from(&a.common),
         }
     }
 }

@@ -135,14 +135,14 @@ fn main() -> ExitCode {
         }
     }));
     let run = || match &cli.command {
-        args::Command::Demo(a) => commands::demo::run(a),
+        args::Command::Demo(a) => commands::demo::run(&a.into()),
         args::Command::Identify(a) => commands::identify::run(a),
         args::Command::Frf(a) => commands::frf::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
         args::Command::Friction(a) => commands::friction::run(a),
-        args::Command::Plot(a) => commands::plot::run(a),
-        args::Command::Info(a) => commands::files::run_info(a),
-        args::Command::Convert(a) => commands::files::run_convert(a),
+        args::Command::Plot(a) => commands::plot::run(&a.into()),
+        args::Command::Info(a) => commands::files::run_info(&a.into()),
+        args::Command::Convert(a) => commands::files::run_convert(&a.into()),
         args::Command::Compare(a) => commands::compare::run(a),
         args::Command::Refine(a) => commands::refine::run(a),
     };
