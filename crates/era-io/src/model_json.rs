@@ -401,8 +401,8 @@ fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     m
 }
 
-/// model.json's `parameters`, typed: what a run sets, written as the flat map of
-/// [`parameters`] and [`refine_parameters`] (the names are the flags'). Both front ends
+/// model.json's `parameters`, typed: what a run sets, written as one flat map (ERA's
+/// options, then the refinement's; the names are the flags'). Both front ends
 /// fill one; a model.json read back holds its map in [`ModelParameters::earlier`].
 #[derive(Debug, Clone, Default)]
 #[non_exhaustive]
