@@ -139,7 +139,7 @@ fn main() -> ExitCode {
         args::Command::Identify(a) => commands::identify::run(a),
         args::Command::Frf(a) => commands::frf::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
-        args::Command::Friction(a) => commands::friction::run(a),
+        args::Command::Friction(a) => commands::friction::run(&a.into()),
         args::Command::Plot(a) => commands::plot::run(&a.into()),
         args::Command::Info(a) => commands::files::run_info(&a.into()),
         args::Command::Convert(a) => commands::files::run_convert(&a.into()),
