@@ -263,7 +263,10 @@ def cli_flags():
 
 def flag_spellings(src):
     """Kebab-case flag names in the core's code: as a parameter name, backticked with its
-    dashes in a message, or any string literal that is one of the CLI's flags."""
+    dashes in a message, or any string literal that is one of the CLI's flags. The value
+    names of an enum's `named!` table are the core's own words (what model.json writes,
+    what `FromStr` parses), not flags, even where a switch is named after one
+    (`Realizer::EraDc => "era-dc"` and `--era-dc`); they are not counted as literals."""
     flags = cli_flags()
     hits = []
     for dirpath, _, files in os.walk(src):
@@ -271,8 +274,14 @@ def flag_spellings(src):
             if not f.endswith(".rs"):
                 continue
             p = os.path.join(dirpath, f)
+            in_table = False
             for k, line in enumerate(strip_comments_only(open(p, encoding="utf-8").read()).split("\n"), 1):
-                literals = set(re.findall(r'"([a-z0-9]+(?:-[a-z0-9]+)+)"', line))
+                if "named!(" in line:
+                    in_table = True
+                value_name = in_table and re.fullmatch(r'\s*[\w:]+\s*=>\s*"[a-z0-9-]+",?\s*', line)
+                if in_table and "]);" in line:
+                    in_table = False
+                literals = set() if value_name else set(re.findall(r'"([a-z0-9]+(?:-[a-z0-9]+)+)"', line))
                 if (re.search(r'name:\s*"[a-z0-9]+(-[a-z0-9]+)+"', line)
                         or re.search(r"`--[a-z]", line) or literals & flags):
                     hits.append(f"{os.path.relpath(p, ROOT)}:{k}: {line.strip()[:100]}")

@@ -150,21 +150,24 @@ def simulate_modal(
 ) -> FrfData: ...
 def identify(
     frf: FrfData,
-    states: Union[int, Literal["auto"]],
+    states: Union[int, Literal["auto"]] = "auto",
     hankel_factor: int = 5,
     integrations: int = 0,
     zero_lines: int = 0,
     pad_to: int = 0,
     lowpass: Union[None, float, Tuple[int, float]] = None,
-    time_domain: Literal["discrete", "continuous"] = "discrete",
-    direct_term: Literal["zero", "markov0"] = "zero",
+    time_domain: Optional[Literal["discrete", "continuous"]] = None,
+    direct_term: Optional[Literal["zero", "markov0"]] = None,
     svd: Literal["auto", "dense", "matrix-free"] = "auto",
-    refine: bool = False,
+    era_dc: bool = False,
+    refine: Optional[bool] = None,
     residuals: Literal["none", "lower", "upper", "both"] = "both",
     reciprocal: bool = False,
     weighting: Literal["pair-noise", "uniform"] = "pair-noise",
     max_iterations: int = 100,
     added_modes: bool = True,
+    band: Optional[Tuple[float, float]] = None,
+    preset: Literal["measured", "thesis"] = "measured",
     threads: Optional[int] = None,
 ) -> Identification: ...
 def friction_estimate(

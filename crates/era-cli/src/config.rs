@@ -1,15 +1,24 @@
-//! Flags to validated options: `identify`'s (and `compare`'s) arguments become an
-//! [`EraOptions`] and an [`OrderRange`], checked under the flags' names before anything is
-//! read. The core names option fields ([`Naming`]); this module adds the flag names, so
-//! other front ends (Python) can word the same checks their own way.
+//! Flags to typed settings: every verb's output switches are one [`Settings`];
+//! `demo`, `info`, `convert`, `plot` and `friction` get settings of their own
+//! ([`Demo`], [`Info`], [`Convert`], [`Plot`], [`Friction`]) that their commands take
+//! instead of the clap structs; `identify`'s (and `compare`'s) arguments become an
+//! [`EraOptions`] and an [`OrderRange`], checked under the flags' names before anything
+//! is read. The core names option fields ([`Naming`]); this module adds the flag names,
+//! so other front ends (Python) can word the same checks their own way.
 
-use crate::args::{CommonArgs, IdentifyArgs, RefineFitArgs, StatesArg};
+use crate::args::{
+    CommonArgs, ConvertArgs, DecayMethodArg, DemoArgs, FrictionAction, FrictionArgs, IdentifyArgs,
+    InfoArgs, OscillatorArgs, PlotArgs, RefineFitArgs, StatesArg, WelchArgs,
+};
+use crate::input::FrfFlags;
+use era::frf::estimate::WelchOptions;
 use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
 use era::modal::stabilization::OrderRange;
 use era::params::Naming;
 use era::pipeline::realize::DirectTerm;
 use era::refine::RefineOptions;
+use std::path::PathBuf;
 
 /// How much a verb says on the terminal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,6 +66,245 @@ impl From<&CommonArgs> for Settings {
             progress: !a.quiet,
             json: a.json,
             timings: a.timings,
+        }
+    }
+}
+
+/// `era demo`: the noise of the truth model's FRFs, its seed, and where to write.
+#[derive(Debug, Clone)]
+pub struct Demo {
+    /// Seed of the noise generator.
+    pub seed: u64,
+    /// Noise RMS as a fraction of each FRF's RMS.
+    pub noise: f64,
+    /// Folder for the files, when asked for.
+    pub out: Option<PathBuf>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&DemoArgs> for Demo {
+    fn from(a: &DemoArgs) -> Self {
+        Demo {
+            seed: a.seed,
+            noise: a.noise,
+            out: a.out.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era info`: the file, and how to find a MAT file's frequencies.
+#[derive(Debug, Clone)]
+pub struct Info {
+    /// The file.
+    pub file: PathBuf,
+    /// A MAT file's frequency variable, when not `FreqV`.
+    pub freq_variable: Option<String>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&InfoArgs> for Info {
+    fn from(a: &InfoArgs) -> Self {
+        Info {
+            file: a.file.clone(),
+            freq_variable: a.freq_variable.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era convert`: the file read, how to read it, and the file written.
+#[derive(Debug, Clone)]
+pub struct Convert<'a> {
+    /// FRF file to read.
+    pub input: PathBuf,
+    /// File to write (its extension picks the format).
+    pub output: PathBuf,
+    /// UFF output: binary 58b.
+    pub binary: bool,
+    /// UFF output: single precision.
+    pub single: bool,
+    /// How to read the input.
+    pub read: FrfFlags<'a>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> From<&'a ConvertArgs> for Convert<'a> {
+    fn from(a: &'a ConvertArgs) -> Self {
+        Convert {
+            input: a.input.clone(),
+            output: a.output.clone(),
+            binary: a.binary,
+            single: a.single,
+            read: FrfFlags::from(&a.read),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era plot`: the FRF file, the model to overlay, and where the figures go.
+#[derive(Debug, Clone)]
+pub struct Plot<'a> {
+    /// FRF file.
+    pub file: PathBuf,
+    /// model.json to overlay.
+    pub model: Option<PathBuf>,
+    /// Integrations before plotting (the model's, or 0, when `None`).
+    pub integrations: Option<usize>,
+    /// Leading lines left out (the model's, or 0, when `None`).
+    pub zero_lines: Option<usize>,
+    /// How to read the file.
+    pub read: FrfFlags<'a>,
+    /// How the phase is drawn.
+    pub phase: era_plot::PhaseView,
+    /// Folder for the figures.
+    pub out: PathBuf,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> From<&'a PlotArgs> for Plot<'a> {
+    fn from(a: &'a PlotArgs) -> Self {
+        Plot {
+            file: a.file.clone(),
+            model: a.model.clone(),
+            integrations: a.integrations,
+            zero_lines: a.zero_lines,
+            read: FrfFlags::from(&a.read),
+            phase: a.phase.into(),
+            out: a.out.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// The actuator model of `era friction simulate|tune`.
+#[derive(Debug, Clone, Copy)]
+pub struct Actuator {
+    /// Net spring stiffness, force per length.
+    pub stiffness: f64,
+    /// Undamped natural frequency, Hz.
+    pub natural_frequency_hz: f64,
+    /// Viscous damping ratio (fraction).
+    pub viscous_damping_ratio: f64,
+    /// Release displacement (length).
+    pub x0: f64,
+    /// Samples per second.
+    pub sample_rate: f64,
+}
+
+impl From<&OscillatorArgs> for Actuator {
+    fn from(a: &OscillatorArgs) -> Self {
+        Actuator {
+            stiffness: a.stiffness,
+            natural_frequency_hz: a.natural_frequency_hz,
+            viscous_damping_ratio: a.viscous_damping_ratio,
+            x0: a.x0,
+            sample_rate: a.sample_rate,
+        }
+    }
+}
+
+/// `era friction estimate`: the free-decay records and the spring's stiffness.
+#[derive(Debug, Clone)]
+pub struct FrictionEstimate {
+    /// Free-decay records.
+    pub files: Vec<PathBuf>,
+    /// Net spring stiffness.
+    pub stiffness: f64,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+/// `era friction simulate`: the actuator, its release and the record written.
+#[derive(Debug, Clone)]
+pub struct FrictionSimulate {
+    /// Coulomb friction force.
+    pub coulomb_force: f64,
+    /// The actuator.
+    pub model: Actuator,
+    /// Time held before the release, s.
+    pub hold: f64,
+    /// Recorded time after the release, s (until the mass sticks, plus 1 s, when `None`).
+    pub duration: Option<f64>,
+    /// Noise as a fraction of the record's RMS.
+    pub noise: f64,
+    /// Seed of the noise.
+    pub seed: u64,
+    /// How the record is made (by the damping, when `None`).
+    pub method: Option<era::friction::simulate::Method>,
+    /// Record to write.
+    pub out: PathBuf,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+/// `era friction tune`: the actuator, from records or from its friction force, and
+/// the compensator's settings.
+#[derive(Debug, Clone)]
+pub struct FrictionTune {
+    /// Free-decay records.
+    pub files: Vec<PathBuf>,
+    /// Coulomb friction force, instead of records.
+    pub coulomb_force: Option<f64>,
+    /// The actuator.
+    pub model: Actuator,
+    /// Dead zone of the compensator.
+    pub dead_zone: f64,
+    /// Fraction of the neutral coefficient applied.
+    pub fraction: f64,
+    /// Cycles simulated.
+    pub cycles: usize,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+/// `era friction estimate|simulate|tune`.
+#[derive(Debug, Clone)]
+pub enum Friction {
+    /// Friction force from free-decay records.
+    Estimate(FrictionEstimate),
+    /// A simulated free-decay record.
+    Simulate(FrictionSimulate),
+    /// The compensation coefficient.
+    Tune(FrictionTune),
+}
+
+impl From<&FrictionArgs> for Friction {
+    fn from(a: &FrictionArgs) -> Self {
+        use era::friction::simulate::Method;
+        match &a.action {
+            FrictionAction::Estimate(e) => Friction::Estimate(FrictionEstimate {
+                files: e.files.clone(),
+                stiffness: e.stiffness,
+                settings: Settings::from(&e.common),
+            }),
+            FrictionAction::Simulate(s) => Friction::Simulate(FrictionSimulate {
+                coulomb_force: s.coulomb_force,
+                model: Actuator::from(&s.model),
+                hold: s.hold,
+                duration: s.duration,
+                noise: s.noise,
+                seed: s.seed,
+                method: s.method.map(|m| match m {
+                    DecayMethodArg::Exact => Method::Exact,
+                    DecayMethodArg::Integrate => Method::Integrate,
+                }),
+                out: s.out.clone(),
+                settings: Settings::from(&s.common),
+            }),
+            FrictionAction::Tune(t) => Friction::Tune(FrictionTune {
+                files: t.files.clone(),
+                coulomb_force: t.coulomb_force,
+                model: Actuator::from(&t.model),
+                dead_zone: t.dead_zone,
+                fraction: t.fraction,
+                cycles: t.cycles,
+                settings: Settings::from(&t.common),
+            }),
         }
     }
 }
@@ -210,8 +458,8 @@ pub fn scan_orders(a: &IdentifyArgs) -> anyhow::Result<Option<OrderRange>> {
 
 fn reason_of(e: &era::EraError) -> String {
     match e {
-        era::EraError::InvalidParameter { reason, .. } => reason.clone(),
-        other => other.to_string(),
+        era::EraError::InvalidParameter { reason, .. } => reason.message(Naming::Flag),
+        other => other.message(Naming::Flag),
     }
 }
 
@@ -308,7 +556,84 @@ pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
     }
 }
 
+/// The Welch settings of the flags at `rate` samples per second.
+pub fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
+    let mut o = WelchOptions::new(rate, welch.frame_or_default());
+    o.overlap = welch.overlap;
+    o.window = welch.window;
+    o.detrend = welch.detrend;
+    o
+}
+
 /// `--noise`, checked by the simulator's rule.
 pub fn check_noise(noise: f64) -> anyhow::Result<()> {
     Ok(era::sim::check_noise(era::params::Naming::Flag, noise)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    fn parsed(args: &[&str]) -> crate::args::Command {
+        let argv = ["era"].iter().chain(args);
+        crate::args::Cli::try_parse_from(argv).unwrap().command
+    }
+
+    fn identify_args(args: &[&str]) -> IdentifyArgs {
+        let argv: Vec<&str> = ["identify", "frf.csv"]
+            .iter()
+            .chain(args)
+            .copied()
+            .collect();
+        match parsed(&argv) {
+            crate::args::Command::Identify(a) => *a,
+            _ => unreachable!(),
+        }
+    }
+
+    /// Every flag left out is the core's default: clap reads them from the core, and
+    /// this fails when one is written out again and drifts.
+    #[test]
+    fn flags_left_out_are_the_cores_defaults() {
+        let a = identify_args(&["--states", "8"]);
+        let mut expected = EraOptions::default();
+        expected.states = 8;
+        assert_eq!(options(&a).unwrap(), expected);
+        assert_eq!(a.lowpass_order, EraOptions::DEFAULT_LOWPASS_ORDER);
+        let a = identify_args(&["--states", "8", "--lowpass-hz", "100"]);
+        assert_eq!(
+            options(&a).unwrap().lowpass,
+            Some((EraOptions::DEFAULT_LOWPASS_ORDER, 100.0))
+        );
+        assert_eq!(
+            refine_options(&a.refine_fit).unwrap(),
+            RefineOptions::default()
+        );
+        assert_eq!(a.preset, era::identify::route::Preset::default());
+        assert_eq!(a.markov, era::sources::MarkovSource::default());
+        assert_eq!(a.welch.estimator, era::frf::estimate::Estimator::default());
+        assert_eq!(
+            welch_options(&a.welch, 100.0),
+            WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
+        );
+        let crate::args::Command::Frf(f) = parsed(&[
+            "frf",
+            "rec.csv",
+            "--inputs",
+            "1",
+            "--outputs",
+            "2",
+            "--out",
+            "f.csv",
+        ]) else {
+            unreachable!()
+        };
+        assert_eq!(f.welch.estimator, era::frf::estimate::Estimator::default());
+        assert_eq!(
+            welch_options(&f.welch, 100.0),
+            WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
+        );
+        assert_eq!(f.quantity, era::Quantity::default());
+    }
 }

@@ -12,6 +12,12 @@ impl std::fmt::Display for UsageError {
 
 impl std::error::Error for UsageError {}
 
+impl era::error::InputError for UsageError {
+    fn is_input_error(&self) -> bool {
+        true
+    }
+}
+
 /// Shorthand for returning a [`UsageError`].
 pub fn usage<T>(message: impl Into<String>) -> anyhow::Result<T> {
     Err(UsageError(message.into()).into())

@@ -17,27 +17,28 @@ use clap::Parser;
 use error::UsageError;
 use std::process::ExitCode;
 
-/// 2 when any cause is the user's (bad data, bad flag, unreadable or unwritable file),
-/// 1 otherwise.
+/// 2 when the first cause of era's own ([`era::error::InputError`]) is the user's (bad
+/// data, bad flag, unreadable or unwritable file), 1 otherwise: each error type decides
+/// by its `is_input_error()`.
 fn exit_code(err: &anyhow::Error) -> u8 {
-    for cause in err.chain() {
-        if let Some(e) = cause.downcast_ref::<era::EraError>() {
-            return if e.is_input_error() { 2 } else { 1 };
-        }
-        if cause.downcast_ref::<era_plot::PlotError>().is_some() {
-            return 1;
-        }
-        if cause.downcast_ref::<era_io::IoError>().is_some()
-            || cause.downcast_ref::<UsageError>().is_some()
-            || cause.downcast_ref::<era::limits::LimitError>().is_some()
-            || cause
-                .downcast_ref::<era::friction::FrictionError>()
-                .is_some()
-        {
-            return 2;
-        }
+    match err.chain().find_map(input_error) {
+        Some(true) => 2,
+        Some(false) | None => 1,
     }
-    1
+}
+
+/// `cause`'s `is_input_error()` when it is one of era's errors.
+fn input_error(cause: &(dyn std::error::Error + 'static)) -> Option<bool> {
+    use era::error::InputError;
+    fn ask<E: InputError + 'static>(cause: &(dyn std::error::Error + 'static)) -> Option<bool> {
+        cause.downcast_ref::<E>().map(E::is_input_error)
+    }
+    ask::<era::EraError>(cause)
+        .or_else(|| ask::<era_io::IoError>(cause))
+        .or_else(|| ask::<UsageError>(cause))
+        .or_else(|| ask::<era::limits::LimitError>(cause))
+        .or_else(|| ask::<era::friction::FrictionError>(cause))
+        .or_else(|| ask::<era_plot::PlotError>(cause))
 }
 
 /// The error and its causes, `: `-joined as anyhow's `{:#}` does, with the core's
@@ -51,6 +52,8 @@ fn message(err: &anyhow::Error) -> String {
         let text = if let Some(e) = cause.downcast_ref::<era::EraError>() {
             e.message(era::params::Naming::Flag)
         } else if let Some(e) = cause.downcast_ref::<era::friction::FrictionError>() {
+            e.message(era::params::Naming::Flag)
+        } else if let Some(e) = cause.downcast_ref::<era::limits::LimitError>() {
             e.message(era::params::Naming::Flag)
         } else {
             cause.to_string()
@@ -132,14 +135,14 @@ fn main() -> ExitCode {
         }
     }));
     let run = || match &cli.command {
-        args::Command::Demo(a) => commands::demo::run(a),
+        args::Command::Demo(a) => commands::demo::run(&a.into()),
         args::Command::Identify(a) => commands::identify::run(a),
         args::Command::Frf(a) => commands::frf::run(a),
         args::Command::Simulate(a) => commands::simulate::run(a),
-        args::Command::Friction(a) => commands::friction::run(a),
-        args::Command::Plot(a) => commands::plot::run(a),
-        args::Command::Info(a) => commands::files::run_info(a),
-        args::Command::Convert(a) => commands::files::run_convert(a),
+        args::Command::Friction(a) => commands::friction::run(&a.into()),
+        args::Command::Plot(a) => commands::plot::run(&a.into()),
+        args::Command::Info(a) => commands::files::run_info(&a.into()),
+        args::Command::Convert(a) => commands::files::run_convert(&a.into()),
         args::Command::Compare(a) => commands::compare::run(a),
         args::Command::Refine(a) => commands::refine::run(a),
     };
@@ -153,10 +156,8 @@ fn main() -> ExitCode {
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(err)) => {
-            // Core errors spell options as flags (EraError::message), and options quoted
-            // in other core messages are rendered as flags too (era::params::render).
-            let text = era::params::render(era::params::Naming::Flag, &message(&err));
-            eprintln!("era: error: {text}");
+            // Core errors spell the parameters they name as flags (EraError::message).
+            eprintln!("era: error: {}", message(&err));
             ExitCode::from(exit_code(&err))
         }
         Err(_) => ExitCode::from(1),

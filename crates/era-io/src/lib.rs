@@ -94,6 +94,13 @@ impl IoError {
     }
 }
 
+/// A file that cannot be read, written or parsed is the caller's to mend.
+impl era::error::InputError for IoError {
+    fn is_input_error(&self) -> bool {
+        true
+    }
+}
+
 impl IoError {
     /// A format error at a 1-based line and, when not empty, a named column.
     pub(crate) fn at(path: &std::path::Path, line: usize, column: &str, message: String) -> Self {

@@ -174,8 +174,9 @@ pub struct ModelJson {
     pub modes: Vec<ModeJson>,
     /// Real poles.
     pub real_poles: Vec<RealPoleJson>,
-    /// Every parameter of the run, by flag name.
-    pub parameters: BTreeMap<String, serde_json::Value>,
+    /// Every parameter of the run, by flag name: typed when written, every key of the
+    /// file (in [`ModelParameters::earlier`]) when read.
+    pub parameters: ModelParameters,
     /// Hankel size and path.
     pub hankel: HankelJson,
     /// Warnings of the run.
@@ -342,7 +343,7 @@ pub fn modal_json(modal: &ModalParameters) -> (Vec<ModeJson>, Vec<RealPoleJson>)
 
 /// Records the refinement's settings in `params` (model.json's `parameters`), as
 /// `era identify --refine`, `era refine` and the Python package write them.
-pub fn refine_parameters(
+fn refine_parameters(
     o: &era::refine::RefineOptions,
     params: &mut BTreeMap<String, serde_json::Value>,
 ) {
@@ -369,7 +370,7 @@ pub fn refine_parameters(
 
 /// Every parameter by its JSON name (docs/design.md §1 table): the `parameters`
 /// of `model.json`, written alike by the CLI and the Python package.
-pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
+fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     use serde_json::json;
     let mut m = BTreeMap::new();
     m.insert("states".into(), json!(o.states));
@@ -400,8 +401,9 @@ pub fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     m
 }
 
-/// model.json's `parameters`, typed: what a run sets, written as the flat map of
-/// [`parameters`] and [`refine_parameters`] (the names are the flags').
+/// model.json's `parameters`, typed: what a run sets, written as one flat map (ERA's
+/// options, then the refinement's; the names are the flags'). Both front ends
+/// fill one; a model.json read back holds its map in [`ModelParameters::earlier`].
 #[derive(Debug, Clone, Default)]
 #[non_exhaustive]
 pub struct ModelParameters {
@@ -422,6 +424,36 @@ pub struct ModelParameters {
     pub refined_from: Option<std::path::PathBuf>,
     /// The states of the model written, when they are not ERA's `states`.
     pub model_states: Option<usize>,
+    /// Where the Markov parameters of time histories came from (`--markov`), when
+    /// recorded.
+    pub markov: Option<era::sources::MarkovSource>,
+    /// The Welch frame the FRFs of time histories were estimated with, when recorded.
+    pub frame: Option<usize>,
+    /// OKID's observer, when it gave the Markov parameters.
+    pub okid: Option<OkidJson>,
+}
+
+/// Written as the flat map of [`ModelParameters::to_map`].
+impl Serialize for ModelParameters {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        self.to_map().serialize(serializer)
+    }
+}
+
+/// Read as the map it is: every key in [`ModelParameters::earlier`].
+impl<'de> Deserialize<'de> for ModelParameters {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        Ok(ModelParameters::refining(BTreeMap::deserialize(
+            deserializer,
+        )?))
+    }
+}
+
+/// Equal when they write the same map.
+impl PartialEq for ModelParameters {
+    fn eq(&self, other: &Self) -> bool {
+        self.to_map() == other.to_map()
+    }
 }
 
 impl ModelParameters {
@@ -466,7 +498,21 @@ impl ModelParameters {
         if let Some(n) = self.model_states {
             m.insert("model_states".into(), json!(n));
         }
+        if let Some(source) = self.markov {
+            m.insert("markov".into(), json!(source.to_string()));
+        }
+        if let Some(frame) = self.frame {
+            m.insert("frame".into(), json!(frame));
+        }
+        if let Some(okid) = &self.okid {
+            m.insert("okid".into(), json!(okid));
+        }
         m
+    }
+
+    /// The value written under `key`.
+    pub fn get(&self, key: &str) -> Option<serde_json::Value> {
+        self.to_map().remove(key)
     }
 }
 
@@ -493,7 +539,7 @@ impl ModelJson {
     /// From an identification and the parameters that produced it.
     pub fn from_identification(
         found: &Identification,
-        parameters: BTreeMap<String, serde_json::Value>,
+        parameters: ModelParameters,
         timings_s: Option<BTreeMap<String, f64>>,
     ) -> Self {
         let m = &found.model;
@@ -542,7 +588,7 @@ impl ModelJson {
 
     /// From an identification and the typed parameters of its run.
     pub fn from_run(found: &Identification, parameters: &ModelParameters) -> Self {
-        Self::from_identification(found, parameters.to_map(), None)
+        Self::from_identification(found, parameters.clone(), None)
     }
 
     /// The state-space model stored.
@@ -728,25 +774,50 @@ pub fn stabilization_json(st: &era::identification::Stabilization) -> serde_json
 /// it was chosen, the Markov blocks, the regression's size and rank, the observer's
 /// largest root and how the system's Markov parameters came from it, and the one-step
 /// residual of each output relative to its RMS.
-pub fn okid_json(o: &era::sources::okid::Okid) -> serde_json::Value {
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OkidJson {
+    /// Lags of the observer.
+    pub observer_order: usize,
+    /// Whether the order was chosen by the information criterion.
+    pub observer_order_chosen: bool,
+    /// Markov blocks returned.
+    pub markov_samples: usize,
+    /// Equations (samples) of the regression.
+    pub equations: usize,
+    /// Unknowns per output.
+    pub regressors: usize,
+    /// Numerical rank of the regressors.
+    pub rank: usize,
+    /// Largest modulus of the observer's roots.
+    pub observer_radius: f64,
+    /// `recursion` or `unit_circle`.
+    pub route: &'static str,
+    /// Points on the unit circle, on that route.
+    pub unit_circle_points: Option<usize>,
+    /// One-step residual of each output, relative to its RMS.
+    pub residual: Vec<f64>,
+}
+
+/// [`OkidJson`] of an OKID run.
+pub fn okid_json(o: &era::sources::okid::Okid) -> OkidJson {
     use era::sources::okid::MarkovRoute;
     let (route, points) = match o.route {
         MarkovRoute::Recursion => ("recursion", None),
         MarkovRoute::UnitCircle { points } => ("unit_circle", Some(points)),
         _ => ("other", None),
     };
-    serde_json::json!({
-        "observer_order": o.observer_order,
-        "observer_order_chosen": !o.criterion.is_empty(),
-        "markov_samples": o.markov.samples(),
-        "equations": o.equations,
-        "regressors": o.regressors,
-        "rank": o.rank,
-        "observer_radius": o.observer_radius,
-        "route": route,
-        "unit_circle_points": points,
-        "residual": o.residual,
-    })
+    OkidJson {
+        observer_order: o.observer_order,
+        observer_order_chosen: !o.criterion.is_empty(),
+        markov_samples: o.markov.samples(),
+        equations: o.equations,
+        regressors: o.regressors,
+        rank: o.rank,
+        observer_radius: o.observer_radius,
+        route,
+        unit_circle_points: points,
+        residual: o.residual.clone(),
+    }
 }
 
 #[cfg(test)]
@@ -764,7 +835,7 @@ mod tests {
         .unwrap();
         let mut params = BTreeMap::new();
         params.insert("states".to_string(), serde_json::json!(8));
-        let json = ModelJson::from_identification(&found, params, None);
+        let json = ModelJson::from_identification(&found, ModelParameters::refining(params), None);
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("model.json");
         json.write(&path).unwrap();

@@ -36,6 +36,13 @@ use thiserror::Error;
 #[error("plotting: {0}")]
 pub struct PlotError(pub String);
 
+/// A figure that cannot be drawn is the program's failure, not the caller's.
+impl era::error::InputError for PlotError {
+    fn is_input_error(&self) -> bool {
+        false
+    }
+}
+
 static FONT: Once = Once::new();
 
 /// Registers DejaVu Sans (embedded) as `sans-serif` once.

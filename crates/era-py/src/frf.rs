@@ -314,21 +314,26 @@ pub(crate) struct WelchKeywords {
 }
 
 impl WelchKeywords {
+    /// The keywords, each `None` the core's default ([`WelchOptions::new`] and the
+    /// enums' `Default`).
     pub(crate) fn parse(
         sample_rate_hz: f64,
-        window: &str,
-        overlap: f64,
-        estimator: &str,
-        detrend: &str,
-        quantity: &str,
+        window: Option<&str>,
+        overlap: Option<f64>,
+        estimator: Option<&str>,
+        detrend: Option<&str>,
+        quantity: Option<&str>,
     ) -> PyResult<Self> {
         let keywords = WelchKeywords {
             sample_rate_hz,
-            window: crate::named("window", window)?,
-            overlap,
-            estimator: crate::named("estimator", estimator)?,
-            detrend: crate::named("detrend", detrend)?,
-            quantity: crate::frf::quantity("quantity", quantity)?,
+            window: crate::named_or_default("window", window)?,
+            overlap: overlap.unwrap_or(WelchOptions::DEFAULT_OVERLAP),
+            estimator: crate::named_or_default("estimator", estimator)?,
+            detrend: crate::named_or_default("detrend", detrend)?,
+            quantity: match quantity {
+                Some(q) => crate::frf::quantity("quantity", q)?,
+                None => era::Quantity::default(),
+            },
         };
         if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return value_error(format!(
@@ -378,7 +383,10 @@ pub(crate) fn channels(name: &str, list: &[Int], available: usize) -> PyResult<V
 /// `data` is (channels, samples) float64; `inputs` and `outputs` are 0-based channel
 /// indices into axis 0. Returns `(FrfData, coherence)` with coherence (q, p, L).
 #[pyfunction]
-#[pyo3(signature = (data, sample_rate_hz, inputs, outputs, frame, window="hann", overlap=0.5, estimator="h1", detrend="mean", quantity="acceleration"))]
+#[pyo3(
+    signature = (data, sample_rate_hz, inputs, outputs, frame, window=None, overlap=None, estimator=None, detrend=None, quantity=None),
+    text_signature = "(data, sample_rate_hz, inputs, outputs, frame, window='hann', overlap=0.5, estimator='h1', detrend='mean', quantity='acceleration')"
+)]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_frf<'py>(
     py: Python<'py>,
@@ -387,11 +395,11 @@ pub fn estimate_frf<'py>(
     inputs: Vec<Int>,
     outputs: Vec<Int>,
     frame: Int,
-    window: &str,
-    overlap: f64,
-    estimator: &str,
-    detrend: &str,
-    quantity: &str,
+    window: Option<&str>,
+    overlap: Option<f64>,
+    estimator: Option<&str>,
+    detrend: Option<&str>,
+    quantity: Option<&str>,
 ) -> PyResult<(PyFrfData, Bound<'py, PyArray3<f64>>)> {
     let welch = WelchKeywords::parse(
         sample_rate_hz,

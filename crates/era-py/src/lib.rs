@@ -45,9 +45,8 @@ mod time;
 /// An error of the core as a Python exception: `ValueError` for the caller's data or
 /// parameters, `RuntimeError` for a numerical failure.
 pub(crate) fn era_error(e: era::EraError) -> PyErr {
-    // Core messages quote options by field name; here they are keywords.
-    let naming = era::params::Naming::Keyword;
-    let message = era::params::render(naming, &e.message(naming));
+    // The parameters the core's messages name are spelled as keywords here.
+    let message = e.message(era::params::Naming::Keyword);
     if e.is_input_error() {
         PyValueError::new_err(message)
     } else {
@@ -81,6 +80,15 @@ where
 {
     text.parse::<T>()
         .or_else(|e| value_error(format!("{keyword} {e}")))
+}
+
+/// `named(keyword, text)`, or the type's default (the core's) when the keyword is
+/// `None`.
+pub(crate) fn named_or_default<T>(keyword: &str, text: Option<&str>) -> PyResult<T>
+where
+    T: std::str::FromStr<Err = era::names::UnknownName> + Default,
+{
+    text.map_or_else(|| Ok(T::default()), |t| named(keyword, t))
 }
 
 pub(crate) fn value_error<T>(message: impl Into<String>) -> PyResult<T> {

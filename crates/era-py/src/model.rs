@@ -19,7 +19,7 @@ use era::identify::{
 use era::params::Naming;
 use era::pipeline::realize::{DirectTerm, SvdPath};
 use era::{Complex64, TimeDomain};
-use era_io::model_json::{parameters, FitJson, ModelJson};
+use era_io::model_json::{FitJson, ModelJson, ModelParameters};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::exceptions::PyImportError;
 use pyo3::prelude::*;
@@ -76,8 +76,9 @@ pub struct PyIdentification {
     pub(crate) refine: Option<era::refine::RefineOptions>,
     /// The route taken (era::identify::route), with its reasons.
     pub(crate) route: era::identify::route::Route,
-    /// What the Markov parameters' source adds to `parameters` (OKID's observer).
-    pub(crate) source: std::collections::BTreeMap<String, serde_json::Value>,
+    /// What the Markov parameters' source adds to `parameters` (the source, the Welch
+    /// frame, OKID's observer); nothing else is set in it.
+    pub(crate) source: ModelParameters,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -266,9 +267,9 @@ impl PyIdentification {
     /// Every parameter of the run by its model.json name.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let mut params = parameters(&self.options);
-        params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
-        params.extend(self.source.clone());
+        let mut params = self.source.clone();
+        params.era = Some(self.options.clone());
+        params.preset = Some(self.route.preset.name().to_string());
         let text = serde_json::to_string(&params)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         py.import("json")?.call_method1("loads", (text,))
@@ -322,27 +323,23 @@ impl PyIdentification {
     }
     /// model.json's text (as `era identify --out` writes it, without timings).
     fn to_json(&self) -> PyResult<String> {
-        let mut params = parameters(&self.options);
-        params.insert("preset".into(), serde_json::json!(self.route.preset.name()));
+        let mut params = ModelParameters::new(&self.options);
+        params.preset = Some(self.route.preset.name().to_string());
         // As the CLI writes them: the automatic order and its scan.
         if self.route.states.is_none() {
-            params.insert("states".into(), serde_json::json!("auto"));
-            params.insert(
-                "model_states".into(),
-                serde_json::json!(self.found.model.states()),
-            );
+            params.automatic_order = true;
+            params.model_states = Some(self.found.model.states());
         }
-        if let Some(st) = &self.found.stabilization {
-            params.insert("orders".into(), serde_json::json!(st.range.to_string()));
-        }
+        params.orders = self
+            .found
+            .stabilization
+            .as_ref()
+            .map(|st| st.range.to_string());
         if let Some(r) = &self.refine {
-            era_io::model_json::refine_parameters(r, &mut params);
-            params.insert(
-                "model_states".into(),
-                serde_json::json!(self.found.model.states()),
-            );
+            params.refinement = Some(r.clone());
+            params.model_states = Some(self.found.model.states());
         }
-        let model = ModelJson::from_identification(&self.found, params, None);
+        let model = ModelJson::from_run(&self.found, &params);
         let mut text = serde_json::to_string_pretty(&model)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         text.push('\n');
@@ -423,9 +420,12 @@ pub(crate) fn states_of(states: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
 ///
 /// `threads` sets the threads of this call (rayon's and faer's together); by default
 /// every core.
+///
+/// A keyword left out (or `None`) takes the core's default ([`EraOptions::default`],
+/// [`era::refine::RefineOptions::default`]); the text signature shows those values.
 #[pyfunction]
 #[pyo3(
-    signature = (frf, states=None, hankel_factor=Int(5), integrations=Int(0), zero_lines=Int(0), pad_to=Int(0), lowpass=None, time_domain=None, direct_term=None, svd="auto", era_dc=false, refine=None, residuals="both", reciprocal=false, weighting="pair-noise", max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
+    signature = (frf, states=None, hankel_factor=None, integrations=None, zero_lines=None, pad_to=None, lowpass=None, time_domain=None, direct_term=None, svd=None, era_dc=None, refine=None, residuals=None, reciprocal=None, weighting=None, max_iterations=None, added_modes=None, band=None, preset=None, threads=None),
     text_signature = "(frf, states='auto', hankel_factor=5, integrations=0, zero_lines=0, pad_to=0, lowpass=None, time_domain=None, direct_term=None, svd='auto', era_dc=False, refine=None, residuals='both', reciprocal=False, weighting='pair-noise', max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
@@ -433,23 +433,23 @@ pub fn identify(
     py: Python<'_>,
     frf: &Bound<'_, PyFrfData>,
     states: Option<&Bound<'_, PyAny>>,
-    hankel_factor: Int,
-    integrations: Int,
-    zero_lines: Int,
-    pad_to: Int,
+    hankel_factor: Option<Int>,
+    integrations: Option<Int>,
+    zero_lines: Option<Int>,
+    pad_to: Option<Int>,
     lowpass: Option<&Bound<'_, PyAny>>,
     time_domain: Option<&str>,
     direct_term: Option<&str>,
-    svd: &str,
-    era_dc: bool,
+    svd: Option<&str>,
+    era_dc: Option<bool>,
     refine: Option<bool>,
-    residuals: &str,
-    reciprocal: bool,
-    weighting: &str,
-    max_iterations: Int,
-    added_modes: bool,
+    residuals: Option<&str>,
+    reciprocal: Option<bool>,
+    weighting: Option<&str>,
+    max_iterations: Option<Int>,
+    added_modes: Option<bool>,
     band: Option<(f64, f64)>,
-    preset: &str,
+    preset: Option<&str>,
     threads: Option<Int>,
 ) -> PyResult<PyIdentification> {
     let threads = thread_count(threads)?;
@@ -459,8 +459,12 @@ pub fn identify(
     };
     let states = chosen.unwrap_or(0);
     let request = route_request(preset, chosen, refine, time_domain, direct_term, band)?;
-    let integrations_n = integrations.size("integrations")?;
-    let route = request.resolve(frf.get().inner.quantity(), integrations_n);
+    let mut options = era_options(states, hankel_factor, lowpass, svd, era_dc)?;
+    let size = |given: Option<Int>, keyword: &str, default: usize| {
+        given.map_or(Ok(default), |n| n.size(keyword))
+    };
+    options.integrations = size(integrations, "integrations", options.integrations)?;
+    let route = request.resolve(frf.get().inner.quantity(), options.integrations);
     let refine = route.refine;
     let mut refine_options = refine_options_of(
         (frf.get().inner.outputs(), frf.get().inner.inputs()),
@@ -470,18 +474,10 @@ pub fn identify(
         added_modes,
         max_iterations,
     )?;
-    let lowpass = lowpass_of(lowpass)?;
-    let mut options = EraOptions::new(states, hankel_factor.size("hankel_factor")?);
-    options.integrations = integrations_n;
-    options.lowpass = lowpass;
-    options.zero_lines = zero_lines.size("zero_lines")?;
-    options.pad_to = pad_to.size("pad_to")?;
+    options.zero_lines = size(zero_lines, "zero_lines", options.zero_lines)?;
+    options.pad_to = size(pad_to, "pad_to", options.pad_to)?;
     options.domain = route.domain;
     options.direct_term = route.direct_term;
-    options.svd = svd_path(svd)?;
-    if era_dc {
-        options.realizer = era::identify::Realizer::EraDc;
-    }
     let checked = {
         let mut o = options.clone();
         o.states = states.max(usize::from(chosen.is_none()));
@@ -543,17 +539,43 @@ pub(crate) fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
     }
 }
 
+/// ERA's options from the keywords both `identify` and `identify_time` take, each
+/// `None` the core's default ([`EraOptions::default`]).
+pub(crate) fn era_options(
+    states: usize,
+    hankel_factor: Option<Int>,
+    lowpass: Option<&Bound<'_, PyAny>>,
+    svd: Option<&str>,
+    era_dc: Option<bool>,
+) -> PyResult<EraOptions> {
+    let mut options = EraOptions::default();
+    options.states = states;
+    if let Some(h) = hankel_factor {
+        options.hankel_factor = h.size("hankel_factor")?;
+    }
+    options.lowpass = lowpass_of(lowpass)?;
+    if let Some(svd) = svd {
+        options.svd = svd_path(svd)?;
+    }
+    match era_dc {
+        Some(true) => options.realizer = era::identify::Realizer::EraDc,
+        Some(false) => options.realizer = era::identify::Realizer::Era,
+        None => {}
+    }
+    Ok(options)
+}
+
 /// The route asked for: `preset` with the choices given (`None` leaves one to the
 /// preset). An FrfData carries no coherence and no window metadata.
 pub(crate) fn route_request(
-    preset: &str,
+    preset: Option<&str>,
     states: Option<usize>,
     refine: Option<bool>,
     time_domain: Option<&str>,
     direct_term: Option<&str>,
     band: Option<(f64, f64)>,
 ) -> PyResult<era::identify::route::RouteRequest> {
-    let preset: era::identify::route::Preset = crate::named("preset", preset)?;
+    let preset: era::identify::route::Preset = crate::named_or_default("preset", preset)?;
     let mut request = era::identify::route::RouteRequest::new(preset);
     // An FrfData carries no coherence and no window metadata: neither is used, and
     // the route says so.
@@ -570,29 +592,37 @@ pub(crate) fn route_request(
     Ok(request)
 }
 
-/// The refinement's settings from the keywords (its band is set once the lines are
-/// known); `reciprocal=True` needs a square set.
+/// The refinement's settings from the keywords, each `None` the core's default
+/// ([`era::refine::RefineOptions::default`]; its band is set once the lines are known);
+/// `reciprocal=True` needs a square set.
 pub(crate) fn refine_options_of(
     (outputs, inputs): (usize, usize),
-    residuals: &str,
-    weighting: &str,
-    reciprocal: bool,
-    added_modes: bool,
-    max_iterations: Int,
+    residuals: Option<&str>,
+    weighting: Option<&str>,
+    reciprocal: Option<bool>,
+    added_modes: Option<bool>,
+    max_iterations: Option<Int>,
 ) -> PyResult<era::refine::RefineOptions> {
     let mut refine_options = era::refine::RefineOptions::default();
-    refine_options.residuals = crate::named("residuals", residuals)?;
-    refine_options.weighting = crate::named("weighting", weighting)?;
-    refine_options.reciprocal = reciprocal;
-    refine_options.add_missed = added_modes;
-    let iterations = max_iterations.size("max_iterations")?;
-    if iterations == 0 {
-        return value_error("max_iterations 0: the refinement needs at least one iteration");
+    if let Some(r) = residuals {
+        refine_options.residuals = crate::named("residuals", r)?;
     }
-    era::limits::ITERATIONS
-        .check("max_iterations", iterations as u64)
-        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
-    refine_options.max_iterations = iterations;
+    if let Some(w) = weighting {
+        refine_options.weighting = crate::named("weighting", w)?;
+    }
+    refine_options.reciprocal = reciprocal.unwrap_or(refine_options.reciprocal);
+    refine_options.add_missed = added_modes.unwrap_or(refine_options.add_missed);
+    if let Some(max_iterations) = max_iterations {
+        let iterations = max_iterations.size("max_iterations")?;
+        if iterations == 0 {
+            return value_error("max_iterations 0: the refinement needs at least one iteration");
+        }
+        era::limits::ITERATIONS
+            .check("max_iterations", iterations as u64)
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+        refine_options.max_iterations = iterations;
+    }
+    let reciprocal = refine_options.reciprocal;
     if reciprocal && outputs != inputs {
         return value_error(format!(
             "reciprocal=True: the set has {outputs} outputs x {inputs} inputs; reciprocity needs a square (collocated) set"
@@ -609,7 +639,7 @@ pub(crate) fn lowpass_of(lowpass: Option<&Bound<'_, PyAny>>) -> PyResult<Option<
         Some(obj) => match obj.extract::<(Int, f64)>() {
             Ok((order, hz)) => Some((order.size("lowpass order")?, hz)),
             Err(_) => match obj.extract::<f64>() {
-                Ok(hz) => Some((4, hz)),
+                Ok(hz) => Some((EraOptions::DEFAULT_LOWPASS_ORDER, hz)),
                 Err(_) => {
                     return value_error(format!(
                         "lowpass {}: expected a cut-off in Hz or (order, cut-off Hz)",

@@ -4,8 +4,7 @@
 //! from OKID's observer (the default) or from those FRFs.
 
 use crate::model::{
-    lowpass_of, refine_options_of, route_request, states_of, svd_path, thread_count,
-    PyIdentification, Run,
+    era_options, refine_options_of, route_request, states_of, thread_count, PyIdentification, Run,
 };
 use crate::{era_error, guarded, value_error, Int};
 use era::frf::estimate::estimate;
@@ -36,7 +35,7 @@ use pyo3::prelude::*;
 /// reported in `parameters['okid']`.
 #[pyfunction]
 #[pyo3(
-    signature = (data, sample_rate_hz, inputs, outputs, states=None, markov="okid", observer_order=None, markov_samples=None, era_dc=false, frame=None, window="hann", overlap=0.5, estimator="h1", detrend="mean", quantity="acceleration", hankel_factor=Int(5), lowpass=None, time_domain=None, direct_term=None, svd="auto", refine=None, residuals="both", weighting=None, max_iterations=Int(100), added_modes=true, band=None, preset="measured", threads=None),
+    signature = (data, sample_rate_hz, inputs, outputs, states=None, markov="okid", observer_order=None, markov_samples=None, era_dc=None, frame=None, window=None, overlap=None, estimator=None, detrend=None, quantity=None, hankel_factor=None, lowpass=None, time_domain=None, direct_term=None, svd=None, refine=None, residuals=None, weighting=None, max_iterations=None, added_modes=None, band=None, preset=None, threads=None),
     text_signature = "(data, sample_rate_hz, inputs, outputs, states='auto', markov='okid', observer_order='auto', markov_samples=None, era_dc=False, frame=None, window='hann', overlap=0.5, estimator='h1', detrend='mean', quantity='acceleration', hankel_factor=5, lowpass=None, time_domain=None, direct_term=None, svd='auto', refine=None, residuals='both', weighting=None, max_iterations=100, added_modes=True, band=None, preset='measured', threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
@@ -50,31 +49,134 @@ pub fn identify_time(
     markov: &str,
     observer_order: Option<&Bound<'_, PyAny>>,
     markov_samples: Option<Int>,
-    era_dc: bool,
+    era_dc: Option<bool>,
     frame: Option<Int>,
-    window: &str,
-    overlap: f64,
-    estimator: &str,
-    detrend: &str,
-    quantity: &str,
-    hankel_factor: Int,
+    window: Option<&str>,
+    overlap: Option<f64>,
+    estimator: Option<&str>,
+    detrend: Option<&str>,
+    quantity: Option<&str>,
+    hankel_factor: Option<Int>,
     lowpass: Option<&Bound<'_, PyAny>>,
     time_domain: Option<&str>,
     direct_term: Option<&str>,
-    svd: &str,
+    svd: Option<&str>,
     refine: Option<bool>,
-    residuals: &str,
+    residuals: Option<&str>,
     weighting: Option<&str>,
-    max_iterations: Int,
-    added_modes: bool,
+    max_iterations: Option<Int>,
+    added_modes: Option<bool>,
     band: Option<(f64, f64)>,
-    preset: &str,
+    preset: Option<&str>,
     threads: Option<Int>,
 ) -> PyResult<PyIdentification> {
     // Every keyword is checked before the data is touched.
     let threads = thread_count(threads)?;
     let source: MarkovSource = crate::named("markov", markov)?;
     let okid_route = source == MarkovSource::Okid;
+    let (observer, markov_samples) = observer_of(observer_order, markov_samples, okid_route)?;
+    let welch_keywords = crate::frf::WelchKeywords::parse(
+        sample_rate_hz,
+        window,
+        overlap,
+        estimator,
+        detrend,
+        quantity,
+    )?;
+    let frame = frame.map(|f| f.size("frame")).transpose()?;
+    let chosen = match states {
+        Some(s) if !s.is_none() => states_of(s)?,
+        _ => None,
+    };
+    let mut request = route_request(preset, chosen, refine, time_domain, direct_term, band)?;
+    // Time histories carry their coherence and their window.
+    request.without_metadata = false;
+    request.markov = source;
+    let route = request.resolve(welch_keywords.quantity, 0);
+    let mut options = era_options(chosen.unwrap_or(0), hankel_factor, lowpass, svd, era_dc)?;
+    options.domain = route.domain;
+    options.direct_term = route.direct_term;
+    let checked = {
+        let mut o = options.clone();
+        o.states = o.states.max(1);
+        o
+    };
+    checked.check(Naming::Keyword).map_err(era_error)?;
+
+    let array = crate::time_block(data)?;
+    let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
+    let inputs = crate::frf::channels("inputs", &inputs, n_channels)?;
+    let outputs = crate::frf::channels("outputs", &outputs, n_channels)?;
+    let frame = frame.unwrap_or_else(|| {
+        if okid_route {
+            era::frf::estimate::judging_frame(samples, 1, welch_keywords.overlap)
+        } else {
+            era::frf::estimate::DEFAULT_FRAME
+        }
+    });
+    let view = array.readonly();
+    let flat = view.as_slice()?;
+    let rows = crate::frf::rows;
+    let refine_options = refine_options_of(
+        (outputs.len(), inputs.len()),
+        residuals,
+        match weighting {
+            Some(w) if w.trim().eq_ignore_ascii_case("coherence") => None,
+            other => other,
+        },
+        Some(false),
+        added_modes,
+        max_iterations,
+    )?;
+    let okid_options = {
+        let mut o = OkidOptions::default();
+        o.observer_order = observer.unwrap_or(ObserverOrder::Auto { max: None });
+        o.markov_samples =
+            markov_samples.unwrap_or_else(|| era::sources::okid::default_markov_samples(samples));
+        o
+    };
+    let job = Job {
+        xs: rows(flat, samples, &inputs),
+        ys: rows(flat, samples, &outputs),
+        welch: &welch_keywords,
+        frame,
+        okid: okid_route.then_some(&okid_options),
+        route: &route,
+        band,
+        options: &options,
+        refine_options: &refine_options,
+        // The estimate's coherence weights the refinement when asked, and by default
+        // when OKID's model is refined (as the CLI's --weighting coherence).
+        by_coherence: match weighting {
+            Some(w) => w.trim().eq_ignore_ascii_case("coherence"),
+            None => okid_route,
+        },
+        fixed_order: chosen.is_some(),
+    };
+    let (found, facts, refine_options) = guarded(py, || {
+        era::parallel::with_threads(Naming::Keyword, threads, || job.run())
+            .and_then(|r| r)
+            .map_err(era_error)
+    })?;
+    let mut source_facts = era_io::model_json::ModelParameters::default();
+    source_facts.markov = Some(source);
+    source_facts.frame = Some(frame);
+    source_facts.okid = facts;
+    Ok(PyIdentification {
+        found,
+        options,
+        refine: route.refine.then_some(refine_options),
+        route,
+        source: source_facts,
+    })
+}
+
+/// `observer_order=` and `markov_samples=`, checked: OKID's observer only.
+fn observer_of(
+    observer_order: Option<&Bound<'_, PyAny>>,
+    markov_samples: Option<Int>,
+    okid_route: bool,
+) -> PyResult<(Option<ObserverOrder>, Option<usize>)> {
     let observer = observer_order_of(observer_order)?;
     let markov_samples = markov_samples
         .map(|n| n.size("markov_samples"))
@@ -94,181 +196,119 @@ pub fn identify_time(
             .check("markov_samples", n as u64)
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     }
-    let welch_keywords = crate::frf::WelchKeywords::parse(
-        sample_rate_hz,
-        window,
-        overlap,
-        estimator,
-        detrend,
-        quantity,
-    )?;
-    let (window, estimator, tag) = (
-        welch_keywords.window,
-        welch_keywords.estimator,
-        welch_keywords.quantity,
-    );
-    let frame = frame.map(|f| f.size("frame")).transpose()?;
-    let chosen = match states {
-        Some(s) if !s.is_none() => states_of(s)?,
-        _ => None,
-    };
-    let mut request = route_request(preset, chosen, refine, time_domain, direct_term, band)?;
-    // Time histories carry their coherence and their window.
-    request.without_metadata = false;
-    request.markov = source;
-    let route = request.resolve(tag, 0);
-    let mut options = EraOptions::new(chosen.unwrap_or(0), hankel_factor.size("hankel_factor")?);
-    options.lowpass = lowpass_of(lowpass)?;
-    options.domain = route.domain;
-    options.direct_term = route.direct_term;
-    options.svd = svd_path(svd)?;
-    if era_dc {
-        options.realizer = era::identify::Realizer::EraDc;
-    }
-    let checked = {
-        let mut o = options.clone();
-        o.states = o.states.max(1);
-        o
-    };
-    checked.check(Naming::Keyword).map_err(era_error)?;
+    Ok((observer, markov_samples))
+}
 
-    let array = crate::time_block(data)?;
-    let (n_channels, samples) = (array.shape()[0], array.shape()[1]);
-    let inputs = crate::frf::channels("inputs", &inputs, n_channels)?;
-    let outputs = crate::frf::channels("outputs", &outputs, n_channels)?;
-    let frame = frame.unwrap_or_else(|| {
-        if okid_route {
-            era::frf::estimate::judging_frame(samples, 1, overlap)
-        } else {
-            era::frf::estimate::DEFAULT_FRAME
+/// One `identify_time` call once its keywords are checked: the records, and what to
+/// run on them.
+struct Job<'a> {
+    xs: Vec<&'a [f64]>,
+    ys: Vec<&'a [f64]>,
+    welch: &'a crate::frf::WelchKeywords,
+    frame: usize,
+    /// OKID's options, when the Markov parameters come from its observer.
+    okid: Option<&'a OkidOptions>,
+    route: &'a era::identify::route::Route,
+    band: Option<(f64, f64)>,
+    options: &'a EraOptions,
+    refine_options: &'a era::refine::RefineOptions,
+    /// The refinement weighted by the estimate's coherence.
+    by_coherence: bool,
+    fixed_order: bool,
+}
+
+impl Job<'_> {
+    /// The Welch H1 FRFs (window-corrected, the band from their coherence), OKID's
+    /// Markov parameters when asked, then the identification as `identify` runs it.
+    /// Returns it with OKID's record and the refinement's settings as run.
+    fn run(
+        &self,
+    ) -> era::Result<(
+        era::Identification,
+        Option<era_io::model_json::OkidJson>,
+        era::refine::RefineOptions,
+    )> {
+        let (welch, route) = (self.welch, self.route);
+        let estimated = estimate(
+            &self.xs,
+            &self.ys,
+            &welch.options(self.frame),
+            welch.estimator,
+            welch.quantity,
+        )?;
+        let coherence: Vec<Vec<f64>> = (0..estimated.frf.outputs())
+            .map(|i| estimated.multiple(i).to_vec())
+            .collect();
+        let mut frf = estimated.frf;
+        // H1's lag window (a tapered window's bias), as the CLI divides it out.
+        if route.window_correction {
+            let lag = era::sources::frf::LagWindow::of_estimate(
+                welch.estimator,
+                welch.window,
+                self.frame,
+                welch.sample_rate_hz,
+            )?;
+            if let Some(lag) = lag {
+                frf = lag.correct_frf(&frf)?;
+            }
         }
-    });
-    let welch = welch_keywords.options(frame);
-    let view = array.readonly();
-    let flat = view.as_slice()?;
-    let rows = crate::frf::rows;
-    let (xs, ys) = (rows(flat, samples, &inputs), rows(flat, samples, &outputs));
-    let refine_options = refine_options_of(
-        (outputs.len(), inputs.len()),
-        residuals,
-        match weighting {
-            Some(w) if !w.trim().eq_ignore_ascii_case("coherence") => w,
-            _ => "pair-noise",
-        },
-        false,
-        added_modes,
-        max_iterations,
-    )?;
-    let okid_options = {
-        let mut o = OkidOptions::default();
-        o.observer_order = observer.unwrap_or(ObserverOrder::Auto { max: None });
-        o.markov_samples =
-            markov_samples.unwrap_or_else(|| era::sources::okid::default_markov_samples(samples));
-        o
-    };
-    let (found, source_facts) = guarded(py, || {
-        era::parallel::with_threads(Naming::Keyword, threads, || -> era::Result<_> {
-            let estimated = estimate(&xs, &ys, &welch, estimator, tag)?;
-            let coherence: Vec<Vec<f64>> = (0..estimated.frf.outputs())
-                .map(|i| estimated.multiple(i).to_vec())
-                .collect();
-            let mut frf = estimated.frf;
-            // H1's lag window (a tapered window's bias), as the CLI divides it out.
-            if route.window_correction {
-                let lag = era::sources::frf::LagWindow::of_estimate(
-                    estimator,
-                    window,
-                    frame,
-                    sample_rate_hz,
-                )?;
-                if let Some(lag) = lag {
-                    frf = lag.correct_frf(&frf)?;
-                }
+        let band = self.band.or_else(|| {
+            route
+                .coherence_band
+                .then(|| era::frf::coherence_band(frf.frequency_hz(), &coherence))
+                .flatten()
+        });
+        let fit = era::frf::fit_lines(&frf, 0, band).map_err(|why| {
+            let (lo, hi) = band.unwrap_or_default();
+            era::EraError::InvalidParameter {
+                name: "band",
+                value: format!("({lo}, {hi})"),
+                reason: why.into(),
             }
-            let band = band.or_else(|| {
-                route
-                    .coherence_band
-                    .then(|| era::frf::coherence_band(frf.frequency_hz(), &coherence))
-                    .flatten()
-            });
-            let fit = era::frf::fit_lines(&frf, 0, band).map_err(|why| {
-                let (lo, hi) = band.unwrap_or_default();
-                era::EraError::InvalidParameter {
-                    name: "band",
-                    value: format!("({lo}, {hi})"),
-                    reason: why,
-                }
-            })?;
-            let observed = if okid_route {
+        })?;
+        let observed = match self.okid {
+            Some(o) => {
                 let record = Record {
-                    inputs: &xs,
-                    outputs: &ys,
+                    inputs: &self.xs,
+                    outputs: &self.ys,
                 };
-                Some(okid(std::slice::from_ref(&record), &okid_options)?)
-            } else {
-                None
-            };
-            let mut scan = ScanOptions::default();
-            scan.band_hz = fit.band_hz;
-            let mut era_run = options.clone();
-            era_run.domain = route.realization_domain();
-            let mut refine_run = refine_options.clone();
-            refine_run.band = fit.lines;
-            // The estimate's coherence weights the refinement when asked, and by default
-            // when OKID's model is refined (as the CLI's --weighting coherence).
-            let by_coherence = match weighting {
-                Some(w) => w.trim().eq_ignore_ascii_case("coherence"),
-                None => okid_route,
-            };
-            if by_coherence {
-                let curves: Vec<&[f64]> = coherence.iter().map(Vec::as_slice).collect();
-                refine_run.weighting =
-                    era::refine::Weighting::coherence_of(&curves, frf.outputs(), frf.inputs())
-                        .ok_or_else(|| {
-                            era::EraError::Numerical(
-                                "the estimate's coherence does not match its FRFs".into(),
-                            )
-                        })?;
+                Some(okid(std::slice::from_ref(&record), o)?)
             }
-            let run = Run {
-                data: &frf,
-                supplied: observed.as_ref().map(|o| SuppliedMarkov {
-                    markov: &o.markov,
-                    sample_time_s: 1.0 / sample_rate_hz,
-                }),
-                era: &era_run,
-                fixed_order: chosen.is_some(),
-                scan: &scan,
-                refine: route.refine.then_some(&refine_run),
-                domain: route.domain,
-                fitted_hz: fit.fitted_hz,
-            };
-            let found = run.identify()?;
-            Ok((
-                found,
-                (
-                    observed.map(|o| era_io::model_json::okid_json(&o)),
-                    refine_run,
-                ),
-            ))
-        })
-        .and_then(|r| r)
-        .map_err(era_error)
-    })?;
-    let (facts, refine_options) = source_facts;
-    let mut source = std::collections::BTreeMap::new();
-    source.insert("markov".to_string(), serde_json::json!(markov));
-    source.insert("frame".to_string(), serde_json::json!(frame));
-    if let Some(f) = facts {
-        source.insert("okid".to_string(), f);
+            None => None,
+        };
+        let mut scan = ScanOptions::default();
+        scan.band_hz = fit.band_hz;
+        let mut era_run = self.options.clone();
+        era_run.domain = route.realization_domain();
+        let mut refine_run = self.refine_options.clone();
+        refine_run.band = fit.lines;
+        if self.by_coherence {
+            let curves: Vec<&[f64]> = coherence.iter().map(Vec::as_slice).collect();
+            refine_run.weighting =
+                era::refine::Weighting::coherence_of(&curves, frf.outputs(), frf.inputs())
+                    .ok_or_else(|| {
+                        era::EraError::Numerical(
+                            "the estimate's coherence does not match its FRFs".into(),
+                        )
+                    })?;
+        }
+        let run = Run {
+            data: &frf,
+            supplied: observed.as_ref().map(|o| SuppliedMarkov {
+                markov: &o.markov,
+                sample_time_s: 1.0 / welch.sample_rate_hz,
+            }),
+            era: &era_run,
+            fixed_order: self.fixed_order,
+            scan: &scan,
+            refine: route.refine.then_some(&refine_run),
+            domain: route.domain,
+            fitted_hz: fit.fitted_hz,
+        };
+        let found = run.identify()?;
+        let facts = observed.map(|o| era_io::model_json::okid_json(&o));
+        Ok((found, facts, refine_run))
     }
-    Ok(PyIdentification {
-        found,
-        options,
-        refine: route.refine.then_some(refine_options),
-        route,
-        source,
-    })
 }
 
 /// `observer_order=`: an int, 'auto' or `None` (both the information criterion).

@@ -11,265 +11,7 @@
 
 use thiserror::Error;
 
-/// A parameter of the core's options, as the core names it: by its field
-/// ([`Param::field`], snake case, as in [`crate::EraOptions`] and Python's keywords).
-/// A front end spells it its own way (the CLI as a flag, Python as a keyword) through
-/// [`EraError::spelled`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum Param {
-    /// Model order.
-    States,
-    /// Hankel size factor.
-    HankelFactor,
-    /// Integrations of the FRFs.
-    Integrations,
-    /// Low-pass cut-off, Hz.
-    LowpassHz,
-    /// Low-pass Butterworth order.
-    LowpassOrder,
-    /// Zeroed leading lines.
-    ZeroLines,
-    /// Padding of the FRFs.
-    PadTo,
-    /// Time domain of the model.
-    TimeDomain,
-    /// Direct term of the model.
-    DirectTerm,
-    /// SVD method.
-    Svd,
-    /// Orders of a scan.
-    Orders,
-    /// Samples per Welch frame.
-    Frame,
-    /// Overlap of Welch frames.
-    Overlap,
-    /// Line spacing, Hz.
-    Df,
-    /// Frequency lines.
-    Lines,
-    /// Duration, s.
-    Duration,
-    /// Cycles.
-    Cycles,
-    /// Worker threads.
-    Threads,
-    /// Sample time of impulse responses, s.
-    SampleTime,
-    /// Sample rate of time histories, Hz.
-    SampleRate,
-    /// Highest line kept, Hz.
-    MaxHz,
-    /// Rate of the compensator's controller, Hz.
-    CompensatorRate,
-    /// Viscous damping ratio of an oscillator.
-    ViscousDampingRatio,
-    /// `accel_noise`.
-    AccelNoise,
-    /// `actuators`.
-    Actuators,
-    /// `averages`.
-    Averages,
-    /// `band`.
-    Band,
-    /// `burst_on`.
-    BurstOn,
-    /// `collocated`.
-    Collocated,
-    /// `compensation`.
-    Compensation,
-    /// `coulomb_force`.
-    CoulombForce,
-    /// `damping`.
-    Damping,
-    /// `dead_zone`.
-    DeadZone,
-    /// `estimator`.
-    Estimator,
-    /// `excitation`.
-    Excitation,
-    /// `fmax`.
-    Fmax,
-    /// `fraction`.
-    Fraction,
-    /// `hold`.
-    Hold,
-    /// `lvt_noise`.
-    LvtNoise,
-    /// `max_iterations`.
-    MaxIterations,
-    /// `model`.
-    Model,
-    /// `modes`.
-    Modes,
-    /// `natural_frequency_hz`.
-    NaturalFrequencyHz,
-    /// `noise`.
-    Noise,
-    /// `period`.
-    Period,
-    /// `pulse_width`.
-    PulseWidth,
-    /// `quantity`.
-    Quantity,
-    /// `reciprocal`.
-    Reciprocal,
-    /// `refine`.
-    Refine,
-    /// `stiffness`.
-    Stiffness,
-    /// `weighting`.
-    Weighting,
-    /// `x0`.
-    X0,
-    /// `analyzer_rate`.
-    AnalyzerRate,
-    /// `lvt_rate`.
-    LvtRate,
-    /// `motor_force_per_volt`.
-    MotorForcePerVolt,
-    /// Lags of the OKID observer.
-    ObserverOrder,
-    /// Markov blocks a time-history source returns.
-    MarkovSamples,
-}
-
-impl Param {
-    /// Every parameter, in declaration order.
-    pub const ALL: &'static [Param] = &[
-        Param::States,
-        Param::HankelFactor,
-        Param::Integrations,
-        Param::LowpassHz,
-        Param::LowpassOrder,
-        Param::ZeroLines,
-        Param::PadTo,
-        Param::TimeDomain,
-        Param::DirectTerm,
-        Param::Svd,
-        Param::Orders,
-        Param::Frame,
-        Param::Overlap,
-        Param::Df,
-        Param::Lines,
-        Param::Duration,
-        Param::Cycles,
-        Param::Threads,
-        Param::SampleTime,
-        Param::SampleRate,
-        Param::MaxHz,
-        Param::CompensatorRate,
-        Param::ViscousDampingRatio,
-        Param::AccelNoise,
-        Param::Actuators,
-        Param::Averages,
-        Param::Band,
-        Param::BurstOn,
-        Param::Collocated,
-        Param::Compensation,
-        Param::CoulombForce,
-        Param::Damping,
-        Param::DeadZone,
-        Param::Estimator,
-        Param::Excitation,
-        Param::Fmax,
-        Param::Fraction,
-        Param::Hold,
-        Param::LvtNoise,
-        Param::MaxIterations,
-        Param::Model,
-        Param::Modes,
-        Param::NaturalFrequencyHz,
-        Param::Noise,
-        Param::Period,
-        Param::PulseWidth,
-        Param::Quantity,
-        Param::Reciprocal,
-        Param::Refine,
-        Param::Stiffness,
-        Param::Weighting,
-        Param::X0,
-        Param::AnalyzerRate,
-        Param::LvtRate,
-        Param::MotorForcePerVolt,
-        Param::ObserverOrder,
-        Param::MarkovSamples,
-    ];
-
-    /// The field name: `hankel_factor`, `lowpass_hz`.
-    pub const fn field(self) -> &'static str {
-        match self {
-            Param::States => "states",
-            Param::HankelFactor => "hankel_factor",
-            Param::Integrations => "integrations",
-            Param::LowpassHz => "lowpass_hz",
-            Param::LowpassOrder => "lowpass_order",
-            Param::ZeroLines => "zero_lines",
-            Param::PadTo => "pad_to",
-            Param::TimeDomain => "time_domain",
-            Param::DirectTerm => "direct_term",
-            Param::Svd => "svd",
-            Param::Orders => "orders",
-            Param::Frame => "frame",
-            Param::Overlap => "overlap",
-            Param::Df => "df",
-            Param::Lines => "lines",
-            Param::Duration => "duration",
-            Param::Cycles => "cycles",
-            Param::Threads => "threads",
-            Param::SampleTime => "sample_time",
-            Param::SampleRate => "sample_rate",
-            Param::MaxHz => "max_hz",
-            Param::CompensatorRate => "compensator_rate",
-            Param::ViscousDampingRatio => "viscous_damping_ratio",
-            Param::AccelNoise => "accel_noise",
-            Param::Actuators => "actuators",
-            Param::Averages => "averages",
-            Param::Band => "band",
-            Param::BurstOn => "burst_on",
-            Param::Collocated => "collocated",
-            Param::Compensation => "compensation",
-            Param::CoulombForce => "coulomb_force",
-            Param::Damping => "damping",
-            Param::DeadZone => "dead_zone",
-            Param::Estimator => "estimator",
-            Param::Excitation => "excitation",
-            Param::Fmax => "fmax",
-            Param::Fraction => "fraction",
-            Param::Hold => "hold",
-            Param::LvtNoise => "lvt_noise",
-            Param::MaxIterations => "max_iterations",
-            Param::Model => "model",
-            Param::Modes => "modes",
-            Param::NaturalFrequencyHz => "natural_frequency_hz",
-            Param::Noise => "noise",
-            Param::Period => "period",
-            Param::PulseWidth => "pulse_width",
-            Param::Quantity => "quantity",
-            Param::Reciprocal => "reciprocal",
-            Param::Refine => "refine",
-            Param::Stiffness => "stiffness",
-            Param::Weighting => "weighting",
-            Param::X0 => "x0",
-            Param::AnalyzerRate => "analyzer_rate",
-            Param::LvtRate => "lvt_rate",
-            Param::MotorForcePerVolt => "motor_force_per_volt",
-            Param::ObserverOrder => "observer_order",
-            Param::MarkovSamples => "markov_samples",
-        }
-    }
-
-    /// The parameter whose field name is `field`.
-    pub fn from_field(field: &str) -> Option<Param> {
-        Param::ALL.iter().copied().find(|p| p.field() == field)
-    }
-}
-
-impl std::fmt::Display for Param {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.field())
-    }
-}
+pub use crate::names::{Param, Prose};
 
 /// Everything that can go wrong in the numeric core.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -333,8 +75,8 @@ pub enum EraError {
         name: &'static str,
         /// The value given, as text.
         value: String,
-        /// Why it is invalid.
-        reason: String,
+        /// Why it is invalid (what to change, with the parameters it names).
+        reason: Prose,
     },
     /// The Hankel matrix asks for more Markov samples than the data has.
     #[error("{}", self.spelled(&|p| p.field().to_string()))]
@@ -409,9 +151,7 @@ pub enum EraError {
         reason: String,
     },
     /// The input cross-spectral matrix cannot be inverted (H1, multiple coherence).
-    #[error(
-        "the input cross-spectral matrix is singular at {singular_lines} of {lines} lines (first at {first_hz} Hz, smallest normalised eigenvalue {min_eigenvalue:.3e}): {reason}"
-    )]
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
     SingularInputSpectrum {
         /// Lines where it is singular.
         singular_lines: usize,
@@ -423,7 +163,7 @@ pub enum EraError {
         /// independent inputs, 0 = linearly dependent).
         min_eigenvalue: f64,
         /// What it means: which inputs are coherent, or too few averages.
-        reason: String,
+        reason: Prose,
     },
     /// A size asked for by the data or a parameter is above a resource limit
     /// ([`crate::limits`]).
@@ -436,6 +176,16 @@ pub enum EraError {
     /// A dense decomposition failed to converge.
     #[error("numerical failure: {0}")]
     Numerical(String),
+    /// The truncated SVD did not converge (a numerical failure, not the caller's).
+    #[error("{}", self.spelled(&|p| p.field().to_string()))]
+    SvdNotConverged {
+        /// Passes made.
+        passes: usize,
+        /// Residual reached.
+        residual: f64,
+        /// Tolerance asked for.
+        tolerance: f64,
+    },
     /// The caller stopped the call ([`crate::cancel`]): Ctrl-C in Python.
     #[error("interrupted")]
     Interrupted,
@@ -453,7 +203,26 @@ impl EraError {
                 name,
                 value,
                 reason,
-            } => refused_parameter(name, value, reason, spell),
+            } => refused_parameter(name, value, &reason.spelled(spell), spell),
+            EraError::SingularInputSpectrum {
+                singular_lines,
+                lines,
+                first_hz,
+                min_eigenvalue,
+                reason,
+            } => format!(
+                "the input cross-spectral matrix is singular at {singular_lines} of {lines} lines (first at {first_hz} Hz, smallest normalised eigenvalue {min_eigenvalue:.3e}): {}",
+                reason.spelled(spell)
+            ),
+            EraError::Limit(limit) => limit.spelled(spell),
+            EraError::SvdNotConverged {
+                passes,
+                residual,
+                tolerance,
+            } => format!(
+                "numerical failure: the truncated SVD did not converge in {passes} passes (residual {residual:.2e}, tolerance {tolerance:.0e}): use {} dense",
+                n(Param::Svd)
+            ),
             EraError::NotEnoughMarkovSamples {
                 needed,
                 available,
@@ -497,7 +266,32 @@ impl EraError {
     /// True for problems with the caller's data or parameters (exit code 2 in the CLI),
     /// false for internal numerical failures (exit code 1) and an interrupted call.
     pub fn is_input_error(&self) -> bool {
-        !matches!(self, EraError::Numerical(_) | EraError::Interrupted)
+        !matches!(
+            self,
+            EraError::Numerical(_) | EraError::SvdNotConverged { .. } | EraError::Interrupted
+        )
+    }
+}
+
+/// Whose fault an error is: the caller's (bad data, a refused value, an unreadable
+/// file: the CLI exits 2, Python raises `ValueError`) or the program's (exit 1). Every
+/// error type of era's crates says it here, so a front end asks one question of any
+/// error it meets.
+pub trait InputError: std::error::Error {
+    /// True when the caller can mend it by changing what it passed.
+    fn is_input_error(&self) -> bool;
+}
+
+impl InputError for EraError {
+    fn is_input_error(&self) -> bool {
+        EraError::is_input_error(self)
+    }
+}
+
+/// A size above a limit is the caller's to lower (or to raise the limit).
+impl InputError for crate::limits::LimitError {
+    fn is_input_error(&self) -> bool {
+        true
     }
 }
 

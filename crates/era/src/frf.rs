@@ -6,9 +6,11 @@ use num_complex::Complex64;
 pub mod estimate;
 
 /// What an FRF measures per unit force.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Quantity {
-    /// Acceleration per unit force (accelerance, e.g. (in/s²)/lbf).
+    /// Acceleration per unit force (accelerance, e.g. (in/s²)/lbf): what a file that
+    /// does not say measures, and what the front ends assume by default.
+    #[default]
     Acceleration,
     /// Velocity per unit force (mobility).
     Velocity,

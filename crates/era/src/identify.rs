@@ -830,9 +830,15 @@ pub fn default_orders(
         return Err(EraError::InvalidParameter {
             name: "states",
             value: "auto".into(),
-            reason: format!(
-                "{markov_samples} Markov samples at hankel-factor {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with `pad_to`, lower `hankel_factor`, or give `states N`"
-            ),
+            reason: crate::names::Prose::from(format!(
+                "{markov_samples} Markov samples at hankel-factor {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with "
+            ))
+            .param(crate::names::Param::PadTo)
+            .text(", lower ")
+            .param(crate::names::Param::HankelFactor)
+            .text(", or give ")
+            .param(crate::names::Param::States)
+            .text(" N"),
         });
     }
     let min = (base / 4).max(2) / 2 * 2;
@@ -1017,17 +1023,20 @@ fn scan_front(
         EraError::NotEnoughMarkovSamples { needed, available, .. } => EraError::InvalidParameter {
             name: "orders",
             value: range.to_string(),
-            reason: format!(
-                "the largest order needs {needed} Markov samples at hankel-factor {}, the data has {available}: lower the orders or `hankel_factor`, or pad with `pad_to`",
+            reason: crate::names::Prose::from(format!(
+                "the largest order needs {needed} Markov samples at hankel-factor {}, the data has {available}: lower the orders or ",
                 options.hankel_factor
-            ),
+            ))
+            .param(crate::names::Param::HankelFactor)
+            .text(", or pad with ")
+            .param(crate::names::Param::PadTo),
         },
         EraError::HankelTooSmall { available, .. } => EraError::InvalidParameter {
             name: "orders",
             value: range.to_string(),
             reason: format!(
                 "the data supports a Hankel matrix with {available} singular values, fewer than the largest order: lower the orders"
-            ),
+            ).into(),
         },
         other => other,
     })?;
@@ -1266,10 +1275,14 @@ fn auto(
         return Err(EraError::InvalidParameter {
             name: "states",
             value: "auto".into(),
-            reason: format!(
-                "no mode is stable across orders {range} (rule: {}): give `states N`, or a wider `orders` range",
+            reason: crate::names::Prose::from(format!(
+                "no mode is stable across orders {range} (rule: {}): give ",
                 selection.rule()
-            ),
+            ))
+            .param(crate::names::Param::States)
+            .text(" N, or a wider ")
+            .param(crate::names::Param::Orders)
+            .text(" range"),
         });
     }
     let top = *s.orders.last().expect("a scan has orders");
@@ -1665,6 +1678,22 @@ pub fn assess_model(
         model,
         sample_time_s,
     )
+}
+
+/// The defaults a front end offers: the thesis's ERA ([`EraOptions::new`]) at a Hankel
+/// factor of [`EraOptions::DEFAULT_HANKEL_FACTOR`]; the order (0 here) is always the
+/// caller's.
+impl Default for EraOptions {
+    fn default() -> Self {
+        EraOptions::new(0, Self::DEFAULT_HANKEL_FACTOR)
+    }
+}
+
+impl EraOptions {
+    /// The Hankel factor when a front end is given none (thesis `lh = 5`).
+    pub const DEFAULT_HANKEL_FACTOR: usize = 5;
+    /// The Butterworth order of a low-pass given by its cut-off alone.
+    pub const DEFAULT_LOWPASS_ORDER: usize = 4;
 }
 
 crate::names::named!(display Realizer, "realizer", [

@@ -116,13 +116,12 @@ pub(crate) fn saturating_count(x: f64) -> u64 {
 
 /// A request above a [`Limit`].
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-#[error(
-    "{context}: {} {what} asked for, the limit is {allowed} (set {env} to raise it)",
-    AskedCount(*.asked)
-)]
+#[error("{}", self.spelled(&|p| p.field().to_string()))]
 pub struct LimitError {
-    /// What asked: a flag, a file field ("--pad-to", "UFF record 3: number of lines").
-    pub context: String,
+    /// What asked: a flag, a file field ("--pad-to", "UFF record 3: number of lines"),
+    /// or the core's words naming a parameter, which a front end spells
+    /// ([`LimitError::spelled`]).
+    pub context: crate::names::Prose,
     /// The amount asked for (saturated at `u64::MAX`).
     pub asked: u64,
     /// The limit in force.
@@ -131,6 +130,21 @@ pub struct LimitError {
     pub what: &'static str,
     /// The variable that raises it.
     pub env: &'static str,
+}
+
+impl LimitError {
+    /// The message with the parameters its context names spelled by `spell` (a front
+    /// end's flag or keyword); `Display` writes their field names.
+    pub fn spelled(&self, spell: &dyn Fn(crate::names::Param) -> String) -> String {
+        format!(
+            "{}: {} {} asked for, the limit is {} (set {} to raise it)",
+            self.context.spelled(spell),
+            AskedCount(self.asked),
+            self.what,
+            self.allowed,
+            self.env
+        )
+    }
 }
 
 impl Limit {
@@ -149,7 +163,11 @@ impl Limit {
     ///
     /// # Errors
     /// [`LimitError`] when `asked` exceeds [`Limit::allowed`].
-    pub fn check(&self, context: impl Into<String>, asked: u64) -> Result<u64, LimitError> {
+    pub fn check(
+        &self,
+        context: impl Into<crate::names::Prose>,
+        asked: u64,
+    ) -> Result<u64, LimitError> {
         let allowed = self.allowed();
         if asked > allowed {
             return Err(LimitError {
@@ -170,7 +188,7 @@ impl Limit {
     /// [`LimitError`] when the (saturated) product exceeds [`Limit::allowed`].
     pub fn check_product(
         &self,
-        context: impl Into<String>,
+        context: impl Into<crate::names::Prose>,
         factors: &[u64],
     ) -> Result<usize, LimitError> {
         let asked = factors.iter().fold(1u64, |acc, &f| acc.saturating_mul(f));

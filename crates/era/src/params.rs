@@ -8,10 +8,9 @@
 //! `states 0: the model needs at least one state` from Python.
 //!
 //! Messages built deeper in the core (an [`EraError`] raised while realizing, a
-//! warning) quote an option by its field name in backticks, `` `hankel_factor` ``; a
-//! front end shows them through [`render`], which rewrites each quote its way
-//! (`--hankel-factor`, or `hankel_factor`). Only the names in [`OPTION_KEYS`] are
-//! rewritten, so text quoted from a file passes through as it was.
+//! warning) name a parameter as a [`crate::names::Param`] inside a
+//! [`crate::names::Prose`], and a front end spells it with [`EraError::message`]
+//! (`--hankel-factor`, or `hankel_factor`): no text is rewritten after the fact.
 //!
 //! A refused value is [`EraError::Invalid`] (an input error: exit code 2 in the CLI,
 //! `ValueError` in Python), or [`EraError::Limit`] when a size is above one of
@@ -58,61 +57,20 @@ impl EraError {
     }
 }
 
-/// The option field names that core messages quote in backticks: those of
-/// [`crate::EraOptions`], of the estimators and simulators, and the CLI-only scan range.
-pub const OPTION_KEYS: &[&str] = &[
-    "states",
-    "hankel_factor",
-    "integrations",
-    "lowpass_hz",
-    "lowpass_order",
-    "zero_lines",
-    "pad_to",
-    "time_domain",
-    "direct_term",
-    "svd",
-    "orders",
-    "frame",
-    "overlap",
-    "df",
-    "lines",
-    "duration",
-    "cycles",
-    "threads",
-    "observer_order",
-    "markov_samples",
-];
-
-/// `message` with each `` `key` `` or `` `key value` `` quote of an [`OPTION_KEYS`]
-/// name written as `naming`'s front end names it: `--pad-to`, `--states N` from the
-/// CLI, `pad_to`, `states N` from Python.
-pub fn render(naming: Naming, message: &str) -> String {
-    let mut out = String::with_capacity(message.len());
-    let mut rest = message;
-    while let Some(open) = rest.find('`') {
-        out.push_str(&rest[..open]);
-        let after = &rest[open + 1..];
-        let Some(close) = after.find('`') else {
-            out.push_str(&rest[open..]);
-            return out;
-        };
-        let quoted = &after[..close];
-        let (key, tail) = quoted.split_once(' ').unwrap_or((quoted, ""));
-        if OPTION_KEYS.contains(&key) && !tail.contains(' ') {
-            out.push_str(&naming.name(key));
-            if !tail.is_empty() {
-                out.push(' ');
-                out.push_str(tail);
-            }
-            rest = &after[close + 1..];
-        } else {
-            // Not an option: keep the opening quote and look again after it.
-            out.push('`');
-            rest = after;
-        }
+impl crate::names::Prose {
+    /// The text with the parameters it names spelled as `naming`'s front end spells
+    /// them.
+    pub fn message(&self, naming: Naming) -> String {
+        self.spelled(&|p| naming.spell(p))
     }
-    out.push_str(rest);
-    out
+}
+
+impl crate::limits::LimitError {
+    /// The message with the parameters its context names spelled as `naming`'s front
+    /// end spells them.
+    pub fn message(&self, naming: Naming) -> String {
+        self.spelled(&|p| naming.spell(p))
+    }
 }
 
 /// `Err(EraError::Invalid)` with `message`.
@@ -154,19 +112,38 @@ mod tests {
         assert!(check_positive(Naming::Flag, "df", 0.5, "x").is_ok());
     }
 
+    /// A message naming parameters ([`crate::names::Prose`]) spells them per front
+    /// end, and `Display` writes their field names.
     #[test]
-    fn quoted_options_are_rendered_per_front_end() {
-        let m = "lower `hankel_factor` or `states N`, pad with `pad_to`; column `time_s` and `states` ` alone";
+    fn prose_spells_its_parameters_per_front_end() {
+        use crate::names::{Param, Prose};
+        let m = Prose::from("lower ")
+            .param(Param::HankelFactor)
+            .text(" or give ")
+            .param(Param::States)
+            .text(" N, or lower ")
+            .param(Param::LowpassOrder);
         assert_eq!(
-            render(Naming::Flag, m),
-            "lower --hankel-factor or --states N, pad with --pad-to; column `time_s` and --states ` alone"
+            m.message(Naming::Flag),
+            "lower --hankel-factor or give --states N, or lower --lowpass-order"
         );
         assert_eq!(
-            render(Naming::Keyword, m),
-            "lower hankel_factor or states N, pad with pad_to; column `time_s` and states ` alone"
+            m.message(Naming::Keyword),
+            "lower hankel_factor or give states N, or lower lowpass order"
         );
-        assert_eq!(render(Naming::Flag, "no quotes"), "no quotes");
-        assert_eq!(render(Naming::Flag, "`lowpass_hz`"), "--lowpass-hz");
+        assert_eq!(
+            m.to_string(),
+            "lower hankel_factor or give states N, or lower lowpass_order"
+        );
+        let e = EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: m,
+        };
+        assert_eq!(
+            e.message(Naming::Flag),
+            "invalid parameter --states = auto: lower --hankel-factor or give --states N, or lower --lowpass-order"
+        );
     }
 
     /// A refused parameter is the CLI's flag for the CLI, the keyword for Python and the

@@ -123,17 +123,17 @@ pub struct WelchArgs {
     #[arg(long, value_name = "N")]
     pub frame: Option<usize>,
     /// Window of each frame.
-    #[arg(long, value_parser = named::<Window>(), default_value_t = Window::Hann)]
+    #[arg(long, value_parser = named::<Window>(), default_value_t = Window::default())]
     pub window: Window,
     /// Overlap of consecutive frames, as a fraction of the frame (0 ≤ overlap < 1).
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = era::frf::estimate::WelchOptions::DEFAULT_OVERLAP, allow_negative_numbers = true)]
     pub overlap: f64,
     /// FRF estimator: h1 (noise on the outputs), h2 (noise on the inputs), hv (total
     /// least squares).
-    #[arg(long, value_parser = named::<Estimator>(), default_value_t = Estimator::H1)]
+    #[arg(long, value_parser = named::<Estimator>(), default_value_t = Estimator::default())]
     pub estimator: Estimator,
     /// Trend removed from each frame before windowing.
-    #[arg(long, value_parser = named::<Detrend>(), default_value_t = Detrend::Mean)]
+    #[arg(long, value_parser = named::<Detrend>(), default_value_t = Detrend::default())]
     pub detrend: Detrend,
     /// Keep the lines up to this frequency (the analyzer's span). ERA then sees a
     /// Nyquist frequency of max-hz, as after decimation: use it when the modes lie far

@@ -20,7 +20,7 @@ pub struct FrfArgs {
     #[command(flatten)]
     pub welch: WelchArgs,
     /// What the outputs measure (the FRFs' quantity).
-    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::Acceleration)]
+    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::default())]
     pub quantity: era::Quantity,
     /// Units of the estimated FRFs, RESPONSE,FORCE (e.g. m/s^2,N), written into the FRF
     /// file for identify, plot and the report; time files seldom carry them.

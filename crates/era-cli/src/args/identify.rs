@@ -3,7 +3,7 @@
 use super::common::{named, CommonArgs, FrfFactsArgs, PhaseArg, RefineFitArgs, WelchArgs};
 use clap::Args;
 use era::identify::route::Preset;
-use era::identify::ModelDomain;
+use era::identify::{EraOptions, ModelDomain};
 use era::pipeline::realize::{DirectTerm, SvdPath};
 use era::sources::MarkovSource;
 use era::Quantity;
@@ -89,10 +89,10 @@ pub struct IdentifyArgs {
     #[arg(long, value_name = "N | auto", value_parser = parse_states, help_heading = "Route")]
     pub states: Option<StatesArg>,
     /// Markov samples in the Hankel matrix: states × this factor.
-    #[arg(long, default_value_t = 5, help_heading = "ERA")]
+    #[arg(long, default_value_t = EraOptions::default().hankel_factor, help_heading = "ERA")]
     pub hankel_factor: usize,
     /// Integrations of the FRFs before ERA: 1 turns acceleration into velocity.
-    #[arg(long, default_value_t = 0, help_heading = "ERA")]
+    #[arg(long, default_value_t = EraOptions::default().integrations, help_heading = "ERA")]
     pub integrations: usize,
     /// Zero-phase Butterworth low-pass on the impulse responses, cut-off in Hz (off when
     /// absent).
@@ -106,16 +106,16 @@ pub struct IdentifyArgs {
     /// Order of that low-pass filter.
     #[arg(
         long,
-        default_value_t = 4,
+        default_value_t = EraOptions::DEFAULT_LOWPASS_ORDER,
         requires = "lowpass_hz",
         help_heading = "ERA"
     )]
     pub lowpass_order: usize,
     /// Leading FRF lines set to zero.
-    #[arg(long, default_value_t = 0, help_heading = "ERA")]
+    #[arg(long, default_value_t = EraOptions::default().zero_lines, help_heading = "ERA")]
     pub zero_lines: usize,
     /// Pad with zero lines to pad-to + 1 lines (0: no padding).
-    #[arg(long, default_value_t = 0, help_heading = "ERA")]
+    #[arg(long, default_value_t = EraOptions::default().pad_to, help_heading = "ERA")]
     pub pad_to: usize,
     /// Model returned. Default: continuous when the measured preset refines, else
     /// discrete (ERA's own).

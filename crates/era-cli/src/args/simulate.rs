@@ -89,7 +89,7 @@ pub struct ShakerArgs {
     #[arg(long, default_value_t = 0.02, allow_negative_numbers = true)]
     pub pulse_width: f64,
     /// What the outputs measure.
-    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::Acceleration)]
+    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::default())]
     pub quantity: era::Quantity,
     /// Time-history CSV to write (time_s, force1.., acc1..); the truth goes to
     /// <name>.truth.json beside it.
@@ -147,7 +147,7 @@ pub struct ModalArgs {
     #[arg(long, default_value_t = 0.025, allow_negative_numbers = true)]
     pub df: f64,
     /// What the FRFs measure per unit force.
-    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::Acceleration)]
+    #[arg(long, value_parser = named::<era::Quantity>(), default_value_t = era::Quantity::default())]
     pub quantity: era::Quantity,
     /// Input shapes equal output shapes (square, reciprocal set like the DTA's).
     #[arg(long)]

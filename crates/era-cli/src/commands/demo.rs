@@ -1,8 +1,7 @@
 //! `era demo`: the embedded default. The thesis's truth model (Table 5.2) identified
 //! with the thesis settings, without and with noise, beside the exact truth.
 
-use crate::args::DemoArgs;
-use crate::config::Settings;
+use crate::config::{Demo, Settings};
 use crate::output::identification::{write_identification, Bundle};
 use crate::output::report::{parameter_echo, print_json, timings_table, Human};
 use crate::output::{prepare_out_dir, write_output, RunInput};
@@ -51,8 +50,8 @@ struct Runs {
     refined: Identification,
 }
 
-pub fn run(a: &DemoArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &Demo) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     crate::config::check_noise(a.noise)?;
     let mut outputs = match &a.out {
@@ -131,7 +130,7 @@ fn identify_both(
 }
 
 /// Table 5.2 beside the truth, and the largest errors of each run.
-fn table(a: &DemoArgs, truth: &[Mode], runs: &Runs, errors: &[serde_json::Value; 3]) -> String {
+fn table(a: &Demo, truth: &[Mode], runs: &Runs, errors: &[serde_json::Value; 3]) -> String {
     let pct = 100.0 * a.noise;
     let mut t = String::new();
     let _ = writeln!(t, "\nTable 5.2: f in Hz, zeta in %");
@@ -212,7 +211,7 @@ fn table(a: &DemoArgs, truth: &[Mode], runs: &Runs, errors: &[serde_json::Value;
 /// The FRFs (CSV) and both runs' bundles (no_noise/, noisy/) into `set`, committed
 /// together: both take their place, or none does.
 fn write_files(
-    a: &DemoArgs,
+    a: &Demo,
     mut set: OutputSet,
     options: &EraOptions,
     [clean_frf, noisy_frf]: [&era::FrfData; 2],
@@ -285,7 +284,7 @@ fn write_files(
 /// The demo's JSON: the truth, each run's modes, the refinement, the errors and the
 /// parameters.
 fn demo_json(
-    a: &DemoArgs,
+    a: &Demo,
     options: &EraOptions,
     truth: &[Mode],
     runs: &Runs,

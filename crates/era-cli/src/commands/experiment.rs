@@ -44,8 +44,9 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
         };
         return Structure::from_state_space(&ss, quantity).map_err(|e| {
             crate::error::UsageError(format!(
-                "--structure {}: {e} (the structure needs one output collocated with each input)",
-                path.display()
+                "--structure {}: {} (the structure needs one output collocated with each input)",
+                path.display(),
+                e.message(era::params::Naming::Flag)
             ))
             .into()
         });
@@ -78,7 +79,8 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
         collocated: true,
         seed: a.seed,
     };
-    let s = ModalStructure::random(&spec).map_err(|e| crate::error::UsageError(e.to_string()))?;
+    let s = ModalStructure::random(&spec)
+        .map_err(|e| crate::error::UsageError(e.message(era::params::Naming::Flag)))?;
     Ok(Structure::from_modal(&s))
 }
 
@@ -163,8 +165,12 @@ fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
     } else {
         Drive::OneAtATime
     };
-    spec.validate()
-        .map_err(|e| crate::error::UsageError(format!("era simulate experiment: {e}")))?;
+    spec.validate().map_err(|e| {
+        crate::error::UsageError(format!(
+            "era simulate experiment: {}",
+            e.message(era::params::Naming::Flag)
+        ))
+    })?;
     Ok(spec)
 }
 

@@ -1,8 +1,7 @@
 //! `era info FILE` and `era convert IN OUT`: what an FRF file holds, and the same FRFs
 //! in another format.
 
-use crate::args::{ConvertArgs, InfoArgs};
-use crate::config::Settings;
+use crate::config::{Convert, Info};
 use crate::input::{describe_input, read_frf_bytes, read_frf_with, shape_line, FrfFlags};
 use crate::output::report::{finish_output, Human};
 use anyhow::Context;
@@ -13,8 +12,8 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// `era convert`.
-pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run_convert(a: &Convert) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     let target = FrfFormat::from_extension(&a.output).ok_or_else(|| {
         crate::error::UsageError(format!(
@@ -29,7 +28,7 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
         ));
     }
     let clock = Instant::now();
-    let input = read_frf_with(&a.input, &crate::input::FrfFlags::from(&a.read))?;
+    let input = read_frf_with(&a.input, &a.read)?;
     let read_s = clock.elapsed().as_secs_f64();
     let frf = &input.file.frf;
     let clock = Instant::now();
@@ -70,8 +69,8 @@ pub fn run_convert(a: &ConvertArgs) -> anyhow::Result<()> {
 }
 
 /// `era info`.
-pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run_info(a: &Info) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     let clock = Instant::now();
     // Read once: a pipe or `/dev/stdin` cannot be read a second time.
@@ -92,7 +91,7 @@ pub fn run_info(a: &InfoArgs) -> anyhow::Result<()> {
     )
 }
 
-fn uff_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
+fn uff_info(a: &Info, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
     let contents = era_io::uff::parse_uff(bytes, &a.file, false)?;
     let mut text = format!("{}: UFF\n", a.file.display());
     let mut by_type: BTreeMap<String, usize> = BTreeMap::new();
@@ -236,7 +235,7 @@ fn uff_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::V
     Ok((text, summary))
 }
 
-fn mat_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
+fn mat_info(a: &Info, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
     let vars = era_io::mat::list_variables_in(bytes, &a.file)?;
     let mut text = format!("{}: MAT v5\n  variables:\n", a.file.display());
     for (name, what) in &vars {
@@ -276,14 +275,14 @@ fn root(e: &anyhow::Error) -> String {
     e.root_cause().to_string()
 }
 
-fn info_flags(a: &InfoArgs) -> FrfFlags<'_> {
+fn info_flags(a: &Info) -> FrfFlags<'_> {
     FrfFlags {
         frequency_variable: a.freq_variable.as_deref(),
         ..FrfFlags::default()
     }
 }
 
-fn csv_info(a: &InfoArgs, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
+fn csv_info(a: &Info, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
     let input = read_frf_bytes(bytes, &a.file, &info_flags(a))?;
     let frf = &input.file.frf;
     let meta = &input.file.metadata;

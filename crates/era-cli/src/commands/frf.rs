@@ -107,15 +107,6 @@ struct Records {
     estimate_s: f64,
 }
 
-/// The Welch settings of the flags at `rate` samples per second.
-fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
-    let mut o = WelchOptions::new(rate, welch.frame_or_default());
-    o.overlap = welch.overlap;
-    o.window = welch.window;
-    o.detrend = welch.detrend;
-    o
-}
-
 /// The sample rate of `history`: `--sample-rate` or the file's, and where it came from.
 fn sample_rate(
     path: &Path,
@@ -194,7 +185,7 @@ fn read_records(
         };
         let input_cols = pick("--inputs", inputs)?;
         let output_cols = pick("--outputs", outputs)?;
-        let opts = welch_options(welch, rate);
+        let opts = crate::config::welch_options(welch, rate);
         let columns = |cols: &[usize]| -> Vec<&[f64]> {
             cols.iter()
                 .map(|&c| history.columns[c].as_slice())
@@ -277,7 +268,7 @@ pub fn estimate_from_time(
         input_labels: first.inputs.iter().map(label).collect(),
     });
     let path = &paths[0];
-    let opts = welch_options(welch, first.rate);
+    let opts = crate::config::welch_options(welch, first.rate);
     spinner.set_message("estimating FRFs");
     let clock = Instant::now();
     let pooled = estimate::Spectra::pool(&records.spectra)

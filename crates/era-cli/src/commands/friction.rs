@@ -1,10 +1,6 @@
 //! `era friction estimate|simulate|tune`.
 
-use crate::args::{
-    DecayMethodArg, FrictionAction, FrictionArgs, FrictionEstimateArgs, FrictionSimulateArgs,
-    FrictionTuneArgs, OscillatorArgs,
-};
-use crate::config::Settings;
+use crate::config::{Actuator, Friction, FrictionEstimate, FrictionSimulate, FrictionTune};
 use crate::error::usage;
 use crate::output::report::{finish_output, fixed, Human};
 use anyhow::Context;
@@ -42,8 +38,8 @@ fn check_stiffness(k: f64) -> anyhow::Result<()> {
     Ok(era::friction::check_stiffness(Naming::Flag, k)?)
 }
 
-fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+fn estimate(a: &FrictionEstimate) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     check_stiffness(a.stiffness)?;
     let clock = Instant::now();
@@ -108,7 +104,7 @@ fn estimate(a: &FrictionEstimateArgs) -> anyhow::Result<()> {
     )
 }
 
-fn oscillator(m: &OscillatorArgs, coulomb_force: f64) -> anyhow::Result<Oscillator> {
+fn oscillator(m: &Actuator, coulomb_force: f64) -> anyhow::Result<Oscillator> {
     check_stiffness(m.stiffness)?;
     let o = Oscillator {
         stiffness: m.stiffness,
@@ -120,17 +116,16 @@ fn oscillator(m: &OscillatorArgs, coulomb_force: f64) -> anyhow::Result<Oscillat
     Ok(o)
 }
 
-fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+fn simulate(a: &FrictionSimulate) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     let clock = Instant::now();
     let osc = oscillator(&a.model, a.coulomb_force)?;
     let method = match a.method {
-        Some(DecayMethodArg::Exact) if osc.viscous_damping_ratio != 0.0 => {
+        Some(Method::Exact) if osc.viscous_damping_ratio != 0.0 => {
             return usage("--method exact is for Coulomb friction alone: drop --viscous-damping-ratio or use --method integrate");
         }
-        Some(DecayMethodArg::Exact) => Method::Exact,
-        Some(DecayMethodArg::Integrate) => Method::Integrate,
+        Some(method) => method,
         None if osc.viscous_damping_ratio != 0.0 => Method::Integrate,
         None => Method::Exact,
     };
@@ -192,8 +187,8 @@ fn simulate(a: &FrictionSimulateArgs) -> anyhow::Result<()> {
     )
 }
 
-fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+fn tune_cmd(a: &FrictionTune) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     let clock = Instant::now();
     check_stiffness(a.model.stiffness)?;
@@ -288,10 +283,10 @@ fn tune_cmd(a: &FrictionTuneArgs) -> anyhow::Result<()> {
     )
 }
 
-pub fn run(a: &FrictionArgs) -> anyhow::Result<()> {
-    match &a.action {
-        FrictionAction::Estimate(e) => estimate(e),
-        FrictionAction::Simulate(s) => simulate(s),
-        FrictionAction::Tune(t) => tune_cmd(t),
+pub fn run(a: &Friction) -> anyhow::Result<()> {
+    match a {
+        Friction::Estimate(e) => estimate(e),
+        Friction::Simulate(s) => simulate(s),
+        Friction::Tune(t) => tune_cmd(t),
     }
 }

@@ -554,7 +554,10 @@ fn realize(
             value,
             reason,
         } if name == "orders" || (name == "states" && value == "auto") => anyhow::Error::from(
-            crate::error::UsageError(format!("--{name} {value}: {reason}")),
+            crate::error::UsageError(format!(
+                "--{name} {value}: {}",
+                reason.message(era::params::Naming::Flag)
+            )),
         ),
         era::EraError::NotEnoughMarkovSamples {
             needed, available, ..
@@ -895,12 +898,8 @@ fn okid_echo(o: &Observed) -> String {
 
 /// model.json's record of OKID: `markov: "okid"` and the observer's facts.
 fn okid_json(o: &Observed, model: &mut ModelJson) {
-    model
-        .parameters
-        .insert("markov".into(), serde_json::json!("okid"));
-    model
-        .parameters
-        .insert("okid".into(), era_io::model_json::okid_json(&o.okid));
+    model.parameters.markov = Some(era::sources::MarkovSource::Okid);
+    model.parameters.okid = Some(era_io::model_json::okid_json(&o.okid));
 }
 
 /// `--weighting coherence`, and the refinement's default when it refines OKID's model:

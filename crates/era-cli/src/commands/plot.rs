@@ -1,8 +1,7 @@
 //! `era plot FRF_FILE [--model model.json] --out DIR`: any FRF file, overlaid with any
 //! model of the same shape.
 
-use crate::args::PlotArgs;
-use crate::config::Settings;
+use crate::config::Plot;
 use crate::error::usage;
 use crate::input::read_frf_with;
 use crate::output::figures::{frf_view, write_figure, write_frf_figures};
@@ -16,11 +15,11 @@ use era_plot::{singular_value_figure, FrfUnits};
 use serde_json::json;
 use std::path::Path;
 
-pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &Plot) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     let mut set = prepare_out_dir(&a.out)?;
-    let input = read_frf_with(&a.file, &crate::input::FrfFlags::from(&a.read))?;
+    let input = read_frf_with(&a.file, &a.read)?;
     let frf = input.file.frf.clone();
     let (model, integrations, zero_lines) = overlay_model(a, &frf)?;
     let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
@@ -49,7 +48,7 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
         frf.quantity(),
         input.file.channels.as_ref(),
         &measured,
-        a.phase.into(),
+        a.phase,
     );
     let (_, overlays) = write_frf_figures(
         &mut set,
@@ -81,7 +80,7 @@ pub fn run(a: &PlotArgs) -> anyhow::Result<()> {
 /// The model to overlay (`--model`), refused when its shape is not the FRFs', and the
 /// integrations and zeroed lines to plot with: the flags', else the model's, else none.
 fn overlay_model(
-    a: &PlotArgs,
+    a: &Plot,
     frf: &era::FrfData,
 ) -> anyhow::Result<(Option<ModelJson>, usize, usize)> {
     let model = match &a.model {

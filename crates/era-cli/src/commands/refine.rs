@@ -14,7 +14,7 @@ use era::identify::{assess_model, EraOptions};
 use era::pipeline::realize::SvdPath;
 use era::refine::identification::refine_identification_in;
 use era::refine::RefineOptions;
-use era_io::model_json::{FitJson, ModelJson, ModelParameters};
+use era_io::model_json::{FitJson, ModelJson};
 use std::fmt::Write as _;
 
 /// `--reciprocal` needs a square set: said before the identification runs.
@@ -53,7 +53,8 @@ pub fn refine_found(
                     value,
                     reason,
                 } => anyhow::Error::from(crate::error::UsageError(format!(
-                    "--max-iterations {value}: {reason}"
+                    "--max-iterations {value}: {}",
+                    reason.message(era::params::Naming::Flag)
                 ))),
                 other => anyhow::Error::from(other),
             })
@@ -164,7 +165,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
         .min(found.realization.singular_values.len())
         .max(1);
     human.print(&identification_summary(&found, states));
-    let mut params = ModelParameters::refining(model.parameters.clone());
+    let mut params = model.parameters.clone();
     params.refinement = Some(ropts.clone());
     params.refined_from = Some(a.model.clone());
     params.model_states = Some(found.model.states());
@@ -273,7 +274,10 @@ fn start(
     .with_context(|| format!("evaluating {} on {}", a.model.display(), a.file.display()))?;
     // The modes judged physical in the file start the refinement of an automatic model;
     // every mode starts that of a fixed-order one (as `era identify --refine`).
-    let auto = model.parameters.get("states").and_then(|v| v.as_str()) == Some("auto");
+    let auto = model
+        .parameters
+        .get("states")
+        .is_some_and(|v| v.as_str() == Some("auto"));
     for (q, m) in found.quality.iter_mut().zip(&model.modes) {
         if let Some(physical) = m.physical {
             q.physical = physical;

@@ -287,7 +287,8 @@ fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
             value,
             reason,
         } => anyhow::Error::from(crate::error::UsageError(format!(
-            "--{name} {value}: {reason}"
+            "--{name} {value}: {}",
+            reason.message(era::params::Naming::Flag)
         ))),
         other => anyhow::Error::from(other),
     })?;

@@ -66,11 +66,13 @@ pub const UNEXCITED_FRACTION: f64 = 1e-20;
 
 /// Window applied to each frame. All are the periodic (DFT-even) forms, as an analyzer
 /// and scipy's `get_window` use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Window {
     /// No window (`w = 1`): for transients and periodic signals that fit the frame.
     Rectangular,
-    /// Hann (`0.5 − 0.5 cos 2πn/N`): the analyzer default for random excitation.
+    /// Hann (`0.5 − 0.5 cos 2πn/N`): the analyzer default for random excitation, and
+    /// era's.
+    #[default]
     Hann,
     /// Five-term flat-top (scipy's `flattop` coefficients): accurate amplitudes of sines.
     FlatTop,
@@ -113,11 +115,12 @@ impl Window {
 }
 
 /// Trend removed from each frame before windowing.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Detrend {
     /// Nothing removed.
     None,
-    /// The frame's mean (scipy's `detrend="constant"`, its default).
+    /// The frame's mean (scipy's `detrend="constant"`, its default, and era's).
+    #[default]
     Mean,
     /// The frame's least-squares straight line (scipy's `"linear"`).
     Linear,
@@ -156,9 +159,10 @@ impl Detrend {
 }
 
 /// FRF estimator (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Estimator {
-    /// `Gyx Gxx⁻¹`: noise on the outputs.
+    /// `Gyx Gxx⁻¹`: noise on the outputs (the default).
+    #[default]
     H1,
     /// `Gyy Gyx (Gyx^H Gyx)⁻¹`: noise on the inputs.
     H2,
@@ -215,15 +219,18 @@ pub struct WelchOptions {
 }
 
 impl WelchOptions {
+    /// The overlap of [`WelchOptions::new`]: half a frame.
+    pub const DEFAULT_OVERLAP: f64 = 0.5;
+
     /// `frame`-sample frames of time histories sampled at `sample_rate_hz`, with the
     /// usual choices: half overlap, a Hann window, each frame's mean removed.
     pub fn new(sample_rate_hz: f64, frame: usize) -> Self {
         WelchOptions {
             sample_rate_hz,
             frame,
-            overlap: 0.5,
-            window: Window::Hann,
-            detrend: Detrend::Mean,
+            overlap: Self::DEFAULT_OVERLAP,
+            window: Window::default(),
+            detrend: Detrend::default(),
         }
     }
 
@@ -277,16 +284,18 @@ impl WelchOptions {
                     "rounds to {} of the {} samples of a frame: frames would not advance",
                     self.overlap_samples(),
                     self.frame
-                ),
+                )
+                .into(),
             });
         }
         if samples < self.frame {
             return Err(EraError::InvalidParameter {
                 name: "frame",
                 value: self.frame.to_string(),
-                reason: format!(
-                    "the time histories have only {samples} samples, fewer than one frame: use a shorter `frame`"
-                ),
+                reason: crate::names::Prose::from(format!(
+                    "the time histories have only {samples} samples, fewer than one frame: use a shorter "
+                ))
+                .param(crate::names::Param::Frame),
             });
         }
         Ok(())
@@ -596,7 +605,7 @@ impl FrfEstimate {
             return Err(EraError::InvalidParameter {
                 name: "max_hz",
                 value: format!("{lines} lines"),
-                reason: format!("keeps fewer than 2 or more than the {total} lines"),
+                reason: format!("keeps fewer than 2 or more than the {total} lines").into(),
             });
         }
         let cut_c = |v: &[Complex64], pairs: usize| -> Vec<Complex64> {
@@ -666,7 +675,8 @@ pub fn estimate(
                 "H2 needs at least as many outputs as inputs ({} outputs, {} inputs): use h1 or hv",
                 outputs.len(),
                 inputs.len()
-            ),
+            )
+            .into(),
         });
     }
     let s = spectra(inputs, outputs, options, estimator == Estimator::H2)?;
@@ -692,7 +702,7 @@ pub fn estimate_from_spectra(
             reason: format!(
                 "H2 needs the full output cross-spectral matrix and at least as many outputs as inputs ({} outputs, {} inputs)",
                 s.outputs, s.inputs
-            ),
+            ).into(),
         });
     }
     let unexcited = check_input_matrix(&s)?;
@@ -842,7 +852,8 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
             reason: format!(
                 "input {} has no power at any line (a constant or silent channel)",
                 j + 1
-            ),
+            )
+            .into(),
         });
     }
     let unexcited: Vec<usize> = (0..lines)
@@ -868,10 +879,13 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
         return Ok(unexcited);
     };
     let reason = if s.frames < p {
-        format!(
-            "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter `frame` or more `overlap`",
+        crate::names::Prose::from(format!(
+            "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter ",
             s.frames, s.frames
-        )
+        ))
+        .param(crate::names::Param::Frame)
+        .text(" or more ")
+        .param(crate::names::Param::Overlap)
     } else {
         let mut worst = (0, 1, -1.0);
         for a in 0..p {
@@ -883,12 +897,12 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
                 }
             }
         }
-        format!(
+        crate::names::Prose::from(format!(
             "inputs {} and {} are fully coherent (coherence {:.9}): two identical or proportional inputs cannot be told apart, drop one",
             worst.0 + 1,
             worst.1 + 1,
             worst.2
-        )
+        ))
     };
     Err(EraError::SingularInputSpectrum {
         singular_lines: bad.len(),

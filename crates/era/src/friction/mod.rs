@@ -116,6 +116,13 @@ pub enum FrictionError {
     },
 }
 
+/// Friction records and parameters are the caller's.
+impl crate::error::InputError for FrictionError {
+    fn is_input_error(&self) -> bool {
+        true
+    }
+}
+
 impl FrictionError {
     /// The message with a refused parameter spelled as `naming`'s front end spells it
     /// (`--sample-rate` from the CLI); other variants read as their `Display`.

@@ -363,7 +363,8 @@ pub fn truncated_svd(
             value: options.rank.to_string(),
             reason: format!(
                 "a truncated SVD of a {rows} x {cols} operator needs 1 to {limit} triplets"
-            ),
+            )
+            .into(),
         });
     }
     let k = (options.rank + options.oversample).min(limit);
@@ -490,10 +491,11 @@ impl Stopwatch {
 }
 
 fn not_converged(options: &TruncatedSvdOptions, residual: f64) -> EraError {
-    EraError::Numerical(format!(
-        "the truncated SVD did not converge in {} passes (residual {residual:.2e}, tolerance {:.0e}): use `svd dense`",
-        options.max_iterations, options.tolerance
-    ))
+    EraError::SvdNotConverged {
+        passes: options.max_iterations,
+        residual,
+        tolerance: options.tolerance,
+    }
 }
 
 /// `Q` of faer's Householder QR: orthonormal whatever the rank of `x` (the completing

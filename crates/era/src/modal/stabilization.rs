@@ -82,7 +82,7 @@ impl OrderRange {
         let bad = |reason: &str| EraError::InvalidParameter {
             name: "orders",
             value: text.to_string(),
-            reason: reason.to_string(),
+            reason: reason.to_string().into(),
         };
         if !text.contains("..") && text.contains(',') || text.trim().parse::<usize>().is_ok() {
             let mut list = Vec::new();
@@ -130,7 +130,7 @@ impl OrderRange {
             .parse::<usize>()
             .map_err(|_| bad("MAX must be a whole number of states"))?;
         Self::new(min, max, step).map_err(|e| match e {
-            EraError::InvalidParameter { reason, .. } => bad(&reason),
+            EraError::InvalidParameter { reason, .. } => bad(&reason.to_string()),
             other => other,
         })
     }
@@ -143,7 +143,7 @@ impl OrderRange {
         let bad = |reason: String| EraError::InvalidParameter {
             name: "orders",
             value: format!("{min}..{max}:{step}"),
-            reason,
+            reason: reason.into(),
         };
         if step == 0 {
             return Err(bad("the step must be at least 1".into()));
@@ -314,7 +314,8 @@ pub fn scan(
             reason: format!(
                 "the Hankel matrix was factored for at most {} states",
                 factorization.max_states()
-            ),
+            )
+            .into(),
         });
     }
     let mut done_orders = Vec::new();
@@ -362,7 +363,7 @@ pub fn scan(
             reason: format!(
                 "every order is above the numerical rank {} of the Hankel matrix: the data supports no model in this range",
                 factorization.rank()
-            ),
+            ).into(),
         });
     }
     Ok(Scan {

@@ -69,7 +69,7 @@ impl LowPass {
                     six_digits(MIN_NORMALISED_CUTOFF * nyquist),
                     six_digits((1.0 - MIN_NORMALISED_CUTOFF) * nyquist),
                     1.0 - MIN_NORMALISED_CUTOFF,
-                ),
+                ).into(),
             });
         }
         let filter = butter_dyn(
@@ -93,7 +93,8 @@ impl LowPass {
             return Err(EraError::InvalidParameter {
                 name: "lowpass_hz",
                 value: cutoff_hz.to_string(),
-                reason: format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower `lowpass_order`"),
+                reason: crate::names::Prose::from(format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower "))
+                    .param(crate::names::Param::LowpassOrder),
             });
         }
         Ok(LowPass {
@@ -134,7 +135,7 @@ impl LowPass {
                 reason: format!(
                     "zero-phase filtering needs more than {edge} samples, the impulse response has {}",
                     signal.len()
-                ),
+                ).into(),
             });
         }
         let out = sosfiltfilt_dyn(signal.iter(), &self.sections);
@@ -142,10 +143,11 @@ impl LowPass {
             return Err(EraError::InvalidParameter {
                 name: "lowpass_hz",
                 value: self.cutoff_hz.to_string(),
-                reason: format!(
-                    "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower `lowpass_order`",
+                reason: crate::names::Prose::from(format!(
+                    "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower ",
                     self.order
-                ),
+                ))
+                .param(crate::names::Param::LowpassOrder),
             });
         }
         Ok(out)

@@ -132,7 +132,7 @@ impl ThesisHankel {
                 value: hankel_factor.to_string(),
                 reason: format!(
                     "states x hankel factor = {product} is below 8: the Hankel matrix would be empty"
-                ),
+                ).into(),
             });
         }
         let blocks = half - 1;

@@ -289,9 +289,11 @@ pub(crate) fn check_dense_svd(rows: usize, cols: usize) -> Result<()> {
         .saturating_mul(3)
         .saturating_add(r.saturating_add(c).saturating_mul(r.min(c)));
     crate::limits::DENSE.check(
-        format!(
-            "a dense SVD of the {rows} x {cols} Hankel matrix (`svd` matrix-free holds a few of its columns instead)"
-        ),
+        crate::names::Prose::from(format!(
+            "a dense SVD of the {rows} x {cols} Hankel matrix ("
+        ))
+        .param(crate::names::Param::Svd)
+        .text(" matrix-free holds a few of its columns instead)"),
         values,
     )?;
     Ok(())
@@ -879,7 +881,8 @@ impl Factorization {
             return Err(EraError::InvalidParameter {
                 name: "states",
                 value: states.to_string(),
-                reason: format!("the factorization realizes 1 to {} states", self.max_states),
+                reason: format!("the factorization realizes 1 to {} states", self.max_states)
+                    .into(),
             });
         }
         if states > self.rank {

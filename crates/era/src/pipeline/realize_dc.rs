@@ -80,7 +80,8 @@ impl DcShape {
             return Err(EraError::InvalidParameter {
                 name: "states",
                 value: states.to_string(),
-                reason: format!("ERA/DC needs blocks and a lag spacing of at least 1 ({self:?})"),
+                reason: format!("ERA/DC needs blocks and a lag spacing of at least 1 ({self:?})")
+                    .into(),
             });
         }
         if self.reach() >= markov.samples() {
@@ -131,7 +132,8 @@ pub fn factor_dc(
             reason: format!(
                 "the factorization of ERA/DC takes the correlation itself (xi = 0), not {}",
                 shape.xi
-            ),
+            )
+            .into(),
         });
     }
     shape.check(markov, max_states, hankel_factor)?;

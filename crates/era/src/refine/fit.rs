@@ -40,7 +40,7 @@ fn invalid(name: &'static str, value: String, reason: impl Into<String>) -> EraE
     EraError::InvalidParameter {
         name,
         value,
-        reason: reason.into(),
+        reason: reason.into().into(),
     }
 }
 

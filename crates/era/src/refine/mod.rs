@@ -826,7 +826,8 @@ impl Refinement {
                 reason: format!(
                     "a z-domain refinement models only the data's quantity, {}",
                     self.quantity
-                ),
+                )
+                .into(),
             });
         }
         // Rank-one terms (pole, u, v) of every mode.
@@ -874,7 +875,7 @@ impl Refinement {
                         reason: format!(
                             "the upper residual of {} data times (jω)^{e} is not proper: ask for {} or an integral of it",
                             self.quantity, self.quantity
-                        ),
+                        ).into(),
                         // (only the upper residual has a positive power: see
                         // `residual_terms`)
                     });

@@ -164,7 +164,7 @@ impl Actuator {
             Err(EraError::InvalidParameter {
                 name,
                 value: v.to_string(),
-                reason: format!("actuator {}: {reason}", j + 1),
+                reason: format!("actuator {}: {reason}", j + 1).into(),
             })
         };
         if !(self.stiffness.is_finite() && self.stiffness > 0.0) {
@@ -287,7 +287,9 @@ impl Structure {
                     return Err(EraError::InvalidParameter {
                         name: "structure",
                         value: "velocity model with D != 0".into(),
-                        reason: "a velocity direct term would need an impulsive acceleration: identify with `direct_term zero`".into(),
+                        reason: crate::names::Prose::from("a velocity direct term would need an impulsive acceleration: identify with ")
+                            .param(crate::names::Param::DirectTerm)
+                            .text(" zero"),
                     });
                 }
                 (&cont.c * &cont.a, &cont.c * &cont.b)
@@ -458,7 +460,7 @@ impl ExperimentSpec {
             Err(EraError::InvalidParameter {
                 name,
                 value: v,
-                reason,
+                reason: reason.into(),
             })
         };
         let a = self.actuators.len();
@@ -586,7 +588,7 @@ impl ExperimentSpec {
             reason: format!(
                 "must be commensurate with the excitation rate {knot} Hz (a common tick of at least 1/{} s)",
                 4096.0 * knot
-            ),
+            ).into(),
         })
     }
 }

@@ -143,7 +143,7 @@ pub fn add_noise(frf: &FrfData, fraction: f64, seed: u64) -> Result<FrfData> {
         return Err(EraError::InvalidParameter {
             name: "noise",
             value: fraction.to_string(),
-            reason: format!("the noise fraction must be a number from 0 to {MAX_NOISE_FRACTION} (0.15 for 15 %)"),
+            reason: format!("the noise fraction must be a number from 0 to {MAX_NOISE_FRACTION} (0.15 for 15 %)").into(),
         });
     }
     let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
@@ -489,10 +489,13 @@ impl ModalStructure {
             return Err(EraError::InvalidParameter {
                 name: "lines/df",
                 value: format!("{lines} lines at {spacing_hz} Hz"),
-                reason: format!(
-                    "the {quantity} FRFs overflow at these frequencies (up to {} Hz): lower `df` or `lines`",
+                reason: crate::names::Prose::from(format!(
+                    "the {quantity} FRFs overflow at these frequencies (up to {} Hz): lower ",
                     spacing_hz * (lines - 1) as f64
-                ),
+                ))
+                .param(crate::names::Param::Df)
+                .text(" or ")
+                .param(crate::names::Param::Lines),
             });
         }
         FrfData::new(freq, q, p, values, quantity)

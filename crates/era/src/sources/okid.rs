@@ -818,11 +818,11 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
             value: options.markov_samples.to_string(),
             reason: format!(
                 "the longest record has {longest} samples: Markov blocks past it are not in the data"
-            ),
+            ).into(),
         });
     }
     crate::limits::VALUES.check_product(
-        "`markov_samples`",
+        crate::names::Prose::default().param(crate::names::Param::MarkovSamples),
         &[options.markov_samples as u64, r as u64, q as u64],
     )?;
     let equations = |p: usize| -> usize { lengths.iter().map(|&l| l.saturating_sub(p)).sum() };
@@ -838,7 +838,7 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
                     reason: format!(
                         "need 1 to {} lags for {r} inputs and {q} outputs (at most {MAX_REGRESSORS} regressors)",
                         (MAX_REGRESSORS - r.min(MAX_REGRESSORS)) / (r + q)
-                    ),
+                    ).into(),
                 });
             }
             if !usable(p) {
@@ -855,7 +855,8 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
                     reason: format!(
                         "the largest order must be 1 to {}",
                         (MAX_REGRESSORS - r.min(MAX_REGRESSORS)) / (r + q)
-                    ),
+                    )
+                    .into(),
                 });
             }
             let mut p = cap;
@@ -871,7 +872,9 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
     // The unit circle's transfer function (the route an unstable observer takes) holds
     // `points` values per input-output pair: checked before anything is built.
     crate::limits::VALUES.check_product(
-        "`markov_samples` (the observer's transfer function on the unit circle)",
+        crate::names::Prose::default()
+            .param(crate::names::Param::MarkovSamples)
+            .text(" (the observer's transfer function on the unit circle)"),
         &[
             unit_circle_points(options.markov_samples, p_max) as u64,
             r as u64,
@@ -961,7 +964,7 @@ fn too_short(p: usize, r: usize, q: usize, lengths: &[usize]) -> EraError {
                 .map(|l| l.to_string())
                 .collect::<Vec<_>>()
                 .join(" + ")
-        ),
+        ).into(),
     }
 }
 

@@ -239,7 +239,7 @@ fn compensator(spec: &ExperimentSpec) -> Result<Option<FrictionCompensator>> {
     .map_err(|e| EraError::InvalidParameter {
         name: "compensation",
         value: String::new(),
-        reason: e.to_string(),
+        reason: e.to_string().into(),
     })
 }
 

@@ -21,7 +21,8 @@ pub fn integrate(frf: &FrfData, times: usize) -> Result<FrfData> {
             .ok_or_else(|| EraError::InvalidParameter {
                 name: "integrations",
                 value: times.to_string(),
-                reason: format!("{} FRFs cannot be integrated {times} times", frf.quantity()),
+                reason: format!("{} FRFs cannot be integrated {times} times", frf.quantity())
+                    .into(),
             })?;
     }
     if times == 0 {
@@ -120,7 +121,7 @@ pub fn preprocess(
         return Err(EraError::InvalidParameter {
             name: "zero_lines",
             value: zero_lines.to_string(),
-            reason: format!("the data has only {} lines", frf.lines()),
+            reason: format!("the data has only {} lines", frf.lines()).into(),
         });
     }
     if pad_to != 0 && pad_to.saturating_add(1) < frf.lines() {
@@ -131,7 +132,8 @@ pub fn preprocess(
                 "padding to {} lines would truncate the {} measured lines (use 0 for no padding)",
                 pad_to + 1,
                 frf.lines()
-            ),
+            )
+            .into(),
         });
     }
     if pad_to != 0 {
@@ -187,7 +189,7 @@ mod tests {
         for pad_to in [usize::MAX - 1, usize::MAX, 100_000_000] {
             match preprocess(&d, 0, pad_to, 0) {
                 Err(EraError::Limit(e)) => {
-                    assert_eq!(e.context, "pad_to");
+                    assert_eq!(e.context.to_string(), "pad_to");
                     assert!(e.asked > e.allowed, "{e}");
                 }
                 other => panic!("pad-to {pad_to}: {other:?}"),
