@@ -21,5 +21,7 @@ pub mod fit;
 pub mod hankel;
 pub mod hankel_op;
 pub mod modes;
+pub mod order;
 pub mod realize;
 pub mod realize_dc;
+pub(crate) mod run;
