@@ -184,7 +184,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     // --states auto every other parameter is checked as for one state.
     let checked = {
         let mut o = opts.clone();
-        o.states = states.max(usize::from(auto));
+        o.order = era::Order::Fixed(states.max(usize::from(auto)));
         o
     };
     checked.check(Naming::Flag)?;

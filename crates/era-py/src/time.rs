@@ -9,7 +9,7 @@ use crate::model::{
 };
 use crate::{era_error, guarded, value_error, Int};
 use era::frf::estimate::estimate;
-use era::identify::{EraOptions, ScanOptions, SuppliedMarkov};
+use era::identify::{EraOptions, ScanOptions};
 use era::params::Naming;
 use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
 use era::sources::MarkovSource;
@@ -127,7 +127,7 @@ pub fn identify_time(
     }
     let checked = {
         let mut o = options.clone();
-        o.states = o.states.max(1);
+        o.order = era::Order::Fixed(o.order.states().unwrap_or(0).max(1));
         o
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
@@ -164,6 +164,7 @@ pub fn identify_time(
         o.observer_order = observer.unwrap_or(ObserverOrder::Auto { max: None });
         o.markov_samples =
             markov_samples.unwrap_or_else(|| era::sources::okid::default_markov_samples(samples));
+        o.sample_time_s = 1.0 / sample_rate_hz;
         o
     };
     let (found, source_facts) = guarded(py, || {
@@ -232,10 +233,7 @@ pub fn identify_time(
             }
             let run = Run {
                 data: &frf,
-                supplied: observed.as_ref().map(|o| SuppliedMarkov {
-                    markov: &o.markov,
-                    sample_time_s: 1.0 / sample_rate_hz,
-                }),
+                supplied: observed.as_ref().map(|o| &o.markov),
                 era: &era_run,
                 fixed_order: chosen.is_some(),
                 scan: &scan,

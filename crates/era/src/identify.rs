@@ -1,12 +1,18 @@
-//! The whole pipeline of docs/src/design.md §1 (the thesis's `frffilt`): FRFs in, a model, its
-//! singular values, modes and fit out.
+//! The entry points of the pipeline of docs/src/design.md §1 (the thesis's `frffilt`):
+//! FRFs in, a model, its singular values, modes and fit out, at the order
+//! [`EraOptions::order`] asks for ([`Order`]: fixed, fixed and judged against a scan, or
+//! automatic). One entry point per source: [`identify`] and [`identify_observed`] take the
+//! FRFs' own Markov sequence (their inverse transform), [`identify_supplied`] one from
+//! elsewhere (OKID's).
 
 use crate::error::Result;
 use crate::frf::FrfData;
 use crate::identification::{Identification, Stage, StageTimings};
 use crate::pipeline::factor::SvdPath;
+use crate::pipeline::order::{auto, with_scan};
 use crate::pipeline::realize::Realization;
 use crate::pipeline::run::{assess, run, Path};
+use crate::sources::frf::MarkovSequence;
 use crate::statespace::StateSpace;
 
 pub mod options;
@@ -15,23 +21,26 @@ pub mod route;
 mod zero_start;
 
 pub use crate::pipeline::order::{
-    cmif, default_orders, identify_auto, identify_auto_supplied, identify_with_scan,
-    identify_with_scan_supplied, supported_hankel_states, DEFAULT_MAX_ORDER, DEFAULT_ORDER_STRETCH,
+    cmif, default_orders, supported_hankel_states, DEFAULT_MAX_ORDER, DEFAULT_ORDER_STRETCH,
 };
-pub use options::{EraOptions, ModelDomain, Realizer, ScanOptions, SuppliedMarkov};
+pub use options::{EraOptions, ModelDomain, Order, Realizer, ScanOptions};
 pub use zero_start::zero_start;
 
-/// Runs docs/src/design.md §1 on `frf`.
+/// Runs docs/src/design.md §1 on `frf` at the order `options.order` asks for.
 ///
 /// # Errors
-/// [`EraError::AllZero`](crate::EraError::AllZero) when there is nothing to identify, and every error of the
-/// stages (invalid parameters, too few samples, rank deficiency, numerical failure).
+/// [`EraError::AllZero`](crate::EraError::AllZero) when there is nothing to identify,
+/// and every error of the stages (invalid parameters, too few samples, rank deficiency,
+/// numerical failure). With a scan, [`EraError::InvalidParameter`](crate::EraError::InvalidParameter)
+/// naming `orders` for a range the data does not support; with the automatic order,
+/// naming `states` when no mode is stable across the orders.
 pub fn identify(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
-    run(frf, None, options, Path::Fast, &mut |_| {})
+    identify_observed(frf, options, &mut |_| {}, &mut |_, _| {})
 }
 
-/// [`identify`], calling `observer` as each [`Stage`] starts (for progress displays;
-/// the core itself draws nothing).
+/// [`identify`], calling `observer` as each [`Stage`] starts and `progress` with the
+/// orders done and in all as a scan realizes them (for progress displays; the core
+/// itself draws nothing).
 ///
 /// # Errors
 /// As [`identify`].
@@ -39,32 +48,51 @@ pub fn identify_observed(
     frf: &FrfData,
     options: &EraOptions,
     observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Identification> {
-    run(frf, None, options, Path::Fast, observer)
+    dispatch(frf, None, options, observer, progress)
 }
 
-/// [`identify_observed`] from `supplied` Markov parameters: `options.integrations`,
-/// `pad_to` and `zero_lines` must be 0 (they shape the FRFs' transform, which is not
-/// taken); a low-pass filters the supplied sequence. The model is fitted and judged
-/// against `frf`.
+/// [`identify_observed`] from a `markov` sequence of another source (OKID's, say) instead
+/// of the FRFs' inverse transform: `options.integrations`, `pad_to` and `zero_lines` must
+/// be 0 (they shape the FRFs' transform, which is not taken); a low-pass filters the
+/// sequence. The model is fitted and judged against `frf`.
 ///
 /// # Errors
-/// As [`identify`], and [`EraError::ShapeMismatch`](crate::EraError::ShapeMismatch) when the sequence's outputs or
-/// inputs are not the FRFs'.
+/// As [`identify`], and [`EraError::ShapeMismatch`](crate::EraError::ShapeMismatch) when
+/// the sequence's outputs or inputs are not the FRFs'.
 pub fn identify_supplied(
     frf: &FrfData,
-    supplied: &SuppliedMarkov,
+    markov: &MarkovSequence,
     options: &EraOptions,
     observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Identification> {
-    run(frf, Some(supplied), options, Path::Fast, observer)
+    dispatch(frf, Some(markov), options, observer, progress)
+}
+
+/// The pipeline at the order `options.order` asks for.
+fn dispatch(
+    frf: &FrfData,
+    supplied: Option<&MarkovSequence>,
+    options: &EraOptions,
+    observer: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Identification> {
+    match options.order {
+        Order::Fixed(_) => run(frf, supplied, options, Path::Fast, observer),
+        Order::Scan { .. } => with_scan(frf, supplied, options, observer, progress),
+        Order::Auto => auto(frf, supplied, options, observer, progress),
+    }
 }
 
 /// [`identify`] with the naive reference of every stage: DFT by definition, element-wise
-/// Hankels, full SVD, loop products, a dense solve per line for the fit.
+/// Hankels, full SVD, loop products, a dense solve per line for the fit. It realizes the
+/// fixed order of `options.order` (a scan's order, without the scan).
 ///
 /// # Errors
-/// As [`identify`].
+/// As [`identify`], and [`EraError::InvalidParameter`](crate::EraError::InvalidParameter)
+/// for the automatic order.
 pub fn identify_naive(frf: &FrfData, options: &EraOptions) -> Result<Identification> {
     run(frf, None, options, Path::Naive, &mut |_| {})
 }

@@ -5,7 +5,6 @@ use crate::error::Result;
 use crate::modal::stabilization::{DiagramCriteria, OrderRange, SelectionCriteria};
 use crate::pipeline::factor::SvdPath;
 use crate::pipeline::realize::DirectTerm;
-use crate::sources::frf::MarkovSequence;
 
 /// Model returned (thesis `cord`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -21,8 +20,11 @@ pub enum ModelDomain {
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct EraOptions {
-    /// Model order (thesis `ns`).
-    pub states: usize,
+    /// The model order: fixed (thesis `ns`), fixed and judged against a scan, or
+    /// automatic.
+    pub order: Order,
+    /// How a scan across orders runs ([`Order::Scan`] and [`Order::Auto`]).
+    pub scan: ScanOptions,
     /// Hankel factor (thesis `lh`).
     pub hankel_factor: usize,
     /// Integrations of the FRFs (thesis `ni`).
@@ -55,22 +57,56 @@ pub enum Realizer {
     EraDc,
 }
 
-/// Markov parameters given to the pipeline instead of the FRFs' inverse transform
-/// (§1.1–1.3): those [`crate::sources::okid`] estimates from time histories, say. The
-/// FRFs given beside them are what the model is fitted and judged against.
-#[derive(Debug, Clone, Copy)]
-pub struct SuppliedMarkov<'a> {
-    /// `Y_0, Y_1, …`, outputs and inputs as the FRFs'.
-    pub markov: &'a MarkovSequence,
-    /// Seconds between samples.
-    pub sample_time_s: f64,
+/// The model order of an identification.
+///
+/// ```
+/// use era::identify::{identify, EraOptions, Order};
+///
+/// let frf = era::sim::truth_model_frf(None).unwrap();
+/// let mut options = EraOptions::thesis_truth_model();
+/// options.order = Order::Auto;
+/// let found = identify(&frf, &options).unwrap();
+/// let diagram = found.stabilization.as_ref().expect("a scan ran");
+/// assert!(found.modal.modes.len() >= 1 && diagram.range.max >= 8);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Order {
+    /// This many states (thesis `ns`).
+    Fixed(usize),
+    /// `states` states, with a scan across the orders of [`EraOptions::scan`] (its
+    /// stabilization diagram): each mode of the model is judged physical only when a
+    /// physical cluster of the scan matches it (within the cluster tolerances) and it
+    /// passes the hard criteria.
+    Scan {
+        /// The model's order.
+        states: usize,
+    },
+    /// The order the data supports: a scan across the orders of [`EraOptions::scan`],
+    /// the physical modes chosen by clustering
+    /// ([`crate::modal::stabilization::select`]), and a modal model of them (each pole
+    /// taken from the highest order its cluster reached).
+    Auto,
+}
+
+impl Order {
+    /// The fixed number of states (of [`Order::Fixed`] and [`Order::Scan`]); `None` for
+    /// [`Order::Auto`].
+    pub fn states(&self) -> Option<usize> {
+        match *self {
+            Order::Fixed(n) | Order::Scan { states: n } => Some(n),
+            Order::Auto => None,
+        }
+    }
 }
 
 impl EraOptions {
-    /// Options with the thesis's defaults for everything but the order and Hankel factor.
+    /// Options with the thesis's defaults for everything but the Hankel factor, at a
+    /// fixed order of `states` ([`Order::Fixed`]).
     pub fn new(states: usize, hankel_factor: usize) -> Self {
         EraOptions {
-            states,
+            order: Order::Fixed(states),
+            scan: ScanOptions::default(),
             hankel_factor,
             integrations: 0,
             lowpass: None,
@@ -103,7 +139,7 @@ impl EraOptions {
 
 impl EraOptions {
     /// Checks what a front end asked for before anything is read or allocated: at least
-    /// one state, a Hankel factor of at least 1, the states, Markov samples
+    /// one state (an automatic order is checked as one state), a Hankel factor of at least 1, the states, Markov samples
     /// (`states × hankel_factor`) and padded lines within [`crate::limits`], and a
     /// Butterworth low-pass of order 1 to 20 at a positive cut-off. Messages name each
     /// parameter as `naming` does (the CLI's `--states`, Python's `states`).
@@ -117,7 +153,8 @@ impl EraOptions {
         use crate::limits::{LINES, SAMPLES, STATES};
         use crate::params::invalid;
         let name = |key: &str| naming.name(key);
-        if self.states == 0 {
+        let states = self.order.states().unwrap_or(1);
+        if states == 0 {
             return invalid(format!(
                 "{} 0: the model needs at least one state",
                 name("states")
@@ -126,14 +163,14 @@ impl EraOptions {
         if self.hankel_factor == 0 {
             return invalid(format!("{} 0: must be at least 1", name("hankel_factor")));
         }
-        STATES.check(name("states"), self.states as u64)?;
+        STATES.check(name("states"), states as u64)?;
         SAMPLES.check_product(
             format!(
                 "{} x {} (Markov samples)",
                 name("states"),
                 name("hankel_factor")
             ),
-            &[self.states as u64, self.hankel_factor as u64],
+            &[states as u64, self.hankel_factor as u64],
         )?;
         if self.pad_to != 0 {
             LINES.check(

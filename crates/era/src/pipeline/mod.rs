@@ -12,8 +12,9 @@
 //! 5. [`modes`]: eigenvalues to frequencies, damping, shapes and participations.
 //! 6. [`fit`]: the model's FRF through its modal form, and the per-pair fit.
 //!
-//! The sources ([`crate::sources`]) come before; the order scan and the automatic order
-//! ([`crate::modal::stabilization`]) and the refinement ([`crate::refine`]) after.
+//! [`order`] runs them across orders: the scan from one factorization, and the automatic
+//! order (with the clustering of [`crate::modal::stabilization`]). The sources
+//! ([`crate::sources`]) come before; the refinement ([`crate::refine`]) after.
 
 pub mod factor;
 pub mod filter;

@@ -6,7 +6,7 @@
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
 use crate::identification::{Identification, Stabilization, Stage, StageTimings};
-use crate::identify::options::{EraOptions, Realizer, ScanOptions, SuppliedMarkov};
+use crate::identify::options::{EraOptions, Realizer, ScanOptions};
 use crate::modal::stabilization::{scan, select, OrderRange, Scan, Selection, SelectionCriteria};
 use crate::pipeline::factor::{FactorOptions, Factorization};
 use crate::pipeline::hankel::HankelShape;
@@ -198,7 +198,7 @@ pub fn cmif(frf: &FrfData) -> Vec<Vec<f64>> {
 
 fn scan_front(
     frf: &FrfData,
-    supplied: Option<&SuppliedMarkov>,
+    supplied: Option<&MarkovSequence>,
     options: &EraOptions,
     scan_options: &ScanOptions,
     observer: &mut dyn FnMut(Stage),
@@ -237,7 +237,7 @@ fn scan_front(
     let factorization = match options.realizer {
         Realizer::Era => Factorization::thesis(
             &f.markov,
-            f.sample_time_s,
+            f.sample_time_s(),
             &FactorOptions {
                 hankel_states,
                 max_states: range.max,
@@ -248,7 +248,7 @@ fn scan_front(
         ),
         Realizer::EraDc => crate::pipeline::realize_dc::factor_dc(
             &f.markov,
-            f.sample_time_s,
+            f.sample_time_s(),
             &crate::pipeline::realize_dc::DcShape::new(
                 hankel_states,
                 options.hankel_factor,
@@ -309,54 +309,22 @@ fn criteria_for(scan_options: &ScanOptions, range: &OrderRange) -> SelectionCrit
     c
 }
 
-/// [`identify`](crate::identify::identify) at the fixed order of `options`, plus a scan across `scan_options`'
-/// orders: the stabilization diagram, and each mode of the fixed-order model judged
-/// physical only when a physical cluster of the scan matches it (within the cluster
-/// tolerances) and it passes the hard criteria.
+/// [`Order::Scan`](crate::identify::options::Order::Scan): the fixed order of
+/// `options`, plus a scan across `options.scan`'s orders: the stabilization diagram, and
+/// each mode of the fixed-order model judged physical only when a physical cluster of
+/// the scan matches it (within the cluster tolerances) and it passes the hard criteria.
 ///
 /// # Errors
-/// As [`identify`](crate::identify::identify), and [`EraError::InvalidParameter`] naming `orders` for a range the
-/// data does not support.
-pub fn identify_with_scan(
+/// As [`crate::identify::identify`], and [`EraError::InvalidParameter`] naming `orders`
+/// for a range the data does not support.
+pub(crate) fn with_scan(
     frf: &FrfData,
+    supplied: Option<&MarkovSequence>,
     options: &EraOptions,
-    scan_options: &ScanOptions,
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Identification> {
-    with_scan(frf, None, options, scan_options, observer, progress)
-}
-
-/// [`identify_with_scan`] from `supplied` Markov parameters (as [`identify_supplied`](crate::identify::identify_supplied)).
-///
-/// # Errors
-/// As [`identify_with_scan`] and [`identify_supplied`](crate::identify::identify_supplied).
-pub fn identify_with_scan_supplied(
-    frf: &FrfData,
-    supplied: &SuppliedMarkov,
-    options: &EraOptions,
-    scan_options: &ScanOptions,
-    observer: &mut dyn FnMut(Stage),
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Identification> {
-    with_scan(
-        frf,
-        Some(supplied),
-        options,
-        scan_options,
-        observer,
-        progress,
-    )
-}
-
-fn with_scan(
-    frf: &FrfData,
-    supplied: Option<&SuppliedMarkov>,
-    options: &EraOptions,
-    scan_options: &ScanOptions,
-    observer: &mut dyn FnMut(Stage),
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Identification> {
+    let scan_options = &options.scan;
     let mut found = run(frf, supplied, options, Path::Fast, observer)?;
     let mut timings = StageTimings::default();
     let (_, factorization, range, s, seconds) = scan_front(
@@ -408,55 +376,24 @@ fn with_scan(
     Ok(found)
 }
 
-/// `--states auto`: scans the orders of `scan_options`, chooses the physical modes by
-/// clustering ([`crate::modal::stabilization::select`]), and builds the model from them:
-/// a modal model of the chosen poles only (each taken from the highest order its cluster
+/// [`Order::Auto`](crate::identify::options::Order::Auto): scans the orders of
+/// `options.scan`, chooses the physical modes by clustering
+/// ([`crate::modal::stabilization::select`]), and builds the model from them: a modal
+/// model of the chosen poles only (each taken from the highest order its cluster
 /// reached), in real block-diagonal form, discrete at the data's sample time (converted
-/// to continuous on request). `options.states` is ignored.
+/// to continuous on request).
 ///
 /// # Errors
-/// As [`identify_with_scan`], and [`EraError::InvalidParameter`] naming `states` when no
-/// cluster is physical.
-pub fn identify_auto(
+/// As [`with_scan`], and [`EraError::InvalidParameter`] naming `states` when no cluster
+/// is physical.
+pub(crate) fn auto(
     frf: &FrfData,
+    supplied: Option<&MarkovSequence>,
     options: &EraOptions,
-    scan_options: &ScanOptions,
     observer: &mut dyn FnMut(Stage),
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Identification> {
-    auto(frf, None, options, scan_options, observer, progress)
-}
-
-/// [`identify_auto`] from `supplied` Markov parameters (as [`identify_supplied`](crate::identify::identify_supplied)).
-///
-/// # Errors
-/// As [`identify_auto`] and [`identify_supplied`](crate::identify::identify_supplied).
-pub fn identify_auto_supplied(
-    frf: &FrfData,
-    supplied: &SuppliedMarkov,
-    options: &EraOptions,
-    scan_options: &ScanOptions,
-    observer: &mut dyn FnMut(Stage),
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Identification> {
-    auto(
-        frf,
-        Some(supplied),
-        options,
-        scan_options,
-        observer,
-        progress,
-    )
-}
-
-fn auto(
-    frf: &FrfData,
-    supplied: Option<&SuppliedMarkov>,
-    options: &EraOptions,
-    scan_options: &ScanOptions,
-    observer: &mut dyn FnMut(Stage),
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Identification> {
+    let scan_options = &options.scan;
     let mut timings = StageTimings::default();
     let (f, factorization, range, s, seconds) = scan_front(
         frf,
@@ -482,8 +419,11 @@ fn auto(
         let own;
         let against = match supplied {
             Some(_) => {
-                own =
-                    crate::sources::frf::frf_of_markov(&f.markov, f.sample_time_s, frf.quantity())?;
+                own = crate::sources::frf::frf_of_markov(
+                    &f.markov,
+                    f.sample_time_s(),
+                    frf.quantity(),
+                )?;
                 &own
             }
             None => frf,
@@ -494,13 +434,13 @@ fn auto(
             against,
             options,
             band_hz,
-            f.sample_time_s,
+            f.sample_time_s(),
         )?;
         if supplied.is_some() {
             let factor = f
                 .scale
                 .map_or(1.0, |sc| MagnitudeScale::factor(sc.exponent));
-            drop_negligible(&mut selection, &s, frf, band_hz, f.sample_time_s, factor);
+            drop_negligible(&mut selection, &s, frf, band_hz, f.sample_time_s(), factor);
         }
     }
     let chosen: Vec<&crate::modal::stabilization::ScanPole> = selection
@@ -524,7 +464,7 @@ fn auto(
     if supplied.is_some() {
         not_circular(&mut realization);
     }
-    let mut discrete = modal_model(&chosen, &realization.model.d, f.sample_time_s);
+    let mut discrete = modal_model(&chosen, &realization.model.d, f.sample_time_s());
     if let Some(sc) = f.scale {
         sc.undo(&mut realization);
         sc.undo_model(&mut discrete);
@@ -544,7 +484,7 @@ fn auto(
         timings,
         realization,
         discrete,
-        f.sample_time_s,
+        f.sample_time_s(),
     )?;
     // Indicators of the chosen poles come from the scan (their own order's factors).
     for (m, q) in found.modal.modes.iter().zip(found.quality.iter_mut()) {

@@ -5,7 +5,7 @@
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
 use crate::identification::{Identification, ModeQuality, Stage, StageTimings};
-use crate::identify::options::{EraOptions, ModelDomain, Realizer, SuppliedMarkov};
+use crate::identify::options::{EraOptions, ModelDomain, Realizer};
 use crate::modal::indicators::{contributions, emac, mpc, ModeIndicators};
 use crate::modal::stabilization::{hard_rejection, SelectionCriteria};
 use crate::pipeline::filter::LowPass;
@@ -103,12 +103,18 @@ pub(crate) enum Path {
 pub(crate) struct Front {
     pub(crate) scale: Option<MagnitudeScale>,
     pub(crate) markov: MarkovSequence,
-    pub(crate) sample_time_s: f64,
+}
+
+impl Front {
+    /// Seconds between the sequence's blocks.
+    pub(crate) fn sample_time_s(&self) -> f64 {
+        self.markov.sample_time_s()
+    }
 }
 
 pub(crate) fn front(
     frf: &FrfData,
-    supplied: Option<&SuppliedMarkov>,
+    supplied: Option<&MarkovSequence>,
     options: &EraOptions,
     path: Path,
     observer: &mut dyn FnMut(Stage),
@@ -158,25 +164,21 @@ pub(crate) fn front(
             *s = filter.apply(s)?;
         }
     }
-    let markov = MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series);
+    let markov = MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series)
+        .with_sample_time(pre.sample_time_s);
     timings.markov = clock.elapsed().as_secs_f64();
-    Ok(Front {
-        scale,
-        markov,
-        sample_time_s: pre.sample_time_s,
-    })
+    Ok(Front { scale, markov })
 }
 
 /// The front of the pipeline on supplied Markov parameters: checked against the FRFs'
 /// shape, low-pass filtered when asked, at the FRFs' magnitude scale.
 fn supplied_front(
     frf: &FrfData,
-    given: &SuppliedMarkov,
+    markov: &MarkovSequence,
     options: &EraOptions,
     timings: &mut StageTimings,
 ) -> Result<Front> {
     let clock = Instant::now();
-    let markov = given.markov;
     for (what, got, expected) in [
         (
             "outputs of the Markov sequence",
@@ -210,7 +212,7 @@ fn supplied_front(
             });
         }
     }
-    let ts = given.sample_time_s;
+    let ts = markov.sample_time_s();
     if !(ts.is_finite() && ts > 0.0) {
         return Err(EraError::InvalidParameter {
             name: "sample_rate",
@@ -237,38 +239,47 @@ fn supplied_front(
     timings.markov = clock.elapsed().as_secs_f64();
     Ok(Front {
         scale,
-        markov: MarkovSequence::from_pair_series(q, p, &series),
-        sample_time_s: ts,
+        markov: MarkovSequence::from_pair_series(q, p, &series)
+            .with_sample_time(ts)
+            .with_kind(markov.kind()),
     })
 }
 
 pub(crate) fn run(
     frf: &FrfData,
-    supplied: Option<&SuppliedMarkov>,
+    supplied: Option<&MarkovSequence>,
     options: &EraOptions,
     path: Path,
     observer: &mut dyn FnMut(Stage),
 ) -> Result<Identification> {
+    let states = options
+        .order
+        .states()
+        .ok_or_else(|| EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: "this path realizes one fixed order: give `states N`".into(),
+        })?;
     let mut timings = StageTimings::default();
     let f = front(frf, supplied, options, path, observer, &mut timings)?;
     let clock = Instant::now();
     let realize_options = RealizeOptions {
         direct_term: options.direct_term,
         svd: options.svd,
-        ..RealizeOptions::new(options.states, options.hankel_factor)
+        ..RealizeOptions::new(states, options.hankel_factor)
     };
     Stage::HankelSvd.enter(observer)?;
     let mut realization = match (path, options.realizer) {
         (_, Realizer::EraDc) => crate::pipeline::realize_dc::realize_dc(
             &f.markov,
-            f.sample_time_s,
-            options.states,
+            f.sample_time_s(),
+            states,
             options.hankel_factor,
             options.direct_term,
         )?,
-        (Path::Fast, Realizer::Era) => realize(&f.markov, f.sample_time_s, &realize_options)?,
+        (Path::Fast, Realizer::Era) => realize(&f.markov, f.sample_time_s(), &realize_options)?,
         (Path::Naive, Realizer::Era) => {
-            realize_naive(&f.markov, f.sample_time_s, &realize_options)?
+            realize_naive(&f.markov, f.sample_time_s(), &realize_options)?
         }
     };
     if let Some(sc) = f.scale {
@@ -289,7 +300,7 @@ pub(crate) fn run(
         timings,
         realization,
         discrete,
-        f.sample_time_s,
+        f.sample_time_s(),
     )
 }
 
