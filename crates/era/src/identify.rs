@@ -15,7 +15,7 @@ use crate::pipeline::run::{assess, run, Path};
 use crate::sources::frf::MarkovSequence;
 use crate::statespace::StateSpace;
 
-pub mod options;
+pub(crate) mod options;
 pub mod route;
 
 mod zero_start;

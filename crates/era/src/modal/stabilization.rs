@@ -404,7 +404,7 @@ fn order_poles(factorization: &Factorization, n: usize) -> Result<Vec<ScanPole>>
 }
 
 /// The diagram status of `pole` against the previous order's poles.
-pub fn status_against(
+pub(crate) fn status_against(
     pole: &ScanPole,
     previous: &[ScanPole],
     criteria: &DiagramCriteria,

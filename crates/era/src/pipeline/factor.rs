@@ -143,6 +143,26 @@ pub(super) fn plan(
     Ok((shapes, warnings))
 }
 
+/// `H1` of a general `H0` of `shape`: the same shape one sample later, checked against
+/// the sequence, once `H0` is checked to have room for `states`.
+pub(super) fn general_h1(
+    markov: &MarkovSequence,
+    shape: HankelShape,
+    states: usize,
+) -> Result<HankelShape> {
+    check_room(
+        shape.block_rows * markov.outputs(),
+        shape.block_cols * markov.inputs(),
+        states,
+    )?;
+    let h1 = HankelShape {
+        first_sample: shape.first_sample + 1,
+        ..shape
+    };
+    hankel::check_shape(markov, h1)?;
+    Ok(h1)
+}
+
 /// [`EraError::HankelTooSmall`] unless an `H0` of `rows × cols` has room for `states`
 /// (at least one).
 pub(crate) fn check_room(rows: usize, cols: usize, states: usize) -> Result<()> {
@@ -360,16 +380,7 @@ impl Factorization {
         svd: SvdPath,
         shape: HankelShape,
     ) -> Result<Self> {
-        let (rows, cols) = (
-            shape.block_rows * markov.outputs(),
-            shape.block_cols * markov.inputs(),
-        );
-        check_room(rows, cols, max_states)?;
-        let h1 = HankelShape {
-            first_sample: shape.first_sample + 1,
-            ..shape
-        };
-        hankel::check_shape(markov, h1)?;
+        let h1 = general_h1(markov, shape, max_states)?;
         let keep = Keep {
             max_states,
             svd,

@@ -18,7 +18,7 @@
 //! tested against.
 
 use crate::error::{EraError, Result};
-use crate::pipeline::factor::{check_dense_svd, check_rank, check_room, plan, Keep};
+use crate::pipeline::factor::{check_dense_svd, check_rank, general_h1, plan, Keep};
 use crate::pipeline::hankel::{self, HankelShape};
 use crate::sources::frf::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
@@ -185,16 +185,7 @@ pub fn realize_general(
     options: &RealizeOptions,
     shape: HankelShape,
 ) -> Result<Realization> {
-    let (rows, cols) = (
-        shape.block_rows * markov.outputs(),
-        shape.block_cols * markov.inputs(),
-    );
-    check_room(rows, cols, options.states)?;
-    let h1 = HankelShape {
-        first_sample: shape.first_sample + 1,
-        ..shape
-    };
-    hankel::check_shape(markov, h1)?;
+    let h1 = general_h1(markov, shape, options.states)?;
     realize_shapes(markov, sample_time_s, options, shape, h1, None)
 }
 

@@ -149,7 +149,7 @@ impl MarkovSequence {
     /// For input `j`, the samples `first .. first+count` of all outputs, output-fastest:
     /// one block-Hankel column.
     #[inline]
-    pub fn input_run(&self, input: usize, first: usize, count: usize) -> &[f64] {
+    pub(crate) fn input_run(&self, input: usize, first: usize, count: usize) -> &[f64] {
         let start = (input * self.samples + first) * self.outputs;
         &self.data[start..start + count * self.outputs]
     }
