@@ -432,7 +432,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
     // --states auto every other parameter is checked as for one state.
     let checked = {
         let mut o = opts.clone();
-        o.states = states.max(usize::from(auto));
+        o.order = era::Order::Fixed(states.max(usize::from(auto)));
         o
     };
     checked.check(Naming::Flag)?;
@@ -598,7 +598,7 @@ mod tests {
     fn flags_left_out_are_the_cores_defaults() {
         let a = identify_args(&["--states", "8"]);
         let mut expected = EraOptions::default();
-        expected.states = 8;
+        expected.order = era::Order::Fixed(8);
         assert_eq!(options(&a).unwrap(), expected);
         assert_eq!(a.lowpass_order, EraOptions::DEFAULT_LOWPASS_ORDER);
         let a = identify_args(&["--states", "8", "--lowpass-hz", "100"]);

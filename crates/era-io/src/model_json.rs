@@ -373,7 +373,7 @@ fn refine_parameters(
 fn parameters(o: &EraOptions) -> BTreeMap<String, serde_json::Value> {
     use serde_json::json;
     let mut m = BTreeMap::new();
-    m.insert("states".into(), json!(o.states));
+    m.insert("states".into(), json!(o.order.states().unwrap_or(0)));
     m.insert("hankel_factor".into(), json!(o.hankel_factor));
     m.insert("integrations".into(), json!(o.integrations));
     m.insert("lowpass_order".into(), json!(o.lowpass.map(|l| l.0)));

@@ -13,8 +13,7 @@ use crate::frf::PyFrfData;
 use crate::{era_error, guarded, value_error, vector, Int};
 use era::identification::Identification;
 use era::identify::{
-    identify as run_identify, identify_auto, identify_auto_supplied, identify_supplied, EraOptions,
-    ModelDomain, ScanOptions, SuppliedMarkov,
+    identify as run_identify, identify_supplied, EraOptions, ModelDomain, Order, ScanOptions,
 };
 use era::params::Naming;
 use era::pipeline::realize::{DirectTerm, SvdPath};
@@ -480,7 +479,7 @@ pub fn identify(
     options.direct_term = route.direct_term;
     let checked = {
         let mut o = options.clone();
-        o.states = states.max(usize::from(chosen.is_none()));
+        o.order = era::Order::Fixed(states.max(usize::from(chosen.is_none())));
         o
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
@@ -549,7 +548,7 @@ pub(crate) fn era_options(
     era_dc: Option<bool>,
 ) -> PyResult<EraOptions> {
     let mut options = EraOptions::default();
-    options.states = states;
+    options.order = era::Order::Fixed(states);
     if let Some(h) = hankel_factor {
         options.hankel_factor = h.size("hankel_factor")?;
     }
@@ -660,7 +659,7 @@ pub(crate) fn svd_path(svd: &str) -> PyResult<SvdPath> {
 pub(crate) struct Run<'a> {
     pub(crate) data: &'a era::FrfData,
     /// Markov parameters from a source other than the FRFs (OKID's).
-    pub(crate) supplied: Option<SuppliedMarkov<'a>>,
+    pub(crate) supplied: Option<&'a era::sources::MarkovSequence>,
     /// The realization's options (its domain the route's realization domain).
     pub(crate) era: &'a EraOptions,
     /// A fixed order (`states=` an int), else the automatic order.
@@ -679,16 +678,17 @@ impl Run<'_> {
     /// suspects of a zero start and of the band's edges.
     pub(crate) fn identify(&self) -> era::Result<Identification> {
         let (stage, order) = (&mut |_| {}, &mut |_, _| {});
-        let found = match (&self.supplied, self.fixed_order) {
-            (None, true) => run_identify(self.data, self.era),
-            (None, false) => identify_auto(self.data, self.era, self.scan, stage, order),
-            (Some(m), true) => identify_supplied(self.data, m, self.era, stage),
-            (Some(m), false) => {
-                identify_auto_supplied(self.data, m, self.era, self.scan, stage, order)
-            }
+        let mut options = self.era.clone();
+        options.scan = self.scan.clone();
+        if !self.fixed_order {
+            options.order = Order::Auto;
+        }
+        let found = match self.supplied {
+            None => run_identify(self.data, &options),
+            Some(m) => identify_supplied(self.data, m, &options, stage, order),
         }?;
         let mut at_order = self.era.clone();
-        at_order.states = found.realization.model.states();
+        at_order.order = Order::Fixed(found.realization.model.states());
         let zero_start = era::identify::zero_start(&found, &at_order, self.refine.is_some());
         let mut found = match self.refine {
             Some(options) => era::refine::identification::refine_identification_in(

@@ -8,7 +8,7 @@ use crate::model::{
 };
 use crate::{era_error, guarded, value_error, Int};
 use era::frf::estimate::estimate;
-use era::identify::{EraOptions, ScanOptions, SuppliedMarkov};
+use era::identify::{EraOptions, ScanOptions};
 use era::params::Naming;
 use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
 use era::sources::MarkovSource;
@@ -98,7 +98,7 @@ pub fn identify_time(
     options.direct_term = route.direct_term;
     let checked = {
         let mut o = options.clone();
-        o.states = o.states.max(1);
+        o.order = era::Order::Fixed(o.order.states().unwrap_or(0).max(1));
         o
     };
     checked.check(Naming::Keyword).map_err(era_error)?;
@@ -133,6 +133,7 @@ pub fn identify_time(
         o.observer_order = observer.unwrap_or(ObserverOrder::Auto { max: None });
         o.markov_samples =
             markov_samples.unwrap_or_else(|| era::sources::okid::default_markov_samples(samples));
+        o.sample_time_s = 1.0 / sample_rate_hz;
         o
     };
     let job = Job {
@@ -294,10 +295,7 @@ impl Job<'_> {
         }
         let run = Run {
             data: &frf,
-            supplied: observed.as_ref().map(|o| SuppliedMarkov {
-                markov: &o.markov,
-                sample_time_s: 1.0 / welch.sample_rate_hz,
-            }),
+            supplied: observed.as_ref().map(|o| &o.markov),
             era: &era_run,
             fixed_order: self.fixed_order,
             scan: &scan,

@@ -4,7 +4,7 @@
 //! model). Two groups, one function per seed, so that criterion's report gives the
 //! median and the worst seed:
 //!
-//! - `auto_order_5_percent`: `identify_auto` (the probe, the scan's factorization, the
+//! - `auto_order_5_percent`: `identify` at `Order::Auto` (the probe, the scan's factorization, the
 //!   scan, the choice of modes), what `era identify --states auto --no-refine` runs;
 //! - `refine_from_auto_5_percent`: the refinement from that start with the CLI's
 //!   defaults (pair-noise weights, rank-one residues, missed modes added), what
@@ -14,7 +14,7 @@
 //! outside the timed closures.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use era::identify::{identify_auto, EraOptions, ModelDomain, ScanOptions};
+use era::identify::{identify, EraOptions, ModelDomain, Order};
 use era::pipeline::realize::DirectTerm;
 use era::refine::identification::refine_identification;
 use era::refine::{RefineOptions, Weighting};
@@ -46,6 +46,7 @@ fn measured() -> EraOptions {
     o.pad_to = 0;
     o.direct_term = DirectTerm::FirstMarkov;
     o.domain = ModelDomain::Continuous;
+    o.order = Order::Auto;
     o
 }
 
@@ -56,16 +57,7 @@ fn auto_seeds(c: &mut Criterion) {
     g.sample_size(10);
     for (seed, frf) in &sets {
         g.bench_function(format!("seed_{seed}"), |b| {
-            b.iter(|| {
-                identify_auto(
-                    black_box(frf),
-                    &options,
-                    &ScanOptions::default(),
-                    &mut |_| {},
-                    &mut |_, _| {},
-                )
-                .unwrap()
-            })
+            b.iter(|| identify(black_box(frf), &options).unwrap())
         });
     }
     g.finish();
@@ -74,14 +66,7 @@ fn auto_seeds(c: &mut Criterion) {
     let mut g = c.benchmark_group("refine_from_auto_5_percent");
     g.sample_size(10);
     for (seed, frf) in &sets {
-        let start = identify_auto(
-            frf,
-            &options,
-            &ScanOptions::default(),
-            &mut |_| {},
-            &mut |_, _| {},
-        )
-        .unwrap();
+        let start = identify(frf, &options).unwrap();
         g.bench_function(format!("seed_{seed}"), |b| {
             b.iter_batched(
                 || start.clone(),

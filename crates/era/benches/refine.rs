@@ -108,9 +108,10 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// From ERA's automatic order, as the CLI refines (setup: one `identify_auto` per set).
+/// From ERA's automatic order, as the CLI refines (setup: one automatic identification
+/// per set).
 fn bench_from_era(c: &mut Criterion) {
-    use era::identify::{identify_auto, EraOptions, ModelDomain, ScanOptions};
+    use era::identify::{identify, EraOptions, ModelDomain, Order};
     use era::refine::identification::refine_identification;
     let spec = ModalSpec::default();
     let s = ModalStructure::random(&spec).unwrap();
@@ -119,6 +120,7 @@ fn bench_from_era(c: &mut Criterion) {
     let era_options = {
         let mut o = EraOptions::thesis_dta();
         o.domain = ModelDomain::Continuous;
+        o.order = Order::Auto;
         o
     };
     let mut options = {
@@ -133,14 +135,7 @@ fn bench_from_era(c: &mut Criterion) {
         ("noise_free", &clean),
         ("noise_5_percent_pair_noise", &noisy),
     ] {
-        let found = identify_auto(
-            frf,
-            &era_options,
-            &ScanOptions::default(),
-            &mut |_| {},
-            &mut |_, _| {},
-        )
-        .unwrap();
+        let found = identify(frf, &era_options).unwrap();
         g.bench_function(name, |b| {
             b.iter_batched(
                 || found.clone(),

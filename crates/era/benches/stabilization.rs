@@ -7,7 +7,7 @@
 //! `cargo bench -p era --bench stabilization`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use era::identify::{identify, identify_with_scan, EraOptions, ScanOptions};
+use era::identify::{identify, EraOptions, Order, ScanOptions};
 use era::modal::stabilization::OrderRange;
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::Quantity;
@@ -27,18 +27,15 @@ fn stabilization(c: &mut Criterion) {
     .unwrap();
     let at_160 = {
         let mut o = EraOptions::thesis_dta();
-        o.states = 160;
+        o.order = Order::Fixed(160);
         o
     };
     // The scan beside a tiny fixed-order model, so that it is what the bench times.
     let small = {
         let mut o = at_160.clone();
-        o.states = 2;
-        o
-    };
-    let scan = {
-        let mut o = ScanOptions::default();
-        o.orders = Some(OrderRange::parse("4..160:4").unwrap());
+        o.order = Order::Scan { states: 2 };
+        o.scan = ScanOptions::default();
+        o.scan.orders = Some(OrderRange::parse("4..160:4").unwrap());
         o
     };
     let mut g = c.benchmark_group("dta_8x8_noisy");
@@ -47,9 +44,7 @@ fn stabilization(c: &mut Criterion) {
         b.iter(|| identify(black_box(&frf), &at_160).unwrap())
     });
     g.bench_function("stabilization_40_orders_to_160", |b| {
-        b.iter(|| {
-            identify_with_scan(black_box(&frf), &small, &scan, &mut |_| {}, &mut |_, _| {}).unwrap()
-        })
+        b.iter(|| identify(black_box(&frf), &small).unwrap())
     });
     g.finish();
 }

@@ -5,7 +5,7 @@
 //! `cargo run --release -p era --example auto_order -- [SEEDS] [NOISE,...] [ORDERS]`,
 //! e.g. `-- 1,2,3 0,0.05 40..200:4`.
 
-use era::identify::{identify_auto, EraOptions, ScanOptions};
+use era::identify::{identify, EraOptions, Order, ScanOptions};
 use era::modal::stabilization::OrderRange;
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::Quantity;
@@ -34,7 +34,8 @@ fn main() -> era::Result<()> {
             if noise > 0.0 {
                 frf = add_noise(&frf, noise, seed)?;
             }
-            let options = EraOptions::thesis_dta();
+            let mut options = EraOptions::thesis_dta();
+            options.order = Order::Auto;
             let mut scan = {
                 let mut o = ScanOptions::default();
                 o.orders = orders.clone();
@@ -47,7 +48,8 @@ fn main() -> era::Result<()> {
                 scan.selection.cmi_minimum = v.parse().unwrap();
             }
             let clock = Instant::now();
-            let found = identify_auto(&frf, &options, &scan, &mut |_| {}, &mut |_, _| {})?;
+            options.scan = scan;
+            let found = identify(&frf, &options)?;
             let seconds = clock.elapsed().as_secs_f64();
             let physical: Vec<(f64, f64)> = found
                 .modal

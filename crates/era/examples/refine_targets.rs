@@ -17,7 +17,7 @@
 //! `RECIP=1` with reciprocity (Table 5.2 only); `DEBUG=1` lists every refined mode of a
 //! DTA-like set with its start, truth and standard deviations.
 
-use era::identify::{identify, identify_auto, EraOptions, ModelDomain, ScanOptions};
+use era::identify::{identify, EraOptions, ModelDomain, Order};
 
 use era::refine::identification::refine_identification;
 
@@ -113,15 +113,10 @@ fn dta(seeds: &[u64], noises: &[f64]) -> era::Result<()> {
             let options = {
                 let mut o = EraOptions::thesis_dta();
                 o.domain = ModelDomain::Continuous;
+                o.order = Order::Auto;
                 o
             };
-            let found = identify_auto(
-                &frf,
-                &options,
-                &ScanOptions::default(),
-                &mut |_| {},
-                &mut |_, _| {},
-            )?;
+            let found = identify(&frf, &options)?;
             let era_fit = relative(&found.measured, &found.model_response, found.first_line);
             let clock = Instant::now();
             let mut ropts = {

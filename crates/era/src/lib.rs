@@ -18,20 +18,22 @@
 //! 3. [`pipeline::hankel`]: `H0[r][c] = Y_(1+r+c)`, `H1[r][c] = Y_(2+r+c)`, `m − 1`
 //!    blocks each way, `m = M/2`, `M = ns·lh` rounded down to a multiple of 4
 //!    ([`pipeline::hankel_op`] applies them without forming them).
-//! 4. [`pipeline::realize`]: `H0 = U S Vᵀ`; `A = S^(−½) Uᵀ H1 V S^(−½)`,
-//!    `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)`.
+//! 4. [`pipeline::factor`]: `H0 = U S Vᵀ`, dense or truncated; [`pipeline::realize`]:
+//!    `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)` at any order.
 //! 5. [`statespace`]: `d2c` (zero-order-hold inverse, `log`) and `c2d` (`exp`).
 //! 6. [`pipeline::modes`]: `s = ln(z)/Ts`; frequency `|s|/2π`, damping `−Re s/|s|`,
 //!    shapes `Cφ`, participations `ψB`.
 //! 7. [`pipeline::fit`]: the model's FRF through its modal form, and the per-pair fit.
 //!
-//! After the pipeline: [`modal`] (indicators, the order scan and the automatic order),
+//! The order ([`Order`]) is fixed, or chosen by [`pipeline::order`] from a scan across
+//! orders. After the pipeline: [`modal`] (indicators, the stabilization clustering),
 //! [`refine`] (maximum likelihood) and [`suspect`] (results to treat with care); the
 //! result is plain data ([`identification`]). [`linalg`] holds the truncated SVD, the
 //! FFT plan cache and the random generator.
 //!
-//! [`identify::identify`] runs them all; [`identify::identify_naive`] runs the naive
-//! reference of every stage. [`sim`] holds the truth model of Table 5.2 and seeded
+//! [`identify::identify`] runs them all; [`identify::identify_supplied`] runs them from
+//! another source's sequence; [`identify::identify_naive`] runs the naive reference of
+//! every stage. [`sim`] holds the truth model of Table 5.2 and seeded
 //! synthetic structures.
 //!
 //! ```
@@ -70,6 +72,8 @@ mod test_support;
 pub use error::{EraError, Result};
 pub use frf::{FrfData, Quantity};
 pub use identification::{Identification, Stage};
-pub use identify::{identify, identify_observed, EraOptions, ModelDomain};
+pub use identify::{
+    identify, identify_observed, identify_supplied, EraOptions, ModelDomain, Order,
+};
 pub use num_complex::Complex64;
 pub use statespace::{StateSpace, TimeDomain};

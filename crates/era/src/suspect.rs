@@ -235,7 +235,7 @@ pub fn band_edges(found: &Identification, band_hz: (f64, f64)) -> Vec<SuspectRes
 
 impl Identification {
     /// `self` with [`Identification::suspects`] found anew from its modes.
-    pub fn with_suspects(mut self) -> Self {
+    pub(crate) fn with_suspects(mut self) -> Self {
         self.suspects = check_identification(&self);
         self
     }

@@ -106,7 +106,7 @@ fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Si
         );
     }
     let mut opts = crate::config::options(&parsed.args)?;
-    if opts.states == 0 {
+    if opts.order.states().unwrap_or(0) == 0 {
         return usage("--identify needs --states N: compare realizes each set at one order");
     }
     // Compare realizes with ERA alone: the route's refinement does not apply, and its

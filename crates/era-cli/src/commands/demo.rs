@@ -272,7 +272,7 @@ fn write_files(
             source: &source,
             title: &title,
             echo: &echo,
-            states: options.states,
+            states: options.order.states().unwrap_or(0),
             figures: true,
         };
         write_identification(&mut set, Path::new(label), &model, &bundle, settings)?;

@@ -17,10 +17,8 @@ use crate::output::report::{
 use crate::output::{pair_fit_table, prepare_out_dir, InputCoherence, RunInput};
 use anyhow::Context;
 use era::identify::route::Route;
-use era::identify::{
-    identify_auto, identify_auto_supplied, identify_observed, identify_supplied,
-    identify_with_scan, identify_with_scan_supplied, ScanOptions, SuppliedMarkov,
-};
+use era::identify::{identify_observed, identify_supplied, Order, ScanOptions};
+use era::sources::MarkovSequence;
 use era_io::atomic::OutputSet;
 use era_io::model_json::{timings_map, FitJson, ModelJson, ModelParameters};
 use std::time::Instant;
@@ -40,16 +38,12 @@ struct Source {
 /// The Markov parameters OKID found in the records, and its seconds.
 struct Observed {
     okid: era::sources::okid::Okid,
-    sample_time_s: f64,
     seconds: f64,
 }
 
 impl Observed {
-    fn supplied(&self) -> SuppliedMarkov<'_> {
-        SuppliedMarkov {
-            markov: &self.okid.markov,
-            sample_time_s: self.sample_time_s,
-        }
+    fn supplied(&self) -> &MarkovSequence {
+        &self.okid.markov
     }
 }
 
@@ -116,20 +110,12 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
         o
     };
     let era_opts = era_options(&opts, &route);
-    let mut found = realize(
-        a,
-        frf,
-        supplied.as_ref(),
-        &era_opts,
-        &scan_options,
-        auto,
-        &settings,
-    )?;
+    let mut found = realize(a, frf, supplied, &era_opts, &scan_options, auto, &settings)?;
     let channels = input.file.channels.as_ref();
     crate::output::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     let states = found.model.states();
     if auto {
-        opts.states = states;
+        opts.order = era::Order::Fixed(states);
     }
     // What the data's zeroed start does to ERA's modes, measured on this model.
     let zero_start = era::identify::zero_start(&found, &era_opts, route.refine);
@@ -140,7 +126,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
             scan_options: &scan_options,
             refine_options: &refine_options,
             route: &route,
-            supplied: supplied.as_ref(),
+            supplied,
             frame: frame_run,
         };
         found = refine_route(a, found, frf, &check, auto, &human, &settings)?;
@@ -526,7 +512,7 @@ fn write(
 fn realize(
     a: &IdentifyArgs,
     frf: &era::FrfData,
-    supplied: Option<&SuppliedMarkov>,
+    supplied: Option<&MarkovSequence>,
     era_opts: &era::EraOptions,
     scan_options: &ScanOptions,
     auto: bool,
@@ -538,15 +524,17 @@ fn realize(
         spinner.set_message(format!("stabilization: order {done} of {total}"));
     };
     let (stage, order) = (&mut on_stage, &mut on_order);
-    let found = match (supplied, auto, scan_options.orders.is_some()) {
-        (None, true, _) => identify_auto(frf, era_opts, scan_options, stage, order),
-        (None, false, true) => identify_with_scan(frf, era_opts, scan_options, stage, order),
-        (None, false, false) => identify_observed(frf, era_opts, stage),
-        (Some(m), true, _) => identify_auto_supplied(frf, m, era_opts, scan_options, stage, order),
-        (Some(m), false, true) => {
-            identify_with_scan_supplied(frf, m, era_opts, scan_options, stage, order)
-        }
-        (Some(m), false, false) => identify_supplied(frf, m, era_opts, stage),
+    let mut options = era_opts.clone();
+    options.scan = scan_options.clone();
+    let states = era_opts.order.states().unwrap_or(0);
+    options.order = match (auto, scan_options.orders.is_some()) {
+        (true, _) => Order::Auto,
+        (false, true) => Order::Scan { states },
+        (false, false) => Order::Fixed(states),
+    };
+    let found = match supplied {
+        None => identify_observed(frf, &options, stage, order),
+        Some(m) => identify_supplied(frf, m, &options, stage, order),
     }
     .map_err(|e| match e {
         era::EraError::InvalidParameter {
@@ -582,7 +570,7 @@ struct Check<'a> {
     refine_options: &'a era::refine::RefineOptions,
     route: &'a era::identify::route::Route,
     /// OKID's Markov parameters, which the second identification realizes again.
-    supplied: Option<&'a SuppliedMarkov<'a>>,
+    supplied: Option<&'a MarkovSequence>,
     /// Samples per frame of the first estimate.
     frame: usize,
 }
@@ -808,6 +796,7 @@ fn observe(
     options.markov_samples = a
         .markov_samples
         .unwrap_or_else(|| era::sources::okid::default_markov_samples(longest));
+    options.sample_time_s = 1.0 / records.rate;
     let inputs: Vec<Vec<&[f64]>> = records
         .records
         .iter()
@@ -853,7 +842,6 @@ fn observe(
     })?;
     Ok(Observed {
         okid: found,
-        sample_time_s: 1.0 / records.rate,
         seconds: clock.elapsed().as_secs_f64(),
     })
 }

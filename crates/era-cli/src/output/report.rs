@@ -198,7 +198,8 @@ pub fn parameter_echo(o: &EraOptions) -> String {
 
 /// [`parameter_echo`], with the states line replaced by `states` when given (`auto`).
 pub fn parameter_echo_states(o: &EraOptions, states: Option<&str>) -> String {
-    let markov = o.states * o.hankel_factor / 4 * 4;
+    let ns = o.order.states().unwrap_or(0);
+    let markov = ns * o.hankel_factor / 4 * 4;
     let lowpass = match o.lowpass {
         Some((order, hz)) => format!("order {order}, {hz} Hz (zero phase)"),
         None => "off".into(),
@@ -211,7 +212,7 @@ pub fn parameter_echo_states(o: &EraOptions, states: Option<&str>) -> String {
             let _ = writeln!(s, "  hankel factor (lh)      {}", o.hankel_factor);
         }
         None => {
-            let _ = writeln!(s, "  states (ns)             {}", o.states);
+            let _ = writeln!(s, "  states (ns)             {}", ns);
             let _ = writeln!(
                 s,
                 "  hankel factor (lh)      {}  (M = {markov} Markov samples)",

@@ -48,7 +48,7 @@ pub fn zero_start(
     )
     .ok()?;
     let mut plain = options.clone();
-    plain.states = found.realization.model.states();
+    plain.order = crate::Order::Fixed(found.realization.model.states());
     plain.integrations = 0;
     plain.zero_lines = 0;
     plain.lowpass = None;

@@ -45,7 +45,7 @@
 //!    reached the higher order is kept. Close modes of a structure have distinct shapes and stay apart.
 //!
 //! The representatives, with their shapes and participations, form the physical modal
-//! model (see [`crate::identify::identify_auto`] for how it is assembled into `(A, B, C, D)`).
+//! model (see [`Order::Auto`](crate::identify::Order::Auto) for how it is assembled into `(A, B, C, D)`).
 //!
 //! The clustering and the diagram are plain loops over at most a few thousand poles; no
 //! crate does this domain-specific matching, so it is written here.
@@ -405,7 +405,7 @@ fn order_poles(factorization: &Factorization, n: usize) -> Result<Vec<ScanPole>>
 }
 
 /// The diagram status of `pole` against the previous order's poles.
-pub fn status_against(
+pub(crate) fn status_against(
     pole: &ScanPole,
     previous: &[ScanPole],
     criteria: &DiagramCriteria,
@@ -452,7 +452,7 @@ pub struct SelectionCriteria {
     /// Fewest poles of a physical cluster.
     pub min_poles: usize,
     /// Smallest share of the FRF of a physical mode (checked by the caller, who has the
-    /// data; [`crate::identify::identify_auto`]).
+    /// data; [`Order::Auto`](crate::identify::Order::Auto)).
     pub contribution_minimum: f64,
 }
 

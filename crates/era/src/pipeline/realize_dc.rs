@@ -28,10 +28,8 @@
 //! The products and the SVD are faer's.
 
 use crate::error::{EraError, Result};
-use crate::pipeline::realize::{
-    check_dense_svd, check_room, DirectTerm, FactorParts, Factorization, HankelTails, Realization,
-    SvdPath,
-};
+use crate::pipeline::factor::{check_dense_svd, check_room, FactorParts, Factorization, SvdPath};
+use crate::pipeline::realize::{DirectTerm, HankelTails, Realization};
 use crate::sources::MarkovSequence;
 use crate::statespace::{StateSpace, TimeDomain};
 use faer::linalg::solvers::SolveLstsq;

@@ -1,6 +1,6 @@
 //! Sources of the Markov sequence, the seam of the pipeline: every source turns its data
 //! into one [`MarkovSequence`] (blocks `Y_k` that decay as `C A^(k−1) B`, with their
-//! sample time), and everything after it ([`crate::pipeline`]) is shared.
+//! sample time and what they are, [`MarkovKind`]), and everything after it ([`crate::pipeline`]) is shared.
 //!
 //! - [`frf`]: measured FRFs, preprocessed and inverse-transformed (the thesis's route).
 //! - [`okid`]: input and output time histories, through a least-squares observer.
@@ -8,7 +8,7 @@
 pub mod frf;
 pub mod okid;
 
-pub use frf::MarkovSequence;
+pub use frf::{MarkovKind, MarkovSequence};
 
 /// Where the Markov sequence of time histories comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

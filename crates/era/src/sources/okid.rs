@@ -110,6 +110,9 @@ pub struct OkidOptions {
     pub markov_samples: usize,
     /// Also return the observer gain's Markov parameters (default false).
     pub gain: bool,
+    /// Seconds between the records' samples, which the Markov sequence carries
+    /// (default 1).
+    pub sample_time_s: f64,
 }
 
 impl Default for OkidOptions {
@@ -118,6 +121,7 @@ impl Default for OkidOptions {
             observer_order: ObserverOrder::default(),
             markov_samples: DEFAULT_MARKOV_SAMPLES,
             gain: false,
+            sample_time_s: 1.0,
         }
     }
 }
@@ -931,10 +935,11 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
     } else {
         (circle?, MarkovRoute::UnitCircle { points })
     };
-    let markov = unscale(&blocks, &data.output_scale, &data.input_scale);
+    let markov = unscale(&blocks, &data.output_scale, &data.input_scale)
+        .with_sample_time(options.sample_time_s);
     let gain_markov = options.gain.then(|| {
         let g = gain_recursion(&obs, samples);
-        unscale(&g, &data.output_scale, &data.output_scale)
+        unscale(&g, &data.output_scale, &data.output_scale).with_sample_time(options.sample_time_s)
     });
     Ok(Okid {
         markov,

@@ -9,7 +9,7 @@ fn more_states_than_the_data_supports() {
     let frf = truth_model_frf(None).unwrap();
     let err = identify(&frf, &{
         let mut o = EraOptions::thesis_truth_model();
-        o.states = 12;
+        o.order = era::Order::Fixed(12);
         o
     })
     .unwrap_err();

@@ -15,17 +15,36 @@ use crate::error::{EraError, Result};
 use crate::frf::FrfData;
 use num_complex::Complex64;
 
-/// A sequence of q×p Markov blocks `Y_0, Y_1, …, Y_(K-1)`.
+/// What the blocks of a [`MarkovSequence`] are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum MarkovKind {
+    /// Impulse-response blocks `Y_0 = D`, `Y_k = C A^(k−1) B` of a system whose inputs
+    /// were measured (the FRFs' inverse transform, OKID).
+    #[default]
+    Impulse,
+    /// Output correlation blocks `R_k = E[y_(t+k) y_refᵀ]` against reference outputs
+    /// (output-only data: they decay as `C A^(k−1) G`, with `G` in place of `B`).
+    Correlation,
+}
+
+/// A sequence of q×p Markov blocks `Y_0, Y_1, …, Y_(K-1)`, `sample_time_s` apart, and
+/// what they are ([`MarkovKind`]): what every source hands the pipeline.
 ///
 /// Storage is "woven" per input: for input `j`, the values `Y_k[i][j]` run output-fastest,
 /// then sample (`data[j·K·q + k·q + i]`). One block-Hankel column is then one contiguous
 /// slice, which is what makes [`crate::pipeline::hankel`] a sequence of copies.
+///
+/// A sequence is built with a sample time of 1 s and of [`MarkovKind::Impulse`]; a source
+/// says its own with [`MarkovSequence::with_sample_time`] and [`MarkovSequence::with_kind`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct MarkovSequence {
     outputs: usize,
     inputs: usize,
     samples: usize,
     data: Vec<f64>,
+    sample_time_s: f64,
+    kind: MarkovKind,
 }
 
 impl MarkovSequence {
@@ -36,7 +55,33 @@ impl MarkovSequence {
             inputs,
             samples,
             data: vec![0.0; outputs * inputs * samples],
+            sample_time_s: 1.0,
+            kind: MarkovKind::Impulse,
         }
+    }
+
+    /// The same blocks, `sample_time_s` seconds apart.
+    #[must_use]
+    pub fn with_sample_time(mut self, sample_time_s: f64) -> Self {
+        self.sample_time_s = sample_time_s;
+        self
+    }
+
+    /// The same blocks, of `kind`.
+    #[must_use]
+    pub fn with_kind(mut self, kind: MarkovKind) -> Self {
+        self.kind = kind;
+        self
+    }
+
+    /// Seconds between blocks.
+    pub fn sample_time_s(&self) -> f64 {
+        self.sample_time_s
+    }
+
+    /// What the blocks are.
+    pub fn kind(&self) -> MarkovKind {
+        self.kind
     }
 
     /// Builds from one time series per output/input pair, pairs in `[output][input]`
@@ -104,7 +149,7 @@ impl MarkovSequence {
     /// For input `j`, the samples `first .. first+count` of all outputs, output-fastest:
     /// one block-Hankel column.
     #[inline]
-    pub fn input_run(&self, input: usize, first: usize, count: usize) -> &[f64] {
+    pub(crate) fn input_run(&self, input: usize, first: usize, count: usize) -> &[f64] {
         let start = (input * self.samples + first) * self.outputs;
         &self.data[start..start + count * self.outputs]
     }
@@ -221,14 +266,14 @@ pub fn frf_of_markov(
     FrfData::new(frequency_hz, q, p, values, quantity)
 }
 
-/// Markov parameters of the FRFs: [`impulse_responses`] woven into a [`MarkovSequence`].
+/// Markov parameters of the FRFs: [`impulse_responses`] woven into a [`MarkovSequence`],
+/// at the sample time of the FRFs' lines ([`preprocess::sample_time_s`]).
 pub fn markov_from_frf(frf: &FrfData) -> Result<MarkovSequence> {
     let series = impulse_responses(frf)?;
-    Ok(MarkovSequence::from_pair_series(
-        frf.outputs(),
-        frf.inputs(),
-        &series,
-    ))
+    Ok(
+        MarkovSequence::from_pair_series(frf.outputs(), frf.inputs(), &series)
+            .with_sample_time(preprocess::sample_time_s(frf.spacing_hz(), frf.lines())),
+    )
 }
 
 #[cfg(test)]
