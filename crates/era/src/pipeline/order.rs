@@ -75,9 +75,11 @@ pub fn default_orders(
         return Err(EraError::InvalidParameter {
             name: "states",
             value: "auto".into(),
-            reason: crate::names::Prose::from(format!(
-                "{markov_samples} Markov samples at hankel-factor {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with "
-            ))
+            reason: crate::names::Prose::from(format!("{markov_samples} Markov samples at "))
+                .param(crate::names::Param::HankelFactor)
+                .text(format!(
+                    " {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with "
+                ))
             .param(crate::names::Param::PadTo)
             .text(", lower ")
             .param(crate::names::Param::HankelFactor)
@@ -269,7 +271,11 @@ fn scan_front(
             name: "orders",
             value: range.to_string(),
             reason: crate::names::Prose::from(format!(
-                "the largest order needs {needed} Markov samples at hankel-factor {}, the data has {available}: lower the orders or ",
+                "the largest order needs {needed} Markov samples at "
+            ))
+            .param(crate::names::Param::HankelFactor)
+            .text(format!(
+                " {}, the data has {available}: lower the orders or ",
                 options.hankel_factor
             ))
             .param(crate::names::Param::HankelFactor)
