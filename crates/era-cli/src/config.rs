@@ -7,7 +7,7 @@
 //! so other front ends (Python) can word the same checks their own way.
 
 use crate::args::{
-    CommonArgs, ConvertArgs, DecayMethodArg, DemoArgs, FrictionAction, FrictionArgs, IdentifyArgs,
+    CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, FrfArgs, FrictionAction, FrictionArgs, IdentifyArgs,
     InfoArgs, OscillatorArgs, PlotArgs, RefineFitArgs, StatesArg, WelchArgs,
 };
 use crate::input::FrfFlags;
@@ -309,6 +309,167 @@ impl From<&FrictionArgs> for Friction {
     }
 }
 
+/// How FRFs are estimated from time histories (`era frf`, `era identify --from-time`).
+#[derive(Debug, Clone)]
+pub struct Welch {
+    /// Samples per frame; `None` picks it from the record ([`DEFAULT_FRAME`], or the
+    /// judging frame when OKID keeps the records).
+    pub frame: Option<usize>,
+    /// Window of each frame.
+    pub window: era::frf::estimate::Window,
+    /// Overlap of consecutive frames, as a fraction of the frame.
+    pub overlap: f64,
+    /// The FRF estimator.
+    pub estimator: era::frf::estimate::Estimator,
+    /// Trend removed from each frame.
+    pub detrend: era::frf::estimate::Detrend,
+    /// Lines kept up to this frequency, Hz.
+    pub max_hz: Option<f64>,
+    /// Sample rate given, Hz (else the file's).
+    pub sample_rate: Option<f64>,
+    /// MAT input: the matrices to read.
+    pub variable: Vec<String>,
+    /// HDF5 input: the datasets to read.
+    pub dataset: Vec<String>,
+}
+
+pub use era::frf::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
+
+impl Welch {
+    /// The frame given, or [`DEFAULT_FRAME`].
+    pub fn frame_or_default(&self) -> usize {
+        self.frame.unwrap_or(DEFAULT_FRAME)
+    }
+}
+
+impl From<&WelchArgs> for Welch {
+    fn from(a: &WelchArgs) -> Self {
+        Welch {
+            frame: a.frame,
+            window: a.window,
+            overlap: a.overlap,
+            estimator: a.estimator,
+            detrend: a.detrend,
+            max_hz: a.max_hz,
+            sample_rate: a.sample_rate,
+            variable: a.variable.clone(),
+            dataset: a.dataset.clone(),
+        }
+    }
+}
+
+/// `era frf`: the time files, their channels, the Welch settings and the file written.
+#[derive(Debug, Clone)]
+pub struct Frf<'a> {
+    /// Time-history files (records of one test).
+    pub files: Vec<PathBuf>,
+    /// Input channels, as given.
+    pub inputs: String,
+    /// Output channels, as given.
+    pub outputs: String,
+    /// How the FRFs are estimated.
+    pub welch: Welch,
+    /// What the outputs measure.
+    pub quantity: era::Quantity,
+    /// Units written into the FRF file.
+    pub units: Option<&'a crate::args::UnitsArg>,
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// UFF output: binary 58b.
+    pub binary: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> From<&'a FrfArgs> for Frf<'a> {
+    fn from(a: &'a FrfArgs) -> Self {
+        Frf {
+            files: a.files.clone(),
+            inputs: a.inputs.clone(),
+            outputs: a.outputs.clone(),
+            welch: Welch::from(&a.welch),
+            quantity: a.quantity,
+            units: a.units.as_ref(),
+            out: a.out.clone(),
+            binary: a.binary,
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era compare`: the two FRF sets, their models (given, or identified with `era
+/// identify`'s flags), the bands and where the files go.
+#[derive(Debug, Clone)]
+pub struct Compare {
+    /// First FRF set.
+    pub a: PathBuf,
+    /// Second FRF set.
+    pub b: PathBuf,
+    /// Model of A.
+    pub model_a: Option<PathBuf>,
+    /// Model of B.
+    pub model_b: Option<PathBuf>,
+    /// Band edges, Hz.
+    pub bands: Vec<f64>,
+    /// Lowest and highest frequency of the fit error, Hz.
+    pub fit_band: Vec<f64>,
+    /// Folder for the files.
+    pub out: Option<PathBuf>,
+    /// `era identify` flags to identify both sets with ([`compare_identify_options`]).
+    pub identify: Option<Vec<String>>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&CompareArgs> for Compare {
+    fn from(a: &CompareArgs) -> Self {
+        Compare {
+            a: a.a.clone(),
+            b: a.b.clone(),
+            model_a: a.model_a.clone(),
+            model_b: a.model_b.clone(),
+            bands: a.bands.clone(),
+            fit_band: a.fit_band.clone(),
+            out: a.out.clone(),
+            identify: a.identify.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// The options `era compare --identify FLAGS` realizes the set at `path` with: plain
+/// ERA at one order, on the route of an unrefined run. The flags are parsed when the
+/// set is read, so that the files' errors come first.
+pub fn compare_identify_options(
+    flags: &[String],
+    path: &std::path::Path,
+    frf: &era::FrfData,
+) -> anyhow::Result<EraOptions> {
+    use clap::Parser;
+    let mut argv = vec![path.display().to_string()];
+    argv.extend(flags.iter().cloned());
+    let parsed = crate::args::IdentifyFlags::try_parse_from(&argv)
+        .map_err(|e| crate::error::UsageError(format!("--identify: {e}")))?;
+    if parsed.args.refine || parsed.args.band.is_some() || parsed.args.from_time {
+        return crate::error::usage(
+            "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
+        );
+    }
+    let mut opts = options(&parsed.args)?;
+    if opts.order.states().unwrap_or(0) == 0 {
+        return crate::error::usage(
+            "--identify needs --states N: compare realizes each set at one order",
+        );
+    }
+    // Compare realizes with ERA alone: the route's refinement does not apply, and its
+    // domain and direct term are those of an unrefined run.
+    let mut request = route_request(&parsed.args);
+    request.refine = Some(false);
+    let route = request.resolve(frf.quantity(), opts.integrations);
+    apply_route(&mut opts, &route);
+    Ok(opts)
+}
+
 /// The route the flags ask for: the preset, and every choice given explicitly
 /// (era::identify::route resolves the rest once the data's quantity is known).
 pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
@@ -557,7 +718,7 @@ pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
 }
 
 /// The Welch settings of the flags at `rate` samples per second.
-pub fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
+pub fn welch_options(welch: &Welch, rate: f64) -> WelchOptions {
     let mut o = WelchOptions::new(rate, welch.frame_or_default());
     o.overlap = welch.overlap;
     o.window = welch.window;
@@ -614,7 +775,7 @@ mod tests {
         assert_eq!(a.markov, era::sources::MarkovSource::default());
         assert_eq!(a.welch.estimator, era::frf::estimate::Estimator::default());
         assert_eq!(
-            welch_options(&a.welch, 100.0),
+            welch_options(&Welch::from(&a.welch), 100.0),
             WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
         );
         let crate::args::Command::Frf(f) = parsed(&[
@@ -631,7 +792,7 @@ mod tests {
         };
         assert_eq!(f.welch.estimator, era::frf::estimate::Estimator::default());
         assert_eq!(
-            welch_options(&f.welch, 100.0),
+            welch_options(&Welch::from(&f.welch), 100.0),
             WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
         );
         assert_eq!(f.quantity, era::Quantity::default());

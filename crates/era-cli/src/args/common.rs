@@ -105,7 +105,7 @@ pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
     })
 }
 
-pub use era::frf::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
+use era::frf::estimate::DEFAULT_FRAME;
 
 impl WelchArgs {
     /// `--frame`, or [`DEFAULT_FRAME`].

@@ -292,7 +292,7 @@ fn read_source(
         &record_paths(a),
         inputs,
         outputs,
-        &a.welch,
+        &crate::config::Welch::from(&a.welch),
         quantity,
         a.markov == era::sources::MarkovSource::Okid,
         settings,
@@ -560,7 +560,7 @@ fn realize(
 }
 
 /// Fewest averages the frame check's second estimate needs.
-const CHECK_AVERAGES: u64 = crate::args::JUDGING_AVERAGES as u64;
+const CHECK_AVERAGES: u64 = crate::config::JUDGING_AVERAGES as u64;
 
 /// What the frame check repeats of the first identification.
 struct Check<'a> {
@@ -598,7 +598,7 @@ fn frame_check(
         if other < 64 {
             continue;
         }
-        let mut welch = a.welch.clone();
+        let mut welch = crate::config::Welch::from(&a.welch);
         welch.frame = Some(other);
         // Too few frames for the inputs is one way for these records to be too short
         // at that frame: the check then tries the other.
