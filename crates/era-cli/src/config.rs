@@ -7,8 +7,10 @@
 //! so other front ends (Python) can word the same checks their own way.
 
 use crate::args::{
-    CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, FrfArgs, FrictionAction, FrictionArgs, IdentifyArgs,
-    InfoArgs, OscillatorArgs, PlotArgs, RefineFitArgs, StatesArg, WelchArgs,
+    CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, ExcitationArg, ExperimentArgs,
+    FrfArgs, FrictionAction, FrictionArgs, IdentifyArgs, InfoArgs, ModalArgs, OnOff,
+    OscillatorArgs, PlotArgs, RefineFitArgs, ShakerArgs, SimulateArgs, SimulateCommon,
+    SimulateModel, StatesArg, StructureQuantity, WelchArgs,
 };
 use crate::input::FrfFlags;
 use era::frf::estimate::WelchOptions;
@@ -468,6 +470,266 @@ pub fn compare_identify_options(
     let route = request.resolve(frf.quantity(), opts.integrations);
     apply_route(&mut opts, &route);
     Ok(opts)
+}
+
+/// What both FRF simulators write: the file, its noise and the seed.
+#[derive(Debug, Clone)]
+pub struct SimOutput {
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// Noise RMS as a fraction of each FRF's RMS.
+    pub noise: f64,
+    /// Seed of the noise (and of the modal structure).
+    pub seed: u64,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&SimulateCommon> for SimOutput {
+    fn from(a: &SimulateCommon) -> Self {
+        SimOutput {
+            out: a.out.clone(),
+            noise: a.noise,
+            seed: a.seed,
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era simulate modal`: the seeded structure, its lines and the file written.
+#[derive(Debug, Clone)]
+pub struct Modal {
+    /// Outputs (sensors).
+    pub outputs: usize,
+    /// Inputs (actuators).
+    pub inputs: usize,
+    /// Number of modes.
+    pub modes: usize,
+    /// Lowest natural frequency, Hz.
+    pub fmin: f64,
+    /// Highest natural frequency, Hz.
+    pub fmax: f64,
+    /// Damping ratio range `MIN..MAX`, as given.
+    pub damping: String,
+    /// Number of lines, from 0 Hz.
+    pub lines: usize,
+    /// Line spacing, Hz.
+    pub df: f64,
+    /// What the FRFs measure per unit force.
+    pub quantity: era::Quantity,
+    /// Input shapes equal output shapes.
+    pub collocated: bool,
+    /// The file, its noise and the seed.
+    pub sim: SimOutput,
+}
+
+impl From<&ModalArgs> for Modal {
+    fn from(a: &ModalArgs) -> Self {
+        Modal {
+            outputs: a.outputs,
+            inputs: a.inputs,
+            modes: a.modes,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            lines: a.lines,
+            df: a.df,
+            quantity: a.quantity,
+            collocated: a.collocated,
+            sim: SimOutput::from(&a.sim),
+        }
+    }
+}
+
+/// The shakers' signal of `era simulate shaker`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Excitation {
+    /// Gaussian white noise.
+    White,
+    /// Gaussian noise in the band.
+    BandLimited,
+    /// White noise on for part of every period.
+    Burst,
+    /// A linear sine sweep over the band.
+    Sweep,
+    /// Half-sine impacts every period.
+    Impact,
+}
+
+/// `era simulate shaker`: the structure, the shakers' signal, the record and its noise.
+#[derive(Debug, Clone)]
+pub struct Shaker {
+    /// Outputs (accelerometers).
+    pub outputs: usize,
+    /// Inputs (shakers).
+    pub inputs: usize,
+    /// Number of modes.
+    pub modes: usize,
+    /// Lowest natural frequency, Hz.
+    pub fmin: f64,
+    /// Highest natural frequency, Hz.
+    pub fmax: f64,
+    /// Damping ratio range `MIN..MAX`, as given.
+    pub damping: String,
+    /// Sample rate, Hz.
+    pub sample_rate: f64,
+    /// Record length, s.
+    pub duration: f64,
+    /// The shakers' signal.
+    pub excitation: Excitation,
+    /// Band `LO..HI` Hz, as given.
+    pub band: Option<String>,
+    /// Period of bursts or impacts, s.
+    pub period: f64,
+    /// Fraction of each burst period with noise on.
+    pub burst_on: f64,
+    /// Duration of one impact, s.
+    pub pulse_width: f64,
+    /// What the outputs measure.
+    pub quantity: era::Quantity,
+    /// Time-history CSV to write.
+    pub out: PathBuf,
+    /// Sensor noise RMS as a fraction of each channel's RMS.
+    pub noise: f64,
+    /// Seed of the structure, the excitation and the noise.
+    pub seed: u64,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&ShakerArgs> for Shaker {
+    fn from(a: &ShakerArgs) -> Self {
+        Shaker {
+            outputs: a.outputs,
+            inputs: a.inputs,
+            modes: a.modes,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            sample_rate: a.sample_rate,
+            duration: a.duration,
+            excitation: match a.excitation {
+                ExcitationArg::White => Excitation::White,
+                ExcitationArg::BandLimited => Excitation::BandLimited,
+                ExcitationArg::Burst => Excitation::Burst,
+                ExcitationArg::Sweep => Excitation::Sweep,
+                ExcitationArg::Impact => Excitation::Impact,
+            },
+            band: a.band.clone(),
+            period: a.period,
+            burst_on: a.burst_on,
+            pulse_width: a.pulse_width,
+            quantity: a.quantity,
+            out: a.out.clone(),
+            noise: a.noise,
+            seed: a.seed,
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era simulate experiment`: the thesis's FRF test in the time domain.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// Friction compensation in the actuators.
+    pub compensation: bool,
+    /// Frames averaged per excited actuator.
+    pub averages: usize,
+    /// Seed of the excitation and the sensor noise.
+    pub seed: u64,
+    /// Multiplies every actuator's true Coulomb force.
+    pub friction_scale: f64,
+    /// Compensator coefficients, lbf, one per actuator.
+    pub coefficients: Option<Vec<f64>>,
+    /// Excitation RMS voltage, V (by the compensation, when `None`).
+    pub excitation: Option<f64>,
+    /// Every actuator at once.
+    pub simultaneous: bool,
+    /// Number of actuators.
+    pub actuators: usize,
+    /// Accelerometer noise RMS, in/s².
+    pub accel_noise: f64,
+    /// LVT noise RMS, in/s.
+    pub lvt_noise: f64,
+    /// Structure from a model.json.
+    pub structure: Option<PathBuf>,
+    /// What the structure model's outputs measure.
+    pub structure_quantity: era::Quantity,
+    /// A seeded modal structure: number of modes.
+    pub modes: Option<usize>,
+    /// Its DOFs.
+    pub dofs: Option<usize>,
+    /// Its lowest natural frequency, Hz.
+    pub fmin: Option<f64>,
+    /// Its highest natural frequency, Hz.
+    pub fmax: Option<f64>,
+    /// Its damping ratio range `MIN..MAX`, as given.
+    pub damping: Option<String>,
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// File for the exact FRFs of the linear system.
+    pub exact_out: Option<PathBuf>,
+    /// Folder for the analyzer's time histories.
+    pub time_histories: Option<PathBuf>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&ExperimentArgs> for Experiment {
+    fn from(a: &ExperimentArgs) -> Self {
+        Experiment {
+            compensation: a.compensation == OnOff::On,
+            averages: a.averages,
+            seed: a.seed,
+            friction_scale: a.friction_scale,
+            coefficients: a.coefficients.clone(),
+            excitation: a.excitation,
+            simultaneous: a.simultaneous,
+            actuators: a.actuators,
+            accel_noise: a.accel_noise,
+            lvt_noise: a.lvt_noise,
+            structure: a.structure.clone(),
+            structure_quantity: match a.structure_quantity {
+                StructureQuantity::Velocity => era::Quantity::Velocity,
+                StructureQuantity::Acceleration => era::Quantity::Acceleration,
+            },
+            modes: a.modes,
+            dofs: a.dofs,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            out: a.out.clone(),
+            exact_out: a.exact_out.clone(),
+            time_histories: a.time_histories.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era simulate truth-model|modal|experiment|shaker`.
+#[derive(Debug, Clone)]
+pub enum Simulate {
+    /// The thesis's truth model's FRFs.
+    TruthModel(SimOutput),
+    /// A seeded modal structure's FRFs.
+    Modal(Modal),
+    /// The thesis's FRF test in the time domain.
+    Experiment(Box<Experiment>),
+    /// A shaker test in the time domain.
+    Shaker(Box<Shaker>),
+}
+
+impl From<&SimulateArgs> for Simulate {
+    fn from(a: &SimulateArgs) -> Self {
+        match &a.model {
+            SimulateModel::TruthModel(s) => Simulate::TruthModel(SimOutput::from(s)),
+            SimulateModel::Modal(m) => Simulate::Modal(Modal::from(m)),
+            SimulateModel::Experiment(e) => {
+                Simulate::Experiment(Box::new(Experiment::from(e.as_ref())))
+            }
+            SimulateModel::Shaker(s) => Simulate::Shaker(Box::new(Shaker::from(s.as_ref()))),
+        }
+    }
 }
 
 /// The route the flags ask for: the preset, and every choice given explicitly
