@@ -9,7 +9,7 @@
 use crate::args::{
     CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, ExcitationArg, ExperimentArgs,
     FrfArgs, FrictionAction, FrictionArgs, IdentifyArgs, InfoArgs, ModalArgs, OnOff,
-    OscillatorArgs, PlotArgs, RefineFitArgs, ShakerArgs, SimulateArgs, SimulateCommon,
+    OscillatorArgs, PlotArgs, RefineArgs, RefineFitArgs, ShakerArgs, SimulateArgs, SimulateCommon,
     SimulateModel, StatesArg, StructureQuantity, WelchArgs,
 };
 use crate::input::FrfFlags;
@@ -729,6 +729,46 @@ impl From<&SimulateArgs> for Simulate {
             }
             SimulateModel::Shaker(s) => Simulate::Shaker(Box::new(Shaker::from(s.as_ref()))),
         }
+    }
+}
+
+/// `era refine`: the model, the FRF file it came from, how to refine and where the
+/// files go.
+#[derive(Debug, Clone)]
+pub struct Refine<'a> {
+    /// model.json of an earlier identification.
+    pub model: PathBuf,
+    /// The FRF file it was identified from.
+    pub file: PathBuf,
+    /// How to read the file.
+    pub read: FrfFlags<'a>,
+    /// How the refinement fits, checked ([`refine_options`]).
+    pub options: RefineOptions,
+    /// Folder for the files, when asked for.
+    pub out: Option<PathBuf>,
+    /// Model files but no figures and no report.
+    pub no_figures: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> Refine<'a> {
+    /// The settings of the flags, checked before anything is read.
+    pub fn new(a: &'a RefineArgs) -> anyhow::Result<Self> {
+        if a.fit.weighting == Some(crate::args::WeightingArg::Coherence) {
+            return crate::error::usage(
+                "--weighting coherence weights by an estimate's coherence, which era refine does not have: use it with era identify --from-time",
+            );
+        }
+        Ok(Refine {
+            model: a.model.clone(),
+            file: a.file.clone(),
+            read: FrfFlags::from(&a.read),
+            options: refine_options(&a.fit)?,
+            out: a.out.clone(),
+            no_figures: a.no_figures,
+            settings: Settings::from(&a.common),
+        })
     }
 }
 

@@ -144,7 +144,7 @@ fn main() -> ExitCode {
         args::Command::Info(a) => commands::files::run_info(&a.into()),
         args::Command::Convert(a) => commands::files::run_convert(&a.into()),
         args::Command::Compare(a) => commands::compare::run(&a.as_ref().into()),
-        args::Command::Refine(a) => commands::refine::run(a),
+        args::Command::Refine(a) => commands::refine::run(&config::Refine::new(a)?),
     };
     // One thread setting for rayon and faer (era::parallel); a refused count is a usage
     // error like any flag's.
