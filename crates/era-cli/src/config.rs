@@ -772,6 +772,132 @@ impl<'a> Refine<'a> {
     }
 }
 
+/// The refinement's weighting asked for by name: one of the core's (set in
+/// [`Identify::refine`]), or the estimate's coherence, whose values come with the data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WeightingGiven {
+    /// `uniform` or `pair-noise`.
+    Named,
+    /// `coherence`.
+    Coherence,
+}
+
+/// `era identify`: the data and how to read or estimate it, ERA's options, the route
+/// asked for, the refinement and where the files go; checked under the flags' names
+/// before anything is read.
+#[derive(Debug, Clone)]
+pub struct Identify<'a> {
+    /// The FRF file, or the first time-history file.
+    pub file: PathBuf,
+    /// More time-history files (records of one test).
+    pub more: Vec<PathBuf>,
+    /// ERA's options ([`options`]); the route's domain and direct term are set once the
+    /// data is read ([`apply_route`]).
+    pub options: EraOptions,
+    /// The route asked for ([`route_request`]).
+    pub request: RouteRequest,
+    /// The refinement's options, checked ([`refine_options`]).
+    pub refine: RefineOptions,
+    /// The weighting asked for by name, when given.
+    pub weighting: Option<WeightingGiven>,
+    /// The scan's orders (`--orders`), when given.
+    pub orders: Option<OrderRange>,
+    /// What the FRFs (or the outputs) measure, when given.
+    pub quantity: Option<era::Quantity>,
+    /// `--outputs`: the FRF file's output count, or the time files' output channels.
+    pub outputs: Option<String>,
+    /// Input channels of the time files.
+    pub inputs: Option<String>,
+    /// Units of the FRFs, when given.
+    pub units: Option<&'a crate::args::UnitsArg>,
+    /// A MAT file's frequency variable, when not `FreqV`.
+    pub freq_variable: Option<String>,
+    /// `--band`, as given.
+    pub band: Option<String>,
+    /// The data are time histories.
+    pub from_time: bool,
+    /// No check of the model against a second frame.
+    pub no_frame_check: bool,
+    /// Where the Markov parameters come from.
+    pub markov: era::sources::MarkovSource,
+    /// OKID's observer order.
+    pub observer_order: era::sources::okid::ObserverOrder,
+    /// Markov blocks OKID returns, when given.
+    pub markov_samples: Option<usize>,
+    /// How FRFs are estimated from the time histories.
+    pub welch: Welch,
+    /// File for the estimated FRFs.
+    pub save_frf: Option<PathBuf>,
+    /// How the figures draw the phase.
+    pub phase: era_plot::PhaseView,
+    /// Folder for the files, when asked for.
+    pub out: Option<PathBuf>,
+    /// Model files but no figures and no report.
+    pub no_figures: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> Identify<'a> {
+    /// The settings of the flags, checked in the order the flags' errors are reported.
+    pub fn new(a: &'a IdentifyArgs) -> anyhow::Result<Self> {
+        use crate::args::{ObserverOrderArg, WeightingArg};
+        use era::sources::okid::ObserverOrder;
+        let options = options(a)?;
+        let orders = scan_orders(a)?;
+        let request = route_request(a);
+        let refine = identify_refine_options(a, &request)?;
+        Ok(Identify {
+            file: a.file.clone(),
+            more: a.more.clone(),
+            options,
+            request,
+            refine,
+            weighting: a.refine_fit.weighting.as_ref().map(|w| match w {
+                WeightingArg::Named(_) => WeightingGiven::Named,
+                WeightingArg::Coherence => WeightingGiven::Coherence,
+            }),
+            orders,
+            quantity: a.quantity,
+            outputs: a.outputs.clone(),
+            inputs: a.inputs.clone(),
+            units: a.facts.units.as_ref(),
+            freq_variable: a.facts.freq_variable.clone(),
+            band: a.band.clone(),
+            from_time: a.from_time,
+            no_frame_check: a.no_frame_check,
+            markov: a.markov,
+            observer_order: match a.observer_order {
+                Some(ObserverOrderArg::Fixed(p)) => ObserverOrder::Fixed(p),
+                Some(ObserverOrderArg::Auto) | None => ObserverOrder::Auto { max: None },
+            },
+            markov_samples: a.markov_samples,
+            welch: Welch::from(&a.welch),
+            save_frf: a.save_frf.clone(),
+            phase: a.phase.into(),
+            out: a.out.clone(),
+            no_figures: a.no_figures,
+            settings: Settings::from(&a.common),
+        })
+    }
+}
+
+/// The refinement's options, refused when given while the route asked for does not
+/// refine: whether it refines depends on the preset, not on the data's quantity, so it
+/// is known before anything is read.
+fn identify_refine_options(
+    a: &IdentifyArgs,
+    request: &RouteRequest,
+) -> anyhow::Result<RefineOptions> {
+    let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
+    if !refine && refine_given(&a.refine_fit) {
+        return crate::error::usage(
+            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine, --preset thesis or --markov okid): add --refine",
+        );
+    }
+    refine_options(&a.refine_fit)
+}
+
 /// The route the flags ask for: the preset, and every choice given explicitly
 /// (era::identify::route resolves the rest once the data's quantity is known).
 pub fn route_request(a: &IdentifyArgs) -> RouteRequest {

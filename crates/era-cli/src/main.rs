@@ -136,7 +136,7 @@ fn main() -> ExitCode {
     }));
     let run = || match &cli.command {
         args::Command::Demo(a) => commands::demo::run(&a.into()),
-        args::Command::Identify(a) => commands::identify::run(a),
+        args::Command::Identify(a) => commands::identify::run(&config::Identify::new(a)?),
         args::Command::Frf(a) => commands::frf::run(&a.into()),
         args::Command::Simulate(a) => commands::simulate::run(&a.into()),
         args::Command::Friction(a) => commands::friction::run(&a.into()),
