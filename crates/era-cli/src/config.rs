@@ -1225,4 +1225,66 @@ mod tests {
         );
         assert_eq!(f.quantity, era::Quantity::default());
     }
+
+    /// The scenarios' flags left out are the core's settings where the core has them
+    /// (the seeded structure, the thesis's test and compensator): this fails when a
+    /// front end's default drifts from the core's.
+    #[test]
+    fn scenario_flags_left_out_are_the_cores() {
+        use era::friction::compensator::ChannelConfig;
+        use era::sim::experiment::{thesis_actuators, ExperimentSpec};
+        let Simulate::Modal(m) = Simulate::from(&sim_args(&["modal", "--out", "m.csv"])) else {
+            unreachable!()
+        };
+        let spec = era::sim::ModalSpec::default();
+        assert_eq!(
+            (m.outputs, m.inputs, m.modes, m.fmin, m.fmax),
+            (
+                spec.outputs,
+                spec.inputs,
+                spec.modes,
+                spec.fmin_hz,
+                spec.fmax_hz
+            )
+        );
+        assert_eq!(
+            parse_range(&m.damping).unwrap(),
+            (spec.damping_min, spec.damping_max)
+        );
+        let Simulate::Shaker(s) = Simulate::from(&sim_args(&["shaker", "--out", "s.csv"])) else {
+            unreachable!()
+        };
+        assert_eq!(
+            parse_range(&s.damping).unwrap(),
+            (spec.damping_min, spec.damping_max)
+        );
+        let Simulate::Experiment(e) = Simulate::from(&sim_args(&["experiment", "--out", "e.csv"]))
+        else {
+            unreachable!()
+        };
+        let thesis = ExperimentSpec::thesis(e.compensation, e.averages, e.seed);
+        assert_eq!(e.accel_noise, thesis.accel_noise_rms);
+        assert_eq!(e.lvt_noise, thesis.lvt_noise_rms);
+        assert_eq!(e.actuators, thesis_actuators().len());
+        let crate::args::Command::Friction(f) = parsed(&["friction", "tune", "--stiffness", "1"])
+        else {
+            unreachable!()
+        };
+        let Friction::Tune(t) = Friction::from(&f) else {
+            unreachable!()
+        };
+        let channel = ChannelConfig::thesis(1.0);
+        assert_eq!(
+            (t.dead_zone, t.fraction),
+            (channel.dead_zone, channel.fraction)
+        );
+    }
+
+    fn sim_args(args: &[&str]) -> SimulateArgs {
+        let argv: Vec<&str> = ["simulate"].iter().chain(args).copied().collect();
+        match parsed(&argv) {
+            crate::args::Command::Simulate(a) => a,
+            _ => unreachable!(),
+        }
+    }
 }

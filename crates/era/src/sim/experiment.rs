@@ -384,8 +384,8 @@ impl Compensation {
     pub fn thesis() -> Self {
         Compensation {
             coefficients: TABLE_5_1.iter().map(|t| t.2).collect(),
-            dead_zone: 0.2,
-            fraction: 0.85,
+            dead_zone: crate::friction::compensator::ChannelConfig::THESIS_DEAD_ZONE,
+            fraction: crate::friction::compensator::ChannelConfig::THESIS_FRACTION,
             rate_hz: 200.0,
         }
     }
@@ -428,6 +428,11 @@ pub struct ExperimentSpec {
 }
 
 impl ExperimentSpec {
+    /// The thesis's accelerometer noise RMS, in/s² ([`ExperimentSpec::thesis`]).
+    pub const THESIS_ACCEL_NOISE_RMS: f64 = 0.01;
+    /// The thesis's LVT noise RMS, in/s ([`ExperimentSpec::thesis`]).
+    pub const THESIS_LVT_NOISE_RMS: f64 = 0.05;
+
     /// The thesis's test on the DTA-like structure, `averages` frames per actuator, with
     /// or without compensation (0.3 V or 0.6 V excitation).
     pub fn thesis(compensated: bool, averages: usize, seed: u64) -> Self {
@@ -444,8 +449,8 @@ impl ExperimentSpec {
             averages,
             lines: 801,
             settle_s: 20.0,
-            accel_noise_rms: 0.01,
-            lvt_noise_rms: 0.05,
+            accel_noise_rms: Self::THESIS_ACCEL_NOISE_RMS,
+            lvt_noise_rms: Self::THESIS_LVT_NOISE_RMS,
             seed,
         }
     }
