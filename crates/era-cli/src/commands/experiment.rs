@@ -59,9 +59,9 @@ fn structure(a: &config::Experiment) -> anyhow::Result<Structure> {
         Some(text) => crate::config::parse_range(text)?,
         None => (d.damping_min, d.damping_max),
     };
-    let dofs = a.dofs.unwrap_or(8);
+    let dofs = a.dofs.unwrap_or(d.outputs);
     era::limits::CHANNELS.check("--dofs", dofs as u64)?;
-    let modes = a.modes.unwrap_or(40);
+    let modes = a.modes.unwrap_or(d.modes);
     era::limits::STATES.check_product("--modes (2 states each)", &[modes as u64, 2])?;
     let spec = ModalSpec {
         outputs: dofs,
@@ -96,7 +96,11 @@ fn spec(a: &config::Experiment) -> anyhow::Result<ExperimentSpec> {
         ));
     }
     let compensated = a.compensation;
-    let excitation = a.excitation.unwrap_or(if compensated { 0.3 } else { 0.6 });
+    let excitation = a.excitation.unwrap_or(if compensated {
+        ExperimentSpec::THESIS_COMPENSATED_EXCITATION_RMS_V
+    } else {
+        ExperimentSpec::THESIS_EXCITATION_RMS_V
+    });
     if !(excitation.is_finite() && excitation > 0.0 && excitation <= 1000.0) {
         return usage(format!(
             "--excitation {excitation}: must be a positive RMS voltage up to 1000 V"

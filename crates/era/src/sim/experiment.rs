@@ -432,6 +432,10 @@ impl ExperimentSpec {
     pub const THESIS_ACCEL_NOISE_RMS: f64 = 0.01;
     /// The thesis's LVT noise RMS, in/s ([`ExperimentSpec::thesis`]).
     pub const THESIS_LVT_NOISE_RMS: f64 = 0.05;
+    /// The thesis's excitation RMS voltage without compensation, V (§4.5).
+    pub const THESIS_EXCITATION_RMS_V: f64 = 0.6;
+    /// The thesis's excitation RMS voltage with compensation, V (§4.5).
+    pub const THESIS_COMPENSATED_EXCITATION_RMS_V: f64 = 0.3;
 
     /// The thesis's test on the DTA-like structure, `averages` frames per actuator, with
     /// or without compensation (0.3 V or 0.6 V excitation).
@@ -441,7 +445,11 @@ impl ExperimentSpec {
             actuators: thesis_actuators(),
             compensation: compensated.then(Compensation::thesis),
             lvt_rate_hz: 200.0,
-            excitation_rms_v: if compensated { 0.3 } else { 0.6 },
+            excitation_rms_v: if compensated {
+                Self::THESIS_COMPENSATED_EXCITATION_RMS_V
+            } else {
+                Self::THESIS_EXCITATION_RMS_V
+            },
             band_hz: 20.0,
             drive: Drive::OneAtATime,
             analyzer_rate_hz: 51.2,
