@@ -1,10 +1,10 @@
-//! Flags to typed settings: every verb's output switches are one [`Settings`];
-//! `demo`, `info`, `convert`, `plot` and `friction` get settings of their own
-//! ([`Demo`], [`Info`], [`Convert`], [`Plot`], [`Friction`]) that their commands take
-//! instead of the clap structs; `identify`'s (and `compare`'s) arguments become an
-//! [`EraOptions`] and an [`OrderRange`], checked under the flags' names before anything
-//! is read. The core names option fields ([`Naming`]); this module adds the flag names,
-//! so other front ends (Python) can word the same checks their own way.
+//! Flags to typed settings: every verb's output switches are one [`Settings`], and
+//! every verb gets settings of its own ([`Demo`], [`Identify`], [`Frf`], [`Simulate`],
+//! [`Friction`], [`Plot`], [`Info`], [`Convert`], [`Compare`], [`Refine`]) that its
+//! command takes instead of the clap structs. `identify`'s (and `compare`'s) arguments
+//! become an [`EraOptions`] and an [`OrderRange`], checked under the flags' names before
+//! anything is read. The core names option fields ([`Naming`]); this module adds the
+//! flag names, so other front ends (Python) can word the same checks their own way.
 
 use crate::args::{
     CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, ExcitationArg, ExperimentArgs,
