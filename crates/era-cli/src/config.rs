@@ -1278,6 +1278,8 @@ mod tests {
             (t.dead_zone, t.fraction),
             (channel.dead_zone, channel.fraction)
         );
+        let compensator = era::sim::experiment::Compensation::thesis();
+        assert_eq!(t.model.sample_rate, compensator.rate_hz);
     }
 
     fn sim_args(args: &[&str]) -> SimulateArgs {

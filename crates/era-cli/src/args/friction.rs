@@ -57,7 +57,7 @@ pub struct OscillatorArgs {
     #[arg(long, allow_negative_numbers = true, default_value_t = 1.5)]
     pub x0: f64,
     /// Samples per second.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 200.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = ChannelConfig::THESIS_RATE_HZ)]
     pub sample_rate: f64,
 }
 

@@ -37,6 +37,8 @@ pub struct ChannelConfig {
 }
 
 impl ChannelConfig {
+    /// The thesis's compensator sample rate, Hz (§4.4; its LVTs are sampled with it).
+    pub const THESIS_RATE_HZ: f64 = 200.0;
     /// The thesis's dead zone, in/s (§4.4).
     pub const THESIS_DEAD_ZONE: f64 = 0.2;
     /// The fraction of the coefficient the thesis applied (§4.4: 0.85–0.9).

@@ -386,7 +386,7 @@ impl Compensation {
             coefficients: TABLE_5_1.iter().map(|t| t.2).collect(),
             dead_zone: crate::friction::compensator::ChannelConfig::THESIS_DEAD_ZONE,
             fraction: crate::friction::compensator::ChannelConfig::THESIS_FRACTION,
-            rate_hz: 200.0,
+            rate_hz: crate::friction::compensator::ChannelConfig::THESIS_RATE_HZ,
         }
     }
 }
@@ -444,7 +444,7 @@ impl ExperimentSpec {
             structure: Structure::from_modal(&dta_like_structure()),
             actuators: thesis_actuators(),
             compensation: compensated.then(Compensation::thesis),
-            lvt_rate_hz: 200.0,
+            lvt_rate_hz: crate::friction::compensator::ChannelConfig::THESIS_RATE_HZ,
             excitation_rms_v: if compensated {
                 Self::THESIS_COMPENSATED_EXCITATION_RMS_V
             } else {
