@@ -1,14 +1,16 @@
-//! Flags to typed settings: every verb's output switches are one [`Settings`];
-//! `demo`, `info`, `convert`, `plot` and `friction` get settings of their own
-//! ([`Demo`], [`Info`], [`Convert`], [`Plot`], [`Friction`]) that their commands take
-//! instead of the clap structs; `identify`'s (and `compare`'s) arguments become an
-//! [`EraOptions`] and an [`OrderRange`], checked under the flags' names before anything
-//! is read. The core names option fields ([`Naming`]); this module adds the flag names,
-//! so other front ends (Python) can word the same checks their own way.
+//! Flags to typed settings: every verb's output switches are one [`Settings`], and
+//! every verb gets settings of its own ([`Demo`], [`Identify`], [`Frf`], [`Simulate`],
+//! [`Friction`], [`Plot`], [`Info`], [`Convert`], [`Compare`], [`Refine`]) that its
+//! command takes instead of the clap structs. `identify`'s (and `compare`'s) arguments
+//! become an [`EraOptions`] and an [`OrderRange`], checked under the flags' names before
+//! anything is read. The core names option fields ([`Naming`]); this module adds the
+//! flag names, so other front ends (Python) can word the same checks their own way.
 
 use crate::args::{
-    CommonArgs, ConvertArgs, DecayMethodArg, DemoArgs, FrictionAction, FrictionArgs, IdentifyArgs,
-    InfoArgs, OscillatorArgs, PlotArgs, RefineFitArgs, StatesArg, WelchArgs,
+    CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, ExcitationArg, ExperimentArgs,
+    FrfArgs, FrictionAction, FrictionArgs, IdentifyArgs, InfoArgs, ModalArgs, OnOff,
+    OscillatorArgs, PlotArgs, RefineArgs, RefineFitArgs, ShakerArgs, SimulateArgs, SimulateCommon,
+    SimulateModel, StatesArg, StructureQuantity, WelchArgs,
 };
 use crate::input::FrfFlags;
 use era::frf::estimate::WelchOptions;
@@ -309,6 +311,593 @@ impl From<&FrictionArgs> for Friction {
     }
 }
 
+/// How FRFs are estimated from time histories (`era frf`, `era identify --from-time`).
+#[derive(Debug, Clone)]
+pub struct Welch {
+    /// Samples per frame; `None` picks it from the record ([`DEFAULT_FRAME`], or the
+    /// judging frame when OKID keeps the records).
+    pub frame: Option<usize>,
+    /// Window of each frame.
+    pub window: era::frf::estimate::Window,
+    /// Overlap of consecutive frames, as a fraction of the frame.
+    pub overlap: f64,
+    /// The FRF estimator.
+    pub estimator: era::frf::estimate::Estimator,
+    /// Trend removed from each frame.
+    pub detrend: era::frf::estimate::Detrend,
+    /// Lines kept up to this frequency, Hz.
+    pub max_hz: Option<f64>,
+    /// Sample rate given, Hz (else the file's).
+    pub sample_rate: Option<f64>,
+    /// MAT input: the matrices to read.
+    pub variable: Vec<String>,
+    /// HDF5 input: the datasets to read.
+    pub dataset: Vec<String>,
+}
+
+pub use era::frf::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
+
+impl Welch {
+    /// The frame given, or [`DEFAULT_FRAME`].
+    pub fn frame_or_default(&self) -> usize {
+        self.frame.unwrap_or(DEFAULT_FRAME)
+    }
+}
+
+impl From<&WelchArgs> for Welch {
+    fn from(a: &WelchArgs) -> Self {
+        Welch {
+            frame: a.frame,
+            window: a.window,
+            overlap: a.overlap,
+            estimator: a.estimator,
+            detrend: a.detrend,
+            max_hz: a.max_hz,
+            sample_rate: a.sample_rate,
+            variable: a.variable.clone(),
+            dataset: a.dataset.clone(),
+        }
+    }
+}
+
+/// `era frf`: the time files, their channels, the Welch settings and the file written.
+#[derive(Debug, Clone)]
+pub struct Frf<'a> {
+    /// Time-history files (records of one test).
+    pub files: Vec<PathBuf>,
+    /// Input channels, as given.
+    pub inputs: String,
+    /// Output channels, as given.
+    pub outputs: String,
+    /// How the FRFs are estimated.
+    pub welch: Welch,
+    /// What the outputs measure.
+    pub quantity: era::Quantity,
+    /// Units written into the FRF file.
+    pub units: Option<&'a crate::args::UnitsArg>,
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// UFF output: binary 58b.
+    pub binary: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> From<&'a FrfArgs> for Frf<'a> {
+    fn from(a: &'a FrfArgs) -> Self {
+        Frf {
+            files: a.files.clone(),
+            inputs: a.inputs.clone(),
+            outputs: a.outputs.clone(),
+            welch: Welch::from(&a.welch),
+            quantity: a.quantity,
+            units: a.units.as_ref(),
+            out: a.out.clone(),
+            binary: a.binary,
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era compare`: the two FRF sets, their models (given, or identified with `era
+/// identify`'s flags), the bands and where the files go.
+#[derive(Debug, Clone)]
+pub struct Compare {
+    /// First FRF set.
+    pub a: PathBuf,
+    /// Second FRF set.
+    pub b: PathBuf,
+    /// Model of A.
+    pub model_a: Option<PathBuf>,
+    /// Model of B.
+    pub model_b: Option<PathBuf>,
+    /// Band edges, Hz.
+    pub bands: Vec<f64>,
+    /// Lowest and highest frequency of the fit error, Hz.
+    pub fit_band: Vec<f64>,
+    /// Folder for the files.
+    pub out: Option<PathBuf>,
+    /// `era identify` flags to identify both sets with ([`compare_identify_options`]).
+    pub identify: Option<Vec<String>>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&CompareArgs> for Compare {
+    fn from(a: &CompareArgs) -> Self {
+        Compare {
+            a: a.a.clone(),
+            b: a.b.clone(),
+            model_a: a.model_a.clone(),
+            model_b: a.model_b.clone(),
+            bands: a.bands.clone(),
+            fit_band: a.fit_band.clone(),
+            out: a.out.clone(),
+            identify: a.identify.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// The options `era compare --identify FLAGS` realizes the set at `path` with: plain
+/// ERA at one order, on the route of an unrefined run. The flags are parsed when the
+/// set is read, so that the files' errors come first.
+pub fn compare_identify_options(
+    flags: &[String],
+    path: &std::path::Path,
+    frf: &era::FrfData,
+) -> anyhow::Result<EraOptions> {
+    use clap::Parser;
+    let mut argv = vec![path.display().to_string()];
+    argv.extend(flags.iter().cloned());
+    let parsed = crate::args::IdentifyFlags::try_parse_from(&argv)
+        .map_err(|e| crate::error::UsageError(format!("--identify: {e}")))?;
+    if parsed.args.refine || parsed.args.band.is_some() || parsed.args.from_time {
+        return crate::error::usage(
+            "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
+        );
+    }
+    let mut opts = options(&parsed.args)?;
+    if opts.order.states().unwrap_or(0) == 0 {
+        return crate::error::usage(
+            "--identify needs --states N: compare realizes each set at one order",
+        );
+    }
+    // Compare realizes with ERA alone: the route's refinement does not apply, and its
+    // domain and direct term are those of an unrefined run.
+    let mut request = route_request(&parsed.args);
+    request.refine = Some(false);
+    let route = request.resolve(frf.quantity(), opts.integrations);
+    apply_route(&mut opts, &route);
+    Ok(opts)
+}
+
+/// What both FRF simulators write: the file, its noise and the seed.
+#[derive(Debug, Clone)]
+pub struct SimOutput {
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// Noise RMS as a fraction of each FRF's RMS.
+    pub noise: f64,
+    /// Seed of the noise (and of the modal structure).
+    pub seed: u64,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&SimulateCommon> for SimOutput {
+    fn from(a: &SimulateCommon) -> Self {
+        SimOutput {
+            out: a.out.clone(),
+            noise: a.noise,
+            seed: a.seed,
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era simulate modal`: the seeded structure, its lines and the file written.
+#[derive(Debug, Clone)]
+pub struct Modal {
+    /// Outputs (sensors).
+    pub outputs: usize,
+    /// Inputs (actuators).
+    pub inputs: usize,
+    /// Number of modes.
+    pub modes: usize,
+    /// Lowest natural frequency, Hz.
+    pub fmin: f64,
+    /// Highest natural frequency, Hz.
+    pub fmax: f64,
+    /// Damping ratio range `MIN..MAX`, as given.
+    pub damping: String,
+    /// Number of lines, from 0 Hz.
+    pub lines: usize,
+    /// Line spacing, Hz.
+    pub df: f64,
+    /// What the FRFs measure per unit force.
+    pub quantity: era::Quantity,
+    /// Input shapes equal output shapes.
+    pub collocated: bool,
+    /// The file, its noise and the seed.
+    pub sim: SimOutput,
+}
+
+impl From<&ModalArgs> for Modal {
+    fn from(a: &ModalArgs) -> Self {
+        Modal {
+            outputs: a.outputs,
+            inputs: a.inputs,
+            modes: a.modes,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            lines: a.lines,
+            df: a.df,
+            quantity: a.quantity,
+            collocated: a.collocated,
+            sim: SimOutput::from(&a.sim),
+        }
+    }
+}
+
+/// The shakers' signal of `era simulate shaker`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Excitation {
+    /// Gaussian white noise.
+    White,
+    /// Gaussian noise in the band.
+    BandLimited,
+    /// White noise on for part of every period.
+    Burst,
+    /// A linear sine sweep over the band.
+    Sweep,
+    /// Half-sine impacts every period.
+    Impact,
+}
+
+/// `era simulate shaker`: the structure, the shakers' signal, the record and its noise.
+#[derive(Debug, Clone)]
+pub struct Shaker {
+    /// Outputs (accelerometers).
+    pub outputs: usize,
+    /// Inputs (shakers).
+    pub inputs: usize,
+    /// Number of modes.
+    pub modes: usize,
+    /// Lowest natural frequency, Hz.
+    pub fmin: f64,
+    /// Highest natural frequency, Hz.
+    pub fmax: f64,
+    /// Damping ratio range `MIN..MAX`, as given.
+    pub damping: String,
+    /// Sample rate, Hz.
+    pub sample_rate: f64,
+    /// Record length, s.
+    pub duration: f64,
+    /// The shakers' signal.
+    pub excitation: Excitation,
+    /// Band `LO..HI` Hz, as given.
+    pub band: Option<String>,
+    /// Period of bursts or impacts, s.
+    pub period: f64,
+    /// Fraction of each burst period with noise on.
+    pub burst_on: f64,
+    /// Duration of one impact, s.
+    pub pulse_width: f64,
+    /// What the outputs measure.
+    pub quantity: era::Quantity,
+    /// Time-history CSV to write.
+    pub out: PathBuf,
+    /// Sensor noise RMS as a fraction of each channel's RMS.
+    pub noise: f64,
+    /// Seed of the structure, the excitation and the noise.
+    pub seed: u64,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&ShakerArgs> for Shaker {
+    fn from(a: &ShakerArgs) -> Self {
+        Shaker {
+            outputs: a.outputs,
+            inputs: a.inputs,
+            modes: a.modes,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            sample_rate: a.sample_rate,
+            duration: a.duration,
+            excitation: match a.excitation {
+                ExcitationArg::White => Excitation::White,
+                ExcitationArg::BandLimited => Excitation::BandLimited,
+                ExcitationArg::Burst => Excitation::Burst,
+                ExcitationArg::Sweep => Excitation::Sweep,
+                ExcitationArg::Impact => Excitation::Impact,
+            },
+            band: a.band.clone(),
+            period: a.period,
+            burst_on: a.burst_on,
+            pulse_width: a.pulse_width,
+            quantity: a.quantity,
+            out: a.out.clone(),
+            noise: a.noise,
+            seed: a.seed,
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era simulate experiment`: the thesis's FRF test in the time domain.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// Friction compensation in the actuators.
+    pub compensation: bool,
+    /// Frames averaged per excited actuator.
+    pub averages: usize,
+    /// Seed of the excitation and the sensor noise.
+    pub seed: u64,
+    /// Multiplies every actuator's true Coulomb force.
+    pub friction_scale: f64,
+    /// Compensator coefficients, lbf, one per actuator.
+    pub coefficients: Option<Vec<f64>>,
+    /// Excitation RMS voltage, V (by the compensation, when `None`).
+    pub excitation: Option<f64>,
+    /// Every actuator at once.
+    pub simultaneous: bool,
+    /// Number of actuators.
+    pub actuators: usize,
+    /// Accelerometer noise RMS, in/s².
+    pub accel_noise: f64,
+    /// LVT noise RMS, in/s.
+    pub lvt_noise: f64,
+    /// Structure from a model.json.
+    pub structure: Option<PathBuf>,
+    /// What the structure model's outputs measure.
+    pub structure_quantity: era::Quantity,
+    /// A seeded modal structure: number of modes.
+    pub modes: Option<usize>,
+    /// Its DOFs.
+    pub dofs: Option<usize>,
+    /// Its lowest natural frequency, Hz.
+    pub fmin: Option<f64>,
+    /// Its highest natural frequency, Hz.
+    pub fmax: Option<f64>,
+    /// Its damping ratio range `MIN..MAX`, as given.
+    pub damping: Option<String>,
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// File for the exact FRFs of the linear system.
+    pub exact_out: Option<PathBuf>,
+    /// Folder for the analyzer's time histories.
+    pub time_histories: Option<PathBuf>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&ExperimentArgs> for Experiment {
+    fn from(a: &ExperimentArgs) -> Self {
+        Experiment {
+            compensation: a.compensation == OnOff::On,
+            averages: a.averages,
+            seed: a.seed,
+            friction_scale: a.friction_scale,
+            coefficients: a.coefficients.clone(),
+            excitation: a.excitation,
+            simultaneous: a.simultaneous,
+            actuators: a.actuators,
+            accel_noise: a.accel_noise,
+            lvt_noise: a.lvt_noise,
+            structure: a.structure.clone(),
+            structure_quantity: match a.structure_quantity {
+                StructureQuantity::Velocity => era::Quantity::Velocity,
+                StructureQuantity::Acceleration => era::Quantity::Acceleration,
+            },
+            modes: a.modes,
+            dofs: a.dofs,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            out: a.out.clone(),
+            exact_out: a.exact_out.clone(),
+            time_histories: a.time_histories.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
+
+/// `era simulate truth-model|modal|experiment|shaker`.
+#[derive(Debug, Clone)]
+pub enum Simulate {
+    /// The thesis's truth model's FRFs.
+    TruthModel(SimOutput),
+    /// A seeded modal structure's FRFs.
+    Modal(Modal),
+    /// The thesis's FRF test in the time domain.
+    Experiment(Box<Experiment>),
+    /// A shaker test in the time domain.
+    Shaker(Box<Shaker>),
+}
+
+impl From<&SimulateArgs> for Simulate {
+    fn from(a: &SimulateArgs) -> Self {
+        match &a.model {
+            SimulateModel::TruthModel(s) => Simulate::TruthModel(SimOutput::from(s)),
+            SimulateModel::Modal(m) => Simulate::Modal(Modal::from(m)),
+            SimulateModel::Experiment(e) => {
+                Simulate::Experiment(Box::new(Experiment::from(e.as_ref())))
+            }
+            SimulateModel::Shaker(s) => Simulate::Shaker(Box::new(Shaker::from(s.as_ref()))),
+        }
+    }
+}
+
+/// `era refine`: the model, the FRF file it came from, how to refine and where the
+/// files go.
+#[derive(Debug, Clone)]
+pub struct Refine<'a> {
+    /// model.json of an earlier identification.
+    pub model: PathBuf,
+    /// The FRF file it was identified from.
+    pub file: PathBuf,
+    /// How to read the file.
+    pub read: FrfFlags<'a>,
+    /// How the refinement fits, checked ([`refine_options`]).
+    pub options: RefineOptions,
+    /// Folder for the files, when asked for.
+    pub out: Option<PathBuf>,
+    /// Model files but no figures and no report.
+    pub no_figures: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> Refine<'a> {
+    /// The settings of the flags, checked before anything is read.
+    pub fn new(a: &'a RefineArgs) -> anyhow::Result<Self> {
+        if a.fit.weighting == Some(crate::args::WeightingArg::Coherence) {
+            return crate::error::usage(
+                "--weighting coherence weights by an estimate's coherence, which era refine does not have: use it with era identify --from-time",
+            );
+        }
+        Ok(Refine {
+            model: a.model.clone(),
+            file: a.file.clone(),
+            read: FrfFlags::from(&a.read),
+            options: refine_options(&a.fit)?,
+            out: a.out.clone(),
+            no_figures: a.no_figures,
+            settings: Settings::from(&a.common),
+        })
+    }
+}
+
+/// The refinement's weighting asked for by name: one of the core's (set in
+/// [`Identify::refine`]), or the estimate's coherence, whose values come with the data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WeightingGiven {
+    /// `uniform` or `pair-noise`.
+    Named,
+    /// `coherence`.
+    Coherence,
+}
+
+/// `era identify`: the data and how to read or estimate it, ERA's options, the route
+/// asked for, the refinement and where the files go; checked under the flags' names
+/// before anything is read.
+#[derive(Debug, Clone)]
+pub struct Identify<'a> {
+    /// The FRF file, or the first time-history file.
+    pub file: PathBuf,
+    /// More time-history files (records of one test).
+    pub more: Vec<PathBuf>,
+    /// ERA's options ([`options`]); the route's domain and direct term are set once the
+    /// data is read ([`apply_route`]).
+    pub options: EraOptions,
+    /// The route asked for ([`route_request`]).
+    pub request: RouteRequest,
+    /// The refinement's options, checked ([`refine_options`]).
+    pub refine: RefineOptions,
+    /// The weighting asked for by name, when given.
+    pub weighting: Option<WeightingGiven>,
+    /// The scan's orders (`--orders`), when given.
+    pub orders: Option<OrderRange>,
+    /// What the FRFs (or the outputs) measure, when given.
+    pub quantity: Option<era::Quantity>,
+    /// `--outputs`: the FRF file's output count, or the time files' output channels.
+    pub outputs: Option<String>,
+    /// Input channels of the time files.
+    pub inputs: Option<String>,
+    /// Units of the FRFs, when given.
+    pub units: Option<&'a crate::args::UnitsArg>,
+    /// A MAT file's frequency variable, when not `FreqV`.
+    pub freq_variable: Option<String>,
+    /// `--band`, as given.
+    pub band: Option<String>,
+    /// The data are time histories.
+    pub from_time: bool,
+    /// No check of the model against a second frame.
+    pub no_frame_check: bool,
+    /// Where the Markov parameters come from.
+    pub markov: era::sources::MarkovSource,
+    /// OKID's observer order.
+    pub observer_order: era::sources::okid::ObserverOrder,
+    /// Markov blocks OKID returns, when given.
+    pub markov_samples: Option<usize>,
+    /// How FRFs are estimated from the time histories.
+    pub welch: Welch,
+    /// File for the estimated FRFs.
+    pub save_frf: Option<PathBuf>,
+    /// How the figures draw the phase.
+    pub phase: era_plot::PhaseView,
+    /// Folder for the files, when asked for.
+    pub out: Option<PathBuf>,
+    /// Model files but no figures and no report.
+    pub no_figures: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl<'a> Identify<'a> {
+    /// The settings of the flags, checked in the order the flags' errors are reported.
+    pub fn new(a: &'a IdentifyArgs) -> anyhow::Result<Self> {
+        use crate::args::{ObserverOrderArg, WeightingArg};
+        use era::sources::okid::ObserverOrder;
+        let options = options(a)?;
+        let orders = scan_orders(a)?;
+        let request = route_request(a);
+        let refine = identify_refine_options(a, &request)?;
+        Ok(Identify {
+            file: a.file.clone(),
+            more: a.more.clone(),
+            options,
+            request,
+            refine,
+            weighting: a.refine_fit.weighting.as_ref().map(|w| match w {
+                WeightingArg::Named(_) => WeightingGiven::Named,
+                WeightingArg::Coherence => WeightingGiven::Coherence,
+            }),
+            orders,
+            quantity: a.quantity,
+            outputs: a.outputs.clone(),
+            inputs: a.inputs.clone(),
+            units: a.facts.units.as_ref(),
+            freq_variable: a.facts.freq_variable.clone(),
+            band: a.band.clone(),
+            from_time: a.from_time,
+            no_frame_check: a.no_frame_check,
+            markov: a.markov,
+            observer_order: match a.observer_order {
+                Some(ObserverOrderArg::Fixed(p)) => ObserverOrder::Fixed(p),
+                Some(ObserverOrderArg::Auto) | None => ObserverOrder::Auto { max: None },
+            },
+            markov_samples: a.markov_samples,
+            welch: Welch::from(&a.welch),
+            save_frf: a.save_frf.clone(),
+            phase: a.phase.into(),
+            out: a.out.clone(),
+            no_figures: a.no_figures,
+            settings: Settings::from(&a.common),
+        })
+    }
+}
+
+/// The refinement's options, refused when given while the route asked for does not
+/// refine: whether it refines depends on the preset, not on the data's quantity, so it
+/// is known before anything is read.
+fn identify_refine_options(
+    a: &IdentifyArgs,
+    request: &RouteRequest,
+) -> anyhow::Result<RefineOptions> {
+    let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
+    if !refine && refine_given(&a.refine_fit) {
+        return crate::error::usage(
+            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine, --preset thesis or --markov okid): add --refine",
+        );
+    }
+    refine_options(&a.refine_fit)
+}
+
 /// The route the flags ask for: the preset, and every choice given explicitly
 /// (era::identify::route resolves the rest once the data's quantity is known).
 pub fn route_request(a: &IdentifyArgs) -> RouteRequest {
@@ -557,7 +1146,7 @@ pub fn parse_range(text: &str) -> anyhow::Result<(f64, f64)> {
 }
 
 /// The Welch settings of the flags at `rate` samples per second.
-pub fn welch_options(welch: &WelchArgs, rate: f64) -> WelchOptions {
+pub fn welch_options(welch: &Welch, rate: f64) -> WelchOptions {
     let mut o = WelchOptions::new(rate, welch.frame_or_default());
     o.overlap = welch.overlap;
     o.window = welch.window;
@@ -614,7 +1203,7 @@ mod tests {
         assert_eq!(a.markov, era::sources::MarkovSource::default());
         assert_eq!(a.welch.estimator, era::frf::estimate::Estimator::default());
         assert_eq!(
-            welch_options(&a.welch, 100.0),
+            welch_options(&Welch::from(&a.welch), 100.0),
             WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
         );
         let crate::args::Command::Frf(f) = parsed(&[
@@ -631,9 +1220,73 @@ mod tests {
         };
         assert_eq!(f.welch.estimator, era::frf::estimate::Estimator::default());
         assert_eq!(
-            welch_options(&f.welch, 100.0),
+            welch_options(&Welch::from(&f.welch), 100.0),
             WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
         );
         assert_eq!(f.quantity, era::Quantity::default());
+    }
+
+    /// The scenarios' flags left out are the core's settings where the core has them
+    /// (the seeded structure, the thesis's test and compensator): this fails when a
+    /// front end's default drifts from the core's.
+    #[test]
+    fn scenario_flags_left_out_are_the_cores() {
+        use era::friction::compensator::ChannelConfig;
+        use era::sim::experiment::{thesis_actuators, ExperimentSpec};
+        let Simulate::Modal(m) = Simulate::from(&sim_args(&["modal", "--out", "m.csv"])) else {
+            unreachable!()
+        };
+        let spec = era::sim::ModalSpec::default();
+        assert_eq!(
+            (m.outputs, m.inputs, m.modes, m.fmin, m.fmax),
+            (
+                spec.outputs,
+                spec.inputs,
+                spec.modes,
+                spec.fmin_hz,
+                spec.fmax_hz
+            )
+        );
+        assert_eq!(
+            parse_range(&m.damping).unwrap(),
+            (spec.damping_min, spec.damping_max)
+        );
+        let Simulate::Shaker(s) = Simulate::from(&sim_args(&["shaker", "--out", "s.csv"])) else {
+            unreachable!()
+        };
+        assert_eq!(
+            parse_range(&s.damping).unwrap(),
+            (spec.damping_min, spec.damping_max)
+        );
+        let Simulate::Experiment(e) = Simulate::from(&sim_args(&["experiment", "--out", "e.csv"]))
+        else {
+            unreachable!()
+        };
+        let thesis = ExperimentSpec::thesis(e.compensation, e.averages, e.seed);
+        assert_eq!(e.accel_noise, thesis.accel_noise_rms);
+        assert_eq!(e.lvt_noise, thesis.lvt_noise_rms);
+        assert_eq!(e.actuators, thesis_actuators().len());
+        let crate::args::Command::Friction(f) = parsed(&["friction", "tune", "--stiffness", "1"])
+        else {
+            unreachable!()
+        };
+        let Friction::Tune(t) = Friction::from(&f) else {
+            unreachable!()
+        };
+        let channel = ChannelConfig::thesis(1.0);
+        assert_eq!(
+            (t.dead_zone, t.fraction),
+            (channel.dead_zone, channel.fraction)
+        );
+        let compensator = era::sim::experiment::Compensation::thesis();
+        assert_eq!(t.model.sample_rate, compensator.rate_hz);
+    }
+
+    fn sim_args(args: &[&str]) -> SimulateArgs {
+        let argv: Vec<&str> = ["simulate"].iter().chain(args).copied().collect();
+        match parsed(&argv) {
+            crate::args::Command::Simulate(a) => a,
+            _ => unreachable!(),
+        }
     }
 }

@@ -136,15 +136,15 @@ fn main() -> ExitCode {
     }));
     let run = || match &cli.command {
         args::Command::Demo(a) => commands::demo::run(&a.into()),
-        args::Command::Identify(a) => commands::identify::run(a),
-        args::Command::Frf(a) => commands::frf::run(a),
-        args::Command::Simulate(a) => commands::simulate::run(a),
+        args::Command::Identify(a) => commands::identify::run(&config::Identify::new(a)?),
+        args::Command::Frf(a) => commands::frf::run(&a.into()),
+        args::Command::Simulate(a) => commands::simulate::run(&a.into()),
         args::Command::Friction(a) => commands::friction::run(&a.into()),
         args::Command::Plot(a) => commands::plot::run(&a.into()),
         args::Command::Info(a) => commands::files::run_info(&a.into()),
         args::Command::Convert(a) => commands::files::run_convert(&a.into()),
-        args::Command::Compare(a) => commands::compare::run(a),
-        args::Command::Refine(a) => commands::refine::run(a),
+        args::Command::Compare(a) => commands::compare::run(&a.as_ref().into()),
+        args::Command::Refine(a) => commands::refine::run(&config::Refine::new(a)?),
     };
     // One thread setting for rayon and faer (era::parallel); a refused count is a usage
     // error like any flag's.

@@ -105,15 +105,6 @@ pub fn parse_units(text: &str) -> Result<UnitsArg, String> {
     })
 }
 
-pub use era::frf::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
-
-impl WelchArgs {
-    /// `--frame`, or [`DEFAULT_FRAME`].
-    pub fn frame_or_default(&self) -> usize {
-        self.frame.unwrap_or(DEFAULT_FRAME)
-    }
-}
-
 /// How FRFs are estimated from time histories (era frf, era identify --from-time).
 #[derive(Debug, Args, Clone)]
 pub struct WelchArgs {

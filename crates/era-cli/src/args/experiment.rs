@@ -2,6 +2,7 @@
 
 use super::common::CommonArgs;
 use clap::{Args, ValueEnum};
+use era::sim::experiment::ExperimentSpec;
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -44,13 +45,13 @@ pub struct ExperimentArgs {
     #[arg(long)]
     pub simultaneous: bool,
     /// Number of actuators, on structure inputs 1, 2, … (at most 8: Table 5.1 has 8).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = era::sim::experiment::TABLE_5_1.len())]
     pub actuators: usize,
     /// Accelerometer noise RMS, in/s².
-    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = ExperimentSpec::THESIS_ACCEL_NOISE_RMS, allow_negative_numbers = true)]
     pub accel_noise: f64,
     /// LVT (relative velocity) noise RMS, in/s.
-    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = ExperimentSpec::THESIS_LVT_NOISE_RMS, allow_negative_numbers = true)]
     pub lvt_noise: f64,
     /// Structure: a model.json (square, outputs collocated with the inputs); default: the
     /// DTA-like modal structure (40 modes under 14 Hz and 4 up to 20 Hz).

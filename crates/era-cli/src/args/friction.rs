@@ -2,6 +2,7 @@
 
 use super::common::CommonArgs;
 use clap::{Args, Subcommand, ValueEnum};
+use era::friction::compensator::ChannelConfig;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -56,7 +57,7 @@ pub struct OscillatorArgs {
     #[arg(long, allow_negative_numbers = true, default_value_t = 1.5)]
     pub x0: f64,
     /// Samples per second.
-    #[arg(long, allow_negative_numbers = true, default_value_t = 200.0)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = ChannelConfig::THESIS_RATE_HZ)]
     pub sample_rate: f64,
 }
 
@@ -99,10 +100,10 @@ pub struct FrictionTuneArgs {
     #[command(flatten)]
     pub model: OscillatorArgs,
     /// Compensator dead zone, velocity (thesis: 0.2 in/s).
-    #[arg(long, allow_negative_numbers = true, default_value_t = 0.2)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = ChannelConfig::THESIS_DEAD_ZONE)]
     pub dead_zone: f64,
     /// Fraction of the coefficient applied in service (thesis: 0.85–0.9).
-    #[arg(long, allow_negative_numbers = true, default_value_t = 0.85)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = ChannelConfig::THESIS_FRACTION)]
     pub fraction: f64,
     /// Cycles simulated per bisection trial.
     #[arg(long, default_value_t = 6)]

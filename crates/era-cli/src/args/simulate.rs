@@ -3,7 +3,14 @@
 use super::common::{named, CommonArgs};
 use super::experiment::ExperimentArgs;
 use clap::{Args, Subcommand, ValueEnum};
+use era::sim::ModalSpec;
 use std::path::PathBuf;
+
+/// The seeded structures' damping range, `MIN..MAX`: the core's ([`ModalSpec`]).
+fn default_damping() -> String {
+    let d = ModalSpec::default();
+    format!("{}..{}", d.damping_min, d.damping_max)
+}
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
@@ -63,7 +70,7 @@ pub struct ShakerArgs {
     #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
     pub fmax: f64,
     /// Damping ratio range MIN..MAX, fractions (0.005..0.02 = 0.5 to 2 %).
-    #[arg(long, default_value = "0.005..0.02")]
+    #[arg(long, default_value_t = default_damping())]
     pub damping: String,
     /// Sample rate, Hz.
     #[arg(long, default_value_t = 64.0, allow_negative_numbers = true)]
@@ -123,22 +130,22 @@ pub enum ExcitationArg {
 #[derive(Debug, Args)]
 pub struct ModalArgs {
     /// Outputs (sensors).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = ModalSpec::default().outputs)]
     pub outputs: usize,
     /// Inputs (actuators).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = ModalSpec::default().inputs)]
     pub inputs: usize,
     /// Number of modes.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = ModalSpec::default().modes)]
     pub modes: usize,
     /// Lowest natural frequency, Hz.
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = ModalSpec::default().fmin_hz, allow_negative_numbers = true)]
     pub fmin: f64,
     /// Highest natural frequency, Hz.
-    #[arg(long, default_value_t = 14.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = ModalSpec::default().fmax_hz, allow_negative_numbers = true)]
     pub fmax: f64,
     /// Damping ratio range MIN..MAX, fractions (0.005..0.02 = 0.5 to 2 %).
-    #[arg(long, default_value = "0.005..0.02")]
+    #[arg(long, default_value_t = default_damping())]
     pub damping: String,
     /// Number of lines, from 0 Hz.
     #[arg(long, default_value_t = 801)]

@@ -2,12 +2,10 @@
 //! 5.12): the difference per pair and per band, the modes of their models matched by MAC,
 //! and the fit of each model to its own data.
 
-use crate::args::{CompareArgs, IdentifyFlags};
-use crate::config::Settings;
+use crate::config::{Compare, Settings};
 use crate::error::usage;
 use crate::output::report::{finish_output, Human};
 use crate::output::write_output;
-use clap::Parser;
 use era::modal::indicators::mac;
 use era::pipeline::fit::model_frf;
 use era::pipeline::modes::modal_parameters;
@@ -96,25 +94,7 @@ fn model_from_json(flag: &str, path: &Path) -> anyhow::Result<Side> {
 }
 
 fn identified(flags: &[String], path: &Path, frf: &FrfData) -> anyhow::Result<Side> {
-    let mut argv = vec![path.display().to_string()];
-    argv.extend(flags.iter().cloned());
-    let parsed = IdentifyFlags::try_parse_from(&argv)
-        .map_err(|e| crate::error::UsageError(format!("--identify: {e}")))?;
-    if parsed.args.refine || parsed.args.band.is_some() || parsed.args.from_time {
-        return usage(
-            "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
-        );
-    }
-    let mut opts = crate::config::options(&parsed.args)?;
-    if opts.order.states().unwrap_or(0) == 0 {
-        return usage("--identify needs --states N: compare realizes each set at one order");
-    }
-    // Compare realizes with ERA alone: the route's refinement does not apply, and its
-    // domain and direct term are those of an unrefined run.
-    let mut request = crate::config::route_request(&parsed.args);
-    request.refine = Some(false);
-    let route = request.resolve(frf.quantity(), opts.integrations);
-    crate::config::apply_route(&mut opts, &route);
+    let opts = crate::config::compare_identify_options(flags, path, frf)?;
     let found = era::identify(frf, &opts)?;
     Ok(Side {
         model: found.model,
@@ -133,8 +113,8 @@ struct Comparison {
     fit: Option<(f64, f64)>,
 }
 
-pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &Compare) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     check_bands(a)?;
     let mut set = match &a.out {
@@ -186,7 +166,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<()> {
 }
 
 /// `--bands` and `--fit-band` checked before anything is read.
-fn check_bands(a: &CompareArgs) -> anyhow::Result<()> {
+fn check_bands(a: &Compare) -> anyhow::Result<()> {
     if a.bands.len() < 2
         || a.bands.iter().any(|b| !b.is_finite() || *b < 0.0)
         || a.bands.windows(2).any(|w| w[1] <= w[0])
@@ -206,7 +186,7 @@ fn check_bands(a: &CompareArgs) -> anyhow::Result<()> {
 }
 
 /// Both FRF files, refused unless they hold the same pairs on the same lines.
-fn read_both(a: &CompareArgs) -> anyhow::Result<(FrfFile, FrfFile)> {
+fn read_both(a: &Compare) -> anyhow::Result<(FrfFile, FrfFile)> {
     let opts = ReadOptions::default();
     let (fa, _) = read_frf_file(&a.a, &opts)?;
     let (fb, _) = read_frf_file(&a.b, &opts)?;
@@ -320,7 +300,7 @@ fn compare_models(
 }
 
 /// The human summary: the differences by band, the fits and the modes matched.
-fn summary(a: &CompareArgs, found: &Comparison, (la, lb): (&str, &str)) -> String {
+fn summary(a: &Compare, found: &Comparison, (la, lb): (&str, &str)) -> String {
     let mut text = format!(
         "era compare {} {}\n  differences by band (median over pairs, worst pair), ‖A − B‖/‖B‖:\n",
         a.a.display(),
@@ -352,7 +332,7 @@ fn summary(a: &CompareArgs, found: &Comparison, (la, lb): (&str, &str)) -> Strin
 /// One PNG per pair, compare.html and compare.json into `set`.
 fn write_files(
     set: &mut OutputSet,
-    a: &CompareArgs,
+    a: &Compare,
     (fa, fb): (&FrfFile, &FrfFile),
     found: &Comparison,
     notes: &str,

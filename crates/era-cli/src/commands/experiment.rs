@@ -1,8 +1,7 @@
 //! `era simulate experiment`: the thesis's FRF test (§4.5) simulated in the time domain
 //! (`era::sim::experiment`), written as an FRF file with its coherence beside it.
 
-use crate::args::{ExperimentArgs, OnOff, StructureQuantity};
-use crate::config::Settings;
+use crate::config;
 use crate::error::usage;
 use crate::output::figures::write_figure;
 use crate::output::report::{finish_output, Human};
@@ -12,7 +11,6 @@ use era::sim::experiment::{
     ExperimentSpec, Structure, TABLE_5_1,
 };
 use era::sim::{ModalSpec, ModalStructure};
-use era::Quantity;
 use era_io::atomic::OutputSet;
 use era_io::csv::FrfFile;
 use era_io::format::FrfFormat;
@@ -32,16 +30,13 @@ fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
 }
 
 /// The structure the flags describe.
-fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
+fn structure(a: &config::Experiment) -> anyhow::Result<Structure> {
     if let Some(path) = &a.structure {
         let model = era_io::model_json::ModelJson::read(path)?;
         let ss = model.state_space().map_err(|e| {
             crate::error::UsageError(format!("--structure {}: {e}", path.display()))
         })?;
-        let quantity = match a.structure_quantity {
-            StructureQuantity::Velocity => Quantity::Velocity,
-            StructureQuantity::Acceleration => Quantity::Acceleration,
-        };
+        let quantity = a.structure_quantity;
         return Structure::from_state_space(&ss, quantity).map_err(|e| {
             crate::error::UsageError(format!(
                 "--structure {}: {} (the structure needs one output collocated with each input)",
@@ -64,9 +59,9 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
         Some(text) => crate::config::parse_range(text)?,
         None => (d.damping_min, d.damping_max),
     };
-    let dofs = a.dofs.unwrap_or(8);
+    let dofs = a.dofs.unwrap_or(d.outputs);
     era::limits::CHANNELS.check("--dofs", dofs as u64)?;
-    let modes = a.modes.unwrap_or(40);
+    let modes = a.modes.unwrap_or(d.modes);
     era::limits::STATES.check_product("--modes (2 states each)", &[modes as u64, 2])?;
     let spec = ModalSpec {
         outputs: dofs,
@@ -85,7 +80,7 @@ fn structure(a: &ExperimentArgs) -> anyhow::Result<Structure> {
 }
 
 /// Validated flags → the experiment.
-fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
+fn spec(a: &config::Experiment) -> anyhow::Result<ExperimentSpec> {
     check_nonnegative("--friction-scale", a.friction_scale)?;
     check_nonnegative("--accel-noise", a.accel_noise)?;
     check_nonnegative("--lvt-noise", a.lvt_noise)?;
@@ -100,8 +95,12 @@ fn spec(a: &ExperimentArgs) -> anyhow::Result<ExperimentSpec> {
             TABLE_5_1.len()
         ));
     }
-    let compensated = a.compensation == OnOff::On;
-    let excitation = a.excitation.unwrap_or(if compensated { 0.3 } else { 0.6 });
+    let compensated = a.compensation;
+    let excitation = a.excitation.unwrap_or(if compensated {
+        ExperimentSpec::THESIS_COMPENSATED_EXCITATION_RMS_V
+    } else {
+        ExperimentSpec::THESIS_EXCITATION_RMS_V
+    });
     if !(excitation.is_finite() && excitation > 0.0 && excitation <= 1000.0) {
         return usage(format!(
             "--excitation {excitation}: must be a positive RMS voltage up to 1000 V"
@@ -393,7 +392,7 @@ struct Sets {
     time_histories: Option<OutputSet>,
 }
 
-fn prepare(a: &ExperimentArgs) -> anyhow::Result<Sets> {
+fn prepare(a: &config::Experiment) -> anyhow::Result<Sets> {
     frf_format("--out", &a.out)?;
     if let Some(p) = &a.exact_out {
         frf_format("--exact-out", p)?;
@@ -423,8 +422,8 @@ fn prepare(a: &ExperimentArgs) -> anyhow::Result<Sets> {
     })
 }
 
-pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &config::Experiment) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     // Refuse bad outputs before the work.
     let sets = prepare(a)?;
@@ -487,7 +486,7 @@ pub fn run(a: &ExperimentArgs) -> anyhow::Result<()> {
 
 /// The FRFs and their coherence (committed together), then the exact FRFs.
 fn write_frfs(
-    a: &ExperimentArgs,
+    a: &config::Experiment,
     mut set: OutputSet,
     exact_set: Option<OutputSet>,
     found: &Experiment,
@@ -498,7 +497,7 @@ fn write_frfs(
         ("source", "era simulate experiment".to_string()),
         (
             "compensation",
-            format!("{:?}", a.compensation).to_lowercase(),
+            (if a.compensation { "on" } else { "off" }).to_string(),
         ),
         ("averages", a.averages.to_string()),
         ("seed", a.seed.to_string()),
@@ -550,7 +549,7 @@ fn write_time_histories(
 
 /// What was written and what happened in the actuators.
 fn summary_line(
-    a: &ExperimentArgs,
+    a: &config::Experiment,
     found: &Experiment,
     spec: &ExperimentSpec,
     runs: usize,

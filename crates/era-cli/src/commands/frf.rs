@@ -1,8 +1,7 @@
 //! `era frf`: FRFs and coherence from time histories, and the same step for
 //! `era identify --from-time`.
 
-use crate::args::{FrfArgs, WelchArgs};
-use crate::config::Settings;
+use crate::config::{Frf, Settings, Welch};
 use crate::input::{shape_line, InputFrf};
 use crate::output::report::{finish_output, Human};
 use anyhow::Context as _;
@@ -99,7 +98,7 @@ struct FirstRecord {
 /// estimating them.
 struct Records {
     /// The Welch settings run, the frame resolved.
-    welch: WelchArgs,
+    welch: Welch,
     spectra: Vec<estimate::Spectra>,
     kept: Option<Vec<TimeRecord>>,
     first: Option<FirstRecord>,
@@ -135,7 +134,7 @@ fn read_records(
     paths: &[PathBuf],
     inputs: &str,
     outputs: &str,
-    welch: &WelchArgs,
+    welch: &Welch,
     est: Estimator,
     keep: bool,
     spinner: &indicatif::ProgressBar,
@@ -165,7 +164,7 @@ fn read_records(
             records.welch.frame = Some(if keep {
                 era::frf::estimate::judging_frame(history.samples(), paths.len(), welch.overlap)
             } else {
-                crate::args::DEFAULT_FRAME
+                crate::config::DEFAULT_FRAME
             });
         }
         let welch = &records.welch;
@@ -241,7 +240,7 @@ pub fn estimate_from_time(
     paths: &[PathBuf],
     inputs: &str,
     outputs: &str,
-    welch: &WelchArgs,
+    welch: &Welch,
     quantity: era::Quantity,
     keep_records: bool,
     settings: &Settings,
@@ -574,8 +573,8 @@ fn describe_estimate_error(
 }
 
 /// `era frf`.
-pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &Frf) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
     // Refuse a bad --out before reading anything.
     let set = crate::output::estimate::prepare_estimate(&a.out, a.binary)?;
@@ -584,7 +583,7 @@ pub fn run(a: &FrfArgs) -> anyhow::Result<()> {
     )?;
     // Time files seldom say their units; --units writes them into the FRF file, where
     // identify, plot and the report find them.
-    crate::input::set_units(&mut found.input, a.units.as_ref());
+    crate::input::set_units(&mut found.input, a.units);
     human.print(&format!(
         "era frf {}\n{}  FRFs: {}\n",
         a.files

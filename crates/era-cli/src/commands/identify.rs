@@ -3,9 +3,7 @@
 //! from time histories by [`crate::commands::frf`]), and the outputs are written by
 //! [`crate::output`].
 
-use crate::args::IdentifyArgs;
-use crate::config::Settings;
-use crate::config::{apply_route, era_options, options, route_request, scan_orders};
+use crate::config::{apply_route, era_options, Identify, Settings, WeightingGiven};
 use crate::input::InputFrf;
 use crate::input::{describe_input, read_frf_with, set_units, shape_line, FrfFlags};
 use crate::output::identification::{write_bundle, write_model, Bundle};
@@ -47,12 +45,12 @@ impl Observed {
     }
 }
 
-pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &Identify) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
-    let mut opts = options(a)?;
-    let request = route_request(a);
-    let refine_options = refine_settings(a, &request)?;
+    let mut opts = a.options.clone();
+    let request = &a.request;
+    let refine_options = a.refine.clone();
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
@@ -72,7 +70,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     };
     let supplied = observed.as_ref().map(Observed::supplied);
     let mut input = source.input;
-    let route = request.resolve(input.file.frf.quantity(), a.integrations);
+    let route = request.resolve(input.file.frf.quantity(), a.options.integrations);
     apply_route(&mut opts, &route);
     correct_window(a, &route, &mut input, &human)?;
     let frf = &input.file.frf;
@@ -105,7 +103,7 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     )?;
     let scan_options = {
         let mut o = ScanOptions::default();
-        o.orders = scan_orders(a)?;
+        o.orders = a.orders.clone();
         o.band_hz = fit.band_hz;
         o
     };
@@ -171,21 +169,6 @@ pub fn run(a: &IdentifyArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The refinement's settings, refused when the route does not refine: whether it does
-/// is known before anything is read.
-fn refine_settings(
-    a: &IdentifyArgs,
-    request: &era::identify::route::RouteRequest,
-) -> anyhow::Result<era::refine::RefineOptions> {
-    let refine = request.resolve(era::Quantity::Acceleration, 0).refine;
-    if !refine && crate::config::refine_given(&a.refine_fit) {
-        return crate::error::usage(
-            "--residuals, --reciprocal, --free-residues, --no-added-modes, --weighting and --max-iterations set the refinement, which is off (--no-refine, --preset thesis or --markov okid): add --refine",
-        );
-    }
-    crate::config::refine_options(&a.refine_fit)
-}
-
 /// The summary of the identification, the fit per pair and the scan.
 fn print_found(found: &era::Identification, frf: &era::FrfData, states: usize, human: &Human) {
     human.print(&identification_summary(found, states));
@@ -221,7 +204,7 @@ fn timings(
 /// What went into the run, for the report: the file (or the time histories and how
 /// their FRFs were estimated), the coherence when there is one, the phase view.
 fn run_input(
-    a: &IdentifyArgs,
+    a: &Identify,
     input: &InputFrf,
     time_format: Option<String>,
     coherence: Option<InputCoherence>,
@@ -233,12 +216,12 @@ fn run_input(
     if coherence.is_some() {
         run_input.coherence = coherence;
     }
-    run_input.phase = a.phase.into();
+    run_input.phase = a.phase;
     run_input
 }
 
 /// The closing line: what the run wrote in `dir`.
-fn written_line(a: &IdentifyArgs, dir: &std::path::Path) -> String {
+fn written_line(a: &Identify, dir: &std::path::Path) -> String {
     let figures = " (singular_values, grid, pairs/)";
     format!(
         "\nwrote {}{}\n",
@@ -250,7 +233,7 @@ fn written_line(a: &IdentifyArgs, dir: &std::path::Path) -> String {
 /// The FRFs to identify: estimated from time histories with `--from-time` (and saved
 /// with `--save-frf`), read from the FRF file otherwise.
 fn read_source(
-    a: &IdentifyArgs,
+    a: &Identify,
     frf_outputs: Option<OutputSet>,
     human: &Human,
     settings: &Settings,
@@ -269,8 +252,8 @@ fn read_source(
             &FrfFlags {
                 quantity: a.quantity,
                 outputs,
-                units: a.facts.units.as_ref(),
-                frequency_variable: a.facts.freq_variable.as_deref(),
+                units: a.units,
+                frequency_variable: a.freq_variable.as_deref(),
             },
         )?;
         human.print(&format!("era identify {}\n", a.file.display()));
@@ -297,7 +280,7 @@ fn read_source(
         a.markov == era::sources::MarkovSource::Okid,
         settings,
     )?;
-    set_units(&mut found.input, a.facts.units.as_ref());
+    set_units(&mut found.input, a.units);
     human.print(&format!(
         "era identify --from-time {}\n{}",
         record_paths(a)
@@ -339,7 +322,7 @@ fn read_source(
 /// The route's window correction of `input` (a Welch estimate's lag window divided
 /// out), said on the terminal.
 fn correct_window(
-    a: &IdentifyArgs,
+    a: &Identify,
     route: &Route,
     input: &mut InputFrf,
     human: &Human,
@@ -363,21 +346,25 @@ fn correct_window(
 /// zero lines a late start was padded with, or --zero-lines zeroed), inside the band
 /// when there is one; the band said on the terminal.
 fn fit_lines(
-    a: &IdentifyArgs,
+    a: &Identify,
     frf: &era::FrfData,
     coherence: Option<&InputCoherence>,
     route: &Route,
     human: &Human,
 ) -> anyhow::Result<era::frf::FitLines> {
     let band = identify_band(a, frf, coherence, route.coherence_band)?;
-    let fit = era::frf::fit_lines(frf, a.zero_lines, band.as_ref().ok().map(|b| (b.0, b.1)))
-        .map_err(|why| {
-            let text = a.band.clone().unwrap_or_else(|| match &band {
-                Ok((lo, hi, _)) => format!("{lo}..{hi}"),
-                Err(_) => String::new(),
-            });
-            crate::error::UsageError(format!("--band {text}: {why}"))
-        })?;
+    let fit = era::frf::fit_lines(
+        frf,
+        a.options.zero_lines,
+        band.as_ref().ok().map(|b| (b.0, b.1)),
+    )
+    .map_err(|why| {
+        let text = a.band.clone().unwrap_or_else(|| match &band {
+            Ok((lo, hi, _)) => format!("{lo}..{hi}"),
+            Err(_) => String::new(),
+        });
+        crate::error::UsageError(format!("--band {text}: {why}"))
+    })?;
     match (&band, fit.band_hz) {
         (Ok((_, _, why)), Some((lo, hi))) => {
             human.print(&format!("  band: {lo}..{hi} Hz, {why}\n"))
@@ -390,7 +377,7 @@ fn fit_lines(
 /// The refinement of ERA's model on the route, and with `--from-time` and the automatic
 /// order the frame check.
 fn refine_route(
-    a: &IdentifyArgs,
+    a: &Identify,
     found: era::Identification,
     frf: &era::FrfData,
     check: &Check,
@@ -463,7 +450,7 @@ struct Written {
 /// The run's files into `out` (staged, not yet committed), model.json last and once
 /// (with the timings when asked for, the write's among them); returns model.json.
 fn write(
-    a: &IdentifyArgs,
+    a: &Identify,
     mut out: Option<(&mut OutputSet, &RunInput)>,
     found: &era::Identification,
     written: Written,
@@ -510,7 +497,7 @@ fn write(
 /// ERA on `frf` as the flags ask: the automatic order, a fixed order judged against a
 /// scan, or a fixed order alone; a spinner on stderr meanwhile.
 fn realize(
-    a: &IdentifyArgs,
+    a: &Identify,
     frf: &era::FrfData,
     supplied: Option<&MarkovSequence>,
     era_opts: &era::EraOptions,
@@ -560,7 +547,7 @@ fn realize(
 }
 
 /// Fewest averages the frame check's second estimate needs.
-const CHECK_AVERAGES: u64 = crate::args::JUDGING_AVERAGES as u64;
+const CHECK_AVERAGES: u64 = crate::config::JUDGING_AVERAGES as u64;
 
 /// What the frame check repeats of the first identification.
 struct Check<'a> {
@@ -583,7 +570,7 @@ struct Check<'a> {
 /// or one estimate's noise do not. Skipped, and said, when the records give fewer than
 /// [`CHECK_AVERAGES`] averages at either frame. Returns the lines to print.
 fn frame_check(
-    a: &IdentifyArgs,
+    a: &Identify,
     found: &mut era::Identification,
     check: &Check,
 ) -> anyhow::Result<String> {
@@ -645,7 +632,7 @@ fn frame_check(
 /// The frame check's second identification: the estimate at `other` samples per frame,
 /// window-corrected as the first, identified and refined on the same route.
 fn second_identification(
-    a: &IdentifyArgs,
+    a: &Identify,
     second: crate::commands::frf::FromTime,
     other: usize,
     check: &Check,
@@ -702,7 +689,7 @@ fn route_echo(route: &era::identify::route::Route) -> String {
 /// (`era::frf::coherence_band`), with the reason to echo; `Err(why)` inside the `Ok`
 /// for every line, with the reason.
 fn identify_band(
-    a: &IdentifyArgs,
+    a: &Identify,
     frf: &era::FrfData,
     estimated: Option<&crate::output::InputCoherence>,
     from_coherence: bool,
@@ -762,7 +749,7 @@ fn identify_band(
 }
 
 /// The time files: the first and any more records of the test.
-fn record_paths(a: &IdentifyArgs) -> Vec<std::path::PathBuf> {
+fn record_paths(a: &Identify) -> Vec<std::path::PathBuf> {
     std::iter::once(a.file.clone())
         .chain(a.more.iter().cloned())
         .collect()
@@ -776,17 +763,13 @@ fn channels(set: &[Vec<f64>]) -> Vec<&[f64]> {
 /// OKID on the records (`--markov okid`), a spinner meanwhile; an input it cannot use
 /// is named by its channel.
 fn observe(
-    a: &IdentifyArgs,
+    a: &Identify,
     records: &crate::commands::frf::TimeRecords,
     settings: &Settings,
 ) -> anyhow::Result<Observed> {
-    use crate::args::ObserverOrderArg;
-    use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
+    use era::sources::okid::{okid, OkidOptions, Record};
     let mut options = OkidOptions::default();
-    options.observer_order = match a.observer_order {
-        Some(ObserverOrderArg::Fixed(p)) => ObserverOrder::Fixed(p),
-        Some(ObserverOrderArg::Auto) | None => ObserverOrder::Auto { max: None },
-    };
+    options.observer_order = a.observer_order;
     let longest = records
         .records
         .iter()
@@ -894,17 +877,15 @@ fn okid_json(o: &Observed, model: &mut ModelJson) {
 /// each line of a pair weighted by its output's multiple coherence from the estimate
 /// (the lines where the test carried information count, the rest hardly).
 fn coherence_weighting(
-    a: &IdentifyArgs,
+    a: &Identify,
     route: &Route,
     coherence: Option<&InputCoherence>,
     frf: &era::FrfData,
     options: &mut era::refine::RefineOptions,
 ) -> anyhow::Result<()> {
-    use crate::args::WeightingArg;
-    let asked = a.refine_fit.weighting == Some(WeightingArg::Coherence);
-    let okid_default = a.refine_fit.weighting.is_none()
-        && a.markov == era::sources::MarkovSource::Okid
-        && route.refine;
+    let asked = a.weighting == Some(WeightingGiven::Coherence);
+    let okid_default =
+        a.weighting.is_none() && a.markov == era::sources::MarkovSource::Okid && route.refine;
     if !(asked || okid_default) {
         return Ok(());
     }

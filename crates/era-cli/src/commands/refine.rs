@@ -2,7 +2,7 @@
 //! (the core is [`era::refine`], wired into the pipeline by
 //! [`era::refine::identification::refine_identification`]).
 
-use crate::args::RefineArgs;
+use crate::config::Refine;
 use crate::config::Settings;
 use crate::input::{read_frf_with, shape_line};
 use crate::output::identification::{write_identification, Bundle};
@@ -120,22 +120,17 @@ fn count(model: &ModelJson, key: &str) -> usize {
 }
 
 /// `era refine MODEL.json FRF_FILE`.
-pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
-    let settings = Settings::from(&a.common);
+pub fn run(a: &Refine) -> anyhow::Result<()> {
+    let settings = a.settings;
     let human = Human::new(&settings);
-    if a.fit.weighting == Some(crate::args::WeightingArg::Coherence) {
-        return crate::error::usage(
-            "--weighting coherence weights by an estimate's coherence, which era refine does not have: use it with era identify --from-time",
-        );
-    }
-    let ropts = crate::config::refine_options(&a.fit)?;
+    let ropts = a.options.clone();
     let model =
         ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
     };
-    let input = read_frf_with(&a.file, &crate::input::FrfFlags::from(&a.read))?;
+    let input = read_frf_with(&a.file, &a.read)?;
     let frf = &input.file.frf;
     check_model_fits(a, &model, frf)?;
     check_shape(&ropts, frf)?;
@@ -204,7 +199,7 @@ pub fn run(a: &RefineArgs) -> anyhow::Result<()> {
 
 /// The model and the FRF file must be of one set: the same outputs and inputs, and
 /// the FRF lines the model was identified from when model.json records them.
-fn check_model_fits(a: &RefineArgs, model: &ModelJson, frf: &era::FrfData) -> anyhow::Result<()> {
+fn check_model_fits(a: &Refine, model: &ModelJson, frf: &era::FrfData) -> anyhow::Result<()> {
     if (model.outputs, model.inputs) != (frf.outputs(), frf.inputs()) {
         return crate::error::usage(format!(
             "{}: the model has {} outputs x {} inputs, {} has {} x {}",
@@ -232,7 +227,7 @@ fn check_model_fits(a: &RefineArgs, model: &ModelJson, frf: &era::FrfData) -> an
 /// marked physical or not as model.json says, only the physical ones kept for an
 /// automatic model, collocation from the channel table.
 fn start(
-    a: &RefineArgs,
+    a: &Refine,
     model: &ModelJson,
     frf: &era::FrfData,
     channels: Option<&era_io::uff::ChannelTable>,

@@ -1,9 +1,6 @@
 //! `era simulate truth-model|modal`: synthetic FRF files.
 
-use crate::args::{
-    ExcitationArg, ModalArgs, ShakerArgs, SimulateArgs, SimulateCommon, SimulateModel,
-};
-use crate::config::Settings;
+use crate::config::{self, Modal, Shaker, SimOutput, Simulate};
 use crate::error::usage;
 use crate::output::report::{finish_output, Human};
 use era::params::Naming;
@@ -16,13 +13,13 @@ use serde_json::json;
 use std::time::Instant;
 
 fn finish(
-    sim: &SimulateCommon,
+    sim: &SimOutput,
     frf: &FrfData,
     extra: &[(&str, &str)],
     summary: serde_json::Value,
     simulate_s: f64,
 ) -> anyhow::Result<()> {
-    let settings = Settings::from(&sim.common);
+    let settings = sim.settings;
     let human = Human::new(&settings);
     let clock = Instant::now();
     let seed = sim.seed.to_string();
@@ -70,7 +67,7 @@ fn finish(
     )
 }
 
-fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
+fn truth(sim: &SimOutput) -> anyhow::Result<()> {
     crate::config::check_noise(sim.noise)?;
     let clock = Instant::now();
     let noise = (sim.noise > 0.0).then_some((sim.noise, sim.seed));
@@ -96,7 +93,7 @@ fn truth(sim: &SimulateCommon) -> anyhow::Result<()> {
     )
 }
 
-fn modal(a: &ModalArgs) -> anyhow::Result<()> {
+fn modal(a: &Modal) -> anyhow::Result<()> {
     crate::config::check_noise(a.sim.noise)?;
     let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
     let request = ModalRequest::new(
@@ -142,12 +139,12 @@ fn modal(a: &ModalArgs) -> anyhow::Result<()> {
     )
 }
 
-pub fn run(a: &SimulateArgs) -> anyhow::Result<()> {
-    match &a.model {
-        SimulateModel::TruthModel(sim) => truth(sim),
-        SimulateModel::Modal(m) => modal(m),
-        SimulateModel::Experiment(e) => super::experiment::run(e),
-        SimulateModel::Shaker(s) => shaker(s),
+pub fn run(a: &Simulate) -> anyhow::Result<()> {
+    match a {
+        Simulate::TruthModel(sim) => truth(sim),
+        Simulate::Modal(m) => modal(m),
+        Simulate::Experiment(e) => super::experiment::run(e),
+        Simulate::Shaker(s) => shaker(s),
     }
 }
 
@@ -195,13 +192,13 @@ fn shaker_csv(r: &era::sim::shaker::ShakerRecord, quantity: Quantity, header: &s
 }
 
 /// The shakers' signal the flags ask for, `--band` checked against it.
-fn shaker_excitation(a: &ShakerArgs) -> anyhow::Result<era::sim::shaker::Excitation> {
+fn shaker_excitation(a: &Shaker) -> anyhow::Result<era::sim::shaker::Excitation> {
     use era::sim::shaker::Excitation;
     let band = a.band.as_deref().map(parse_band).transpose()?;
     if band.is_some()
         && !matches!(
             a.excitation,
-            ExcitationArg::BandLimited | ExcitationArg::Sweep
+            config::Excitation::BandLimited | config::Excitation::Sweep
         )
     {
         return usage(
@@ -210,20 +207,20 @@ fn shaker_excitation(a: &ShakerArgs) -> anyhow::Result<era::sim::shaker::Excitat
     }
     let nyquist = a.sample_rate / 2.0;
     let excitation = match a.excitation {
-        ExcitationArg::White => Excitation::White,
-        ExcitationArg::BandLimited => {
+        config::Excitation::White => Excitation::White,
+        config::Excitation::BandLimited => {
             let (lo_hz, hi_hz) = band.unwrap_or((0.0, nyquist));
             Excitation::BandLimited { lo_hz, hi_hz }
         }
-        ExcitationArg::Burst => Excitation::Burst {
+        config::Excitation::Burst => Excitation::Burst {
             period_s: a.period,
             on_fraction: a.burst_on,
         },
-        ExcitationArg::Sweep => {
+        config::Excitation::Sweep => {
             let (lo_hz, hi_hz) = band.unwrap_or((a.fmin / 2.0, (1.2 * a.fmax).min(nyquist)));
             Excitation::Sweep { lo_hz, hi_hz }
         }
-        ExcitationArg::Impact => Excitation::Impact {
+        config::Excitation::Impact => Excitation::Impact {
             period_s: a.period,
             width_s: a.pulse_width,
         },
@@ -234,7 +231,7 @@ fn shaker_excitation(a: &ShakerArgs) -> anyhow::Result<era::sim::shaker::Excitat
 /// The truth beside a shaker test's CSV (and its JSON summary): the settings, the
 /// columns, and each mode's frequency, damping and shape.
 fn shaker_truth(
-    a: &ShakerArgs,
+    a: &Shaker,
     record: &era::sim::shaker::ShakerRecord,
     excitation: era::sim::shaker::Excitation,
     quantity: Quantity,
@@ -255,9 +252,9 @@ fn shaker_truth(
         "modes": modes})
 }
 
-fn shaker(a: &ShakerArgs) -> anyhow::Result<()> {
+fn shaker(a: &Shaker) -> anyhow::Result<()> {
     use era::sim::shaker::{simulate_shaker_test, ShakerTest};
-    let settings = Settings::from(&a.common);
+    let settings = a.settings;
     let human = Human::new(&settings);
     crate::config::check_noise(a.noise)?;
     let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;

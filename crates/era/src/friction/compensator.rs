@@ -37,13 +37,20 @@ pub struct ChannelConfig {
 }
 
 impl ChannelConfig {
+    /// The thesis's compensator sample rate, Hz (§4.4; its LVTs are sampled with it).
+    pub const THESIS_RATE_HZ: f64 = 200.0;
+    /// The thesis's dead zone, in/s (§4.4).
+    pub const THESIS_DEAD_ZONE: f64 = 0.2;
+    /// The fraction of the coefficient the thesis applied (§4.4: 0.85–0.9).
+    pub const THESIS_FRACTION: f64 = 0.85;
+
     /// The thesis's settings for a coefficient: dead zone 0.2, fraction 0.85, force
     /// output, no limits.
     pub fn thesis(coefficient: f64) -> Self {
         ChannelConfig {
             coefficient,
-            dead_zone: 0.2,
-            fraction: 0.85,
+            dead_zone: Self::THESIS_DEAD_ZONE,
+            fraction: Self::THESIS_FRACTION,
             gain: 1.0,
             output_min: f64::NEG_INFINITY,
             output_max: f64::INFINITY,

@@ -384,9 +384,9 @@ impl Compensation {
     pub fn thesis() -> Self {
         Compensation {
             coefficients: TABLE_5_1.iter().map(|t| t.2).collect(),
-            dead_zone: 0.2,
-            fraction: 0.85,
-            rate_hz: 200.0,
+            dead_zone: crate::friction::compensator::ChannelConfig::THESIS_DEAD_ZONE,
+            fraction: crate::friction::compensator::ChannelConfig::THESIS_FRACTION,
+            rate_hz: crate::friction::compensator::ChannelConfig::THESIS_RATE_HZ,
         }
     }
 }
@@ -428,6 +428,15 @@ pub struct ExperimentSpec {
 }
 
 impl ExperimentSpec {
+    /// The thesis's accelerometer noise RMS, in/s² ([`ExperimentSpec::thesis`]).
+    pub const THESIS_ACCEL_NOISE_RMS: f64 = 0.01;
+    /// The thesis's LVT noise RMS, in/s ([`ExperimentSpec::thesis`]).
+    pub const THESIS_LVT_NOISE_RMS: f64 = 0.05;
+    /// The thesis's excitation RMS voltage without compensation, V (§4.5).
+    pub const THESIS_EXCITATION_RMS_V: f64 = 0.6;
+    /// The thesis's excitation RMS voltage with compensation, V (§4.5).
+    pub const THESIS_COMPENSATED_EXCITATION_RMS_V: f64 = 0.3;
+
     /// The thesis's test on the DTA-like structure, `averages` frames per actuator, with
     /// or without compensation (0.3 V or 0.6 V excitation).
     pub fn thesis(compensated: bool, averages: usize, seed: u64) -> Self {
@@ -435,8 +444,12 @@ impl ExperimentSpec {
             structure: Structure::from_modal(&dta_like_structure()),
             actuators: thesis_actuators(),
             compensation: compensated.then(Compensation::thesis),
-            lvt_rate_hz: 200.0,
-            excitation_rms_v: if compensated { 0.3 } else { 0.6 },
+            lvt_rate_hz: crate::friction::compensator::ChannelConfig::THESIS_RATE_HZ,
+            excitation_rms_v: if compensated {
+                Self::THESIS_COMPENSATED_EXCITATION_RMS_V
+            } else {
+                Self::THESIS_EXCITATION_RMS_V
+            },
             band_hz: 20.0,
             drive: Drive::OneAtATime,
             analyzer_rate_hz: 51.2,
@@ -444,8 +457,8 @@ impl ExperimentSpec {
             averages,
             lines: 801,
             settle_s: 20.0,
-            accel_noise_rms: 0.01,
-            lvt_noise_rms: 0.05,
+            accel_noise_rms: Self::THESIS_ACCEL_NOISE_RMS,
+            lvt_noise_rms: Self::THESIS_LVT_NOISE_RMS,
             seed,
         }
     }
