@@ -62,6 +62,7 @@ def main(argv):
     if not groups:
         fail("name at least one criterion group\n" + __doc__)
     found = {group: estimates(group) for group in groups}
+    print()  # a table of its own, even right after a table the bench printed
     if summary:
         print("| group | benchmarks | median of the medians | fastest | slowest |")
         print("|---|---:|---:|---:|---:|")

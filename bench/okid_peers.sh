@@ -63,4 +63,4 @@ echo "|---|---:|---:|---:|---:|"
 printf '| era identify --markov okid (file to model files; the calls: OKID, Hankel SVD, realization) | %s | %.3f | %.0f | %s of 14 |\n' "$es" "$ec" "$(median3 "${e_m[@]}" | awk '{print $1/1024}')" "$e_hits"
 printf '| python-control markov + eigensys_realization | %s | %.2f | %.0f | %s of 14 |\n' "$ps" "$pc" "$(median3 "${p_m[@]}" | awk '{print $1/1024}')" "$p_hits"
 echo
-awk -v a="$pc" -v b="$es" -v c="$ps" -v d="$ec" 'BEGIN { printf "era end to end: %.1fx faster than python-control'"'"'s two calls alone, %.1fx process to process; the calls alone against the calls alone: %.1fx\n", a / b, c / b, a / d }'
+awk -v a="$pc" -v b="$es" -v c="$ps" -v d="$ec" 'BEGIN { printf "md: era end to end: %.1fx faster than python-control'"'"'s two calls alone, %.1fx process to process; the calls alone against the calls alone: %.1fx\n", a / b, c / b, a / d }'

@@ -6,6 +6,7 @@
 #   bench/peers.sh            # python-control where it finishes in about a minute
 #   bench/peers.sh --all      # also python-control at 8000^2 (minutes, GBs)
 #   bench/peers.sh --thesis   # only the thesis case (DTA-like FRFs), three runs each
+#   bench/peers.sh --large    # only the larger cases (no thesis case)
 #
 # The thesis case comes first: the Markov data of the DTA-like 8x8 set at the thesis
 # settings (ns 80, lh 5, ni 1, nz 3, ndpts 1024; H0 1592^2), noise-free and with 5 %
@@ -35,6 +36,7 @@ run() {
 }
 
 median3() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
+if [ "$all" != --large ]; then
 echo "thesis case: DTA-like 8x8 FRFs, ns 80, lh 5, ni 1, nz 3, ndpts 1024 (H0 1592 x 1592), $(uptime | sed 's/.*load/load/')"
 echo
 echo "| data | era | passes | python-control $("$venv/bin/python" -c 'import control; print(control.__version__)') | speed-up |"
@@ -52,7 +54,9 @@ for noise in 0 0.05; do
   printf '| %s | %.3f s | %s | %.3f s | %.0f× |\n' "$(awk -v n="$noise" 'BEGIN { print n == 0 ? "noise-free" : 100 * n " % noise" }')" \
     "$es" "$passes" "$ps" "$(awk -v a="$ps" -v b="$es" 'BEGIN { print a / b }')"
 done
+fi
 [ "$all" = --thesis ] && exit 0
+big=no; [ "$all" = --all ] && big=yes
 echo
 
 echo "| case (q × p, m, states) | H0 | era (matrix-free) | era RSS | python-control | its RSS | speed-up |"
@@ -60,7 +64,7 @@ echo "|---|---|---:|---:|---:|---:|---:|"
 # q p modes m python?
 cases="8 8 40 200 yes
 8 8 120 600 yes
-8 8 200 1000 ${all:+yes}
+8 8 200 1000 $big
 8 8 200 2000 no
 151 8 40 400 no"
 while read -r q p modes m py; do

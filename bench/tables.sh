@@ -22,7 +22,7 @@ all_names="thesis_peers hankel_peers cost_model partial_svd auto_order auto_peer
 command_of() {
   case $1 in
     thesis_peers) echo "bash bench/peers.sh --thesis" ;;
-    hankel_peers) echo "bash bench/peers.sh" ;;
+    hankel_peers) echo "bash bench/peers.sh --large" ;;
     cost_model) echo "cargo run --release -q -p era --example cost_model" ;;
     partial_svd) echo "cargo run --release -q -p era --example partial_svd_peer" ;;
     auto_order) echo "cargo bench -q -p era --bench auto_seeds && python3 bench/criterion_table.py --summary auto_order_5_percent refine_from_auto_5_percent" ;;
@@ -83,6 +83,7 @@ write_table() {
          { if (last == "row") last = "other" }' "$tmp.raw"
   } > "$tmp"
   mkdir -p "$out_dir"
+  chmod 644 "$tmp"
   mv "$tmp" "$out_dir/$name.md"
   rm -f "$tmp.raw"
   echo "bench/tables.sh: wrote $out_dir/$name.md" >&2
