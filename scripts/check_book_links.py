@@ -143,8 +143,16 @@ def main():
         for _, t in targets(summary)
         if t and not external(t)
     }
+    # A file a chapter includes ({{#include perf/NAME.md}}) is part of that chapter.
+    included = set()
     for p in chapters:
-        if p != summary and p not in listed:
+        for m in re.finditer(r"\{\{#include\s+([^}\s:]+)", open(p, encoding="utf-8").read()):
+            included.add(os.path.normpath(os.path.join(os.path.dirname(p), m.group(1))))
+    for p in sorted(included):
+        if not os.path.isfile(p):
+            errors.append(f"{os.path.relpath(p, ROOT)}: included by a chapter, but missing")
+    for p in chapters:
+        if p != summary and p not in listed and p not in included:
             errors.append(f"{os.path.relpath(p, ROOT)}:1: not listed in docs/src/SUMMARY.md, so mdBook leaves it out")
     readme = os.path.join(ROOT, "README.md")
     if os.path.isfile(readme):

@@ -115,8 +115,11 @@ pub fn run(a: &Identify) -> anyhow::Result<()> {
     if auto {
         opts.order = era::Order::Fixed(states);
     }
-    // What the data's zeroed start does to ERA's modes, measured on this model.
+    // What the data's zeroed start does to ERA's modes, measured on this model (two
+    // identifications of its own FRF: a stage of its own in --timings).
+    let clock = std::time::Instant::now();
     let zero_start = era::identify::zero_start(&found, &era_opts, route.refine);
+    let zero_start_s = clock.elapsed().as_secs_f64();
     if route.refine {
         let check = Check {
             band_hz: fit.band_hz,
@@ -136,6 +139,7 @@ pub fn run(a: &Identify) -> anyhow::Result<()> {
     print_found(&found, frf, states, &human);
     let mut model = model_json(&found, &opts, &route, &refine_options, auto, states);
     let mut timings = timings(&found, read_s, source.estimate_s, route.refine);
+    timings.insert("zero_start".into(), zero_start_s);
     if let Some(o) = &observed {
         okid_json(o, &mut model);
         timings.insert("okid".into(), o.seconds);

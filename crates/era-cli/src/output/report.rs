@@ -342,6 +342,7 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
         "selection",
         "modes",
         "fit",
+        "zero_start",
         "refine",
         "write",
     ];
