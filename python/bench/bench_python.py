@@ -3,9 +3,9 @@ lines; ns 80, lh 5, ni 1, nz 3, ndpts 1024):
 
 1. Call overhead: `era.identify` from Python against the same work in Rust, the stage
    times the CLI measures inside the process (`era identify --timings --json`: preprocess,
-   Markov, Hankel + SVD, realization, modes, fit; reading the file is left out on both
-   sides). Runs alternate between the two so that machine load falls on both alike; the
-   medians are compared.
+   Markov, Hankel + SVD, realization, modes, fit, the zero-start check; reading the file
+   is left out on both sides). Runs alternate between the two so that machine load falls
+   on both alike; the medians are compared.
 2. era against python-control's `eigensys_realization` on the same Markov data, in the
    same process (python/examples/python_control_side_by_side.py explains the data).
 
@@ -34,7 +34,7 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 SETTINGS = dict(states=80, hankel_factor=5, integrations=1, zero_lines=3, pad_to=1024, preset="thesis")
 FLAGS = ["--preset", "thesis", "--states", "80", "--hankel-factor", "5", "--integrations", "1",
          "--zero-lines", "3", "--pad-to", "1024"]
-STAGES = ("preprocess", "markov", "hankel_svd", "realize", "modes", "fit")
+STAGES = ("preprocess", "markov", "hankel_svd", "realize", "modes", "fit", "zero_start")
 
 
 def default_binary() -> pathlib.Path:
@@ -102,7 +102,7 @@ def main() -> None:
         print(f"| era against python-control {control.__version__} on the same Markov data "
               f"(H0 {found.hankel_size[0]} × {found.hankel_size[1]}, best of {args.control_repeats}) | time |")
         print("|---|---:|")
-        print(f"| `era.identify` (Markov data, Hankel SVD, realization, modes, fit) | {1e3 * e:.1f} ms |")
+        print(f"| `era.identify` (Markov data, Hankel SVD, realization, modes, fit, zero-start check) | {1e3 * e:.1f} ms |")
         print(f"| `control.eigensys_realization` | {1e3 * c:.1f} ms |")
         print(f"| ratio | {c / e:.1f}× (eigenvalues {gap:.1e} apart) |")
         result.update({"era_ms": 1e3 * e, "control_ms": 1e3 * c, "control_over_era": c / e,
