@@ -147,6 +147,18 @@ pub fn fit_lines(
 pub const FREQUENCY_SPACING_TOLERANCE: f64 = 1e-6;
 
 impl FrfData {
+    /// The same lines, channels and quantity with other `values` (same layout as
+    /// [`FrfData::values`]), validated as [`FrfData::new`] validates them.
+    pub(crate) fn with_values(&self, values: Vec<Complex64>) -> Result<Self> {
+        FrfData::new(
+            self.frequency_hz().to_vec(),
+            self.outputs(),
+            self.inputs(),
+            values,
+            self.quantity(),
+        )
+    }
+
     /// Validates and wraps FRFs.
     ///
     /// `values[(i·p + j)·L + k]` is output `i`, input `j`, line `k`.

@@ -129,13 +129,7 @@ impl Identification {
     /// # Errors
     /// None in practice: the shapes are the identification's own.
     pub fn model_frf(&self) -> Result<FrfData> {
-        FrfData::new(
-            self.measured.frequency_hz().to_vec(),
-            self.measured.outputs(),
-            self.measured.inputs(),
-            self.model_response.clone(),
-            self.measured.quantity(),
-        )
+        self.measured.with_values(self.model_response.clone())
     }
 }
 

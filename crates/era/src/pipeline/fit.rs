@@ -421,13 +421,7 @@ pub fn model_frf(model: &StateSpace, like: &FrfData) -> Result<FrfData> {
             *v = Complex64::new(0.0, 0.0);
         }
     }
-    FrfData::new(
-        like.frequency_hz().to_vec(),
-        like.outputs(),
-        like.inputs(),
-        values,
-        like.quantity(),
-    )
+    like.with_values(values)
 }
 
 /// Fit of one output/input pair.

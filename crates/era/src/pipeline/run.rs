@@ -54,13 +54,7 @@ impl MagnitudeScale {
     fn apply(self, frf: &FrfData) -> Result<FrfData> {
         let s = Self::factor(self.exponent);
         let values = frf.values().iter().map(|v| v * s).collect();
-        FrfData::new(
-            frf.frequency_hz().to_vec(),
-            frf.outputs(),
-            frf.inputs(),
-            values,
-            frf.quantity(),
-        )
+        frf.with_values(values)
     }
 
     pub(crate) fn undo(self, r: &mut Realization) {
@@ -543,14 +537,8 @@ mod tests {
     use crate::sim::truth_model_frf;
 
     fn scaled(frf: &FrfData, factor: f64) -> FrfData {
-        FrfData::new(
-            frf.frequency_hz().to_vec(),
-            frf.outputs(),
-            frf.inputs(),
-            frf.values().iter().map(|v| v * factor).collect(),
-            frf.quantity(),
-        )
-        .unwrap()
+        frf.with_values(frf.values().iter().map(|v| v * factor).collect())
+            .unwrap()
     }
 
     #[test]

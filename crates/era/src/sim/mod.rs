@@ -163,7 +163,7 @@ pub fn add_noise(frf: &FrfData, fraction: f64, seed: u64) -> Result<FrfData> {
             }
         }
     }
-    FrfData::new(frf.frequency_hz().to_vec(), q, p, values, frf.quantity())
+    frf.with_values(values)
 }
 
 /// Table 5.2 of the thesis as printed, truth column: natural frequency (Hz) and

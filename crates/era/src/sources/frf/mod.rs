@@ -500,13 +500,7 @@ impl LagWindow {
                 .map_err(|e| EraError::Numerical(format!("FFT: {e}")))?;
             values.extend_from_slice(&spectrum[..lines]);
         }
-        FrfData::new(
-            frf.frequency_hz().to_vec(),
-            frf.outputs(),
-            frf.inputs(),
-            values,
-            frf.quantity(),
-        )
+        frf.with_values(values)
     }
 }
 

@@ -83,14 +83,8 @@ pub fn zero_leading_lines(frf: &FrfData, count: usize) -> FrfData {
             *v = Complex64::new(0.0, 0.0);
         }
     }
-    FrfData::new(
-        frf.frequency_hz().to_vec(),
-        frf.outputs(),
-        frf.inputs(),
-        values,
-        frf.quantity(),
-    )
-    .expect("zeroing lines keeps the data valid")
+    frf.with_values(values)
+        .expect("zeroing lines keeps the data valid")
 }
 
 /// The FRFs as the inverse FFT sees them, with the sample time they imply.
