@@ -1,0 +1,131 @@
+//! Output-only identification on simulated records with exact truth: the records of
+//! `era simulate shaker` with the forces left out.
+
+use era::identify::oma::{oma, OmaMethod, OmaOptions};
+use era::sim::shaker::{simulate_shaker_test, ShakerRecord, ShakerTest};
+use era::sim::ModalSpec;
+
+fn record(seed: u64, duration_s: f64) -> ShakerRecord {
+    let mut spec = ModalSpec::new(8, 2, 10);
+    spec.fmin_hz = 1.0;
+    spec.fmax_hz = 20.0;
+    spec.seed = seed;
+    let mut test = ShakerTest::new(spec, 64.0, duration_s);
+    test.noise = 0.02;
+    simulate_shaker_test(&test).unwrap()
+}
+
+/// For each true mode, the physical mode within 1 % in frequency (the nearest), and
+/// the physical modes matched to none.
+fn matched(found: &era::Oma, truth: &era::sim::ModalStructure) -> (Vec<Option<usize>>, usize) {
+    let id = &found.identification;
+    let physical: Vec<usize> = (0..id.modal.modes.len())
+        .filter(|&m| id.quality[m].physical)
+        .collect();
+    let pick: Vec<Option<usize>> = truth
+        .frequencies_hz
+        .iter()
+        .map(|&f| {
+            physical
+                .iter()
+                .copied()
+                .filter(|&m| (id.modal.modes[m].frequency_hz - f).abs() < 0.01 * f)
+                .min_by(|&a, &b| {
+                    (id.modal.modes[a].frequency_hz - f)
+                        .abs()
+                        .total_cmp(&(id.modal.modes[b].frequency_hz - f).abs())
+                })
+        })
+        .collect();
+    let spurious = physical
+        .iter()
+        .filter(|m| !pick.contains(&Some(**m)))
+        .count();
+    (pick, spurious)
+}
+
+#[test]
+fn ssi_cov_finds_the_modes_of_an_output_only_record_with_no_spurious_one() {
+    let rec = record(1, 600.0);
+    let outputs: Vec<&[f64]> = rec.outputs.iter().map(Vec::as_slice).collect();
+    let found = oma(&[outputs.as_slice()], &OmaOptions::new(64.0)).unwrap();
+    let (pick, spurious) = matched(&found, &rec.truth);
+    let hits = pick.iter().flatten().count();
+    // Two of the ten modes lie 0.06 % apart (13.898 and 13.907 Hz): one mode stands for both.
+    assert!(hits >= 9, "found {hits} of 10: {pick:?}");
+    assert_eq!(spurious, 0);
+    // Every physical mode carries standard deviations, and the truth lies within a
+    // few of them.
+    for (t, p) in pick.iter().enumerate() {
+        let Some(m) = *p else { continue };
+        let q = &found.identification.quality[m];
+        let mode = &found.identification.modal.modes[m];
+        let (fs, zs) = (q.frequency_std_hz.unwrap(), q.damping_ratio_std.unwrap());
+        assert!(fs > 0.0 && zs > 0.0);
+        let close_pair = (13.8..14.0).contains(&rec.truth.frequencies_hz[t]);
+        if !close_pair {
+            assert!((mode.frequency_hz - rec.truth.frequencies_hz[t]).abs() < 5.0 * fs);
+            assert!((mode.damping_ratio - rec.truth.damping_ratios[t]).abs() < 5.0 * zs);
+        }
+    }
+    assert_eq!(found.references, (0..8).collect::<Vec<_>>());
+    assert!(found.lags >= 64);
+}
+
+#[test]
+fn next_era_and_ssi_cov_agree_on_a_record() {
+    let rec = record(4, 300.0);
+    let outputs: Vec<&[f64]> = rec.outputs.iter().map(Vec::as_slice).collect();
+    let mut options = OmaOptions::new(64.0);
+    options.blocks = 1;
+    options.era.order = era::Order::Fixed(40);
+    let ssi = oma(&[outputs.as_slice()], &options).unwrap();
+    options.method = OmaMethod::NextEra;
+    let next = oma(&[outputs.as_slice()], &options).unwrap();
+    // Without blocks, no standard deviations.
+    assert!(ssi.spread.iter().all(Option::is_none));
+    // The strongest modes (the lowest) agree to a fraction of their bandwidth.
+    for f in [1.0006, 1.4260, 3.4903] {
+        let near = |o: &era::Oma| {
+            o.identification
+                .modal
+                .modes
+                .iter()
+                .min_by(|a, b| {
+                    (a.frequency_hz - f)
+                        .abs()
+                        .total_cmp(&(b.frequency_hz - f).abs())
+                })
+                .unwrap()
+                .clone()
+        };
+        let (a, b) = (near(&ssi), near(&next));
+        assert!(
+            (a.frequency_hz - b.frequency_hz).abs() < 0.2 * a.damping_ratio * f,
+            "{f}: {} vs {}",
+            a.frequency_hz,
+            b.frequency_hz
+        );
+    }
+}
+
+#[test]
+fn records_are_pooled_and_bad_ones_named() {
+    let a = record(7, 200.0);
+    let b = record(7, 200.0);
+    let ra: Vec<&[f64]> = a.outputs.iter().map(Vec::as_slice).collect();
+    let rb: Vec<&[f64]> = b.outputs[..7].iter().map(Vec::as_slice).collect();
+    let e = oma(&[ra.as_slice(), rb.as_slice()], &OmaOptions::new(64.0)).unwrap_err();
+    assert!(e.to_string().contains("channels of record 2"), "{e}");
+    let mut options = OmaOptions::new(64.0);
+    options.references = Some(vec![8]);
+    let e = oma(&[ra.as_slice()], &options).unwrap_err();
+    assert!(e.to_string().contains("not among the 8 outputs"), "{e}");
+    let mut options = OmaOptions::new(64.0);
+    options.lags = Some(20_000);
+    let e = oma(&[ra.as_slice()], &options).unwrap_err();
+    assert!(e.to_string().contains("twice the lags"), "{e}");
+    let mut options = OmaOptions::new(0.0);
+    options.blocks = 2;
+    assert!(oma(&[ra.as_slice()], &options).is_err());
+}
