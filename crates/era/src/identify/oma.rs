@@ -398,7 +398,7 @@ fn jackknife(
             let seq = normalized(&corr.leave_out(b)?);
             let mut factors = match (&start, warm) {
                 (Some(v0), true) => {
-                    warm_factors(&seq, hankel, era.hankel_factor, v0.as_ref(), top)?
+                    warm_factors(&seq, hankel, era.hankel_factor, v0.as_ref(), top, era.svd)?
                 }
                 _ => Factorization::thesis(
                     &seq,
@@ -513,22 +513,34 @@ fn warm_factors(
     hankel_factor: usize,
     v0: faer::MatRef<'_, f64>,
     max_states: usize,
+    svd: crate::pipeline::factor::SvdPath,
 ) -> Result<Factorization> {
+    use crate::linalg::LinearOperator;
+    use crate::pipeline::hankel::{build, HankelShape};
+    use crate::pipeline::hankel_op::HankelOperator;
     let clock = Instant::now();
     let shapes = crate::pipeline::hankel::ThesisHankel::new(hankel_states, hankel_factor)?;
-    let h0 = crate::pipeline::hankel::build(seq, shapes.h0)?;
-    let h1 = crate::pipeline::hankel::build(seq, shapes.h1)?;
+    // The Hankel products by FFT where the pipeline would factor matrix-free, dense below.
+    let short = (shapes.h0.block_rows * seq.outputs()).min(shapes.h0.block_cols * seq.inputs());
+    let operator = |shape: HankelShape| -> Result<Box<dyn LinearOperator>> {
+        Ok(if svd.matrix_free(short) {
+            Box::new(HankelOperator::new(seq, shape)?)
+        } else {
+            Box::new(build(seq, shape)?)
+        })
+    };
+    let (h0, h1) = (operator(shapes.h0)?, operator(shapes.h1)?);
     let mut v = v0.to_owned();
     for _ in 0..WARM_ITERATIONS {
-        let q = (&h0 * &v).qr().compute_thin_Q();
-        v = (h0.transpose() * &q).qr().compute_thin_Q();
+        let q = h0.apply(v.as_ref()).qr().compute_thin_Q();
+        v = h0.apply_transpose(q.as_ref()).qr().compute_thin_Q();
     }
-    let z = &h0 * &v;
+    let z = h0.apply(v.as_ref());
     let svd = crate::linalg::dense::thin_svd(z, "a jackknife block's H0")?;
     let v = &v * &svd.v;
     let n = max_states.min(svd.s.len());
     let (un, vn) = (svd.u.subcols(0, n), v.subcols(0, n));
-    let ut_h1_v = un.transpose() * (&h1 * vn);
+    let ut_h1_v = un.transpose() * h1.apply(vn);
     Ok(Factorization::from_parts(
         seq,
         seq.sample_time_s(),
