@@ -75,7 +75,9 @@ pub struct OmaOptions {
     pub references: Option<Vec<usize>>,
     /// Correlation lags; `None` for [`crate::sources::correlation::default_lags`].
     pub lags: Option<usize>,
-    /// Blocks of the jackknife (at least 2 for standard deviations; 1 for none).
+    /// Blocks of the jackknife, at most (at least 2 for standard deviations; 0 or 1
+    /// for none). A record too short for them takes as many as hold twice the lags each
+    /// ([`Oma::blocks`] says how many were used).
     pub blocks: usize,
     /// The pipeline's settings: the order (automatic by default), the scan, the Hankel
     /// factor, the model's time domain. Its FRF preprocessing (integrations, padding,
@@ -135,7 +137,7 @@ pub struct Oma {
     pub lags: usize,
     /// Samples per channel over all records.
     pub samples: usize,
-    /// Blocks of the jackknife.
+    /// Blocks of the jackknife used (1: no standard deviations).
     pub blocks: usize,
     /// Wall time of the correlations, s.
     pub correlation_seconds: f64,
@@ -187,12 +189,18 @@ pub fn oma_observed(
         Some(l) => l,
         None => crate::sources::correlation::default_lags(records, fs)?,
     };
+    // A short record takes fewer blocks: each must hold twice the lags.
+    let samples: usize = records
+        .iter()
+        .map(|r| r.first().map_or(0, |c| c.len()))
+        .sum();
+    let blocks = options.blocks.min(samples / (2 * lags.max(1))).max(1);
     let corr = correlations(
         records,
         &CorrelationOptions {
             references: options.references.clone(),
             lags,
-            blocks: options.blocks.max(1),
+            blocks,
             sample_time_s: 1.0 / fs,
         },
     )?;

@@ -486,8 +486,10 @@ impl<'r> Accumulator<'r> {
     }
 }
 
-/// Fewest lags [`default_lags`] gives.
-pub const MIN_DEFAULT_LAGS: usize = 64;
+/// Fewest lags [`default_lags`] gives: the scan at the default Hankel factor of
+/// output-only identification reaches about 100 states (the largest order is tied to
+/// the lags, not to the channels), whatever the lowest mode.
+pub const MIN_DEFAULT_LAGS: usize = 256;
 
 /// The most rows the scan's Hankel gets from [`default_lags`] (outputs × block rows):
 /// enough for dozens of modes, and a dense SVD of well under a second.
@@ -495,10 +497,10 @@ pub const DEFAULT_HANKEL_ROWS: usize = 2048;
 
 /// The default number of lags for `records` sampled at `sample_rate_hz`: four periods of
 /// the lowest spectral peak ([`lowest_peak_hz`]), so that the Hankel (half the lags)
-/// spans two, rounded up to an even number; at least [`MIN_DEFAULT_LAGS`], at most a
-/// tenth of the longest record (the correlations' variance grows with the lag), and no
-/// more than keeps the Hankel within [`DEFAULT_HANKEL_ROWS`] rows (a quarter of the
-/// lags in block rows, times the outputs). Without a clear peak, the lowest frequency is
+/// spans two, rounded up to an even number; no more than keeps the Hankel within
+/// [`DEFAULT_HANKEL_ROWS`] rows (a quarter of the lags in block rows, times the outputs)
+/// unless that is below [`MIN_DEFAULT_LAGS`]; and at most a tenth of the longest record
+/// (the correlations' variance grows with the lag). Without a clear peak, the lowest frequency is
 /// taken as 1 % of the sample rate.
 ///
 /// # Errors
