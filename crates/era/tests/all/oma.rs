@@ -129,3 +129,76 @@ fn records_are_pooled_and_bad_ones_named() {
     options.blocks = 2;
     assert!(oma(&[ra.as_slice()], &options).is_err());
 }
+
+/// Monte Carlo: eight 600 s records of one structure (one long simulation cut in
+/// eight). For each true mode found in at least six records, the scatter of the
+/// estimates over the records against the median standard deviation the jackknife
+/// reported; the median of that ratio over the modes must lie within a factor 2, for the
+/// frequency and for the damping.
+#[test]
+fn the_reported_standard_deviations_match_the_scatter_over_records() {
+    let records = 8;
+    let whole = record(1, 600.0 * records as f64);
+    let n = 600 * 64;
+    let truth = &whole.truth;
+    let mut estimates: Vec<Vec<(f64, f64, f64, f64)>> =
+        vec![Vec::new(); truth.frequencies_hz.len()];
+    for r in 0..records {
+        let outputs: Vec<&[f64]> = whole
+            .outputs
+            .iter()
+            .map(|c| &c[r * n..(r + 1) * n])
+            .collect();
+        let found = oma(&[outputs.as_slice()], &OmaOptions::new(64.0)).unwrap();
+        let (pick, spurious) = matched(&found, truth);
+        assert!(spurious <= 1, "record {r}: {spurious} spurious");
+        let mut taken = Vec::new();
+        for (t, p) in pick.iter().enumerate() {
+            let Some(m) = *p else { continue };
+            // One estimate per found mode: a close pair's two true modes share one.
+            if taken.contains(&m) {
+                continue;
+            }
+            taken.push(m);
+            let id = &found.identification;
+            let (mode, q) = (&id.modal.modes[m], &id.quality[m]);
+            estimates[t].push((
+                mode.frequency_hz,
+                mode.damping_ratio,
+                q.frequency_std_hz.unwrap(),
+                q.damping_ratio_std.unwrap(),
+            ));
+        }
+    }
+    let ratio = |values: &[(f64, f64)]| {
+        let k = values.len() as f64;
+        let mean = values.iter().map(|v| v.0).sum::<f64>() / k;
+        let scatter = (values.iter().map(|v| (v.0 - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+        let mut reported: Vec<f64> = values.iter().map(|v| v.1).collect();
+        reported.sort_by(f64::total_cmp);
+        scatter / reported[reported.len() / 2]
+    };
+    let (mut f, mut z) = (Vec::new(), Vec::new());
+    for e in estimates.iter().filter(|e| e.len() >= 6) {
+        f.push(ratio(&e.iter().map(|v| (v.0, v.2)).collect::<Vec<_>>()));
+        z.push(ratio(&e.iter().map(|v| (v.1, v.3)).collect::<Vec<_>>()));
+    }
+    assert!(
+        f.len() >= 8,
+        "{} modes found in six records or more",
+        f.len()
+    );
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (mf, mz) = (median(f), median(z));
+    assert!(
+        (0.5..=2.0).contains(&mf),
+        "frequency: scatter / reported = {mf:.2}"
+    );
+    assert!(
+        (0.5..=2.0).contains(&mz),
+        "damping: scatter / reported = {mz:.2}"
+    );
+}
