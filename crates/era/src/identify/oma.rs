@@ -139,7 +139,10 @@ pub struct Oma {
     pub samples: usize,
     /// Blocks of the jackknife used (1: no standard deviations).
     pub blocks: usize,
-    /// Wall time of the correlations, s.
+    /// The singular values of the output spectral matrix (Welch, the default segment):
+    /// the frequency-domain first look to set beside the modes.
+    pub spectrum: crate::sources::correlation::spectrum::OutputSpectrum,
+    /// Wall time of the correlations (and the output spectrum), s.
     pub correlation_seconds: f64,
     /// Wall time of the jackknife, s.
     pub uncertainty_seconds: f64,
@@ -204,6 +207,7 @@ pub fn oma_observed(
             sample_time_s: 1.0 / fs,
         },
     )?;
+    let spectrum = crate::sources::correlation::spectrum::output_spectrum(records, fs, None)?;
     let correlation_seconds = clock.elapsed().as_secs_f64();
     let half =
         crate::sources::frf::frf_of_markov(&corr.sequence, 1.0 / fs, Quantity::Acceleration)?;
@@ -239,6 +243,7 @@ pub fn oma_observed(
         lags,
         samples: corr.samples,
         blocks: corr.blocks(),
+        spectrum,
         correlation_seconds,
         uncertainty_seconds: clock.elapsed().as_secs_f64(),
     })

@@ -24,6 +24,8 @@
 //!
 //! faer has no correlation; `realfft` does the transforms ([`crate::linalg::fft`]).
 
+pub mod spectrum;
+
 use crate::error::{EraError, Result};
 use crate::linalg::fft::real_fft_plans;
 use crate::sources::{MarkovKind, MarkovSequence};
