@@ -15,31 +15,30 @@ fn record(seed: u64, duration_s: f64) -> ShakerRecord {
     simulate_shaker_test(&test).unwrap()
 }
 
-/// For each true mode, the physical mode within 1 % in frequency (the nearest), and
-/// the physical modes matched to none.
+/// For each true mode, the physical mode matched to it (one to one, the closest pairs
+/// within 1 % in frequency first), and the physical modes matched to none.
 fn matched(found: &era::Oma, truth: &era::sim::ModalStructure) -> (Vec<Option<usize>>, usize) {
     let id = &found.identification;
-    let physical: Vec<usize> = (0..id.modal.modes.len())
-        .filter(|&m| id.quality[m].physical)
-        .collect();
-    let pick: Vec<Option<usize>> = truth
-        .frequencies_hz
-        .iter()
-        .map(|&f| {
-            physical
-                .iter()
-                .copied()
-                .filter(|&m| (id.modal.modes[m].frequency_hz - f).abs() < 0.01 * f)
-                .min_by(|&a, &b| {
-                    (id.modal.modes[a].frequency_hz - f)
-                        .abs()
-                        .total_cmp(&(id.modal.modes[b].frequency_hz - f).abs())
-                })
-        })
-        .collect();
-    let spurious = physical
-        .iter()
-        .filter(|m| !pick.contains(&Some(**m)))
+    let mut pairs = Vec::new();
+    for (t, &f) in truth.frequencies_hz.iter().enumerate() {
+        for (m, mode) in id.modal.modes.iter().enumerate() {
+            let d = (mode.frequency_hz - f).abs() / f;
+            if id.quality[m].physical && d < 0.01 {
+                pairs.push((d, t, m));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut pick = vec![None; truth.frequencies_hz.len()];
+    let mut used = vec![false; id.modal.modes.len()];
+    for (_, t, m) in pairs {
+        if pick[t].is_none() && !used[m] {
+            pick[t] = Some(m);
+            used[m] = true;
+        }
+    }
+    let spurious = (0..used.len())
+        .filter(|&m| id.quality[m].physical && !used[m])
         .count();
     (pick, spurious)
 }
@@ -152,14 +151,8 @@ fn the_reported_standard_deviations_match_the_scatter_over_records() {
         let found = oma(&[outputs.as_slice()], &OmaOptions::new(64.0)).unwrap();
         let (pick, spurious) = matched(&found, truth);
         assert!(spurious <= 1, "record {r}: {spurious} spurious");
-        let mut taken = Vec::new();
         for (t, p) in pick.iter().enumerate() {
             let Some(m) = *p else { continue };
-            // One estimate per found mode: a close pair's two true modes share one.
-            if taken.contains(&m) {
-                continue;
-            }
-            taken.push(m);
             let id = &found.identification;
             let (mode, q) = (&id.modal.modes[m], &id.quality[m]);
             estimates[t].push((
