@@ -426,8 +426,25 @@ fn traces82(
         while ids.len() < count {
             let line = take(path, r, j, 1, "the trace line's nodes")?[0];
             let want = (count - ids.len()).min(8);
-            let spec: Vec<Field> = (0..want).map(|_| Field::Int("node", 10)).collect();
-            ids.extend(numbers(path, line, &spec, "dataset 82 nodes")?.ints);
+            // Simcenter Testlab pads the last line with zeros past the count: pen
+            // lifts, which draw nothing, so they are read and dropped.
+            let present = line
+                .1
+                .split(|b| b.is_ascii_whitespace())
+                .filter(|t| !t.is_empty())
+                .count()
+                .clamp(want, 8);
+            let spec: Vec<Field> = (0..present).map(|_| Field::Int("node", 10)).collect();
+            let values = numbers(path, line, &spec, "dataset 82 nodes")?.ints;
+            if values[want..].iter().any(|v| *v != 0) {
+                return Err(IoError::at(
+                    path,
+                    line.0,
+                    "",
+                    format!("dataset 82: trace line {id} has more nodes than the {count} it announces"),
+                ));
+            }
+            ids.extend_from_slice(&values[..want]);
             j += 1;
         }
         if let Some(bad) = ids.iter().find(|v| **v < 0) {
