@@ -97,7 +97,10 @@ pub fn parse_geometry_csv(bytes: &[u8], path: &Path) -> Result<Geometry, IoError
                 if cells.len() != 4 {
                     return Err(bad(
                         "",
-                        format!("a node row has 4 cells (node,x,y,z), this one {}", cells.len()),
+                        format!(
+                            "a node row has 4 cells (node,x,y,z), this one {}",
+                            cells.len()
+                        ),
                     ));
                 }
                 let id = int_cell(cells[0]).ok_or_else(|| {
@@ -105,9 +108,9 @@ pub fn parse_geometry_csv(bytes: &[u8], path: &Path) -> Result<Geometry, IoError
                 })?;
                 let mut xyz = [0.0; 3];
                 for (c, name) in ["x", "y", "z"].into_iter().enumerate() {
-                    xyz[c] = cells[c + 1].parse::<f64>().map_err(|_| {
-                        bad(name, format!("'{}' is not a number", cells[c + 1]))
-                    })?;
+                    xyz[c] = cells[c + 1]
+                        .parse::<f64>()
+                        .map_err(|_| bad(name, format!("'{}' is not a number", cells[c + 1])))?;
                 }
                 g.nodes.push(Node {
                     id,
@@ -130,10 +133,7 @@ pub fn parse_geometry_csv(bytes: &[u8], path: &Path) -> Result<Geometry, IoError
                     })?;
                 }
                 if pair[0] == pair[1] {
-                    return Err(bad(
-                        "",
-                        format!("a line from node {} to itself", pair[0]),
-                    ));
+                    return Err(bad("", format!("a line from node {} to itself", pair[0])));
                 }
                 // Every segment is checked against the nodes with its own line number.
                 origins.trace_lines.push(number);

@@ -158,11 +158,13 @@ impl Geometry {
                 ));
             }
             if let Some(&j) = first.get(&n.id) {
+                let lines = match (at.nodes.get(j), at.nodes.get(k)) {
+                    (Some(a), Some(b)) => format!(" (lines {a} and {b})"),
+                    _ => String::new(),
+                };
                 return Err(format!(
-                    "node {} is defined twice{}{}; node ids must be unique",
-                    n.id,
-                    at.node(j),
-                    at.node(k)
+                    "node {} is defined twice{lines}; node ids must be unique",
+                    n.id
                 ));
             }
             first.insert(n.id, k);
@@ -170,7 +172,9 @@ impl Geometry {
         let mut systems = BTreeMap::new();
         for c in &self.coordinate_systems {
             if c.id == 0 {
-                return Err("coordinate system 0 is the global frame and cannot be redefined".into());
+                return Err(
+                    "coordinate system 0 is the global frame and cannot be redefined".into(),
+                );
             }
             if systems.insert(c.id, ()).is_some() {
                 return Err(format!("coordinate system {} is defined twice", c.id));
@@ -236,7 +240,10 @@ pub fn map_channels(geometry: &Geometry, channels: &[Channel]) -> ChannelMap {
         let d = c.dof.direction;
         let reason = match index.get(&c.dof.node) {
             None => Some(format!("node {} is not in the geometry", c.dof.node)),
-            Some(_) if d == 0 => Some(format!("node {}: a scalar channel has no direction", c.dof.node)),
+            Some(_) if d == 0 => Some(format!(
+                "node {}: a scalar channel has no direction",
+                c.dof.node
+            )),
             Some(_) if !(1..=3).contains(&d.abs()) => Some(format!(
                 "node {}: direction {} is not a translation",
                 c.dof.node,

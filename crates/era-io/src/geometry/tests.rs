@@ -69,7 +69,10 @@ fn dataset_2411_with_d_exponents_and_free_format_lines_are_read() {
     assert!(close(g.nodes[1].xyz, [1.5, -2.5, 3.5]));
     assert!(close(g.nodes[2].xyz, [1.0, 2.0, 3.0]));
     // System 1 is not defined: a note, and its directions are taken as global.
-    assert!(g.notes.iter().any(|n| n.contains("displacement coordinate systems 1")));
+    assert!(g
+        .notes
+        .iter()
+        .any(|n| n.contains("displacement coordinate systems 1")));
 }
 
 /// Dataset 18 as Simcenter Testlab writes it: system 1 has its x axis along global −X
@@ -111,7 +114,10 @@ fn dataset_18_systems_place_nodes_and_turn_directions() {
     // (global −X), its axes those of system 1. Node 3 at r = 2, θ = 90°, z = 1 in it:
     // 2 along system 1's y (global +Y) and 1 along its z (global −Z).
     let n3 = g.nodes[2].xyz;
-    assert!(close(n3.map(|v| (v * 1e6).round() / 1e6), [-3.4, 1.05, -1.0]), "{n3:?}");
+    assert!(
+        close(n3.map(|v| (v * 1e6).round() / 1e6), [-3.4, 1.05, -1.0]),
+        "{n3:?}"
+    );
     // Channels: node 1 +X is global −X; node 3 +X (radial) points along global +Y;
     // node 2 (global system) +Z is +Z; node 9 is not in the geometry; node 1 +RX is a
     // rotation.
@@ -124,7 +130,10 @@ fn dataset_18_systems_place_nodes_and_turn_directions() {
         &[ch(1, 1), ch(3, 1), ch(2, -3), ch(9, 3), ch(1, 4), ch(2, 0)],
     );
     assert_eq!(map.placed.len(), 3);
-    assert!(close(map.placed[0].direction.map(f64::round), [-1.0, 0.0, 0.0]));
+    assert!(close(
+        map.placed[0].direction.map(f64::round),
+        [-1.0, 0.0, 0.0]
+    ));
     let radial = map.placed[1].direction;
     assert!((radial[1] - 1.0).abs() < 1e-6, "{radial:?}");
     assert!(close(map.placed[2].direction, [0.0, 0.0, -1.0]));
@@ -178,8 +187,11 @@ fn bad_geometry_is_refused_naming_the_line() {
         "         1         0         0         0  1",
     );
     let e = uff(&dup).unwrap_err();
-    assert!(e.contains("node 1 is defined twice (line 3) (line 4)"), "{e}");
-    let missing = SQUARE.replace("         0         4         1", "         0         4        77");
+    assert!(e.contains("node 1 is defined twice (lines 3 and 4)"), "{e}");
+    let missing = SQUARE.replace(
+        "         0         4         1",
+        "         0         4        77",
+    );
     let e = uff(&missing).unwrap_err();
     assert!(e.contains("trace line 1 (line 10) names node 77"), "{e}");
     let nan = SQUARE.replace("2.00000E+00 -5.00000E-01", "2.00000E+00          NaN");
@@ -191,13 +203,28 @@ fn bad_geometry_is_refused_naming_the_line() {
         e.contains("g.uff: line 5: dataset 15 node (x), columns 41-53: expected a real number"),
         "{e}"
     );
-    let count = SQUARE.replace("         1         7         0", "         1 900000000         0");
+    let count = SQUARE.replace(
+        "         1         7         0",
+        "         1 900000000         0",
+    );
     let e = uff(&count).unwrap_err();
-    assert!(e.contains("announces 900000000 nodes; the record holds at most 8"), "{e}");
-    let short = SQUARE.replace("         1         7         0", "         1         9         0");
+    assert!(
+        e.contains("announces 900000000 nodes; the record holds at most 8"),
+        "{e}"
+    );
+    let short = SQUARE.replace(
+        "         1         7         0",
+        "         1         9         0",
+    );
     let e = uff(&short).unwrap_err();
-    assert!(e.contains("trace line 1 announces 9 nodes; the record holds at most 8"), "{e}");
-    let few = SQUARE.replace("         1         7         0", "         1         6         0");
+    assert!(
+        e.contains("trace line 1 announces 9 nodes; the record holds at most 8"),
+        "{e}"
+    );
+    let few = SQUARE.replace(
+        "         1         7         0",
+        "         1         6         0",
+    );
     let e = uff(&few).unwrap_err();
     assert!(
         e.contains("line 12: dataset 82: trace line 1 has more nodes than the 6 it announces"),
@@ -214,7 +241,10 @@ fn bad_geometry_is_refused_naming_the_line() {
     );
     let open = SQUARE.trim_end().trim_end_matches("-1");
     let e = uff(open).unwrap_err();
-    assert!(e.contains("line 8: the record of dataset 82 has no closing -1"), "{e}");
+    assert!(
+        e.contains("line 8: the record of dataset 82 has no closing -1"),
+        "{e}"
+    );
     let e = uff("    -1\n    82\n         1         2         0\nx\n 1 2\n    -1\n").unwrap_err();
     assert!(e.contains("no nodes"), "{e}");
 }
@@ -226,14 +256,20 @@ fn cyclic_and_degenerate_systems_are_refused() {
         "         1         0         2         8         1",
         1,
     );
-    let text = format!("{cyclic}{}", &SQUARE[..SQUARE.find("    -1\n    82").unwrap()]);
+    let text = format!(
+        "{cyclic}{}",
+        &SQUARE[..SQUARE.find("    -1\n    82").unwrap()]
+    );
     let e = uff(&text).unwrap_err();
     assert!(e.contains("refers to itself through its references"), "{e}");
     let flat = TESTLAB18.replace(
         " -3.40000e+00 -9.50000e-01 -1.00000e+00",
         " -4.40000e+00 -9.50000e-01  0.00000e+00",
     );
-    let text = format!("{flat}{}", &SQUARE[..SQUARE.find("    -1\n    82").unwrap()]);
+    let text = format!(
+        "{flat}{}",
+        &SQUARE[..SQUARE.find("    -1\n    82").unwrap()]
+    );
     let e = uff(&text).unwrap_err();
     assert!(e.contains("line 3: dataset 18: coordinate system 1: its origin, +x point and +xz point do not span a plane"), "{e}");
 }
@@ -249,7 +285,13 @@ fn other_datasets_and_binary_records_are_skipped() {
     bytes.extend_from_slice(SQUARE.as_bytes());
     let g = parse_geometry(&bytes, Path::new("g.uff")).unwrap();
     assert_eq!(g.nodes.len(), 4);
-    assert!(g.notes.iter().any(|n| n == "skipped: 1 × dataset 58; 1 × dataset 164"), "{:?}", g.notes);
+    assert!(
+        g.notes
+            .iter()
+            .any(|n| n == "skipped: 1 × dataset 58; 1 × dataset 164"),
+        "{:?}",
+        g.notes
+    );
 }
 
 #[test]
@@ -283,7 +325,10 @@ fn the_uff_writer_round_trips_nodes_lines_and_systems() {
     assert!(again.trace_lines.len() >= 3);
     let text = String::from_utf8(out).unwrap();
     for block in text.split("    82").skip(1) {
-        let count: usize = block.lines().nth(1).unwrap()[10..20].trim().parse().unwrap();
+        let count: usize = block.lines().nth(1).unwrap()[10..20]
+            .trim()
+            .parse()
+            .unwrap();
         assert!(count <= 250, "{count}");
     }
     for (a, b) in g.coordinate_systems.iter().zip(&again.coordinate_systems) {
@@ -295,10 +340,9 @@ fn the_uff_writer_round_trips_nodes_lines_and_systems() {
 
 #[test]
 fn the_csv_is_read_and_its_errors_name_line_and_column() {
-    let csv = |t: &str| {
-        parse_geometry(t.as_bytes(), Path::new("g.csv")).map_err(|e| e.to_string())
-    };
-    let good = "# a triangle\nfrom,to\n1,2\n2,3\n\nNode, X, Y, Z\n1,0,0,0\n2,1,0,0\n3, 0.5, 0.8, 1e-1\n";
+    let csv = |t: &str| parse_geometry(t.as_bytes(), Path::new("g.csv")).map_err(|e| e.to_string());
+    let good =
+        "# a triangle\nfrom,to\n1,2\n2,3\n\nNode, X, Y, Z\n1,0,0,0\n2,1,0,0\n3, 0.5, 0.8, 1e-1\n";
     let g = csv(good).unwrap();
     assert_eq!(g.nodes.len(), 3);
     assert!(close(g.nodes[2].xyz, [0.5, 0.8, 0.1]));
@@ -306,13 +350,16 @@ fn the_csv_is_read_and_its_errors_name_line_and_column() {
     let e = csv("node,x,y,z\n1,0,0,0\n2,0,zero,0\n").unwrap_err();
     assert_eq!(e, "g.csv: line 3, column y: 'zero' is not a number");
     let e = csv("node,x,y,z\n1,0,0,0\n1,0,0,1\n").unwrap_err();
-    assert!(e.contains("node 1 is defined twice (line 2) (line 3)"), "{e}");
+    assert!(e.contains("node 1 is defined twice (lines 2 and 3)"), "{e}");
     let e = csv("node,x,y,z\n1,0,0,0\n2,0,inf,1\n").unwrap_err();
     assert!(e.contains("node 2 (line 3): coordinate y is inf"), "{e}");
     let e = csv("node,x,y,z\n1,0,0,0\nfrom,to\n1,5\n").unwrap_err();
     assert!(e.contains("trace line 1 (line 4) names node 5"), "{e}");
     let e = csv("1,0,0,0\n").unwrap_err();
-    assert!(e.contains("line 1: expected the header 'node,x,y,z'"), "{e}");
+    assert!(
+        e.contains("line 1: expected the header 'node,x,y,z'"),
+        "{e}"
+    );
     let e = csv("from,to\n1,2\n").unwrap_err();
     assert!(e.contains("no 'node,x,y,z' section"), "{e}");
     let e = csv("node,x,y,z\n1,0,0\n").unwrap_err();
