@@ -145,7 +145,9 @@ fn records<'a>(
                         path,
                         open.0,
                         "",
-                        format!("the record of dataset {dataset} has no closing -1 (truncated record)"),
+                        format!(
+                            "the record of dataset {dataset} has no closing -1 (truncated record)"
+                        ),
                     ))
                 }
                 Some((_, t)) if is_delimiter(t) => break,
@@ -194,10 +196,7 @@ fn fixed(text: &[u8], spec: &[Field]) -> Result<Numbers, Misfit> {
         let cell = columns(text, at, width);
         let (ok, want) = match f {
             Field::Int(..) => (parse_int(cell).map(|v| n.ints.push(v)), "an integer"),
-            Field::Real(..) => (
-                parse_real(cell).map(|v| n.reals.push(v)),
-                "a real number",
-            ),
+            Field::Real(..) => (parse_real(cell).map(|v| n.reals.push(v)), "a real number"),
         };
         if ok.is_none() {
             let found = String::from_utf8_lossy(cell).into_owned();
@@ -362,8 +361,7 @@ fn nodes2411(path: &Path, r: &Record, out: &mut Vec<RawNode>) -> Result<(), IoEr
             path,
             last,
             "",
-            "dataset 2411: a node label line without its coordinate line (truncated record)"
-                .into(),
+            "dataset 2411: a node label line without its coordinate line (truncated record)".into(),
         ));
     }
     for pair in lines.chunks_exact(2) {
@@ -441,7 +439,9 @@ fn traces82(
                     path,
                     line.0,
                     "",
-                    format!("dataset 82: trace line {id} has more nodes than the {count} it announces"),
+                    format!(
+                        "dataset 82: trace line {id} has more nodes than the {count} it announces"
+                    ),
                 ));
             }
             ids.extend_from_slice(&values[..want]);
@@ -530,7 +530,12 @@ fn systems2420(
         Field::Int("color", 10),
     ];
     let part = take(path, r, 0, 2, "the part UID and name")?;
-    numbers(path, part[0], &[Field::Int("part UID", 10)], "dataset 2420 record 1")?;
+    numbers(
+        path,
+        part[0],
+        &[Field::Int("part UID", 10)],
+        "dataset 2420 record 1",
+    )?;
     let mut k = 2;
     while k < r.lines.len() {
         if trim_bytes(r.lines[k].1).is_empty() {
@@ -600,7 +605,10 @@ fn resolve18(
                     path,
                     s.line,
                     "",
-                    format!("dataset 18: coordinate system {} refers to itself through its references", s.id),
+                    format!(
+                        "dataset 18: coordinate system {} refers to itself through its references",
+                        s.id
+                    ),
                 ));
             }
             chain.push(next);
@@ -723,7 +731,8 @@ pub fn parse_uff_geometry(bytes: &[u8], path: &Path) -> Result<Geometry, IoError
             .iter()
             .map(|(d, n)| format!("{n} × dataset {d}"))
             .collect();
-        g.notes.push(format!("skipped: {}", crate::frf_file::listed(&list)));
+        g.notes
+            .push(format!("skipped: {}", crate::frf_file::listed(&list)));
     }
     if g.nodes.is_empty() {
         return Err(IoError::format(

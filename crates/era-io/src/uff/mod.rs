@@ -61,9 +61,9 @@ mod write_geometry;
 
 pub use crate::frf_file::{direction_name, listed, Channel, ChannelTable, Dof};
 pub use frf::{frf_from_uff, quantity_of, read_frf_uff, FrfLayout};
+pub use geometry::parse_uff_geometry;
 pub use parse::{parse_uff, read_uff};
 pub use types::*;
-pub use geometry::parse_uff_geometry;
 pub use write55::{write_uff55, write_uff55_on};
-pub use write_geometry::write_geometry_records;
 pub use write58::{write_uff58, UffWriteOptions};
+pub use write_geometry::write_geometry_records;

@@ -59,9 +59,7 @@ pub fn write_geometry_records(w: &mut impl Write, g: &Geometry) -> std::io::Resu
                 1
             )?;
             writeln!(w, "{}", header_text(&c.name, 40).trim_end())?;
-            let at = |axis: usize| -> [f64; 3] {
-                [0, 1, 2].map(|i| c.origin[i] + c.axes[axis][i])
-            };
+            let at = |axis: usize| -> [f64; 3] { [0, 1, 2].map(|i| c.origin[i] + c.axes[axis][i]) };
             let mut line: String = c.origin.iter().chain(&at(0)).map(|v| e(*v)).collect();
             writeln!(w, "{line}")?;
             line = at(2).iter().map(|v| e(*v)).collect();

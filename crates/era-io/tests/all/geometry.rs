@@ -37,7 +37,10 @@ fn the_artemis_geometry_is_read_as_the_file_says() {
 
 #[test]
 fn the_artemis_geometry_survives_our_uff_and_csv_writers() {
-    let g = read_geometry(&data_file("pyuff-artemis-geometry/artemis_geometry_rpbc.uff")).unwrap();
+    let g = read_geometry(&data_file(
+        "pyuff-artemis-geometry/artemis_geometry_rpbc.uff",
+    ))
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("g.csv");
     era_io::geometry::csv::write_geometry_csv(&csv, &g).unwrap();
