@@ -355,7 +355,7 @@ fn nodes2411(path: &Path, r: &Record, out: &mut Vec<RawNode>) -> Result<(), IoEr
         .copied()
         .filter(|l| !trim_bytes(l.1).is_empty())
         .collect();
-    if lines.len() % 2 != 0 {
+    if !lines.len().is_multiple_of(2) {
         let last = lines.last().map_or(r.open, |l| l.0);
         return Err(IoError::at(
             path,
