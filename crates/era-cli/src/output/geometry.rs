@@ -48,7 +48,7 @@ pub fn notes(
             .map(|u| {
                 let c = &table.outputs[u.channel];
                 format!(
-                    "output {} ({} {}): {}",
+                    "output {} (node {} {}): {}",
                     u.channel + 1,
                     c.dof.node,
                     direction_name(c.dof.direction),

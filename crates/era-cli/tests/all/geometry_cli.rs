@@ -58,7 +58,7 @@ fn identify_writes_the_geometry_into_modes_uff_and_lists_what_is_not_drawn() {
         "summary"
     );
     assert!(report.contains("2 of 3 output channels on its nodes"));
-    assert!(report.contains("output 3 (3 +Z): node 3 is not in the geometry"));
+    assert!(report.contains("output 3 (node 3 +Z): node 3 is not in the geometry"));
     // Refine keeps it too.
     let refined = dir.path().join("refined");
     era()

@@ -380,6 +380,15 @@ fn the_csv_writer_round_trips() {
 }
 
 #[test]
+fn a_geometry_round_trips_through_json() {
+    let g = uff(&format!("{TESTLAB18}{SQUARE}")).unwrap();
+    let text = serde_json::to_string(&g).unwrap();
+    assert!(text.contains("\"kind\":\"cylindrical\""), "{text}");
+    let back: Geometry = serde_json::from_str(&text).unwrap();
+    assert_eq!(back, g);
+}
+
+#[test]
 fn validate_refuses_what_the_readers_refuse() {
     let mut g = uff(SQUARE).unwrap();
     assert!(g.validate().is_ok());
