@@ -195,3 +195,40 @@ fn the_reported_standard_deviations_match_the_scatter_over_records() {
         "damping: scatter / reported = {mz:.2}"
     );
 }
+
+/// A fleet of one structure with a 2 % drift and a 10 % stiffness loss from record 4:
+/// each record's modes follow the truth of that record.
+#[test]
+fn oma_follows_a_fleets_drift_and_damage() {
+    use era::sim::fleet::{fleet_record, FleetSpec};
+    let mut spec = FleetSpec::new(
+        ModalSpec {
+            fmin_hz: 1.0,
+            fmax_hz: 20.0,
+            seed: 3,
+            ..ModalSpec::new(8, 2, 6)
+        },
+        6,
+    );
+    spec.damage = Some((4, 0.1));
+    for index in [0, 3, 5] {
+        let r = fleet_record(&spec, index).unwrap();
+        let outputs: Vec<&[f64]> = r.record.outputs.iter().map(Vec::as_slice).collect();
+        let found = oma(&[outputs.as_slice()], &OmaOptions::new(64.0)).unwrap();
+        let (pick, _) = matched(&found, &r.record.truth);
+        let hits: Vec<usize> = pick.iter().flatten().copied().collect();
+        assert!(hits.len() >= 5, "record {index}: {pick:?}");
+        for (t, p) in pick.iter().enumerate() {
+            let Some(m) = *p else { continue };
+            let (got, want) = (
+                found.identification.modal.modes[m].frequency_hz,
+                r.record.truth.frequencies_hz[t],
+            );
+            // Well inside the 2 % drift and the 1-5 % damage shifts.
+            assert!(
+                (got / want - 1.0).abs() < 0.003,
+                "record {index}: {got} vs {want}"
+            );
+        }
+    }
+}
