@@ -160,15 +160,7 @@ pub fn realize(
     sample_time_s: f64,
     options: &RealizeOptions,
 ) -> Result<Realization> {
-    let (shapes, warnings) = plan(markov, options.states, options.hankel_factor)?;
-    realize_shapes(
-        markov,
-        sample_time_s,
-        options,
-        (shapes.h0, shapes.h1),
-        Some(warnings),
-        false,
-    )
+    realize_thesis(markov, sample_time_s, options, false)
 }
 
 /// [`realize`] with `A` from the shift of the observability factor
@@ -181,6 +173,16 @@ pub fn realize_shift(
     sample_time_s: f64,
     options: &RealizeOptions,
 ) -> Result<Realization> {
+    realize_thesis(markov, sample_time_s, options, true)
+}
+
+/// The thesis Hankel's realization, `A` from `H1` or from the shift.
+fn realize_thesis(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+    shift: bool,
+) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options.states, options.hankel_factor)?;
     realize_shapes(
         markov,
@@ -188,7 +190,7 @@ pub fn realize_shift(
         options,
         (shapes.h0, shapes.h1),
         Some(warnings),
-        true,
+        shift,
     )
 }
 
