@@ -94,8 +94,15 @@ where
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(err)?;
-    // The later curves first, the first on top of them.
-    for (k, curve) in plot.curves.iter().enumerate().rev() {
+    // The first curve (in the legend first), the others, then the first again on top.
+    let n = plot.curves.len();
+    let order: Vec<(usize, bool)> = (0..n.min(1))
+        .map(|k| (k, true))
+        .chain((1..n).map(|k| (k, k == 1)))
+        .chain((0..n.min(1)).map(|k| (k, false)))
+        .collect();
+    for (k, labelled) in order {
+        let curve = &plot.curves[k];
         let points: Vec<(f64, f64)> = plot
             .lines_hz
             .iter()
@@ -107,14 +114,18 @@ where
         let series = chart
             .draw_series(LineSeries::new(points, colour.stroke_width(width)))
             .map_err(err)?;
-        if k == 0 {
-            series.label("first singular value").legend(|(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], FIRST.stroke_width(2))
-            });
-        } else if k == 1 {
-            series.label("the others").legend(|(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], OTHER.stroke_width(1))
-            });
+        match (k, labelled) {
+            (0, true) => {
+                series.label("first singular value").legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], FIRST.stroke_width(2))
+                });
+            }
+            (_, true) => {
+                series.label("the others").legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], OTHER.stroke_width(1))
+                });
+            }
+            _ => {}
         }
     }
     for (physical, colour, label) in [

@@ -78,6 +78,9 @@ pub struct PyIdentification {
     /// What the Markov parameters' source adds to `parameters` (the source, the Welch
     /// frame, OKID's observer); nothing else is set in it.
     pub(crate) source: ModelParameters,
+    /// What an output-only run (`era.oma`) adds: method, channels, lags, blocks,
+    /// samples, shape standard deviations.
+    pub(crate) oma: Option<crate::oma::OmaFacts>,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -230,6 +233,13 @@ impl PyIdentification {
             })
             .collect::<PyResult<Vec<_>>>()?;
         PyList::new(py, modes)
+    }
+    /// An output-only run's facts (`era.oma`): `method`, `outputs` and `references`
+    /// (0-based channels), `lags`, `blocks`, `samples`, `sample_rate_hz`, per mode
+    /// `shape_std`, and `shapes = 'unscaled'`; `None` for other runs.
+    #[getter]
+    fn oma<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.oma.as_ref().map(|o| o.dict(py)).transpose()
     }
     /// Size of H0, (rows, columns).
     #[getter]
@@ -523,6 +533,7 @@ pub fn identify(
         refine: refine.then_some(refine_options),
         route,
         source: Default::default(),
+        oma: None,
     })
 }
 

@@ -256,7 +256,11 @@ pub fn run(a: &Oma) -> anyhow::Result<()> {
     }
     let mut timings = era_io::model_json::timings_map(&found.identification.timings);
     timings.insert("read".into(), read_s);
-    timings.insert("correlations".into(), found.correlation_seconds);
+    // The correlations are the Markov stage's work: a part of it, not added again.
+    timings.insert(
+        format!("markov{}correlations", crate::output::report::PART),
+        found.correlation_seconds,
+    );
     timings.insert("uncertainty".into(), found.uncertainty_seconds);
     let mut json = oma_json(&run);
     if let (Some(set), Some(dir)) = (outputs.as_mut(), a.out.as_ref()) {
