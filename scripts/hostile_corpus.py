@@ -403,13 +403,13 @@ def main():
     with open(os.path.join(work, "oma.csv"), "w") as f:
         f.write("time_s,y1,y2,y3\n")
         prng = random.Random(11)
-        a = [0.0, 0.0]
-        b = [0.0, 0.0]
+        r1 = [0.0, 0.0]
+        r2 = [0.0, 0.0]
         for k in range(4096):
             u, v = prng.gauss(0, 1), prng.gauss(0, 1)
-            a = [1.80 * a[0] - 0.98 * a[1] + u, a[0]]
-            b = [1.20 * b[0] - 0.97 * b[1] + v, b[0]]
-            f.write(f"{k / 128:.6f},{a[0] + 0.3 * b[0]:.6e},{a[0] - b[0]:.6e},{0.5 * a[0] + b[0]:.6e}\n")
+            r1 = [1.80 * r1[0] - 0.98 * r1[1] + u, r1[0]]
+            r2 = [1.20 * r2[0] - 0.97 * r2[1] + v, r2[0]]
+            f.write(f"{k / 128:.6f},{r1[0] + 0.3 * r2[0]:.6e},{r1[0] - r2[0]:.6e},{0.5 * r1[0] + r2[0]:.6e}\n")
 
     commands = {
         "truth.csv": [["info", "{f}"], ["identify", "{f}", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],

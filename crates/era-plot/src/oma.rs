@@ -12,7 +12,7 @@ use std::path::Path;
 const FIRST: RGBColor = RGBColor(31, 119, 180);
 const OTHER: RGBColor = RGBColor(120, 150, 190);
 const PHYSICAL: RGBColor = RGBColor(214, 39, 40);
-const OTHER_MODE: RGBColor = RGBColor(150, 150, 150);
+const OTHER_MODE: RGBColor = RGBColor(255, 127, 14);
 
 fn err(e: impl std::fmt::Display) -> PlotError {
     PlotError(e.to_string())

@@ -3,51 +3,12 @@
 //! NExT-ERA at the automatic or a fixed order, with standard deviations from a
 //! delete-one-block jackknife.
 
-use crate::model::{states_of, thread_count, PyIdentification};
+use crate::model::{states_of, thread_count, OmaFacts, PyIdentification};
 use crate::{era_error, guarded, value_error, Int};
 use era::identify::oma::{oma, OmaMethod, OmaOptions};
 use era::params::Naming;
 use numpy::{PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
-
-/// What an output-only run adds to its identification.
-#[derive(Debug, Clone)]
-pub struct OmaFacts {
-    /// `ssi-cov` or `next-era`.
-    pub method: String,
-    /// The output channels (0-based, axis 0 of the data).
-    pub outputs: Vec<usize>,
-    /// The reference channels (0-based, axis 0 of the data).
-    pub references: Vec<usize>,
-    /// Correlation lags.
-    pub lags: usize,
-    /// Jackknife blocks.
-    pub blocks: usize,
-    /// Samples per channel over all records.
-    pub samples: usize,
-    /// Samples per second.
-    pub sample_rate_hz: f64,
-    /// Per mode, the standard deviation of each shape entry (`None`: no spread).
-    pub shape_std: Vec<Option<Vec<f64>>>,
-}
-
-impl OmaFacts {
-    /// As a dict: every field, and `shapes = 'unscaled'`.
-    pub fn dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("method", &self.method)?;
-        d.set_item("outputs", &self.outputs)?;
-        d.set_item("references", &self.references)?;
-        d.set_item("lags", self.lags)?;
-        d.set_item("blocks", self.blocks)?;
-        d.set_item("samples", self.samples)?;
-        d.set_item("sample_rate_hz", self.sample_rate_hz)?;
-        d.set_item("shape_std", self.shape_std.clone())?;
-        d.set_item("shapes", "unscaled")?;
-        Ok(d)
-    }
-}
 
 /// Output-only identification of `data`, responses to unmeasured broadband forces, as
 /// `era oma` runs it.
@@ -86,93 +47,14 @@ pub fn oma_py(
 ) -> PyResult<PyIdentification> {
     // Every keyword is checked before the data is touched.
     let threads = thread_count(threads)?;
-    let method: OmaMethod = crate::named("method", method)?;
-    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
-        return value_error(format!(
-            "sample_rate_hz {sample_rate_hz}: must be a positive number of samples per second"
-        ));
-    }
-    let chosen = match states {
-        Some(s) if !s.is_none() => states_of(s)?,
-        _ => None,
-    };
-    if chosen == Some(0) {
-        return value_error("states 0: a model needs at least 2 states (one mode), or use 'auto'");
-    }
-    let mut options = OmaOptions::new(sample_rate_hz);
-    options.method = method;
-    if let Some(n) = time_lags {
-        let n = n.size("time_lags")?;
-        if !(2..=era::sources::correlation::MAX_LAGS).contains(&n) {
-            return value_error(format!(
-                "time_lags {n}: must be from 2 to {}",
-                era::sources::correlation::MAX_LAGS
-            ));
-        }
-        options.lags = Some(n);
-    }
-    if let Some(b) = blocks {
-        let b = b.size("blocks")?;
-        if !(1..=era::sources::correlation::MAX_BLOCKS).contains(&b) {
-            return value_error(format!(
-                "blocks {b}: must be from 1 (no standard deviations) to {}",
-                era::sources::correlation::MAX_BLOCKS
-            ));
-        }
-        options.blocks = b;
-    }
-    if let Some(n) = chosen {
-        options.era.order = era::Order::Fixed(n);
-    }
-    // One record or a list of them, each (channels, samples).
-    let list: Vec<Bound<'_, PyAny>> = if data.is_instance_of::<pyo3::types::PyList>()
-        || data.is_instance_of::<pyo3::types::PyTuple>()
-    {
-        data.try_iter()?.collect::<PyResult<_>>()?
-    } else {
-        vec![data.clone()]
-    };
-    if list.is_empty() {
-        return value_error("data: give at least one record (channels, samples)");
-    }
-    let arrays = list
-        .iter()
-        .map(crate::time_block)
-        .collect::<PyResult<Vec<_>>>()?;
+    let (mut options, chosen) = options_of(sample_rate_hz, method, states, time_lags, blocks)?;
+    let arrays = records_of(data)?;
     let n_channels = arrays[0].shape()[0];
-    for (k, a) in arrays.iter().enumerate() {
-        if a.shape()[0] != n_channels {
-            return value_error(format!(
-                "data: record {} has {} channels, the first {n_channels}: records of one test have the same channels",
-                k + 1,
-                a.shape()[0]
-            ));
-        }
-    }
     let outputs = match outputs {
         Some(list) => crate::frf::channels("outputs", &list, n_channels)?,
         None => (0..n_channels).collect(),
     };
-    let references = match references {
-        None => None,
-        Some(list) => {
-            let chosen = crate::frf::channels("references", &list, n_channels)?;
-            let mut at = Vec::with_capacity(chosen.len());
-            for c in chosen {
-                let Some(k) = outputs.iter().position(|&o| o == c) else {
-                    return value_error(format!(
-                        "references: channel {c} is not among the outputs: a reference is one of the outputs"
-                    ));
-                };
-                if at.contains(&k) {
-                    return value_error(format!("references: channel {c} is given twice"));
-                }
-                at.push(k);
-            }
-            Some(at)
-        }
-    };
-    options.references = references;
+    options.references = references_of(references, &outputs, n_channels)?;
     let views: Vec<_> = arrays.iter().map(|a| a.readonly()).collect();
     let flats = views
         .iter()
@@ -183,24 +65,8 @@ pub fn oma_py(
         .zip(&arrays)
         .map(|(flat, a)| crate::frf::rows(flat, a.shape()[1], &outputs))
         .collect();
-    // A dead or non-finite channel named by its channel in the data.
-    for (k, record) in records.iter().enumerate() {
-        for (ch, &c) in record.iter().zip(&outputs) {
-            if let Some(s) = ch.iter().position(|v| !v.is_finite()) {
-                return value_error(format!(
-                    "data: channel {c} of record {} is not finite at sample {s}",
-                    k + 1
-                ));
-            }
-        }
-    }
-    for (i, &c) in outputs.iter().enumerate() {
-        if records.iter().all(|r| r[i].iter().all(|v| *v == r[i][0])) {
-            return value_error(format!(
-                "outputs: channel {c} is constant in every record (a dead channel): leave it out"
-            ));
-        }
-    }
+    check_channels(&records, &outputs)?;
+    let method = options.method;
     let found = guarded(py, || {
         let views: Vec<&[&[f64]]> = records.iter().map(Vec::as_slice).collect();
         era::parallel::with_threads(Naming::Keyword, threads, || oma(&views, &options))
@@ -239,6 +105,137 @@ pub fn oma_py(
         source: Default::default(),
         oma: Some(facts),
     })
+}
+
+/// The options of the keywords, each checked; and the fixed order asked for.
+fn options_of(
+    sample_rate_hz: f64,
+    method: &str,
+    states: Option<&Bound<'_, PyAny>>,
+    time_lags: Option<Int>,
+    blocks: Option<Int>,
+) -> PyResult<(OmaOptions, Option<usize>)> {
+    let method: OmaMethod = crate::named("method", method)?;
+    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+        return value_error(format!(
+            "sample_rate_hz {sample_rate_hz}: must be a positive number of samples per second"
+        ));
+    }
+    let chosen = match states {
+        Some(s) if !s.is_none() => states_of(s)?,
+        _ => None,
+    };
+    if chosen == Some(0) {
+        return value_error("states 0: a model needs at least 2 states (one mode), or use 'auto'");
+    }
+    let mut options = OmaOptions::new(sample_rate_hz);
+    options.method = method;
+    if let Some(n) = time_lags {
+        let n = n.size("time_lags")?;
+        if !(2..=era::sources::correlation::MAX_LAGS).contains(&n) {
+            return value_error(format!(
+                "time_lags {n}: must be from 2 to {}",
+                era::sources::correlation::MAX_LAGS
+            ));
+        }
+        options.lags = Some(n);
+    }
+    if let Some(b) = blocks {
+        let b = b.size("blocks")?;
+        if !(1..=era::sources::correlation::MAX_BLOCKS).contains(&b) {
+            return value_error(format!(
+                "blocks {b}: must be from 1 (no standard deviations) to {}",
+                era::sources::correlation::MAX_BLOCKS
+            ));
+        }
+        options.blocks = b;
+    }
+    if let Some(n) = chosen {
+        options.era.order = era::Order::Fixed(n);
+    }
+    Ok((options, chosen))
+}
+
+/// `data` as records, each (channels, samples), all with the same channels.
+fn records_of<'py>(
+    data: &Bound<'py, PyAny>,
+) -> PyResult<Vec<Bound<'py, numpy::PyArray<f64, numpy::ndarray::Ix2>>>> {
+    // One record or a list of them, each (channels, samples).
+    let list: Vec<Bound<'_, PyAny>> = if data.is_instance_of::<pyo3::types::PyList>()
+        || data.is_instance_of::<pyo3::types::PyTuple>()
+    {
+        data.try_iter()?.collect::<PyResult<_>>()?
+    } else {
+        vec![data.clone()]
+    };
+    if list.is_empty() {
+        return value_error("data: give at least one record (channels, samples)");
+    }
+    let arrays = list
+        .iter()
+        .map(crate::time_block)
+        .collect::<PyResult<Vec<_>>>()?;
+    let n_channels = arrays[0].shape()[0];
+    for (k, a) in arrays.iter().enumerate() {
+        if a.shape()[0] != n_channels {
+            return value_error(format!(
+                "data: record {} has {} channels, the first {n_channels}: records of one test have the same channels",
+                k + 1,
+                a.shape()[0]
+            ));
+        }
+    }
+    Ok(arrays)
+}
+
+/// The references as positions among the outputs; one that is not an output is named.
+fn references_of(
+    references: Option<Vec<Int>>,
+    outputs: &[usize],
+    n_channels: usize,
+) -> PyResult<Option<Vec<usize>>> {
+    Ok(match references {
+        None => None,
+        Some(list) => {
+            let chosen = crate::frf::channels("references", &list, n_channels)?;
+            let mut at = Vec::with_capacity(chosen.len());
+            for c in chosen {
+                let Some(k) = outputs.iter().position(|&o| o == c) else {
+                    return value_error(format!(
+                        "references: channel {c} is not among the outputs: a reference is one of the outputs"
+                    ));
+                };
+                if at.contains(&k) {
+                    return value_error(format!("references: channel {c} is given twice"));
+                }
+                at.push(k);
+            }
+            Some(at)
+        }
+    })
+}
+
+/// Every output finite, and none constant in every record (a dead channel).
+fn check_channels(records: &[Vec<&[f64]>], outputs: &[usize]) -> PyResult<()> {
+    // A dead or non-finite channel named by its channel in the data.
+    for (k, record) in records.iter().enumerate() {
+        for (ch, &c) in record.iter().zip(outputs) {
+            if let Some(s) = ch.iter().position(|v| !v.is_finite()) {
+                return value_error(format!(
+                    "data: channel {c} of record {} is not finite at sample {s}",
+                    k + 1
+                ));
+            }
+        }
+    }
+    for (i, &c) in outputs.iter().enumerate() {
+        if records.iter().all(|r| r[i].iter().all(|v| *v == r[i][0])) {
+            return value_error(format!(
+                "outputs: channel {c} is constant in every record (a dead channel): leave it out"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A core error as a `ValueError` naming the keyword (`time_lags` for the lags).

@@ -4,7 +4,7 @@
 //! files, figures and report are [`crate::output::oma`]'s.
 
 use crate::config::Oma;
-use crate::output::oma::{oma_json, oma_table, write_oma, OmaRun};
+use crate::output::oma::{oma_json, oma_table, write_oma, OmaRun, Records};
 use crate::output::prepare_out_dir;
 use crate::output::report::{print_json, stabilization_summary, timings_table, Human};
 use anyhow::Context as _;
@@ -12,25 +12,6 @@ use era::identify::oma::oma_observed;
 use era_io::time::{parse_channels, read_time_file, TimeHistory};
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// The records of one test as read: the output channels of each, the sample rate and
-/// the labels.
-pub struct Records {
-    /// Per record, its output channels.
-    pub channels: Vec<Vec<Vec<f64>>>,
-    /// Samples per second, and where it came from.
-    pub rate: f64,
-    /// Where the rate came from.
-    pub rate_from: String,
-    /// The first file's format.
-    pub format: String,
-    /// The output columns (0-based, in the file).
-    pub columns: Vec<usize>,
-    /// Each output's label, `3 (y1)`.
-    pub labels: Vec<String>,
-    /// The references, 0-based among the outputs, when given.
-    pub references: Option<Vec<usize>>,
-}
 
 /// Reads every file, selects the outputs and checks that the records agree.
 fn read_records(a: &Oma, spinner: &indicatif::ProgressBar) -> anyhow::Result<Records> {

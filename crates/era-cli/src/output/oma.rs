@@ -7,7 +7,6 @@
 use super::figures::{write_figure, write_png_with, write_stabilization};
 use super::identification::{write_bundle, Bundle};
 use super::{stamped, write_output, RunInput};
-use crate::commands::oma::Records;
 use era::identify::oma::Oma;
 use era_io::atomic::{write_atomic, OutputSet};
 use era_io::model_json::{FitJson, ModelJson, ModelParameters};
@@ -17,6 +16,25 @@ use era_plot::{singular_value_figure, FrfUnits, FrfView, PhaseView};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// The records of one test as read: the output channels of each, the sample rate and
+/// the labels.
+pub struct Records {
+    /// Per record, its output channels.
+    pub channels: Vec<Vec<Vec<f64>>>,
+    /// Samples per second, and where it came from.
+    pub rate: f64,
+    /// Where the rate came from.
+    pub rate_from: String,
+    /// The first file's format.
+    pub format: String,
+    /// The output columns (0-based, in the file).
+    pub columns: Vec<usize>,
+    /// Each output's label, `3 (y1)`.
+    pub labels: Vec<String>,
+    /// The references, 0-based among the outputs, when given.
+    pub references: Option<Vec<usize>>,
+}
 
 /// One `era oma` run: the files, the records as read, the result and whether the order
 /// was automatic.
@@ -268,7 +286,7 @@ pub fn write_oma(
     sections_svg.push((
         "spectral",
         "Spectral singular values",
-        "The singular values of the output spectrum at each line (the transform of the correlations, outputs × references), largest first: the quick look of frequency-domain decomposition. Peaks of the first are the modes; two curves peaking together are close modes. The dashed red lines are the modes judged physical, the grey ones the others.".into(),
+        "The singular values of the output spectrum at each line (the transform of the correlations, outputs × references), largest first: the quick look of frequency-domain decomposition. Peaks of the first are the modes; two curves peaking together are close modes. The dashed red lines are the modes judged physical, the orange ones the others.".into(),
         svg,
     ));
     if let Some(mac) = mac_plot(run) {

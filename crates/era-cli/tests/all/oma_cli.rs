@@ -194,7 +194,7 @@ fn bad_inputs_are_named() {
         ),
         (vec![s(&dead), "--outputs", "3-10"], "acc4"),
         (vec![s(&dead), "--outputs", "3-10"], "dead channel"),
-        (vec![s(&nan), "--outputs", "3-10"], "not finite"),
+        (vec![s(&nan), "--outputs", "3-10"], "must be finite"),
         (vec![s(&nan), "--outputs", "3-10"], "acc5"),
         (
             vec![f, "--outputs", "3-10", "--time-lags", "3000"],
