@@ -1375,6 +1375,40 @@ mod tests {
         assert_eq!(t.model.sample_rate, compensator.rate_hz);
     }
 
+    /// `era oma`'s flags left out are the core's options (`OmaOptions::new`), and the
+    /// order flags become the core's orders.
+    #[test]
+    fn oma_flags_left_out_are_the_cores_defaults() {
+        let oma = |args: &[&str]| {
+            let argv: Vec<&str> = ["oma", "rec.csv", "--outputs", "1-4"]
+                .iter()
+                .chain(args)
+                .copied()
+                .collect();
+            match parsed(&argv) {
+                crate::args::Command::Oma(a) => Oma::new(&a),
+                _ => unreachable!(),
+            }
+        };
+        let o = oma(&[]).unwrap();
+        assert_eq!(o.options, era::identify::oma::OmaOptions::new(1.0));
+        assert!(o.auto && o.references.is_none() && o.sample_rate.is_none());
+        let o = oma(&["--states", "20"]).unwrap();
+        assert_eq!(o.options.era.order, era::Order::Fixed(20));
+        assert!(!o.auto);
+        let o = oma(&["--states", "20", "--orders", "10..30"]).unwrap();
+        assert_eq!(o.options.era.order, era::Order::Scan { states: 20 });
+        for bad in [
+            &["--blocks", "0"][..],
+            &["--time-lags", "1"],
+            &["--sample-rate", "0"],
+            &["--states", "0"],
+            &["--orders", "9..3"],
+        ] {
+            assert!(oma(bad).is_err(), "{bad:?}");
+        }
+    }
+
     fn sim_args(args: &[&str]) -> SimulateArgs {
         let argv: Vec<&str> = ["simulate"].iter().chain(args).copied().collect();
         match parsed(&argv) {
