@@ -4,7 +4,7 @@
 //! files, figures and report are [`crate::output::oma`]'s.
 
 use crate::config::Oma;
-use crate::output::oma::{oma_json, oma_table, write_oma, OmaRun, Records};
+use crate::output::oma::{oma_json, oma_table, write_model_json, write_oma, OmaRun, Records};
 use crate::output::prepare_out_dir;
 use crate::output::report::{print_json, stabilization_summary, timings_table, Human};
 use anyhow::Context as _;
@@ -244,11 +244,10 @@ pub fn run(a: &Oma) -> anyhow::Result<()> {
     );
     timings.insert("uncertainty".into(), found.uncertainty_seconds);
     let mut json = oma_json(&run);
-    if let (Some(set), Some(dir)) = (outputs.as_mut(), a.out.as_ref()) {
+    if let Some(set) = outputs.as_mut() {
         let clock = Instant::now();
-        write_oma(set, &run, &json, !a.no_figures, &settings)?;
+        write_oma(set, &run, !a.no_figures, &settings)?;
         timings.insert("write".into(), clock.elapsed().as_secs_f64());
-        let _ = dir;
     }
     if settings.timings {
         if let Some(wall) = crate::output::report::process_seconds() {
@@ -256,6 +255,9 @@ pub fn run(a: &Oma) -> anyhow::Result<()> {
         }
         human.print(&timings_table(&timings));
         json["timings_s"] = serde_json::json!(timings);
+    }
+    if let Some(set) = outputs.as_mut() {
+        write_model_json(set, &json)?;
     }
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
         set.commit()?;

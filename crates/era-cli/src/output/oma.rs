@@ -223,21 +223,25 @@ pub fn oma_json(run: &OmaRun) -> serde_json::Value {
     value
 }
 
-/// Every output of the run into `set`: model.json (`json`), fit.json, model.mat,
+/// model.json (the run's JSON, [`oma_json`]) into `set`: written last, with the
+/// timings when they were asked for, as `era identify` writes it.
+pub fn write_model_json(set: &mut OutputSet, json: &serde_json::Value) -> anyhow::Result<()> {
+    write_output(set, "model.json", |p| {
+        Ok(era_io::model_json::write_json(p, json)?)
+    })
+}
+
+/// Every output of the run but model.json into `set`: fit.json, model.mat,
 /// model_frf.uff and modes.uff (the bundle writer's), and with `figures` the figures and
 /// report.html.
 pub fn write_oma(
     set: &mut OutputSet,
     run: &OmaRun,
-    json: &serde_json::Value,
     figures: bool,
     settings: &crate::config::Settings,
 ) -> anyhow::Result<()> {
     let found = &run.oma.identification;
     let here = Path::new("");
-    write_output(set, "model.json", |p| {
-        Ok(era_io::model_json::write_json(p, json)?)
-    })?;
     let fit = FitJson::from_report(&found.fit);
     let source = run_input(run);
     let title = format!(
@@ -402,16 +406,12 @@ fn run_input(run: &OmaRun) -> RunInput {
             ],
             ..stamped()
         },
-        quantity: found_quantity(o),
+        quantity: o.identification.measured.quantity(),
         units: FrfUnits::default(),
         channels: None,
         coherence: None,
         phase: PhaseView::Wrapped,
     }
-}
-
-fn found_quantity(o: &Oma) -> era::Quantity {
-    o.identification.measured.quantity()
 }
 
 /// What the run wrote, for the closing line.
