@@ -235,3 +235,25 @@ fn bad_inputs_are_named() {
     let mat = data_file("daisy-steel-subframe/flexible_structure_dat.mat");
     expect_input_error(&["oma", s(&mat), "--outputs", "3-30"], "--sample-rate");
 }
+
+#[test]
+fn a_fifo_or_a_device_where_a_record_should_be_is_refused() {
+    use common::hostile::{run_capped, run_capped_env};
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("rec.csv");
+    let c = std::ffi::CString::new(s(&fifo)).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    run_capped(&["oma", s(&fifo), "--outputs", "1"], None, None)
+        .assert_input_error()
+        .says("empty");
+    run_capped_env(
+        &["oma", "/dev/zero", "--outputs", "1"],
+        None,
+        None,
+        &[("ERA_MAX_INPUT_BYTES", "1000000")],
+    )
+    .assert_input_error()
+    .says("/dev/zero");
+    run_capped(&["oma", s(dir.path()), "--outputs", "1"], None, None).assert_input_error();
+}
