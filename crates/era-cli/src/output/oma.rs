@@ -97,9 +97,14 @@ impl OmaRun<'_> {
             format!("{} states", o.identification.realization.model.states())
         };
         let _ = writeln!(s, "  order: {order}");
+        let spread = if o.blocks >= 2 {
+            "± is one standard deviation from the delete-one-block jackknife"
+        } else {
+            "no standard deviations with --blocks 1"
+        };
         let _ = writeln!(
             s,
-            "  shapes: unscaled (no measured input, so no modal mass); ± is one standard deviation from the delete-one-block jackknife"
+            "  shapes: unscaled (no measured input, so no modal mass); {spread}"
         );
         s
     }
