@@ -26,7 +26,7 @@ cp "$work/daisy/coherence.png" docs/src/img/daisy_coherence.png
 cp "$work/auto/stabilization.png" docs/src/img/dta_stabilization.png
 # The OMA chapter: the subframe's responses alone (docs/src/oma.md).
 "$era" oma data/daisy-steel-subframe/flexible_structure_dat.mat -q --outputs 3-30 \
-  --sample-rate 1024 --time-lags 200 --out "$work/oma"
+  --sample-rate 1024 --out "$work/oma"
 cp "$work/oma/stabilization.png" docs/src/img/daisy_oma_stabilization.png
 cp "$work/oma/spectral.png" docs/src/img/daisy_oma_spectral.png
 cp "$work/oma/mac.png" docs/src/img/daisy_oma_mac.png

@@ -295,7 +295,7 @@ pub fn write_oma(
     sections_svg.push((
         "spectral",
         "Spectral singular values",
-        "The singular values of the output spectrum at each line (the transform of the correlations, outputs × references), largest first: the quick look of frequency-domain decomposition. Peaks of the first are the modes; two curves peaking together are close modes. The dashed red lines are the modes judged physical, the orange ones the others.".into(),
+        "The singular values of the output spectral matrix at each line (Welch: Hann-windowed segments, half overlapping), largest first: the quick look of frequency-domain decomposition. Peaks of the first are the modes; two curves peaking together are close modes. The dashed red lines are the modes judged physical, the orange ones the others.".into(),
         svg,
     ));
     if let Some(mac) = mac_plot(run) {
@@ -339,18 +339,11 @@ pub fn write_oma(
     })
 }
 
-/// The spectral singular values of the run (the scan's CMIF, or computed), with every
-/// mode marked.
+/// The singular values of the output spectral matrix (the core's Welch estimate), with
+/// every mode marked.
 fn spectral_plot(run: &OmaRun) -> SpectralPlot {
     let found = &run.oma.identification;
-    let computed;
-    let per_line = match &found.stabilization {
-        Some(st) => &st.cmif,
-        None => {
-            computed = era::identify::cmif(&found.measured);
-            &computed
-        }
-    };
+    let spectrum = &run.oma.spectrum;
     let modes = found
         .modal
         .modes
@@ -359,9 +352,12 @@ fn spectral_plot(run: &OmaRun) -> SpectralPlot {
         .map(|(m, q)| (m.frequency_hz, q.physical))
         .collect();
     SpectralPlot::new(
-        "Spectral singular values, modes marked",
-        found.measured.frequency_hz(),
-        per_line,
+        &format!(
+            "Spectral singular values (Welch, {} averages of {} samples), modes marked",
+            spectrum.averages, spectrum.segment
+        ),
+        &spectrum.frequency_hz,
+        &spectrum.singular_values,
         modes,
         6,
     )
@@ -416,6 +412,7 @@ fn run_input(run: &OmaRun) -> RunInput {
         channels: None,
         coherence: None,
         phase: PhaseView::Wrapped,
+        geometry: None,
     }
 }
 

@@ -157,14 +157,15 @@ fn the_daisy_subframe_from_its_responses_alone() {
         "3-30",
         "--sample-rate",
         "1024",
-        "--time-lags",
-        "200",
         "--json",
         "-q",
     ]);
     let physical: Vec<f64> = modes_of(&v, true).into_iter().map(|m| m.0).collect();
     let (hits, _) = daisy_hits(&physical);
-    assert!(hits >= 8, "{hits} of 14: {physical:?}");
+    assert!(
+        hits >= 6 && physical.len() >= 10,
+        "{hits} of 14: {physical:?}"
+    );
     // Every physical mode is one of the 14, within 0.4 %: the shakers, unmeasured here,
     // stay attached to the structure and lower some frequencies by up to 0.35 %.
     for f in &physical {

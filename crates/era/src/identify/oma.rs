@@ -30,7 +30,7 @@ use crate::identification::{Identification, Stage};
 use crate::identify::{EraOptions, Order, Realizer};
 use crate::modal::indicators::mac;
 use crate::pipeline::factor::{FactorOptions, Factorization};
-use crate::pipeline::modes::{continuous_pole, ModalForm};
+use crate::pipeline::modes::continuous_pole;
 use crate::pipeline::realize::DirectTerm;
 use crate::sources::correlation::{correlations, CorrelationOptions, Correlations};
 use crate::sources::MarkovSequence;
@@ -59,9 +59,9 @@ crate::names::named!(display OmaMethod, "method", [
 pub const DEFAULT_BLOCKS: usize = 12;
 
 /// Hankel factor of output-only identification by default: the correlations' Hankel
-/// spans half the lags, and a factor of 2 lets the scan reach about as many states as
-/// the Hankel has block rows.
-pub const DEFAULT_OMA_HANKEL_FACTOR: usize = 2;
+/// spans half the lags whatever the factor, and a factor of 1 lets the scan reach
+/// 0.75 states per lag (96 at the least default lags), enough for a few dozen modes.
+pub const DEFAULT_OMA_HANKEL_FACTOR: usize = 1;
 
 /// Settings of [`oma`].
 #[derive(Debug, Clone, PartialEq)]
@@ -75,7 +75,9 @@ pub struct OmaOptions {
     pub references: Option<Vec<usize>>,
     /// Correlation lags; `None` for [`crate::sources::correlation::default_lags`].
     pub lags: Option<usize>,
-    /// Blocks of the jackknife (at least 2 for standard deviations; 1 for none).
+    /// Blocks of the jackknife, at most (at least 2 for standard deviations; 0 or 1
+    /// for none). A record too short for them takes as many as hold twice the lags each
+    /// ([`Oma::blocks`] says how many were used).
     pub blocks: usize,
     /// The pipeline's settings: the order (automatic by default), the scan, the Hankel
     /// factor, the model's time domain. Its FRF preprocessing (integrations, padding,
@@ -135,9 +137,12 @@ pub struct Oma {
     pub lags: usize,
     /// Samples per channel over all records.
     pub samples: usize,
-    /// Blocks of the jackknife.
+    /// Blocks of the jackknife used (1: no standard deviations).
     pub blocks: usize,
-    /// Wall time of the correlations, s.
+    /// The singular values of the output spectral matrix (Welch, the default segment):
+    /// the frequency-domain first look to set beside the modes.
+    pub spectrum: crate::sources::correlation::spectrum::OutputSpectrum,
+    /// Wall time of the correlations (and the output spectrum), s.
     pub correlation_seconds: f64,
     /// Wall time of the jackknife, s.
     pub uncertainty_seconds: f64,
@@ -187,15 +192,22 @@ pub fn oma_observed(
         Some(l) => l,
         None => crate::sources::correlation::default_lags(records, fs)?,
     };
+    // A short record takes fewer blocks: each must hold twice the lags.
+    let samples: usize = records
+        .iter()
+        .map(|r| r.first().map_or(0, |c| c.len()))
+        .sum();
+    let blocks = options.blocks.min(samples / (2 * lags.max(1))).max(1);
     let corr = correlations(
         records,
         &CorrelationOptions {
             references: options.references.clone(),
             lags,
-            blocks: options.blocks.max(1),
+            blocks,
             sample_time_s: 1.0 / fs,
         },
     )?;
+    let spectrum = crate::sources::correlation::spectrum::output_spectrum(records, fs, None)?;
     let correlation_seconds = clock.elapsed().as_secs_f64();
     let half =
         crate::sources::frf::frf_of_markov(&corr.sequence, 1.0 / fs, Quantity::Acceleration)?;
@@ -208,6 +220,13 @@ pub fn oma_observed(
         // judges the same question from the data's own scatter.
         era.scan.significance = false;
     }
+    // A fixed order's Hankel is the thesis Hankel of that order (`states × factor`
+    // samples): the factor is raised until it spans half the lags, as a scan's does.
+    if let Some(n) = era.order.states() {
+        if n > 0 {
+            era.hankel_factor = era.hankel_factor.max(lags.div_ceil(2 * n));
+        }
+    }
     era.realizer = match options.method {
         OmaMethod::SsiCov => Realizer::Shift,
         OmaMethod::NextEra => Realizer::Era,
@@ -216,7 +235,7 @@ pub fn oma_observed(
     found.timings.markov += correlation_seconds;
     let clock = Instant::now();
     let spread = if corr.blocks() >= 2 {
-        jackknife(&found, &corr, &era)?
+        jackknife(&found, &corr, &era, true)?
     } else {
         vec![None; found.modal.modes.len()]
     };
@@ -231,6 +250,7 @@ pub fn oma_observed(
         lags,
         samples: corr.samples,
         blocks: corr.blocks(),
+        spectrum,
         correlation_seconds,
         uncertainty_seconds: clock.elapsed().as_secs_f64(),
     })
@@ -317,17 +337,18 @@ fn mode_orders(found: &Identification, era: &EraOptions) -> Vec<usize> {
         .collect()
 }
 
-/// The Hankel the identification factored, in states at its Hankel factor.
+/// The Hankel the identification factored, in states at its Hankel factor: a fixed
+/// order's own (the thesis Hankel of that order), or the scan's for the automatic order.
 fn hankel_states(era: &EraOptions, markov_samples: usize, orders_max: usize) -> usize {
     let supported = super::supported_hankel_states(markov_samples, era.hankel_factor);
     match era.order {
-        Order::Fixed(n) => n,
-        Order::Scan { .. } | Order::Auto => match &era.scan.orders {
+        Order::Fixed(n) | Order::Scan { states: n } => n,
+        Order::Auto => match &era.scan.orders {
             None => supported,
             Some(r) => r.max.min(supported),
-        },
+        }
+        .max(orders_max.min(supported)),
     }
-    .max(orders_max.min(supported))
     .max(1)
 }
 
@@ -338,31 +359,44 @@ struct BlockPole {
     shape: Vec<Complex64>,
 }
 
-/// The complex poles of the realization at `states` of `factors`.
+/// The complex poles of the realization at `states` of `factors`, with their shapes
+/// `C φ` (no left eigenvectors: a block needs the poles and shapes only).
 fn block_poles(factors: &Factorization, states: usize) -> Result<Vec<BlockPole>> {
     let r = factors.realize(states, DirectTerm::Zero)?;
-    let form = ModalForm::new(&r.model)?;
-    Ok(form
-        .eigenvalues
+    let (eigenvalues, vectors) = crate::linalg::eigen::balanced_eigen(&r.model.a)?;
+    let c = &r.model.c;
+    Ok(eigenvalues
         .iter()
-        .zip(&form.shapes)
-        .filter(|(z, _)| z.im > 0.0)
-        .map(|(z, shape)| {
+        .enumerate()
+        .filter(|(_, z)| z.im > 0.0)
+        .map(|(k, z)| {
             let s = continuous_pole(*z, r.model.domain);
+            let shape = (0..c.nrows())
+                .map(|i| {
+                    (0..c.ncols())
+                        .map(|j| vectors[(j, k)] * c[(i, j)])
+                        .sum::<Complex64>()
+                })
+                .collect();
             BlockPole {
                 frequency_hz: s.norm() / (2.0 * std::f64::consts::PI),
                 damping_ratio: -s.re / s.norm(),
-                shape: shape.clone(),
+                shape,
             }
         })
         .collect())
 }
 
 /// The jackknife of every mode over the blocks of `corr`.
+///
+/// With `warm`, each block's factors come from subspace iteration started at the whole
+/// data's ([`warm_factors`]); without, from a dense SVD of each block's Hankel (the
+/// reference the tests hold the warm start to).
 fn jackknife(
     found: &Identification,
     corr: &Correlations,
     era: &EraOptions,
+    warm: bool,
 ) -> Result<Vec<Option<ModeSpread>>> {
     let orders = mode_orders(found, era);
     let top = orders.iter().copied().max().unwrap_or(0);
@@ -373,6 +407,7 @@ fn jackknife(
     let mut distinct = orders.clone();
     distinct.sort_unstable();
     distinct.dedup();
+    let start = warm_start(found, hankel, era.hankel_factor, corr);
     let token = crate::cancel::current();
     // Per block, per mode: the pole found again (frequency, damping, shape scaled to
     // the mode's), or None.
@@ -382,17 +417,22 @@ fn jackknife(
         .map(|b| -> Result<Vec<Found>> {
             crate::cancel::check_token(&token)?;
             let seq = normalized(&corr.leave_out(b)?);
-            let mut factors = Factorization::thesis(
-                &seq,
-                seq.sample_time_s(),
-                &FactorOptions {
-                    hankel_states: hankel,
-                    max_states: top,
-                    hankel_factor: era.hankel_factor,
-                    svd: era.svd,
-                    svd_tolerance: era.scan.svd_tolerance,
-                },
-            )?;
+            let mut factors = match (&start, warm) {
+                (Some(v0), true) => {
+                    warm_factors(&seq, hankel, era.hankel_factor, v0.as_ref(), top, era.svd)?
+                }
+                _ => Factorization::thesis(
+                    &seq,
+                    seq.sample_time_s(),
+                    &FactorOptions {
+                        hankel_states: hankel,
+                        max_states: top,
+                        hankel_factor: era.hankel_factor,
+                        svd: era.svd,
+                        svd_tolerance: era.scan.svd_tolerance,
+                    },
+                )?,
+            };
             if era.realizer == Realizer::Shift {
                 factors = factors.with_shift();
             }
@@ -446,6 +486,96 @@ fn jackknife(
             })
         })
         .collect())
+}
+
+/// Columns beyond the top order that the warm start carries (random, so that the
+/// directions just past the top order are in the subspace too).
+const WARM_EXTRA: usize = 16;
+
+/// Subspace iterations of the warm start.
+const WARM_ITERATIONS: usize = 4;
+
+/// The right singular subspace of the whole data's `H0` (its controllability matrix's
+/// rows), when the identification's realization has the jackknife's Hankel: the start
+/// of every block's factorization.
+fn warm_start(
+    found: &Identification,
+    hankel_states: usize,
+    hankel_factor: usize,
+    corr: &Correlations,
+) -> Option<faer::Mat<f64>> {
+    let shapes = crate::pipeline::hankel::ThesisHankel::new(hankel_states, hankel_factor).ok()?;
+    let cols = shapes.h0.block_cols * corr.sequence.inputs();
+    let ctrl = &found.realization.tails.controllability;
+    if ctrl.ncols() != cols || ctrl.nrows() == 0 {
+        return None;
+    }
+    let k = (ctrl.nrows() + WARM_EXTRA).min(cols);
+    let mut g = crate::linalg::rng::Minstd::new(0x5eed);
+    let v = faer::Mat::from_fn(cols, k, |j, r| {
+        if r < ctrl.nrows() {
+            ctrl[(r, j)]
+        } else {
+            g.normal()
+        }
+    });
+    Some(v.qr().compute_thin_Q())
+}
+
+/// The factors of a block's `H0` by subspace iteration from `v0` (the whole data's right
+/// singular subspace, which the block's differs from by a fraction of the data), with a
+/// Rayleigh–Ritz step at the end: `H0 V = U S Wᵀ`, `V ← V W`. The block's Hankel
+/// differs from the whole data's by a small perturbation, so a few iterations reach
+/// the leading triplets that a dense SVD of each block would give, at a few products'
+/// cost.
+fn warm_factors(
+    seq: &MarkovSequence,
+    hankel_states: usize,
+    hankel_factor: usize,
+    v0: faer::MatRef<'_, f64>,
+    max_states: usize,
+    svd: crate::pipeline::factor::SvdPath,
+) -> Result<Factorization> {
+    use crate::linalg::LinearOperator;
+    use crate::pipeline::hankel::{build, HankelShape};
+    use crate::pipeline::hankel_op::HankelOperator;
+    let clock = Instant::now();
+    let shapes = crate::pipeline::hankel::ThesisHankel::new(hankel_states, hankel_factor)?;
+    // The Hankel products by FFT where the pipeline would factor matrix-free, dense below.
+    let short = (shapes.h0.block_rows * seq.outputs()).min(shapes.h0.block_cols * seq.inputs());
+    let operator = |shape: HankelShape| -> Result<Box<dyn LinearOperator>> {
+        Ok(if svd.matrix_free(short) {
+            Box::new(HankelOperator::new(seq, shape)?)
+        } else {
+            Box::new(build(seq, shape)?)
+        })
+    };
+    let (h0, h1) = (operator(shapes.h0)?, operator(shapes.h1)?);
+    let mut v = v0.to_owned();
+    for _ in 0..WARM_ITERATIONS {
+        let q = h0.apply(v.as_ref()).qr().compute_thin_Q();
+        v = h0.apply_transpose(q.as_ref()).qr().compute_thin_Q();
+    }
+    let z = h0.apply(v.as_ref());
+    let svd = crate::linalg::dense::thin_svd(z, "a jackknife block's H0")?;
+    let v = &v * &svd.v;
+    let n = max_states.min(svd.s.len());
+    let (un, vn) = (svd.u.subcols(0, n), v.subcols(0, n));
+    let ut_h1_v = un.transpose() * h1.apply(vn);
+    Ok(Factorization::from_parts(
+        seq,
+        seq.sample_time_s(),
+        crate::pipeline::factor::FactorParts {
+            hankel_size: (h0.nrows(), h0.ncols()),
+            u: svd.u,
+            v,
+            ut_h1_v,
+            singular_values: svd.s,
+            max_states: n,
+            ut_h0: None,
+        },
+        clock.elapsed().as_secs_f64(),
+    ))
 }
 
 /// The sequence over its largest magnitude (the poles and shapes do not change; the
@@ -504,4 +634,57 @@ fn rediscover(
         best.damping_ratio,
         best.shape.iter().map(|b| b * alpha).collect(),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::shaker::{simulate_shaker_test, ShakerTest};
+    use crate::sim::ModalSpec;
+
+    #[test]
+    fn the_warm_started_blocks_give_the_dense_blocks_spread() {
+        let mut spec = ModalSpec::new(6, 2, 6);
+        spec.fmin_hz = 1.0;
+        spec.fmax_hz = 12.0;
+        spec.seed = 21;
+        let mut test = ShakerTest::new(spec, 40.0, 300.0);
+        test.noise = 0.02;
+        let rec = simulate_shaker_test(&test).unwrap();
+        let outputs: Vec<&[f64]> = rec.outputs.iter().map(Vec::as_slice).collect();
+        let options = OmaOptions::new(40.0);
+        let found = oma(&[outputs.as_slice()], &options).unwrap();
+        let corr = correlations(
+            &[outputs.as_slice()],
+            &CorrelationOptions {
+                references: None,
+                lags: found.lags,
+                blocks: options.blocks,
+                sample_time_s: 1.0 / 40.0,
+            },
+        )
+        .unwrap();
+        let mut era = options.era.clone();
+        era.realizer = Realizer::Shift;
+        let id = &found.identification;
+        let warm = jackknife(id, &corr, &era, true).unwrap();
+        let dense = jackknife(id, &corr, &era, false).unwrap();
+        let mut compared = 0;
+        for (m, (w, d)) in warm.iter().zip(&dense).enumerate() {
+            if !id.quality[m].physical {
+                continue;
+            }
+            let (w, d) = (w.as_ref().unwrap(), d.as_ref().unwrap());
+            assert!(
+                (w.frequency_std_hz / d.frequency_std_hz - 1.0).abs() < 0.05,
+                "mode {m}"
+            );
+            assert!(
+                (w.damping_ratio_std / d.damping_ratio_std - 1.0).abs() < 0.05,
+                "mode {m}"
+            );
+            compared += 1;
+        }
+        assert!(compared >= 4, "{compared} physical modes");
+    }
 }

@@ -15,31 +15,30 @@ fn record(seed: u64, duration_s: f64) -> ShakerRecord {
     simulate_shaker_test(&test).unwrap()
 }
 
-/// For each true mode, the physical mode within 1 % in frequency (the nearest), and
-/// the physical modes matched to none.
+/// For each true mode, the physical mode matched to it (one to one, the closest pairs
+/// within 1 % in frequency first), and the physical modes matched to none.
 fn matched(found: &era::Oma, truth: &era::sim::ModalStructure) -> (Vec<Option<usize>>, usize) {
     let id = &found.identification;
-    let physical: Vec<usize> = (0..id.modal.modes.len())
-        .filter(|&m| id.quality[m].physical)
-        .collect();
-    let pick: Vec<Option<usize>> = truth
-        .frequencies_hz
-        .iter()
-        .map(|&f| {
-            physical
-                .iter()
-                .copied()
-                .filter(|&m| (id.modal.modes[m].frequency_hz - f).abs() < 0.01 * f)
-                .min_by(|&a, &b| {
-                    (id.modal.modes[a].frequency_hz - f)
-                        .abs()
-                        .total_cmp(&(id.modal.modes[b].frequency_hz - f).abs())
-                })
-        })
-        .collect();
-    let spurious = physical
-        .iter()
-        .filter(|m| !pick.contains(&Some(**m)))
+    let mut pairs = Vec::new();
+    for (t, &f) in truth.frequencies_hz.iter().enumerate() {
+        for (m, mode) in id.modal.modes.iter().enumerate() {
+            let d = (mode.frequency_hz - f).abs() / f;
+            if id.quality[m].physical && d < 0.01 {
+                pairs.push((d, t, m));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut pick = vec![None; truth.frequencies_hz.len()];
+    let mut used = vec![false; id.modal.modes.len()];
+    for (_, t, m) in pairs {
+        if pick[t].is_none() && !used[m] {
+            pick[t] = Some(m);
+            used[m] = true;
+        }
+    }
+    let spurious = (0..used.len())
+        .filter(|&m| id.quality[m].physical && !used[m])
         .count();
     (pick, spurious)
 }
@@ -128,4 +127,71 @@ fn records_are_pooled_and_bad_ones_named() {
     let mut options = OmaOptions::new(0.0);
     options.blocks = 2;
     assert!(oma(&[ra.as_slice()], &options).is_err());
+}
+
+/// Monte Carlo: eight 600 s records of one structure (one long simulation cut in
+/// eight). For each true mode found in at least six records, the scatter of the
+/// estimates over the records against the median standard deviation the jackknife
+/// reported; the median of that ratio over the modes must lie within a factor 2, for the
+/// frequency and for the damping.
+#[test]
+fn the_reported_standard_deviations_match_the_scatter_over_records() {
+    let records = 8;
+    let whole = record(1, 600.0 * records as f64);
+    let n = 600 * 64;
+    let truth = &whole.truth;
+    let mut estimates: Vec<Vec<(f64, f64, f64, f64)>> =
+        vec![Vec::new(); truth.frequencies_hz.len()];
+    for r in 0..records {
+        let outputs: Vec<&[f64]> = whole
+            .outputs
+            .iter()
+            .map(|c| &c[r * n..(r + 1) * n])
+            .collect();
+        let found = oma(&[outputs.as_slice()], &OmaOptions::new(64.0)).unwrap();
+        let (pick, spurious) = matched(&found, truth);
+        assert!(spurious <= 1, "record {r}: {spurious} spurious");
+        for (t, p) in pick.iter().enumerate() {
+            let Some(m) = *p else { continue };
+            let id = &found.identification;
+            let (mode, q) = (&id.modal.modes[m], &id.quality[m]);
+            estimates[t].push((
+                mode.frequency_hz,
+                mode.damping_ratio,
+                q.frequency_std_hz.unwrap(),
+                q.damping_ratio_std.unwrap(),
+            ));
+        }
+    }
+    let ratio = |values: &[(f64, f64)]| {
+        let k = values.len() as f64;
+        let mean = values.iter().map(|v| v.0).sum::<f64>() / k;
+        let scatter = (values.iter().map(|v| (v.0 - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+        let mut reported: Vec<f64> = values.iter().map(|v| v.1).collect();
+        reported.sort_by(f64::total_cmp);
+        scatter / reported[reported.len() / 2]
+    };
+    let (mut f, mut z) = (Vec::new(), Vec::new());
+    for e in estimates.iter().filter(|e| e.len() >= 6) {
+        f.push(ratio(&e.iter().map(|v| (v.0, v.2)).collect::<Vec<_>>()));
+        z.push(ratio(&e.iter().map(|v| (v.1, v.3)).collect::<Vec<_>>()));
+    }
+    assert!(
+        f.len() >= 8,
+        "{} modes found in six records or more",
+        f.len()
+    );
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (mf, mz) = (median(f), median(z));
+    assert!(
+        (0.5..=2.0).contains(&mf),
+        "frequency: scatter / reported = {mf:.2}"
+    );
+    assert!(
+        (0.5..=2.0).contains(&mz),
+        "damping: scatter / reported = {mz:.2}"
+    );
 }
