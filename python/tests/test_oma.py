@@ -43,10 +43,11 @@ def test_the_modes_of_responses_alone_with_their_spread(era_cli, tmp_path):
 
 def test_the_same_answer_as_the_command_line(era_cli, tmp_path):
     data, path, _ = responses(era_cli, tmp_path, 5, duration="200")
-    found = era.oma(data, 64.0, references=[0, 4], method="next-era", time_lags=160)
+    found = era.oma(data, 64.0, references=[0, 4], method="next-era", time_lags=160,
+                    states=20)
     cli = json.loads(era_cli("oma", path, "--outputs", "3-10", "--references", "3,7",
-                             "--method", "next-era", "--time-lags", "160", "--json",
-                             "--quiet").stdout)
+                             "--method", "next-era", "--time-lags", "160", "--states", "20",
+                             "--json", "--quiet").stdout)
     assert cli["method"] == "next-era" and cli["lags"] == 160 and cli["shapes"] == "unscaled"
     assert cli["references"] == [3, 7] and found.oma["references"] == [0, 4]
     assert len(cli["modes"]) == len(found.modes)

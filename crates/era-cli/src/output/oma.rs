@@ -91,6 +91,16 @@ impl OmaRun<'_> {
         );
         let _ = writeln!(s, "  outputs: {}", self.labels(&all));
         let _ = writeln!(s, "{}", self.correlation_line());
+        let asked = self.options.blocks;
+        if o.blocks != asked {
+            let _ = writeln!(
+                s,
+                "  note: --blocks {asked} asked; {} taken, as many as the records hold at twice the {} lags each{}",
+                o.blocks,
+                o.lags,
+                if o.blocks < 2 { " (no standard deviations)" } else { "" }
+            );
+        }
         let order = if self.auto {
             "auto (from the stabilization diagram)".to_string()
         } else {
