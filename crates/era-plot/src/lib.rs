@@ -14,6 +14,7 @@ pub mod figures;
 pub mod render;
 pub mod report;
 pub mod stabilization;
+pub mod viewer;
 
 pub use figures::{
     coherence_grid, frf_grid, frf_overlay, singular_value_figure, Figure, FrfUnits, FrfView, Panel,
