@@ -12,7 +12,8 @@ DevTools protocol and checks that:
 - picking another mode (from the list, or by clicking a row of the mode table)
   changes the picture and the caption;
 - the page logs no console error and throws no exception;
-- the page requests nothing but itself (no network).
+- the page requests nothing but itself (no network);
+- with prefers-reduced-motion it starts paused.
 
 It saves screenshots of the viewer (viewer_mode1.png, viewer_mode3.png) in the output
 folder to look at. Standard library only (a minimal WebSocket client is below).
@@ -305,6 +306,16 @@ def main():
         if not a.report:
             not_drawn = cdp.js("document.getElementById('shapes-not-drawn').textContent")
             check("node 999 is not in the geometry" in not_drawn, "the channel on node 999 is listed as not drawn")
+
+        # A reader who asks for reduced motion gets a still, and Play.
+        cdp.call("Emulation.setEmulatedMedia", features=[{"name": "prefers-reduced-motion", "value": "reduce"}])
+        cdp.events = [e for e in cdp.events if e.get("method") != "Page.loadEventFired"]
+        cdp.call("Page.reload")
+        cdp.wait_event("Page.loadEventFired")
+        first = cdp.js(canvas)
+        cdp.js("new Promise(r => setTimeout(r, 500))")
+        check(cdp.js(canvas) == first and cdp.js("document.getElementById('shape-play').textContent") == "Play",
+              "with prefers-reduced-motion the viewer starts paused")
 
         # Let any late error surface, then read the events.
         cdp.js("new Promise(r => setTimeout(r, 300))")

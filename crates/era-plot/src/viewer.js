@@ -325,7 +325,10 @@
     draw();
   };
 
+  // A reader who asked for less motion gets the still at the largest deflection; Play
+  // starts the cycle.
+  var reduceMotion = window.matchMedia && window.matchMedia("(prefers-reduced-motion: reduce)").matches;
   fit();
   setMode(0);
-  setPlaying(true);
+  setPlaying(!reduceMotion);
 })();

@@ -14,7 +14,8 @@
 //! with channels in several directions moves in 3-D. Each mode is scaled so that its
 //! largest `|u|` is 1 and turned so that the largest component there is real; the
 //! animation draws `Re(u e^{iφ})` with φ over one cycle (at a fixed pace, not the
-//! mode's frequency). A node without channels is drawn where it is, as a hollow dot:
+//! mode's frequency; a reader whose system asks for reduced motion gets the still at
+//! the largest deflection, and Play). A node without channels is drawn where it is, as a hollow dot:
 //! nothing is interpolated or guessed. Channels that cannot be drawn are listed below
 //! the viewer.
 
