@@ -15,6 +15,7 @@ pub mod oma;
 pub mod render;
 pub mod report;
 pub mod stabilization;
+pub mod viewer;
 
 pub use figures::{
     coherence_grid, frf_grid, frf_overlay, singular_value_figure, Figure, FrfUnits, FrfView, Panel,

@@ -1,8 +1,8 @@
-//! `report.html`: one self-contained file (inline SVG, inline CSS, no script, no
-//! network) with what went in (file, format, units, channel table, command line,
-//! version, date), the parameters, singular values, modal table, the fit as an
-//! outputs × inputs matrix, the coherence when the input carries it, the overview grid
-//! and every pair's overlay.
+//! `report.html`: one self-contained file (inline SVG, inline CSS, no network) with
+//! what went in (file, format, units, channel table, command line, version, date), the
+//! parameters, singular values, modal table, the modes on the geometry when one is given
+//! (the one script, [`crate::viewer`]), the fit as an outputs × inputs matrix, the
+//! coherence when the input carries it, the overview grid and every pair's overlay.
 //!
 //! Size: each figure appears once, its elements share style rules
 //! ([`crate::render::compact_svg`]) and its curves are thinned to what a pixel shows
@@ -85,6 +85,8 @@ pub struct ReportInput<'a> {
     pub grid_svg: Option<&'a str>,
     /// One (title, SVG) per pair.
     pub overlays: &'a [(String, String)],
+    /// The modes on the test geometry, when one was given ([`crate::viewer`]).
+    pub shapes: Option<&'a crate::viewer::ShapeView>,
 }
 
 /// A figure of its own in the report: its anchor, heading, caption and SVG.
@@ -402,6 +404,7 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
         }
         h.push_str("</p>\n");
     }
+    h.push_str(&crate::viewer::shapes_html(input.shapes));
     let fit = &f.fit;
     let (col, noncol) = (
         fit_means(fit, input.view, true),

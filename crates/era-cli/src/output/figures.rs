@@ -245,6 +245,7 @@ pub fn write_all(
     };
     let (grid_svg, overlays) =
         write_frf_figures(set, folder, measured, Some(&model), &view, progress)?;
+    let shapes = super::geometry::shape_view(source, found);
     let html = report_html(&ReportInput {
         title,
         source: &source.section,
@@ -264,6 +265,7 @@ pub fn write_all(
         sections: &[],
         grid_svg: Some(&grid_svg),
         overlays: &overlays,
+        shapes: shapes.as_ref(),
     });
     write_output(set, folder.join("report.html"), |p| {
         Ok(write_atomic(p, html.as_bytes())?)

@@ -1,9 +1,12 @@
 //! `--geometry FILE`: read and checked before a run (a bad file exits with code 2), then
-//! described in the run's notes with the channels it cannot draw, and written into
-//! modes.uff with the shapes ([`super::identification::write_bundle`]).
+//! described in the run's notes with the channels it cannot draw, written into
+//! modes.uff with the shapes ([`super::identification::write_bundle`]), and drawn in
+//! the report's mode-shape viewer ([`shape_view`]).
 
+use era::identification::Identification;
 use era_io::frf_file::{direction_name, ChannelTable};
-use era_io::geometry::{map_channels, read_geometry, Geometry};
+use era_io::geometry::{map_channels, read_geometry, ChannelMap, Geometry};
+use era_plot::viewer::{Placement, ShapeView};
 use std::path::Path;
 
 /// The geometry of `path`, when given, its summary printed.
@@ -42,26 +45,62 @@ pub fn notes(
         table.outputs.len()
     ));
     if !map.not_drawn.is_empty() {
-        let list: Vec<String> = map
-            .not_drawn
-            .iter()
-            .map(|u| {
-                let c = &table.outputs[u.channel];
-                format!(
-                    "output {} (node {} {}): {}",
-                    u.channel + 1,
-                    c.dof.node,
-                    direction_name(c.dof.direction),
-                    u.reason
-                )
-            })
-            .collect();
+        let list = not_drawn(&map, table);
         notes.push(format!(
             "geometry: not drawn: {}",
             era_io::frf_file::listed(&list)
         ));
     }
     notes
+}
+
+/// One sentence per channel `map` does not draw: `output 3 (node 3 +Z): why`.
+fn not_drawn(map: &ChannelMap, table: &ChannelTable) -> Vec<String> {
+    map.not_drawn
+        .iter()
+        .map(|u| {
+            let c = &table.outputs[u.channel];
+            format!(
+                "output {} (node {} {}): {}",
+                u.channel + 1,
+                c.dof.node,
+                direction_name(c.dof.direction),
+                u.reason
+            )
+        })
+        .collect()
+}
+
+/// The modes of `found` on the run's geometry, for the report's viewer; `None` without
+/// a geometry. The outputs are placed as in [`notes`].
+pub fn shape_view(run: &super::RunInput, found: &Identification) -> Option<ShapeView> {
+    let geometry = run.geometry.as_ref()?;
+    let outputs = found.measured.outputs();
+    let numbered = ChannelTable::numbered(outputs, 0);
+    let table = run.channels.as_ref().unwrap_or(&numbered);
+    let map = map_channels(geometry, &table.outputs);
+    let index = geometry.node_index();
+    let segments = geometry
+        .segments()
+        .into_iter()
+        .filter_map(|(a, b)| Some((*index.get(&a)?, *index.get(&b)?)))
+        .collect();
+    let placed: Vec<Placement> = map
+        .placed
+        .iter()
+        .map(|p| Placement {
+            channel: p.channel,
+            node: p.node,
+            direction: p.direction,
+        })
+        .collect();
+    Some(ShapeView::new(
+        geometry.nodes.iter().map(|n| n.xyz).collect(),
+        segments,
+        &placed,
+        found,
+        not_drawn(&map, table),
+    ))
 }
 
 /// `run` with the geometry and its notes.

@@ -122,3 +122,99 @@ fn a_bad_geometry_exits_2_naming_the_file_and_line() {
     );
     assert!(!out.join("model.json").exists());
 }
+
+/// The JSON of the report's shape viewer.
+fn viewer_data(report: &str) -> serde_json::Value {
+    let start = report
+        .find("<script type=\"application/json\" id=\"era-shapes\">")
+        .expect("the viewer's data in report.html");
+    let body = &report[start..];
+    let body = &body[body.find('>').unwrap() + 1..body.find("</script>").unwrap()];
+    serde_json::from_str(body).expect("the viewer's data is JSON")
+}
+
+#[test]
+fn the_report_animates_each_mode_on_the_geometry_or_says_there_is_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let frf = simulated_truth(dir.path());
+    // Outputs on nodes 1..3 +Z; node 3 is not in the geometry, node 7 has no channel.
+    let geometry = dir.path().join("g.csv");
+    std::fs::write(
+        &geometry,
+        "node,x,y,z\n1,0,0,0\n2,1.5,0,0\n7,2,0,0.25\nfrom,to\n1,2\n2,7\n",
+    )
+    .unwrap();
+    let run = |out: &std::path::Path, with_geometry: bool| {
+        let mut cmd = era();
+        cmd.args([
+            "identify",
+            s(&frf),
+            "--states",
+            "8",
+            "--preset",
+            "thesis",
+            "-q",
+        ]);
+        if with_geometry {
+            cmd.args(["--geometry", s(&geometry)]);
+        }
+        cmd.args(["--out", s(out)]).assert().success();
+        std::fs::read_to_string(out.join("report.html")).unwrap()
+    };
+    let report = run(&dir.path().join("with"), true);
+    let data = viewer_data(&report);
+    assert_eq!(data["nodes"].as_array().unwrap().len(), 3);
+    assert_eq!(data["segments"], serde_json::json!([[0, 1], [1, 2]]));
+    assert_eq!(data["measured"], serde_json::json!([1, 1, 0]));
+    let modes = data["modes"].as_array().unwrap();
+    // One entry per mode of the table: the truth model's four.
+    assert_eq!(modes.len(), 4);
+    for (k, m) in modes.iter().enumerate() {
+        assert!(m["label"]
+            .as_str()
+            .unwrap()
+            .starts_with(&format!("Mode {}: ", k + 1)));
+        // Nodes 1 and 2 move, along z only (their channels are +Z); the largest
+        // displacement is 1.
+        let u = m["u"].as_array().unwrap();
+        assert_eq!(u.len(), 2);
+        let mut largest: f64 = 0.0;
+        for (row, node) in u.iter().zip([0, 1]) {
+            let r: Vec<f64> = row
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            assert_eq!(r[0], node as f64);
+            assert_eq!(&r[1..5], &[0.0; 4], "x and y stay still: {r:?}");
+            largest = largest.max(r[5].hypot(r[6]));
+        }
+        assert!((largest - 1.0).abs() < 1e-3, "mode {k}: largest {largest}");
+    }
+    assert!(report.contains("<canvas id=\"shape-canvas\""));
+    assert!(
+        report.contains("eraShowPhase"),
+        "the viewer's script is inlined"
+    );
+    assert!(report.contains("<option value=\"3\">Mode 4: "));
+    assert!(report.contains("<li>output 3 (node 3 +Z): node 3 is not in the geometry</li>"));
+    // No external resource of any kind.
+    for needle in [
+        "src=\"http",
+        "href=\"http",
+        "import(",
+        "fetch(",
+        "XMLHttpRequest",
+    ] {
+        assert!(!report.contains(needle), "{needle} in report.html");
+    }
+
+    // Without a geometry: one line says so, and nothing else of the viewer is there.
+    let plain = run(&dir.path().join("without"), false);
+    assert_eq!(plain.matches("id=\"shapes-none\"").count(), 1);
+    assert!(plain.contains("No test geometry was given"));
+    for needle in ["<script", "<canvas", "id=\"shapes\""] {
+        assert!(!plain.contains(needle), "{needle} without a geometry");
+    }
+}
