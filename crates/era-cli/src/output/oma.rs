@@ -343,6 +343,7 @@ pub fn write_oma(
         sections: &sections,
         grid_svg: None,
         overlays: &[],
+        shapes: None,
     });
     write_output(set, "report.html", |p| {
         Ok(write_atomic(p, html.as_bytes())?)
