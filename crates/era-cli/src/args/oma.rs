@@ -11,7 +11,7 @@ const OMA_EXAMPLES: &str = "\
 Examples:
   era oma rec.csv --outputs 2-9
       the modes of responses to unmeasured forces: SSI-cov, every output a reference,
-      the automatic order, standard deviations from 12 jackknife blocks
+      the automatic order, standard deviations from 6 jackknife blocks
   era oma day1.mat day2.mat --variable acc --sample-rate 100 --outputs 1-30 --out run
       two records of one test; model.json, the figures and run/report.html
   era oma rec.csv --outputs 1-8 --references 1,5 --method next-era --time-lags 400

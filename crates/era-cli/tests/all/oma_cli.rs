@@ -86,7 +86,7 @@ fn the_modes_of_responses_alone_with_standard_deviations() {
         v["references"],
         serde_json::json!([3, 4, 5, 6, 7, 8, 9, 10])
     );
-    assert_eq!(v["blocks"], 12);
+    assert_eq!(v["blocks"], era::identify::oma::DEFAULT_BLOCKS);
     assert_eq!(v["sample_rate_hz"], 64.0);
     assert_eq!(v["samples"], 300 * 64);
     assert!(v["lags"].as_u64().unwrap() >= 64);

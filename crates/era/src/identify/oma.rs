@@ -55,8 +55,11 @@ crate::names::named!(display OmaMethod, "method", [
     OmaMethod::NextEra => "next-era",
 ]);
 
-/// Blocks of the jackknife by default.
-pub const DEFAULT_BLOCKS: usize = 12;
+/// Blocks of the jackknife by default. Each block left out perturbs the estimate by a
+/// sixth of the data, well above the jitter of the order's truncation, which the
+/// jackknife multiplies by `B − 1`: on simulated records of one structure, 6 blocks give
+/// standard deviations 1.1–1.6 times the scatter over records, 12 blocks 1.5–2.
+pub const DEFAULT_BLOCKS: usize = 6;
 
 /// Hankel factor of output-only identification by default: the correlations' Hankel
 /// spans half the lags whatever the factor, and a factor of 1 lets the scan reach
@@ -277,10 +280,11 @@ fn scan_factor(factor: usize, lags: usize, references: usize) -> usize {
 }
 
 /// Each mode's standard deviations into its quality, and the modes the data do not pin
-/// down marked not physical: one found again in too few blocks, one whose frequency
-/// scatters by more than its half-power half-bandwidth `ζ f`, or whose damping scatters
-/// by more than itself (Reynders, Houbrechts & De Roeck 2012 also reject modes by
-/// their uncertainty).
+/// down marked not physical: one found again in too few blocks, or one whose frequency
+/// scatters by more than its half-power half-bandwidth `ζ f` (Reynders, Houbrechts &
+/// De Roeck 2012 also reject modes by their uncertainty). A damping that scatters is
+/// not a reason: a lightly damped mode of a short record has a clear peak and an
+/// uncertain damping, which its standard deviation says.
 fn judge_spread(found: &mut Identification, spread: &[Option<ModeSpread>], blocks: usize) {
     for ((mode, q), s) in found
         .modal
@@ -302,12 +306,6 @@ fn judge_spread(found: &mut Identification, spread: &[Option<ModeSpread>], block
                     Some(format!(
                         "its frequency scatters by {:.3} Hz over the blocks, more than its half-power half-bandwidth {:.3} Hz: the data do not pin it down",
                         s.frequency_std_hz, half_band
-                    ))
-                } else if s.damping_ratio_std > mode.damping_ratio.abs() {
-                    Some(format!(
-                        "its damping scatters by {:.2} % over the blocks, more than its value {:.2} %: the data do not pin it down",
-                        100.0 * s.damping_ratio_std,
-                        100.0 * mode.damping_ratio
                     ))
                 } else {
                     None
