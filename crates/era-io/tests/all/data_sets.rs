@@ -6,7 +6,7 @@ use crate::common;
 use common::data_file;
 
 /// (folder, licence's first line, data files)
-const SETS: [(&str, &str, &[&str]); 3] = [
+const SETS: [(&str, &str, &[&str]); 4] = [
     (
         "daisy-steel-subframe",
         "BSD 3-Clause License",
@@ -26,6 +26,18 @@ const SETS: [(&str, &str, &[&str]); 3] = [
             "view_0_03.hdf5",
             "view_0_04.hdf5",
             "view_1.hdf5",
+        ],
+    ),
+    (
+        "koma-shear-frame",
+        "MIT License",
+        &[
+            "data_shearframe.npy",
+            "omega_n.npy",
+            "xi_ref.npy",
+            "phi_ref.npy",
+            "shear_frame.csv",
+            "reference.json",
         ],
     ),
 ];
