@@ -3,7 +3,7 @@
 # tables were measured with: pyOMA-2 (dagghe/pyOMA2) and koma-python (knutankv/koma),
 # with numpy, scipy, matplotlib and scikit-learn as they require. It lives in
 # target/oma-venv, or $ERA_OMA_VENV, and is made on first use (a few minutes; about
-# 600 MB, as pyOMA-2 brings pyvista and vtk). Both peers run headless: matplotlib's Agg
+# 1.3 GB, as pyOMA-2 brings pyvista, vtk and jupyter). Both peers run headless: matplotlib's Agg
 # backend, pyvista off screen, no progress bars.
 here=$(cd "$(dirname "${BASH_SOURCE[1]}")/.." && pwd)
 venv=${ERA_OMA_VENV:-$here/target/oma-venv}

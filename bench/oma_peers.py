@@ -255,16 +255,24 @@ class Era:
         for m in doc["modes"]:
             if m.get("physical", True) is False:
                 continue
-            shape = m.get("shape")
-            if shape is not None:
-                shape = np.array([complex(*s) if isinstance(s, list) else
-                                  (complex(s["re"], s["im"]) if isinstance(s, dict) else s)
-                                  for s in shape])
+            shape = era_shape(m)
             modes.append({"frequency_hz": m["frequency_hz"],
                           "damping_ratio": m["damping_ratio"], "shape": shape,
                           "frequency_std_hz": m.get("frequency_std_hz"),
                           "damping_ratio_std": m.get("damping_ratio_std")})
         return modes, seconds
+
+
+def era_shape(m):
+    """A mode's shape from era's JSON, complex: `shape_re`/`shape_im` as model.json writes
+    them, or `shape` as numbers, [re, im] pairs or {re, im} objects; None when absent."""
+    if m.get("shape_re") is not None:
+        return np.array(m["shape_re"]) + 1j * np.array(m.get("shape_im") or 0.0)
+    shape = m.get("shape")
+    if shape is None:
+        return None
+    return np.array([complex(*v) if isinstance(v, list) else
+                     complex(v["re"], v["im"]) if isinstance(v, dict) else v for v in shape])
 
 
 def era_has_oma(era):
@@ -395,10 +403,94 @@ def monte_carlo_rows(results, truth):
     return rows
 
 
+# ------------------------------------------------------------------ sections
+
+HEADER = ["tool", "modes found", "spurious", "median damping error", "median frequency error",
+          "s per record (median)", "s range", "failed runs"]
+
+
+def simulated_section(label, recs, tools, monte_carlo):
+    results = {}
+    for tool in tools:
+        runs = []
+        for path, _, fs, cols in recs:
+            r = run_tool(tool, path, cols, fs)
+            if r[2]:
+                progress(f"{tool.name} failed on {os.path.basename(path)}: {r[2]}")
+            progress(f"{tool.name} {os.path.basename(path)}: {len(r[0])} modes, {r[1]:.2f} s")
+            runs.append(r)
+        results[tool.name] = runs
+    print(f"md: **{label}**")
+    print()
+    print_table(HEADER, accuracy_rows(results, [r[1] for r in recs]))
+    if monte_carlo:
+        print("md: **Monte Carlo check** over the same records: for each true mode found in at "
+              "least half of them, the median std the tool reports divided by the actual "
+              "scatter (std over the records) of its estimate; 1 = the std holds, > 1 "
+              "overstated. Median over the modes, and range.")
+        print()
+        print_table(["tool", "modes", "frequency: reported / actual", "range",
+                     "damping: reported / actual", "range"],
+                    monte_carlo_rows(results, recs[0][1]))
+
+
+def koma_section(tools):
+    exact = json.load(open(os.path.join(KOMA, "reference.json")))
+    # The record's own poles: the exact ones as the Newmark integration shifted them
+    # (data/koma-shear-frame/PROVENANCE.md).
+    ref = {"modes": [{"frequency_hz": m["frequency_hz_as_integrated"],
+                      "damping_ratio": m["damping_ratio_as_integrated"],
+                      "shape": m["shape"]} for m in exact["modes"]]}
+    path = os.path.join(KOMA, "shear_frame.csv")
+    results = {}
+    for tool in tools:
+        kw = {} if isinstance(tool, Era) else (
+            {"br": 50, "ordmax": 60} if isinstance(tool, PyOMA2) else {"i": 50, "ordmax": 60})
+        results[tool.name] = [run_tool(tool, path, [1, 2, 3, 4, 5], 12.0, **kw)]
+        if results[tool.name][0][2]:
+            progress(f"{tool.name} failed on the shear frame: {results[tool.name][0][2]}")
+    print("md: **koma's shear frame** (data/koma-shear-frame: 5 floors, displacements with "
+          "noise, 12 Hz, 1200 s, 5 modes 0.18–1.18 Hz as integrated); peers at block rows 50, "
+          "orders 2..60, as koma's example.")
+    print()
+    print_table(HEADER, accuracy_rows(results, [ref]))
+    for tool, runs in results.items():
+        found, _ = match(runs[0][0], ref["modes"])
+        line = ", ".join(
+            f"{t['frequency_hz']:.3f} Hz {100 * t['damping_ratio']:.2f} % → " + (
+                f"{found[j]['frequency_hz']:.3f} Hz {100 * found[j]['damping_ratio']:.2f} %"
+                if j in found else "–")
+            for j, t in enumerate(ref["modes"]))
+        print(f"md: {tool}: {line}")
+    print()
+
+
+def daisy_section(tools):
+    cols = list(range(3, 31))
+    rows = []
+    for tool in tools:
+        kw = {} if isinstance(tool, Era) else (
+            {"br": 30, "ordmax": 120} if isinstance(tool, PyOMA2) else {"i": 30, "ordmax": 120})
+        modes, seconds, err = run_tool(tool, DAISY, cols, 1024.0, **kw)
+        if err:
+            progress(f"{tool.name} failed on DaISy: {err}")
+        within = [r for r in DAISY_REFERENCE
+                  if any(abs(m["frequency_hz"] - r) <= 0.5 for m in modes)]
+        missed = ", ".join(f"{r:g}" for r in DAISY_REFERENCE if r not in within) or "none"
+        rows.append((tool.name, f"{len(within)} / {len(DAISY_REFERENCE)}", str(len(modes)),
+                     fmt(seconds, 2), "failed" if err else missed))
+    print("md: **DaISy steel subframe, outputs only** (28 accelerations, forces dropped, "
+          "1024 Hz, 8523 samples): reference frequencies (its PROVENANCE.md) with a reported "
+          "mode within 0.5 Hz; peers at block rows 30, orders up to 120, channel means "
+          "removed.")
+    print()
+    print_table(["tool", "references found", "modes reported", "seconds", "missed"], rows)
+
+
 # ------------------------------------------------------------------ main
 
 
-def main():
+def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--era", required=True)
     ap.add_argument("--records", type=int, default=10)
@@ -414,9 +506,12 @@ def main():
     ap.add_argument("--no-unc", action="store_true", help="skip pyOMA2's calc_unc run")
     ap.add_argument("--skip", default="", help="comma list of: seeds,one,koma,daisy")
     ap.add_argument("--work", help="folder for the records (default: a temp dir, removed)")
-    args = ap.parse_args()
-    skip = set(filter(None, args.skip.split(",")))
+    return ap.parse_args()
 
+
+def main():
+    args = parse_args()
+    skip = set(filter(None, args.skip.split(",")))
     tools = [PyOMA2(args.preset, args.br, args.ordmax, False), Koma(args.br, args.ordmax)]
     unc = None if args.no_unc else PyOMA2(args.preset, args.br, args.ordmax, True)
     has_era = era_has_oma(args.era)
@@ -442,97 +537,21 @@ def main():
     try:
         seeds, one = make_records(args.era, work, args.records, args)
         progress(f"{2 * args.records} records written in {work}")
-        header = ["tool", "modes found", "spurious", "median damping error",
-                  "median frequency error", "s per record (median)", "s range", "failed runs"]
-        for label, recs, key in [
-            (f"{args.records} records, seeds 1..{args.records} (a structure each): "
-             f"{args.modes} modes 1–20 Hz, {args.outputs} outputs, {args.inputs} unmeasured "
-             f"white-noise forces, {args.rate:g} Hz, {RECORD_S:g} s, "
-             f"{100 * args.noise:g} % sensor noise", seeds, "seeds"),
-            (f"{args.records} records of one structure (seed {args.mc_seed}): one "
-             f"{args.records * RECORD_S:g} s record cut into {RECORD_S:g} s records",
-             one, "one")]:
-            if key in skip:
-                continue
-            results = {}
-            run_list = tools + ([unc] if (unc and key == "one") else [])
-            for tool in run_list:
-                runs = []
-                for path, truth, fs, cols in recs:
-                    r = run_tool(tool, path, cols, fs)
-                    if r[2]:
-                        print(f"md: {tool.name} failed on {os.path.basename(path)}: {r[2]}",
-                              file=sys.stderr)
-                    runs.append(r)
-                    progress(f"{tool.name} {os.path.basename(path)}: {len(r[0])} modes, "
-                             f"{r[1]:.2f} s")
-                results[tool.name] = runs
-            print(f"md: **{label}**")
-            print()
-            print_table(header, accuracy_rows(results, [r[1] for r in recs]))
-            if key == "one":
-                rows = monte_carlo_rows(results, recs[0][1])
-                print("md: **Monte Carlo check** over the same records: for each true mode "
-                      "found in at least half of them, the median std the tool reports "
-                      "divided by the actual scatter (std over the records) of its estimate; "
-                      "1 = the std holds, > 1 overstated. Median over the modes, and range.")
-                print()
-                print_table(["tool", "modes", "frequency: reported / actual", "range",
-                             "damping: reported / actual", "range"], rows)
+        if "seeds" not in skip:
+            simulated_section(
+                f"{args.records} records, seeds 1..{args.records} (a structure each): "
+                f"{args.modes} modes 1–20 Hz, {args.outputs} outputs, {args.inputs} unmeasured "
+                f"white-noise forces, {args.rate:g} Hz, {RECORD_S:g} s, "
+                f"{100 * args.noise:g} % sensor noise", seeds, tools, False)
+        if "one" not in skip:
+            simulated_section(
+                f"{args.records} records of one structure (seed {args.mc_seed}): one "
+                f"{args.records * RECORD_S:g} s record cut into {RECORD_S:g} s records",
+                one, tools + ([unc] if unc else []), True)
         if "koma" not in skip:
-            exact = json.load(open(os.path.join(KOMA, "reference.json")))
-            # The record's own poles: the exact ones as the Newmark integration shifted
-            # them (data/koma-shear-frame/PROVENANCE.md).
-            ref = {"modes": [{"frequency_hz": m["frequency_hz_as_integrated"],
-                              "damping_ratio": m["damping_ratio_as_integrated"],
-                              "shape": m["shape"]} for m in exact["modes"]]}
-            path = os.path.join(KOMA, "shear_frame.csv")
-            results = {}
-            for tool in tools:
-                kw = {} if isinstance(tool, Era) else (
-                    {"br": 50, "ordmax": 60} if isinstance(tool, PyOMA2) else
-                    {"i": 50, "ordmax": 60})
-                results[tool.name] = [run_tool(tool, path, [1, 2, 3, 4, 5], 12.0, **kw)]
-                if results[tool.name][0][2]:
-                    print(f"md: {tool.name} failed on the shear frame: "
-                          f"{results[tool.name][0][2]}", file=sys.stderr)
-            print("md: **koma's shear frame** (data/koma-shear-frame: 5 floors, displacements "
-                  "with noise, 12 Hz, 1200 s, 5 modes 0.18–1.18 Hz as integrated); peers at block rows "
-                  "50, orders 2..60, as koma's example.")
-            print()
-            print_table(header, accuracy_rows(results, [ref]))
-            for tool, runs in results.items():
-                found, _ = match(runs[0][0], ref["modes"])
-                line = ", ".join(
-                    f"{t['frequency_hz']:.3f} Hz {100 * t['damping_ratio']:.2f} % → " + (
-                        f"{found[j]['frequency_hz']:.3f} Hz "
-                        f"{100 * found[j]['damping_ratio']:.2f} %" if j in found else "–")
-                    for j, t in enumerate(ref["modes"]))
-                print(f"md: {tool}: {line}")
-            print()
+            koma_section(tools)
         if "daisy" not in skip:
-            cols = list(range(3, 31))
-            rows = []
-            for tool in tools:
-                kw = {} if isinstance(tool, Era) else (
-                    {"br": 30, "ordmax": 120} if isinstance(tool, PyOMA2) else
-                    {"i": 30, "ordmax": 120})
-                modes, seconds, err = run_tool(tool, DAISY, cols, 1024.0, **kw)
-                if err:
-                    print(f"md: {tool.name} failed on DaISy: {err}", file=sys.stderr)
-                within = [r for r in DAISY_REFERENCE
-                          if any(abs(m["frequency_hz"] - r) <= 0.5 for m in modes)]
-                rows.append((tool.name, f"{len(within)} / {len(DAISY_REFERENCE)}",
-                             str(len(modes)), fmt(seconds, 2),
-                             "failed" if err else ", ".join(f"{r:g}" for r in DAISY_REFERENCE
-                                                            if r not in within) or "none"))
-            print("md: **DaISy steel subframe, outputs only** (28 accelerations, forces "
-                  "dropped, 1024 Hz, 8523 samples): reference frequencies (its PROVENANCE.md) "
-                  "with a reported mode within 0.5 Hz; peers at block rows 30, orders up to "
-                  "120, channel means removed.")
-            print()
-            print_table(["tool", "references found", "modes reported", "seconds", "missed"],
-                        rows)
+            daisy_section(tools)
     finally:
         if not args.work:
             shutil.rmtree(work, ignore_errors=True)
