@@ -750,6 +750,8 @@ pub struct Refine<'a> {
     pub no_figures: bool,
     /// The output switches.
     pub settings: Settings,
+    /// `--geometry`, when given.
+    pub geometry: Option<PathBuf>,
 }
 
 impl<'a> Refine<'a> {
@@ -768,6 +770,7 @@ impl<'a> Refine<'a> {
             out: a.out.clone(),
             no_figures: a.no_figures,
             settings: Settings::from(&a.common),
+            geometry: a.geometry.geometry.clone(),
         })
     }
 }
@@ -836,6 +839,8 @@ pub struct Identify<'a> {
     pub no_figures: bool,
     /// The output switches.
     pub settings: Settings,
+    /// `--geometry`, when given.
+    pub geometry: Option<PathBuf>,
 }
 
 impl<'a> Identify<'a> {
@@ -878,6 +883,7 @@ impl<'a> Identify<'a> {
             out: a.out.clone(),
             no_figures: a.no_figures,
             settings: Settings::from(&a.common),
+            geometry: a.geometry.geometry.clone(),
         })
     }
 }

@@ -6,6 +6,8 @@
 //! - [`mat`]: MATLAB MAT files (model and FRFs) for MATLAB, Octave and scipy;
 //! - [`uff`]: Universal File Format datasets 58/58b (FRFs, read and written) and 55
 //!   (mode shapes, written);
+//! - [`geometry`]: test geometry (nodes, trace lines, coordinate systems) from UFF
+//!   15/2411/82/18/2420 or our geometry CSV, and where a file's channels sit on it;
 //! - [`frf_file`]: the types every FRF format shares ([`frf_file::FrfFile`],
 //!   [`frf_file::ChannelTable`]);
 //! - [`text`]: CSV metadata lines, shared by the CSV readers;
@@ -21,6 +23,7 @@ pub mod csv;
 pub mod decay_csv;
 pub mod format;
 pub mod frf_file;
+pub mod geometry;
 pub mod input;
 pub mod mat;
 mod mat_check;

@@ -211,6 +211,63 @@ fn mutated_uff_ascii_and_binary_never_panic() {
     assert_bounded("UFF");
 }
 
+/// A geometry with every dataset the reader knows: systems (18, 2420), nodes (15,
+/// 2411) and a trace line (82).
+const GEOMETRY_UFF: &str = "    -1
+    18
+         1         1         0         8         1
+SYS1
+ -2.40000e+00 -9.50000e-01  0.00000e+00 -3.40000e+00 -9.50000e-01  0.00000e+00
+ -3.40000e+00 -9.50000e-01 -1.00000e+00
+    -1
+    -1
+  2420
+         1
+Part1
+         2         0         2
+CS2
+   1.0000000000000000D+00   0.0000000000000000D+00   0.0000000000000000D+00
+   0.0000000000000000D+00   1.0000000000000000D+00   0.0000000000000000D+00
+   0.0000000000000000D+00   0.0000000000000000D+00   1.0000000000000000D+00
+   0.0000000000000000D+00   0.0000000000000000D+00   5.0000000000000000D+00
+    -1
+    -1
+    15
+         1         1         2         0  1.00000E+00  4.50000E+01  0.00000E+00
+         2         2         1         0  1.00000E+00  2.00000E+00  3.00000E+00
+    -1
+    -1
+  2411
+         3         0         0         0
+   1.0000000000000000D+00   2.0000000000000000D+00   3.0000000000000000D+00
+    -1
+    -1
+    82
+         1         4         0
+lines
+         1         2         3         1
+    -1
+";
+
+#[test]
+fn mutated_geometry_files_never_panic() {
+    let path = Path::new("h.uff");
+    let base = GEOMETRY_UFF.as_bytes();
+    let g = era_io::geometry::parse_geometry(base, path).unwrap();
+    assert_eq!((g.nodes.len(), g.segments().len()), (3, 3));
+    let csv = b"node,x,y,z\n1,0,0,0\n2,1,0,0\n3,1,1,0\nfrom,to\n1,2\n2,3\n";
+    assert!(era_io::geometry::parse_geometry(csv, path).is_ok());
+    for (base, seed) in [(base, 50), (&csv[..], 60)] {
+        let mut cases = flips(base, seed, 400);
+        cases.extend(cuts(base, seed + 1, 80));
+        cases.extend(huge_numbers(&text(base), seed + 2, 300));
+        for c in &cases {
+            let _ = era_io::geometry::parse_geometry(c, path);
+        }
+    }
+    assert_bounded("geometry");
+}
+
 #[test]
 fn mutated_mat_files_never_panic() {
     let base = std::fs::read(fixture("frf_3x2.mat")).unwrap();

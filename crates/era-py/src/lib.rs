@@ -9,6 +9,7 @@
 //! - `model`: `identify` and its `Identification` (the matrices, singular values, modes,
 //!   fit, the model's FRF, `model.json`'s text, a python-control `StateSpace`).
 //! - `friction`: `friction_estimate`, the free-decay Coulomb estimate of Eq. 3.12.
+//! - `geometry`: `read_geometry`, a test geometry's nodes and lines as numpy arrays.
 //!
 //! ## Errors
 //! A refused value or file is a Python exception carrying the CLI's message: input errors
@@ -39,6 +40,7 @@ use pyo3::prelude::*;
 
 mod frf;
 mod friction;
+mod geometry;
 mod model;
 mod time;
 
@@ -362,6 +364,7 @@ fn _era(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frf::write_frf, m)?)?;
     m.add_function(wrap_pyfunction!(frf::estimate_frf, m)?)?;
     m.add_function(wrap_pyfunction!(frf::read_time, m)?)?;
+    m.add_function(wrap_pyfunction!(geometry::read_geometry, m)?)?;
     m.add_function(wrap_pyfunction!(frf::simulate_truth_model, m)?)?;
     m.add_function(wrap_pyfunction!(frf::simulate_modal, m)?)?;
     m.add_function(wrap_pyfunction!(model::identify, m)?)?;

@@ -15,6 +15,7 @@ use crate::pipeline::run::{assess, run, Path};
 use crate::sources::frf::MarkovSequence;
 use crate::statespace::StateSpace;
 
+pub mod oma;
 pub(crate) mod options;
 pub mod route;
 

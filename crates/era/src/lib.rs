@@ -72,6 +72,7 @@ mod test_support;
 pub use error::{EraError, Result};
 pub use frf::{FrfData, Quantity};
 pub use identification::{Identification, Stage};
+pub use identify::oma::{oma, Oma, OmaMethod, OmaOptions};
 pub use identify::{
     identify, identify_observed, identify_supplied, EraOptions, ModelDomain, Order,
 };

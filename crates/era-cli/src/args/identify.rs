@@ -145,6 +145,8 @@ pub struct IdentifyArgs {
     pub outputs: Option<String>,
     #[command(flatten, next_help_heading = "Reading the file")]
     pub facts: FrfFactsArgs,
+    #[command(flatten)]
+    pub geometry: super::GeometryArgs,
     /// Orders of the stabilization diagram, MIN..MAX[:STEP] (step 2) or a list such as
     /// 50,70,80, all from one SVD. Default with --states auto: a range the data support.
     #[arg(long, value_name = "MIN..MAX[:STEP]", help_heading = "Route")]

@@ -14,6 +14,8 @@ pub struct RefineArgs {
     pub read: FrfReadArgs,
     #[command(flatten)]
     pub fit: RefineFitArgs,
+    #[command(flatten)]
+    pub geometry: super::GeometryArgs,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
     /// figures of the refined model (created if missing).
     #[arg(long, value_name = "DIR")]

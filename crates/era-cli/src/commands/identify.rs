@@ -51,6 +51,7 @@ pub fn run(a: &Identify) -> anyhow::Result<()> {
     let mut opts = a.options.clone();
     let request = &a.request;
     let refine_options = a.refine.clone();
+    let geometry = crate::output::geometry::read(a.geometry.as_deref(), &human)?;
     let mut outputs = match &a.out {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
@@ -153,7 +154,8 @@ pub fn run(a: &Identify) -> anyhow::Result<()> {
     let (time_format, coherence) = (source.time_format, source.coherence);
     let run_input = outputs
         .as_ref()
-        .map(|_| run_input(a, &input, time_format, coherence));
+        .map(|_| run_input(a, &input, time_format, coherence))
+        .map(|r| crate::output::geometry::attach(r, geometry, input.file.frf.outputs()));
     let model = write(
         a,
         outputs.as_mut().zip(run_input.as_ref()),

@@ -124,6 +124,7 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
     let settings = a.settings;
     let human = Human::new(&settings);
     let ropts = a.options.clone();
+    let geometry = crate::output::geometry::read(a.geometry.as_deref(), &human)?;
     let model =
         ModelJson::read(&a.model).with_context(|| format!("reading {}", a.model.display()))?;
     let mut outputs = match &a.out {
@@ -172,6 +173,7 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
         let fit = FitJson::from_report(&found.fit);
         let title = format!("era refine {} {}", a.model.display(), a.file.display());
         let source = crate::output::RunInput::from_file(&a.file, &input);
+        let source = crate::output::geometry::attach(source, geometry, frf.outputs());
         let echo = format!("refined from {}\n", a.model.display());
         let bundle = Bundle {
             found: &found,

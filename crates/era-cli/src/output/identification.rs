@@ -84,12 +84,13 @@ pub fn write_bundle(
         )?)
     })?;
     write_output(set, sub.join("modes.uff"), |p| {
-        Ok(era_io::uff::write_uff55(
+        Ok(era_io::uff::write_uff55_on(
             p,
             &found.modal,
             channels,
             // The shapes are of the integrated quantity, as the model is.
             found.processed.quantity(),
+            source.geometry.as_ref(),
         )?)
     })?;
     if !figures {

@@ -5,6 +5,7 @@
 
 pub mod estimate;
 pub mod figures;
+pub mod geometry;
 pub mod identification;
 pub mod progress;
 pub mod report;
@@ -163,6 +164,8 @@ pub struct RunInput {
     pub coherence: Option<InputCoherence>,
     /// Phase view of the figures.
     pub phase: PhaseView,
+    /// The test geometry (`--geometry`), written into modes.uff.
+    pub geometry: Option<era_io::geometry::Geometry>,
 }
 
 impl RunInput {
@@ -196,6 +199,7 @@ impl RunInput {
             channels: file.channels.clone(),
             coherence,
             phase: PhaseView::Wrapped,
+            geometry: None,
         }
     }
 
@@ -214,6 +218,7 @@ impl RunInput {
             channels: None,
             coherence: None,
             phase: PhaseView::Wrapped,
+            geometry: None,
         }
     }
 }

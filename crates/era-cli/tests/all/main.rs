@@ -9,6 +9,7 @@ mod experiment_cli;
 mod formats_cli;
 mod frf_cli;
 mod friction_cli;
+mod geometry_cli;
 mod hostile_inputs;
 mod hostile_outputs;
 mod hostile_params;

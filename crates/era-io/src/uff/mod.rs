@@ -42,19 +42,28 @@
 //! [`write_uff58`] writes one record per output/input pair: ASCII by default with the
 //! widths of the definition (13 significant digits in the 20-wide double fields), or
 //! binary 58b (little-endian IEEE, exact). [`write_uff55`] writes the mode shapes of
-//! an identified model as complex-eigenvalue records (analysis type 3).
+//! an identified model as complex-eigenvalue records (analysis type 3), after the
+//! geometry's datasets 18, 15 and 82 when one is given ([`write_uff55_on`]).
+//!
+//! # Geometry
+//! [`parse_uff_geometry`] reads nodes (15, 2411), trace lines (82) and coordinate
+//! systems (18, 2420) into a [`crate::geometry::Geometry`]; see its module.
 
 mod frf;
+mod geometry;
 mod parse;
 #[cfg(test)]
 mod tests;
 mod types;
 mod write55;
 mod write58;
+mod write_geometry;
 
 pub use crate::frf_file::{direction_name, listed, Channel, ChannelTable, Dof};
 pub use frf::{frf_from_uff, quantity_of, read_frf_uff, FrfLayout};
+pub use geometry::parse_uff_geometry;
 pub use parse::{parse_uff, read_uff};
 pub use types::*;
-pub use write55::write_uff55;
+pub use write55::{write_uff55, write_uff55_on};
 pub use write58::{write_uff58, UffWriteOptions};
+pub use write_geometry::write_geometry_records;

@@ -22,6 +22,22 @@ pub fn write_uff55(
     channels: Option<&ChannelTable>,
     quantity: Quantity,
 ) -> Result<(), IoError> {
+    write_uff55_on(path, modal, channels, quantity, None)
+}
+
+/// [`write_uff55`], with the geometry's datasets 18, 15 and 82 ahead of the shapes
+/// when one is given ([`super::write_geometry_records`]), so that a viewer opens the
+/// shapes on their structure from the one file.
+///
+/// # Errors
+/// As [`write_uff55`].
+pub fn write_uff55_on(
+    path: &Path,
+    modal: &ModalParameters,
+    channels: Option<&ChannelTable>,
+    quantity: Quantity,
+    geometry: Option<&crate::geometry::Geometry>,
+) -> Result<(), IoError> {
     let q = modal.modes.first().map_or(0, |m| m.shape.len());
     let numbered = ChannelTable::numbered(q, 0);
     let outputs = channels.map_or(&numbered.outputs, |t| &t.outputs);
@@ -58,6 +74,9 @@ pub fn write_uff55(
         slots.push((n, component.min(per_node - 1), sign));
     }
     write_streamed(path, |w| {
+        if let Some(g) = geometry {
+            super::write_geometry_records(w, g)?;
+        }
         for (number, mode) in modal.modes.iter().enumerate() {
             writeln!(w, "{:>6}", -1)?;
             writeln!(w, "{:>6}{:74}", 55, "")?;

@@ -6,6 +6,7 @@
 mod common;
 mod data_sets;
 mod fuzz_regressions;
+mod geometry;
 mod mat_time;
 mod time_files;
 mod uff_golden;

@@ -55,6 +55,11 @@ pub enum Realizer {
     Era,
     /// ERA/DC on its shifted correlations ([`crate::pipeline::realize_dc`]).
     EraDc,
+    /// The shift structure of the observability factor: `A` is the least-squares
+    /// solution of `O↑ A = O↓`, with `O = U_n S_n^(½)` and `O↑`, `O↓` its rows
+    /// without the last and the first block row (covariance-driven SSI, Peeters &
+    /// De Roeck 1999). `H1` is not used for `A`; `B` and `C` are ERA's.
+    Shift,
 }
 
 /// The model order of an identification.
@@ -253,6 +258,7 @@ impl Default for ScanOptions {
 crate::names::named!(display Realizer, "realizer", [
     Realizer::Era => "era",
     Realizer::EraDc => "era-dc",
+    Realizer::Shift => "shift",
 ]);
 
 crate::names::named!(display ModelDomain, "time domain", [

@@ -287,6 +287,8 @@ pub struct Factorization {
     /// ERA/DC's `U_Nᵀ H(0)`, from which `B` and the controllability tail come
     /// ([`crate::pipeline::realize_dc`]); `None` for ERA, whose `V` gives them.
     pub(super) ut_h0: Option<Mat<f64>>,
+    /// `A` from the shift of the observability factor ([`crate::identify::Realizer::Shift`]).
+    pub(super) shift: bool,
 }
 
 /// What [`Factorization::from_parts`] assembles: an SVD `U Σ Vᵀ` of some `H0`, the
@@ -340,6 +342,7 @@ impl Factorization {
             warnings: Vec::new(),
             seconds,
             ut_h0: parts.ut_h0,
+            shift: false,
         }
     }
 
@@ -465,7 +468,16 @@ impl Factorization {
             warnings,
             seconds: clock.elapsed().as_secs_f64(),
             ut_h0: None,
+            shift: false,
         })
+    }
+
+    /// The same factors, realizing `A` from the shift of the observability factor
+    /// ([`crate::identify::Realizer::Shift`]) instead of `H1`.
+    #[must_use]
+    pub fn with_shift(mut self) -> Self {
+        self.shift = true;
+        self
     }
 
     /// The largest order this factorization realizes.

@@ -243,7 +243,7 @@ fn scan_front(
     let clock = Instant::now();
     Stage::HankelSvd.enter(observer)?;
     let factorization = match options.realizer {
-        Realizer::Era => Factorization::thesis(
+        Realizer::Era | Realizer::Shift => Factorization::thesis(
             &f.markov,
             f.sample_time_s(),
             &FactorOptions {
@@ -253,7 +253,14 @@ fn scan_front(
                 svd: options.svd,
                 svd_tolerance: scan_options.svd_tolerance,
             },
-        ),
+        )
+        .map(|f| {
+            if options.realizer == Realizer::Shift {
+                f.with_shift()
+            } else {
+                f
+            }
+        }),
         Realizer::EraDc => crate::pipeline::realize_dc::factor_dc(
             &f.markov,
             f.sample_time_s(),

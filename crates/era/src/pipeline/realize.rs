@@ -160,14 +160,37 @@ pub fn realize(
     sample_time_s: f64,
     options: &RealizeOptions,
 ) -> Result<Realization> {
+    realize_thesis(markov, sample_time_s, options, false)
+}
+
+/// [`realize`] with `A` from the shift of the observability factor
+/// ([`crate::identify::Realizer::Shift`]).
+///
+/// # Errors
+/// As [`realize`].
+pub fn realize_shift(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+) -> Result<Realization> {
+    realize_thesis(markov, sample_time_s, options, true)
+}
+
+/// The thesis Hankel's realization, `A` from `H1` or from the shift.
+fn realize_thesis(
+    markov: &MarkovSequence,
+    sample_time_s: f64,
+    options: &RealizeOptions,
+    shift: bool,
+) -> Result<Realization> {
     let (shapes, warnings) = plan(markov, options.states, options.hankel_factor)?;
     realize_shapes(
         markov,
         sample_time_s,
         options,
-        shapes.h0,
-        shapes.h1,
+        (shapes.h0, shapes.h1),
         Some(warnings),
+        shift,
     )
 }
 
@@ -186,7 +209,7 @@ pub fn realize_general(
     shape: HankelShape,
 ) -> Result<Realization> {
     let h1 = general_h1(markov, shape, options.states)?;
-    realize_shapes(markov, sample_time_s, options, shape, h1, None)
+    realize_shapes(markov, sample_time_s, options, (shape, h1), None, false)
 }
 
 /// One factorization at the order asked, and its realization there. `shape_warnings`
@@ -196,9 +219,9 @@ fn realize_shapes(
     markov: &MarkovSequence,
     sample_time_s: f64,
     options: &RealizeOptions,
-    h0_shape: HankelShape,
-    h1_shape: HankelShape,
+    (h0_shape, h1_shape): (HankelShape, HankelShape),
     shape_warnings: Option<Vec<RealizeWarning>>,
+    shift: bool,
 ) -> Result<Realization> {
     let keep = Keep {
         max_states: options.states,
@@ -206,8 +229,9 @@ fn realize_shapes(
         svd_tolerance: options.svd_tolerance,
         extra: 0,
     };
-    let factors =
+    let mut factors =
         Factorization::of_shapes(markov, sample_time_s, &keep, h0_shape, h1_shape, Vec::new())?;
+    factors.shift = shift;
     let mut realization = factors.realize(options.states, options.direct_term)?;
     match shape_warnings {
         Some(warnings) => realization.warnings.extend(
@@ -313,6 +337,33 @@ fn balanced_abc(
     (a, b, c)
 }
 
+/// `A` of the shift structure: the least-squares solution of `O↑ A = O↓`, where
+/// `O = U_n S^(½)` and `O↑`, `O↓` are `O` without its last and its first `q` rows.
+fn shift_a(singular_values: &[f64], un: faer::MatRef<'_, f64>, q: usize) -> Result<Mat<f64>> {
+    use faer::linalg::solvers::SolveLstsq;
+    let n = singular_values.len();
+    let rows = un.nrows();
+    if rows < q + n {
+        return Err(EraError::HankelTooSmall {
+            rows: rows.saturating_sub(q),
+            cols: n,
+            available: rows.saturating_sub(q),
+            states: n,
+        });
+    }
+    let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
+    let o = Mat::from_fn(rows, n, |i, r| un[(i, r)] * root[r]);
+    let up = o.get(..rows - q, ..).to_owned();
+    let down = o.get(q.., ..).to_owned();
+    let a = up.qr().solve_lstsq(down);
+    if a.col_iter().flat_map(|c| c.iter()).any(|v| !v.is_finite()) {
+        return Err(EraError::Numerical(
+            "the shift solve of A is not finite".into(),
+        ));
+    }
+    Ok(a)
+}
+
 impl Factorization {
     /// The balanced realization at `states` (docs/src/design.md §1.9) from the kept factors.
     ///
@@ -342,7 +393,10 @@ impl Factorization {
         let (q, p) = (self.y0.nrows(), self.y0.ncols());
         let sv = &self.singular_values[..n];
         let (un, vn) = (self.u.subcols(0, n), self.v.subcols(0, n));
-        let (a, mut b, c) = balanced_abc(sv, un, vn, self.ut_h1_v.as_ref(), q, p);
+        let (mut a, mut b, c) = balanced_abc(sv, un, vn, self.ut_h1_v.as_ref(), q, p);
+        if self.shift {
+            a = shift_a(sv, un, q)?;
+        }
         let mut tails = HankelTails::of(sv, un, vn, q, p);
         if let Some(ut_h0) = &self.ut_h0 {
             // ERA/DC: Q_β = Σ^(−½) U_nᵀ H(0), and B its first p columns.

@@ -272,6 +272,16 @@ pub(crate) fn run(
             options.direct_term,
         )?,
         (Path::Fast, Realizer::Era) => realize(&f.markov, f.sample_time_s(), &realize_options)?,
+        (Path::Fast, Realizer::Shift) => {
+            crate::pipeline::realize::realize_shift(&f.markov, f.sample_time_s(), &realize_options)?
+        }
+        (Path::Naive, Realizer::Shift) => {
+            return Err(EraError::InvalidParameter {
+                name: "realizer",
+                value: Realizer::Shift.to_string(),
+                reason: "the naive reference realizes ERA only".into(),
+            })
+        }
         (Path::Naive, Realizer::Era) => {
             realize_naive(&f.markov, f.sample_time_s(), &realize_options)?
         }

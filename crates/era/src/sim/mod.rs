@@ -8,6 +8,7 @@
 //! noise and structures in both.
 
 pub mod experiment;
+pub mod fleet;
 pub mod shaker;
 
 use crate::error::{EraError, Result};

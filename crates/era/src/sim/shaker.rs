@@ -223,6 +223,19 @@ pub fn simulate_shaker_test(test: &ShakerTest) -> Result<ShakerRecord> {
         }
     }
     let truth = ModalStructure::random(&test.structure)?;
+    let seed = test.structure.seed.wrapping_mul(7919).wrapping_add(17);
+    drive(test, truth, n, seed)
+}
+
+/// `test` on the structure `truth` (already checked against `test`'s rate): `n`
+/// samples of each output, the excitation and the noise drawn from `seed`.
+pub(crate) fn drive(
+    test: &ShakerTest,
+    truth: ModalStructure,
+    n: usize,
+    seed: u64,
+) -> Result<ShakerRecord> {
+    let fs = test.sample_rate_hz;
     let p = truth.inputs();
     crate::limits::VALUES.check_product(
         "samples x channels",
@@ -231,7 +244,7 @@ pub fn simulate_shaker_test(test: &ShakerTest) -> Result<ShakerRecord> {
     let model = truth.state_space(test.quantity).c2d(1.0 / fs)?;
     // The excitation draws from a stream of its own, so that a seed gives the same
     // structure whatever the excitation.
-    let mut rng = Minstd::new(test.structure.seed.wrapping_mul(7919).wrapping_add(17));
+    let mut rng = Minstd::new(seed);
     let mut inputs: Vec<Vec<f64>> = (0..p)
         .map(|j| excite(&test.excitation, j, p, n, fs, &mut rng))
         .collect();

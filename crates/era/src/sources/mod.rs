@@ -4,7 +4,9 @@
 //!
 //! - [`frf`]: measured FRFs, preprocessed and inverse-transformed (the thesis's route).
 //! - [`okid`]: input and output time histories, through a least-squares observer.
+//! - [`correlation`]: output-only records, through their output correlations (NExT).
 
+pub mod correlation;
 pub mod frf;
 pub mod okid;
 

@@ -9,6 +9,7 @@ mod filter_golden;
 mod frf_estimate;
 mod friction;
 mod matrix_free;
+mod oma;
 mod properties;
 mod refine;
 mod refine_properties;
