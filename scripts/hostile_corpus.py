@@ -18,6 +18,8 @@ Cases:
   folder, standard input);
 - time histories through OKID (`identify --from-time --markov okid`), mutated and with
   absurd observer flags;
+- output-only records through `era oma`, mutated and with absurd lags, blocks, orders,
+  references and sample rates;
 - signals: SIGINT, SIGTERM or SIGHUP at a random moment of a run (exit 0, or 128 + the
   signal within 1 s; nothing of era's left; the earlier outputs whole, or the new set);
 - two runs into one `--out` folder at once (one is refused, or they run one after the
@@ -397,6 +399,17 @@ def main():
             u = prng.gauss(0, 1)
             y = 0.9 * y + u
             f.write(f"{k / 256:.6f},{u:.6e},{y:.6e}\n")
+    # Three responses of two lightly damped resonators to unmeasured noise, for era oma.
+    with open(os.path.join(work, "oma.csv"), "w") as f:
+        f.write("time_s,y1,y2,y3\n")
+        prng = random.Random(11)
+        r1 = [0.0, 0.0]
+        r2 = [0.0, 0.0]
+        for k in range(4096):
+            u, v = prng.gauss(0, 1), prng.gauss(0, 1)
+            r1 = [1.80 * r1[0] - 0.98 * r1[1] + u, r1[0]]
+            r2 = [1.20 * r2[0] - 0.97 * r2[1] + v, r2[0]]
+            f.write(f"{k / 128:.6f},{r1[0] + 0.3 * r2[0]:.6e},{r1[0] - r2[0]:.6e},{0.5 * r1[0] + r2[0]:.6e}\n")
 
     commands = {
         "truth.csv": [["info", "{f}"], ["identify", "{f}", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
@@ -409,6 +422,10 @@ def main():
                       "--markov", "okid", "--states", "4", "--no-figures", "--out", "okid-out"],
                      ["identify", "{f}", "--from-time", "--inputs", "force", "--outputs", "acc",
                       "--markov", "okid", "--era-dc", "--states", "2", "--json", "-q"]],
+        "oma.csv": [["oma", "{f}", "--outputs", "2-4", "--states", "4", "--blocks", "4", "--json", "-q"],
+                    ["oma", "{f}", "--outputs", "y1,y2,y3", "--references", "y1", "--method", "next-era",
+                     "--no-figures", "--out", "oma-out"],
+                    ["oma", "{f}", "{f}", "--outputs", "2-4", "--time-lags", "40", "--out", "oma-out"]],
         "decay.csv": [["friction", "estimate", "{f}", "--stiffness", "1"]],
         "model.json": [["plot", "truth.csv", "--model", "{f}", "--out", "plotdir"]],
     }
@@ -451,6 +468,9 @@ def main():
          ["--observer-order", "--markov-samples", "--states", "--frame", "--sample-rate"],
          ["--states", "4"]),
         (["plot", "truth.csv", "--out", "p"], ["--integrations", "--zero-lines"], []),
+        (["oma", "oma.csv", "--outputs", "2-4", "--no-figures", "--out", "oma-out"],
+         ["--time-lags", "--blocks", "--states", "--sample-rate", "--orders", "--references", "--outputs"],
+         ["--blocks", "4"]),
     ]
     for base, flags, defaults in flag_cases:
         for flag in flags:
@@ -523,7 +543,9 @@ def main():
     os.mkfifo(fifo)
     for args in (["info", fifo], ["identify", fifo, "--states", "4"], ["info", "/dev/zero"],
                  ["identify", "/dev/zero", "--states", "4"], ["info", work], ["info", "/dev/null"],
-                 ["frf", "/dev/zero", "--inputs", "1", "--outputs", "2", "--out", "x.csv"]):
+                 ["frf", "/dev/zero", "--inputs", "1", "--outputs", "2", "--out", "x.csv"],
+                 ["oma", fifo, "--outputs", "1"], ["oma", "/dev/zero", "--outputs", "1"],
+                 ["oma", work, "--outputs", "1"], ["oma", "/dev/null", "--outputs", "1"]):
         r.run("input: special file", args, env={"ERA_MAX_INPUT_BYTES": "50000000"})
     with open(os.path.join(work, "truth.csv"), "rb") as f:
         truth = f.read()

@@ -16,6 +16,10 @@ through ``era.identify_time(data, sample_rate_hz, inputs, outputs)``: the Markov
 parameters from OKID's observer (``markov="okid"``) or the Welch H1 FRFs
 (``markov="frf"``), the model fitted and judged against the H1 FRFs.
 
+Responses alone, to unmeasured forces (operational modal analysis), go through
+``era.oma(data, sample_rate_hz)``: SSI-cov or NExT-ERA on the output correlations,
+modes with ``frequency_std_hz`` and ``damping_ratio_std`` from a jackknife.
+
 Thesis names (Woods 1994, Appendix J) beside ours: ``states`` = ns, ``hankel_factor``
 = lh, ``integrations`` = ni, ``zero_lines`` = nz, ``pad_to`` = ndpts, ``lowpass`` =
 (ford, Hzbreak), ``time_domain`` = cord.
@@ -33,6 +37,7 @@ from ._era import (
     estimate_frf,
     identify,
     identify_time,
+    oma,
     read_frf,
     read_geometry,
     read_time,
@@ -51,6 +56,7 @@ __all__ = [
     "friction",
     "identify",
     "identify_time",
+    "oma",
     "read_frf",
     "read_geometry",
     "read_time",

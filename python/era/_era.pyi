@@ -100,6 +100,8 @@ class Identification:
     @property
     def hankel_size(self) -> Tuple[int, int]: ...
     @property
+    def oma(self) -> Optional[Dict[str, Any]]: ...
+    @property
     def warnings(self) -> List[str]: ...
     @property
     def parameters(self) -> Dict[str, Any]: ...
@@ -169,6 +171,17 @@ def identify(
     added_modes: bool = True,
     band: Optional[Tuple[float, float]] = None,
     preset: Literal["measured", "thesis"] = "measured",
+    threads: Optional[int] = None,
+) -> Identification: ...
+def oma(
+    data: Union[npt.ArrayLike, Sequence[npt.ArrayLike]],
+    sample_rate_hz: float,
+    outputs: Optional[Sequence[int]] = None,
+    references: Optional[Sequence[int]] = None,
+    method: Literal["ssi-cov", "next-era"] = "ssi-cov",
+    states: Union[int, Literal["auto"]] = "auto",
+    time_lags: Optional[int] = None,
+    blocks: int = 12,
     threads: Optional[int] = None,
 ) -> Identification: ...
 def friction_estimate(

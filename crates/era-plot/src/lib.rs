@@ -11,6 +11,7 @@
 
 pub mod compare;
 pub mod figures;
+pub mod oma;
 pub mod render;
 pub mod report;
 pub mod stabilization;

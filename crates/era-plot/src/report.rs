@@ -78,10 +78,25 @@ pub struct ReportInput<'a> {
     pub singular_values_svg: &'a str,
     /// Stabilization diagram, SVG, when a scan ran.
     pub stabilization_svg: Option<&'a str>,
-    /// Overview grid, SVG.
-    pub grid_svg: &'a str,
+    /// Figures of their own after the stabilization diagram (an output-only run's
+    /// spectral singular values and MAC matrix).
+    pub sections: &'a [ReportSection<'a>],
+    /// Overview grid, SVG (none for an output-only run, whose pairs are correlations).
+    pub grid_svg: Option<&'a str>,
     /// One (title, SVG) per pair.
     pub overlays: &'a [(String, String)],
+}
+
+/// A figure of its own in the report: its anchor, heading, caption and SVG.
+pub struct ReportSection<'a> {
+    /// The id of the heading (`fig-` + it for the figure).
+    pub id: &'a str,
+    /// The heading.
+    pub heading: &'a str,
+    /// What the figure shows (plain text).
+    pub caption: &'a str,
+    /// The figure, SVG.
+    pub svg: &'a str,
 }
 
 fn escape(text: &str) -> String {
@@ -206,6 +221,49 @@ fn fit_means(
     )
 }
 
+/// The report's figures of their own, each a heading, a caption and the figure.
+fn sections_html(sections: &[ReportSection<'_>]) -> String {
+    let mut h = String::new();
+    for section in sections {
+        let _ = write!(
+            h,
+            "<h2 id=\"{0}\">{1}</h2>\n<p>{2}</p>\n<figure class=\"plot\" id=\"fig-{0}\">{3}</figure>\n",
+            escape(section.id),
+            escape(section.heading),
+            escape(section.caption),
+            section.svg
+        );
+    }
+    h
+}
+
+/// The overview grid (when there is one) and every pair's overlay.
+fn pairs_html(input: &ReportInput<'_>) -> String {
+    let mut h = String::new();
+    if let Some(grid) = input.grid_svg {
+        let _ = write!(
+            h,
+            "<h2 id=\"grid\">All pairs</h2>\n<p>|G| in {}.</p>\n<figure class=\"plot wide\" id=\"fig-grid\">{}</figure>\n",
+            escape(&input.view.unit),
+            grid
+        );
+    }
+    if !input.overlays.is_empty() {
+        h.push_str("<h2 id=\"overlays\">Each pair</h2>\n");
+    }
+    // The title is drawn in each figure; the figure carries it as its label only.
+    for (k, (title, svg)) in input.overlays.iter().enumerate() {
+        let _ = writeln!(
+            h,
+            "<figure class=\"plot overlay\" id=\"fig-pair-{}\" aria-label=\"{}\">{}</figure>",
+            k + 1,
+            escape(title).replace('"', "&quot;"),
+            svg
+        );
+    }
+    h
+}
+
 /// The whole page.
 /// ` ± σ` after a refined value (one standard deviation), empty otherwise.
 fn plus_minus(std: Option<f64>) -> String {
@@ -305,6 +363,7 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
             svg
         );
     }
+    h.push_str(&sections_html(input.sections));
     let _ = write!(h, "<h2 id=\"modes\">Modes</h2>\n<p>MPC: modal phase collinearity (1 for a real normal mode). EMAC: extended modal amplitude coherence, how consistently the mode appears over the record (1 = fully). CMI = MPC × EMAC. Share: the mode's part of the measured FRF. Orders: scanned orders in which the mode's cluster has a pole. A mode not judged physical is marked, with the reason.</p>\n{}<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th><th>MPC</th><th>EMAC</th><th>CMI</th><th>share</th><th>orders</th><th>physical</th></tr>\n", refinement_html(f));
     for (k, m) in f.modal.modes.iter().enumerate() {
         let q = f.quality.get(k);
@@ -373,23 +432,7 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
             c.svg
         );
     }
-    let _ = write!(
-        h,
-        "<h2 id=\"grid\">All pairs</h2>\n<p>|G| in {}.</p>\n<figure class=\"plot wide\" id=\"fig-grid\">{}</figure>\n",
-        escape(&input.view.unit),
-        input.grid_svg
-    );
-    h.push_str("<h2 id=\"overlays\">Each pair</h2>\n");
-    // The title is drawn in each figure; the figure carries it as its label only.
-    for (k, (title, svg)) in input.overlays.iter().enumerate() {
-        let _ = writeln!(
-            h,
-            "<figure class=\"plot overlay\" id=\"fig-pair-{}\" aria-label=\"{}\">{}</figure>",
-            k + 1,
-            escape(title).replace('"', "&quot;"),
-            svg
-        );
-    }
+    h.push_str(&pairs_html(input));
     h.push_str("</body></html>\n");
     h
 }

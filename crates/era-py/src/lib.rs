@@ -42,6 +42,7 @@ mod frf;
 mod friction;
 mod geometry;
 mod model;
+mod oma;
 mod time;
 
 /// An error of the core as a Python exception: `ValueError` for the caller's data or
@@ -369,6 +370,7 @@ fn _era(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frf::simulate_modal, m)?)?;
     m.add_function(wrap_pyfunction!(model::identify, m)?)?;
     m.add_function(wrap_pyfunction!(time::identify_time, m)?)?;
+    m.add_function(wrap_pyfunction!(oma::oma_py, m)?)?;
     m.add_function(wrap_pyfunction!(friction::friction_estimate, m)?)?;
     Ok(())
 }

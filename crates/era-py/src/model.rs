@@ -65,6 +65,44 @@ impl PyMode {
     }
 }
 
+/// What an output-only run adds to its identification.
+#[derive(Debug, Clone)]
+pub struct OmaFacts {
+    /// `ssi-cov` or `next-era`.
+    pub method: String,
+    /// The output channels (0-based, axis 0 of the data).
+    pub outputs: Vec<usize>,
+    /// The reference channels (0-based, axis 0 of the data).
+    pub references: Vec<usize>,
+    /// Correlation lags.
+    pub lags: usize,
+    /// Jackknife blocks.
+    pub blocks: usize,
+    /// Samples per channel over all records.
+    pub samples: usize,
+    /// Samples per second.
+    pub sample_rate_hz: f64,
+    /// Per mode, the standard deviation of each shape entry (`None`: no spread).
+    pub shape_std: Vec<Option<Vec<f64>>>,
+}
+
+impl OmaFacts {
+    /// As a dict: every field, and `shapes = 'unscaled'`.
+    pub fn dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("method", &self.method)?;
+        d.set_item("outputs", &self.outputs)?;
+        d.set_item("references", &self.references)?;
+        d.set_item("lags", self.lags)?;
+        d.set_item("blocks", self.blocks)?;
+        d.set_item("samples", self.samples)?;
+        d.set_item("sample_rate_hz", self.sample_rate_hz)?;
+        d.set_item("shape_std", self.shape_std.clone())?;
+        d.set_item("shapes", "unscaled")?;
+        Ok(d)
+    }
+}
+
 /// What `identify` found: the model `(A, B, C, D)`, its Hankel singular values, modes
 /// and fit.
 #[pyclass(module = "era", name = "Identification", frozen)]
@@ -78,6 +116,9 @@ pub struct PyIdentification {
     /// What the Markov parameters' source adds to `parameters` (the source, the Welch
     /// frame, OKID's observer); nothing else is set in it.
     pub(crate) source: ModelParameters,
+    /// What an output-only run (`era.oma`) adds: method, channels, lags, blocks,
+    /// samples, shape standard deviations.
+    pub(crate) oma: Option<OmaFacts>,
 }
 
 fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -230,6 +271,13 @@ impl PyIdentification {
             })
             .collect::<PyResult<Vec<_>>>()?;
         PyList::new(py, modes)
+    }
+    /// An output-only run's facts (`era.oma`): `method`, `outputs` and `references`
+    /// (0-based channels), `lags`, `blocks`, `samples`, `sample_rate_hz`, per mode
+    /// `shape_std`, and `shapes = 'unscaled'`; `None` for other runs.
+    #[getter]
+    fn oma<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.oma.as_ref().map(|o| o.dict(py)).transpose()
     }
     /// Size of H0, (rows, columns).
     #[getter]
@@ -523,6 +571,7 @@ pub fn identify(
         refine: refine.then_some(refine_options),
         route,
         source: Default::default(),
+        oma: None,
     })
 }
 

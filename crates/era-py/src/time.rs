@@ -169,6 +169,7 @@ pub fn identify_time(
         refine: route.refine.then_some(refine_options),
         route,
         source: source_facts,
+        oma: None,
     })
 }
 

@@ -30,7 +30,7 @@ fn count_or_auto(text: &str, what: &str) -> Result<Option<usize>, String> {
         .map_err(|_| format!("'{text}' is neither a number of {what} nor 'auto'"))
 }
 
-fn parse_states(text: &str) -> Result<StatesArg, String> {
+pub fn parse_states(text: &str) -> Result<StatesArg, String> {
     Ok(count_or_auto(text, "states")?.map_or(StatesArg::Auto, StatesArg::Fixed))
 }
 

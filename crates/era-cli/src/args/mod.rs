@@ -11,6 +11,7 @@ mod frf;
 mod friction;
 mod geometry;
 mod identify;
+mod oma;
 mod plot;
 mod refine;
 mod simulate;
@@ -24,6 +25,7 @@ pub use frf::*;
 pub use friction::*;
 pub use geometry::*;
 pub use identify::*;
+pub use oma::*;
 pub use plot::*;
 pub use refine::*;
 pub use simulate::*;
@@ -56,6 +58,10 @@ pub enum Command {
     /// Estimate FRFs and coherence from input and output time histories (CSV, MAT v5 or
     /// HDF5): Welch-averaged spectra, H1, H2 or Hv.
     Frf(FrfArgs),
+    /// Operational modal analysis: the modes of output-only time histories (responses
+    /// to unmeasured forces) by SSI-cov or NExT-ERA, with standard deviations from a
+    /// jackknife over blocks of the records.
+    Oma(Box<OmaArgs>),
     /// Write synthetic FRFs: the truth model or a seeded modal structure.
     Simulate(SimulateArgs),
     /// Coulomb friction of the actuators: estimate from free decay, simulate, tune.

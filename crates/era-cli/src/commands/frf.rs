@@ -107,7 +107,7 @@ struct Records {
 }
 
 /// The sample rate of `history`: `--sample-rate` or the file's, and where it came from.
-fn sample_rate(
+pub(crate) fn sample_rate(
     path: &Path,
     history: &TimeHistory,
     given: Option<f64>,

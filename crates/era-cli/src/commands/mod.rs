@@ -8,6 +8,7 @@ pub mod files;
 pub mod frf;
 pub mod friction;
 pub mod identify;
+pub mod oma;
 pub mod plot;
 pub mod refine;
 pub mod simulate;

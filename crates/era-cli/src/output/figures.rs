@@ -79,7 +79,7 @@ fn write_png(figure: &Figure, path: &Path) -> Result<(), IoError> {
 }
 
 /// [`write_png`] for any renderer.
-fn write_png_with(
+pub(crate) fn write_png_with(
     path: &Path,
     render: impl FnOnce(&Path) -> Result<(), era_plot::PlotError>,
 ) -> Result<(), IoError> {
@@ -159,6 +159,43 @@ pub fn write_frf_figures(
     Ok((grid_svg, overlays))
 }
 
+/// The stabilization diagram of `found`'s scan into `folder` of `set` (SVG and PNG);
+/// returns the SVG, or `None` when no scan ran.
+pub fn write_stabilization(
+    set: &mut OutputSet,
+    folder: &Path,
+    found: &Identification,
+) -> anyhow::Result<Option<String>> {
+    Ok(match &found.stabilization {
+        Some(st) => {
+            let physical: Vec<f64> = found
+                .modal
+                .modes
+                .iter()
+                .zip(&found.quality)
+                .filter(|(_, q)| q.physical)
+                .map(|(m, _)| m.frequency_hz)
+                .collect();
+            let plot = StabilizationPlot::new(
+                &format!("Stabilization diagram, orders {}", st.range),
+                st,
+                (0.0, found.band_hz.1),
+                found.measured.frequency_hz(),
+                physical,
+            );
+            let svg = stabilization_svg(&plot)?;
+            write_output(set, folder.join("stabilization.svg"), |p| {
+                Ok(write_atomic(p, svg.as_bytes())?)
+            })?;
+            write_output(set, folder.join("stabilization.png"), |p| {
+                Ok(write_png_with(p, |tmp| stabilization_png(&plot, tmp))?)
+            })?;
+            Some(svg)
+        }
+        None => None,
+    })
+}
+
 /// Figures and report of `found` into `folder` of `set`: `singular_values`, `grid`,
 /// `pairs/pair_I_J`, `coherence` when `source` carries it (SVG and PNG) and
 /// `report.html`, in the units and with the collocation `source` gives.
@@ -189,34 +226,7 @@ pub fn write_all(
         "singular_values",
         &singular_value_figure(singular_values, states),
     )?;
-    let stabilization_svg = match &found.stabilization {
-        Some(st) => {
-            let physical: Vec<f64> = found
-                .modal
-                .modes
-                .iter()
-                .zip(&found.quality)
-                .filter(|(_, q)| q.physical)
-                .map(|(m, _)| m.frequency_hz)
-                .collect();
-            let plot = StabilizationPlot::new(
-                &format!("Stabilization diagram, orders {}", st.range),
-                st,
-                (0.0, found.band_hz.1),
-                measured.frequency_hz(),
-                physical,
-            );
-            let svg = stabilization_svg(&plot)?;
-            write_output(set, folder.join("stabilization.svg"), |p| {
-                Ok(write_atomic(p, svg.as_bytes())?)
-            })?;
-            write_output(set, folder.join("stabilization.png"), |p| {
-                Ok(write_png_with(p, |tmp| stabilization_png(&plot, tmp))?)
-            })?;
-            Some(svg)
-        }
-        None => None,
-    };
+    let stabilization_svg = write_stabilization(set, folder, found)?;
     let view = frf_view(
         &source.units,
         source.quantity,
@@ -251,7 +261,8 @@ pub fn write_all(
         found,
         singular_values_svg: &sv_svg,
         stabilization_svg: stabilization_svg.as_deref(),
-        grid_svg: &grid_svg,
+        sections: &[],
+        grid_svg: Some(&grid_svg),
         overlays: &overlays,
     });
     write_output(set, folder.join("report.html"), |p| {

@@ -7,6 +7,7 @@ pub mod estimate;
 pub mod figures;
 pub mod geometry;
 pub mod identification;
+pub mod oma;
 pub mod progress;
 pub mod report;
 

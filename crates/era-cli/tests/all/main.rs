@@ -15,6 +15,7 @@ mod hostile_outputs;
 mod hostile_params;
 mod messages_cli;
 mod okid_cli;
+mod oma_cli;
 mod refine_cli;
 mod report_cli;
 mod signals;

@@ -188,9 +188,13 @@ pub fn oma_observed(
     }
     let clock = Instant::now();
     Stage::Markov.enter(observer)?;
+    let references = options
+        .references
+        .as_ref()
+        .map_or_else(|| records.first().map_or(0, |r| r.len()), Vec::len);
     let lags = match options.lags {
         Some(l) => l,
-        None => crate::sources::correlation::default_lags(records, fs)?,
+        None => crate::sources::correlation::default_lags(records, fs, references)?,
     };
     // A short record takes fewer blocks: each must hold twice the lags.
     let samples: usize = records
@@ -222,10 +226,11 @@ pub fn oma_observed(
     }
     // A fixed order's Hankel is the thesis Hankel of that order (`states × factor`
     // samples): the factor is raised until it spans half the lags, as a scan's does.
-    if let Some(n) = era.order.states() {
-        if n > 0 {
-            era.hankel_factor = era.hankel_factor.max(lags.div_ceil(2 * n));
-        }
+    // A scan's Hankel of every supported sample must have room for its states: with few
+    // references its columns are few, and the factor is raised until they suffice.
+    match era.order.states() {
+        Some(n) if n > 0 => era.hankel_factor = era.hankel_factor.max(lags.div_ceil(2 * n)),
+        _ => era.hankel_factor = scan_factor(era.hankel_factor, lags, corr.references.len()),
     }
     era.realizer = match options.method {
         OmaMethod::SsiCov => Realizer::Shift,
@@ -254,6 +259,21 @@ pub fn oma_observed(
         correlation_seconds,
         uncertainty_seconds: clock.elapsed().as_secs_f64(),
     })
+}
+
+/// The least Hankel factor from `factor` up whose scan Hankel (every supported sample of
+/// `lags`) has at least as many columns as the states it is factored for, with
+/// `references` inputs: one reference needs 3, two need 2, more need 1.
+fn scan_factor(factor: usize, lags: usize, references: usize) -> usize {
+    let mut lh = factor.max(1);
+    while lh < 8 {
+        let states = super::supported_hankel_states(lags, lh);
+        match crate::pipeline::hankel::ThesisHankel::new(states.max(2), lh) {
+            Ok(t) if t.h0.block_cols * references >= states => break,
+            _ => lh += 1,
+        }
+    }
+    lh
 }
 
 /// Each mode's standard deviations into its quality, and the modes the data do not pin

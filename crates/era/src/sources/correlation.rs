@@ -503,21 +503,31 @@ pub const DEFAULT_HANKEL_ROWS: usize = 2048;
 /// (more lags add the noise of the long lags: on simulated 600 s records, 256 lags
 /// found fewer modes with worse damping than 128), rounded up to an even number; no more than keeps the Hankel within
 /// [`DEFAULT_HANKEL_ROWS`] rows (a quarter of the lags in block rows, times the outputs)
-/// unless that is below [`MIN_DEFAULT_LAGS`]; and at most a tenth of the longest record
-/// (the correlations' variance grows with the lag). Without a clear peak, the lowest frequency is
+/// unless that is below [`MIN_DEFAULT_LAGS`]; with one or two `references`, the least
+/// lags times `3/references` (the Hankel's columns, a quarter of the lags times the
+/// references, must leave the scan room for a few dozen states); and at most a tenth of the
+/// longest record (the correlations' variance grows with the lag). Without a clear peak, the lowest frequency is
 /// taken as 1 % of the sample rate.
 ///
 /// # Errors
 /// As [`correlations`]' checks of the records.
-pub fn default_lags(records: &[&[&[f64]]], sample_rate_hz: f64) -> Result<usize> {
+pub fn default_lags(
+    records: &[&[&[f64]]],
+    sample_rate_hz: f64,
+    references: usize,
+) -> Result<usize> {
     let q = check_records(records)?;
     let longest = records.iter().map(|r| r[0].len()).max().unwrap_or(0);
     let lowest = lowest_peak_hz(records, sample_rate_hz).unwrap_or(0.01 * sample_rate_hz);
     let wanted = (2.0 * sample_rate_hz / lowest).ceil() as usize;
+    // The Hankel's columns are a quarter of the lags times the references: few
+    // references need more lags for the scan's states to have room.
+    let for_room = MIN_DEFAULT_LAGS * 3 / references.clamp(1, 3);
     let by_rows = 4 * DEFAULT_HANKEL_ROWS / q;
     let lags = wanted
         .min(by_rows)
         .max(MIN_DEFAULT_LAGS)
+        .max(for_room)
         .min(longest / 10)
         .next_multiple_of(2);
     Ok(lags.max(2))

@@ -232,3 +232,28 @@ fn oma_follows_a_fleets_drift_and_damage() {
         }
     }
 }
+
+/// Few references make a narrow Hankel: the automatic order still runs (its Hankel
+/// factor is raised until the columns have room), with one reference and with two.
+#[test]
+fn few_references_run_at_the_automatic_order() {
+    let rec = record(12, 300.0);
+    let outputs: Vec<&[f64]> = rec.outputs.iter().map(Vec::as_slice).collect();
+    for refs in [vec![0], vec![2, 6]] {
+        let mut options = OmaOptions::new(64.0);
+        options.references = Some(refs.clone());
+        let found = oma(&[outputs.as_slice()], &options)
+            .unwrap_or_else(|e| panic!("references {refs:?}: {e}"));
+        let physical = found
+            .identification
+            .quality
+            .iter()
+            .filter(|q| q.physical)
+            .count();
+        assert!(
+            physical >= 3,
+            "references {refs:?}: {physical} physical modes"
+        );
+        assert_eq!(found.references, refs);
+    }
+}
