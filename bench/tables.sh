@@ -4,7 +4,8 @@
 # the date, the machine, its load and the commit. docs/src/performance.md includes them.
 #
 #   bench/tables.sh NAME [NAME ...]     # the tables named
-#   bench/tables.sh all                 # every table (about 25 minutes on 2 cores)
+#   bench/tables.sh all                 # every table (about 50 minutes on 2 cores;
+#                                       # oma_peers alone takes about 25)
 #   bench/tables.sh --list              # the names and their commands
 #
 # A benchmark prints markdown: the wrapper keeps its table rows (lines that begin with
@@ -17,7 +18,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out_dir=docs/src/perf
-all_names="thesis_peers hankel_peers cost_model partial_svd auto_order auto_peers okid okid_peers oma stages read refine python"
+all_names="thesis_peers hankel_peers cost_model partial_svd auto_order auto_peers okid okid_peers oma oma_peers stages read refine python"
 
 command_of() {
   case $1 in
@@ -30,6 +31,7 @@ command_of() {
     okid) echo "cargo bench -q -p era --bench okid && python3 bench/criterion_table.py okid" ;;
     okid_peers) echo "bash bench/okid_peers.sh" ;;
     oma) echo "cargo bench -q -p era --bench oma && python3 bench/criterion_table.py oma" ;;
+    oma_peers) echo "bash bench/oma_peers.sh" ;;
     stages) echo "cargo bench -q -p era --bench stages && python3 bench/criterion_table.py dta_8x8_ns80_lh5 tsvd_dta_1592" ;;
     read) echo "cargo bench -q -p era-io --bench read && python3 bench/criterion_table.py read_dta_8x8_801" ;;
     refine) echo "cargo bench -q -p era --bench refine && python3 bench/criterion_table.py refine_dta_8x8_40modes_801lines refine_2x2_4modes_401lines refine_dta_from_era_auto" ;;

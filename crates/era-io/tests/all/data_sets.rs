@@ -6,7 +6,7 @@ use crate::common;
 use common::data_file;
 
 /// (folder, licence's first line, data files)
-const SETS: [(&str, &str, &[&str]); 4] = [
+const SETS: [(&str, &str, &[&str]); 5] = [
     (
         "daisy-steel-subframe",
         "BSD 3-Clause License",
@@ -32,6 +32,18 @@ const SETS: [(&str, &str, &[&str]); 4] = [
         "pyuff-artemis-geometry",
         "MIT License",
         &["artemis_geometry_rpbc.uff"],
+    ),
+    (
+        "koma-shear-frame",
+        "MIT License",
+        &[
+            "data_shearframe.npy",
+            "omega_n.npy",
+            "xi_ref.npy",
+            "phi_ref.npy",
+            "shear_frame.csv",
+            "reference.json",
+        ],
     ),
 ];
 
