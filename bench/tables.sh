@@ -31,7 +31,7 @@ command_of() {
     okid) echo "cargo bench -q -p era --bench okid && python3 bench/criterion_table.py okid" ;;
     okid_peers) echo "bash bench/okid_peers.sh" ;;
     oma) echo "cargo bench -q -p era --bench oma && python3 bench/criterion_table.py oma" ;;
-    oma_peers) echo "bash bench/oma_peers.sh" ;;
+    oma_peers) echo "bash bench/oma_peers.sh --no-unc" ;;
     stages) echo "cargo bench -q -p era --bench stages && python3 bench/criterion_table.py dta_8x8_ns80_lh5 tsvd_dta_1592" ;;
     read) echo "cargo bench -q -p era-io --bench read && python3 bench/criterion_table.py read_dta_8x8_801" ;;
     refine) echo "cargo bench -q -p era --bench refine && python3 bench/criterion_table.py refine_dta_8x8_40modes_801lines refine_2x2_4modes_401lines refine_dta_from_era_auto" ;;
