@@ -154,19 +154,7 @@ pub fn oma_table(o: &Oma) -> String {
     let mut reasons = Vec::new();
     for (k, m) in found.modal.modes.iter().enumerate() {
         let q = found.quality.get(k);
-        let physical = match q {
-            Some(q) if q.physical => "yes",
-            Some(q) => {
-                reasons.push(format!(
-                    "  mode {} ({:.4} Hz): {}",
-                    k + 1,
-                    m.frequency_hz,
-                    q.reason.as_deref().unwrap_or("suspect")
-                ));
-                "no"
-            }
-            None => "-",
-        };
+        let physical = super::report::verdict(k, m, q, &mut reasons, ("yes", "no", "-"));
         let _ = writeln!(
             s,
             "{:>5} {:>12.4} {} {:>10.4} {} {:>6}  {physical}",

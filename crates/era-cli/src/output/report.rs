@@ -84,19 +84,7 @@ pub fn mode_table(found: &Identification) -> String {
     let mut reasons = Vec::new();
     for (k, m) in found.modal.modes.iter().enumerate() {
         let q = found.quality.get(k);
-        let mark = match q {
-            Some(q) if q.physical => "yes",
-            Some(q) => {
-                reasons.push(format!(
-                    "  mode {} ({:.4} Hz): {}",
-                    k + 1,
-                    m.frequency_hz,
-                    q.reason.as_deref().unwrap_or("suspect")
-                ));
-                "?"
-            }
-            None => "",
-        };
+        let mark = verdict(k, m, q, &mut reasons, ("yes", "?", ""));
         let i = q.map(|q| q.indicators);
         let (f_std, z_std) = if refined {
             (
@@ -434,5 +422,29 @@ pub fn svd_path_line(r: &era::pipeline::realize::Realization) -> String {
             it
         ),
         None => format!("  hankel_svd path: {}\n", r.svd_path.name()),
+    }
+}
+
+/// A mode's mark in a modal table: `marks.0` when physical, `marks.1` (and its reason,
+/// a line in `reasons`) when not, `marks.2` without a judgement.
+pub(crate) fn verdict(
+    k: usize,
+    m: &era::pipeline::modes::Mode,
+    q: Option<&era::identification::ModeQuality>,
+    reasons: &mut Vec<String>,
+    marks: (&'static str, &'static str, &'static str),
+) -> &'static str {
+    match q {
+        Some(q) if q.physical => marks.0,
+        Some(q) => {
+            reasons.push(format!(
+                "  mode {} ({:.4} Hz): {}",
+                k + 1,
+                m.frequency_hz,
+                q.reason.as_deref().unwrap_or("suspect")
+            ));
+            marks.1
+        }
+        None => marks.2,
     }
 }
