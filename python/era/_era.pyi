@@ -181,7 +181,7 @@ def oma(
     method: Literal["ssi-cov", "next-era"] = "ssi-cov",
     states: Union[int, Literal["auto"]] = "auto",
     time_lags: Optional[int] = None,
-    blocks: int = 12,
+    blocks: int = 6,
     threads: Optional[int] = None,
 ) -> Identification: ...
 def friction_estimate(

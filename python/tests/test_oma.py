@@ -35,7 +35,7 @@ def test_the_modes_of_responses_alone_with_their_spread(era_cli, tmp_path):
     facts = found.oma
     assert facts["method"] == "ssi-cov" and facts["shapes"] == "unscaled"
     assert facts["references"] == list(range(8)) and facts["outputs"] == list(range(8))
-    assert facts["samples"] == data.shape[1] and facts["blocks"] == 12
+    assert facts["samples"] == data.shape[1] and facts["blocks"] == 6  # the default
     assert len(facts["shape_std"]) == len(found.modes)
     # The other identifications have no such facts.
     assert era.identify(era.simulate_truth_model(), states=8).oma is None

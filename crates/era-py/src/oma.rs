@@ -30,7 +30,7 @@ use pyo3::prelude::*;
 #[pyo3(
     name = "oma",
     signature = (data, sample_rate_hz, outputs=None, references=None, method="ssi-cov", states=None, time_lags=None, blocks=None, threads=None),
-    text_signature = "(data, sample_rate_hz, outputs=None, references=None, method='ssi-cov', states='auto', time_lags=None, blocks=12, threads=None)"
+    text_signature = "(data, sample_rate_hz, outputs=None, references=None, method='ssi-cov', states='auto', time_lags=None, blocks=6, threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub fn oma_py(
