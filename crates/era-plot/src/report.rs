@@ -134,7 +134,7 @@ fn input_html(s: &InputSection) -> String {
         h.push_str("</ul>\n");
     }
     if s.channels.is_empty() {
-        h.push_str("<p id=\"channel-table\">The file has no channel table: outputs and inputs are known by their index only, and collocation is by index (output i with input i).</p>\n");
+        h.push_str("<p id=\"channel-table\">The file has no channel table: the channels are known by their index only (with inputs, collocation is by index: output i with input i).</p>\n");
     } else {
         // A long table folds away (still in the page, one click to open).
         let _ = writeln!(
@@ -354,7 +354,7 @@ table.matrix td{{font-size:.85em}} table.matrix small{{color:#666}} figure.wide{
     if let (Some(svg), Some(st)) = (input.stabilization_svg, f.stabilization.as_ref()) {
         let _ = write!(
             h,
-            "<h2 id=\"stabilization\">Stabilization diagram</h2>\n<p>Every pole of the models of orders {} (all from one SVD of H0, {} × {}), against frequency. A pole is <em>new</em> (grey ×), or agrees with the previous order in frequency (blue ○), in frequency and damping (orange ▲), or in frequency, damping and shape (green ●). Physical modes stand as vertical columns of green; the dashed red lines are the modes judged physical. The grey curves are the CMIF, the singular values of the FRF matrix at each line (right axis): its peaks are the modes, and two curves peaking together are close modes.</p>\n<p>Rule: {}.{}</p>\n<figure class=\"plot\" id=\"fig-stabilization\">{}</figure>\n",
+            "<h2 id=\"stabilization\">Stabilization diagram</h2>\n<p>Every pole of the models of orders {} (all from one SVD of H0, {} × {}), against frequency. A pole is <em>new</em> (grey ×), or agrees with the previous order in frequency (blue ○), in frequency and damping (orange ▲), or in frequency, damping and shape (green ●). Physical modes stand as vertical columns of green; the dashed red lines are the modes judged physical. The grey curves are the CMIF, the singular values at each line of the FRF matrix the model is fitted to (for responses alone, the half spectrum of the output correlations; right axis): its peaks are the modes, and two curves peaking together are close modes.</p>\n<p>Rule: {}.{}</p>\n<figure class=\"plot\" id=\"fig-stabilization\">{}</figure>\n",
             escape(&st.range.to_string()),
             st.hankel_size.0,
             st.hankel_size.1,
