@@ -181,14 +181,8 @@ pub fn oma_observed(
             reason: "must be a positive number of samples per second".into(),
         });
     }
-    let e = &options.era;
-    if e.integrations != 0 || e.pad_to != 0 || e.zero_lines != 0 {
-        return Err(EraError::InvalidParameter {
-            name: "integrations",
-            value: format!("{}/{}/{}", e.integrations, e.pad_to, e.zero_lines),
-            reason: "output-only data has no FRFs to integrate, pad or zero".into(),
-        });
-    }
+    // Before the correlations: the pipeline would refuse it after them.
+    crate::pipeline::run::check_no_frf_shaping(&options.era)?;
     let clock = Instant::now();
     Stage::Markov.enter(observer)?;
     let references = options

@@ -164,6 +164,26 @@ pub(crate) fn front(
     Ok(Front { scale, markov })
 }
 
+/// [`EraError::InvalidParameter`] naming the first of `options`' FRF preprocessing
+/// (integrations, padding, zeroed lines) that is not 0: it shapes the FRFs' inverse
+/// transform, which a sequence from another source (OKID, output correlations) skips.
+pub(crate) fn check_no_frf_shaping(options: &EraOptions) -> Result<()> {
+    for (key, value) in [
+        ("integrations", options.integrations),
+        ("pad_to", options.pad_to),
+        ("zero_lines", options.zero_lines),
+    ] {
+        if value != 0 {
+            return Err(EraError::InvalidParameter {
+                name: key,
+                value: value.to_string(),
+                reason: "it shapes the FRFs' inverse transform, and these Markov parameters come from elsewhere (OKID, output correlations): leave it at 0".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The front of the pipeline on supplied Markov parameters: checked against the FRFs'
 /// shape, low-pass filtered when asked, at the FRFs' magnitude scale.
 fn supplied_front(
@@ -193,19 +213,7 @@ fn supplied_front(
             });
         }
     }
-    for (key, value) in [
-        ("integrations", options.integrations),
-        ("pad_to", options.pad_to),
-        ("zero_lines", options.zero_lines),
-    ] {
-        if value != 0 {
-            return Err(EraError::InvalidParameter {
-                name: key,
-                value: value.to_string(),
-                reason: "it shapes the FRFs' inverse transform, and these Markov parameters come from elsewhere (OKID): leave it at 0".into(),
-            });
-        }
-    }
+    check_no_frf_shaping(options)?;
     let ts = markov.sample_time_s();
     if !(ts.is_finite() && ts > 0.0) {
         return Err(EraError::InvalidParameter {

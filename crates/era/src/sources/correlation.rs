@@ -542,15 +542,12 @@ pub fn default_lags(
 /// none or the records are shorter than a segment.
 pub fn lowest_peak_hz(records: &[&[&[f64]]], sample_rate_hz: f64) -> Option<f64> {
     let longest = records.iter().map(|r| r[0].len()).max()?;
-    let seg = (longest / 16).clamp(256, 8192);
-    let seg = 1usize << (usize::BITS - 1 - seg.leading_zeros());
+    let seg = spectrum::default_segment(longest);
     if longest < seg {
         return None;
     }
     let (r2c, _) = real_fft_plans(seg);
-    let window: Vec<f64> = (0..seg)
-        .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / seg as f64).cos())
-        .collect();
+    let window = crate::frf::estimate::Window::Hann.values(seg);
     let lines = seg / 2 + 1;
     let mut total = vec![0.0; lines];
     for record in records {

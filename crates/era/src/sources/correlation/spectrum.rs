@@ -87,9 +87,7 @@ pub fn output_spectrum(
         });
     }
     let (r2c, _) = real_fft_plans(seg);
-    let window: Vec<f64> = (0..seg)
-        .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / seg as f64).cos())
-        .collect();
+    let window = crate::frf::estimate::Window::Hann.values(seg);
     // g[i][j][line], i ≥ j (the lower triangle; the matrix is Hermitian).
     let mut g = vec![vec![vec![Complex64::new(0.0, 0.0); lines]; q]; q];
     let mut averages = 0;
