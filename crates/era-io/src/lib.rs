@@ -21,6 +21,7 @@
 pub mod atomic;
 pub mod csv;
 pub mod decay_csv;
+pub mod fleet;
 pub mod format;
 pub mod frf_file;
 pub mod geometry;
