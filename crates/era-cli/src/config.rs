@@ -717,6 +717,9 @@ pub enum Simulate {
     Experiment(Box<Experiment>),
     /// A shaker test in the time domain.
     Shaker(Box<Shaker>),
+    /// A fleet of output-only records (its flags are taken as they are; the command
+    /// checks them as it builds the core's spec).
+    Fleet(Box<crate::args::FleetArgs>),
 }
 
 impl From<&SimulateArgs> for Simulate {
@@ -728,6 +731,7 @@ impl From<&SimulateArgs> for Simulate {
                 Simulate::Experiment(Box::new(Experiment::from(e.as_ref())))
             }
             SimulateModel::Shaker(s) => Simulate::Shaker(Box::new(Shaker::from(s.as_ref()))),
+            SimulateModel::Fleet(f) => Simulate::Fleet(f.clone()),
         }
     }
 }
@@ -1420,6 +1424,42 @@ mod tests {
         match parsed(&argv) {
             crate::args::Command::Simulate(a) => a,
             _ => unreachable!(),
+        }
+    }
+}
+
+/// `era batch`'s settings.
+#[derive(Debug, Clone)]
+pub struct Batch {
+    /// The manifest.
+    pub manifest: PathBuf,
+    /// The tables' folder.
+    pub out: PathBuf,
+    /// `(I, N)`: every N-th record from the I-th (1-based).
+    pub shard: Option<(usize, usize)>,
+    /// Skip the records an earlier run finished.
+    pub resume: bool,
+    /// Records side by side.
+    pub jobs: usize,
+    /// Each record's model files in `out/records/<id>/`.
+    pub keep_models: bool,
+    /// Accept record files outside the manifest's folder.
+    pub allow_outside: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&crate::args::BatchArgs> for Batch {
+    fn from(a: &crate::args::BatchArgs) -> Self {
+        Batch {
+            manifest: a.manifest.clone(),
+            out: a.out.clone(),
+            shard: a.shard,
+            resume: a.resume,
+            jobs: a.jobs,
+            keep_models: a.keep_models,
+            allow_outside: a.allow_outside,
+            settings: (&a.common).into(),
         }
     }
 }

@@ -136,9 +136,10 @@ fn main() -> ExitCode {
     }));
     let run = || match &cli.command {
         args::Command::Demo(a) => commands::demo::run(&a.into()),
-        args::Command::Identify(a) => commands::identify::run(&config::Identify::new(a)?),
+        args::Command::Identify(a) => commands::identify::run(&config::Identify::new(a)?).map(drop),
         args::Command::Frf(a) => commands::frf::run(&a.into()),
-        args::Command::Oma(a) => commands::oma::run(&config::Oma::new(a)?),
+        args::Command::Oma(a) => commands::oma::run(&config::Oma::new(a)?).map(drop),
+        args::Command::Batch(a) => commands::batch::run(&a.into()),
         args::Command::Simulate(a) => commands::simulate::run(&a.into()),
         args::Command::Friction(a) => commands::friction::run(&a.into()),
         args::Command::Plot(a) => commands::plot::run(&a.into()),

@@ -2,6 +2,7 @@
 //! [`common`]. Nothing here reads, computes or writes: flags follow docs/src/design.md §1's
 //! table, and [`crate::config`] turns them into typed settings.
 
+mod batch;
 mod common;
 mod compare;
 mod demo;
@@ -16,6 +17,7 @@ mod plot;
 mod refine;
 mod simulate;
 
+pub use batch::*;
 pub use common::*;
 pub use compare::*;
 pub use demo::*;
@@ -77,6 +79,10 @@ pub enum Command {
     /// Compare two FRF sets of one structure: overlays, differences by band, and the
     /// modes and fits of their models (given or identified).
     Compare(Box<CompareArgs>),
+    /// Identify every record of a manifest (a fleet of monitoring records, the runs of a
+    /// test campaign) with one verb and its flags: one Parquet table of modes, one line
+    /// per record, failures as rows; shards and resumes.
+    Batch(BatchArgs),
     /// Refine a model identified earlier (model.json) against its FRF file: poles,
     /// residues and residual terms by maximum likelihood, with uncertainties.
     Refine(RefineArgs),

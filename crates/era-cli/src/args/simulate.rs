@@ -49,6 +49,11 @@ pub enum SimulateModel {
     /// its responses sampled with sensor noise. Writes a time-history CSV that
     /// `era frf` and `era identify --from-time` read, and the truth as JSON beside it.
     Shaker(Box<ShakerArgs>),
+    /// A fleet of output-only records of one monitored structure, one every interval:
+    /// its frequencies drift with temperature, drop after a chosen damage, and some
+    /// records miss channels. Writes the records, a manifest for `era batch` and the
+    /// truth.
+    Fleet(Box<FleetArgs>),
 }
 
 /// `era simulate shaker`.
@@ -161,4 +166,66 @@ pub struct ModalArgs {
     pub collocated: bool,
     #[command(flatten)]
     pub sim: SimulateCommon,
+}
+
+/// `era simulate fleet`.
+#[derive(Debug, Args, Clone)]
+pub struct FleetArgs {
+    /// Output channels of the structure.
+    #[arg(long, default_value_t = 8)]
+    pub outputs: usize,
+    /// Unmeasured random forces driving it (its ambient load).
+    #[arg(long, default_value_t = 2)]
+    pub forces: usize,
+    /// Number of modes.
+    #[arg(long, default_value_t = 6)]
+    pub modes: usize,
+    /// Lowest natural frequency, Hz.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub fmin: f64,
+    /// Highest natural frequency, Hz.
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    pub fmax: f64,
+    /// Damping ratio range MIN..MAX, fractions.
+    #[arg(long, default_value = "0.005..0.02")]
+    pub damping: String,
+    /// Records in the fleet.
+    #[arg(long, default_value_t = 12)]
+    pub records: usize,
+    /// Length of each record, s.
+    #[arg(long, default_value_t = 600.0, allow_negative_numbers = true)]
+    pub record_length: f64,
+    /// Time from one record's start to the next's, s.
+    #[arg(long, default_value_t = 3600.0, allow_negative_numbers = true)]
+    pub interval: f64,
+    /// Sample rate, Hz.
+    #[arg(long, default_value_t = 64.0, allow_negative_numbers = true)]
+    pub sample_rate: f64,
+    /// Sensor noise RMS as a fraction of each channel's RMS.
+    #[arg(long, default_value_t = 0.02, allow_negative_numbers = true)]
+    pub noise: f64,
+    /// Relative fall of every frequency over the fleet from a warming trend (0.02 = 2 %).
+    #[arg(long, default_value_t = 0.02, allow_negative_numbers = true)]
+    pub drift: f64,
+    /// Amplitude of the daily temperature cycle, °C.
+    #[arg(long, default_value_t = 3.0, allow_negative_numbers = true)]
+    pub daily: f64,
+    /// Damage: from record R (1-based) on, a stiffness loss LOSS (a fraction), R:LOSS.
+    #[arg(long, value_name = "R:LOSS")]
+    pub damage: Option<String>,
+    /// Probability that a record lacks a given channel.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub missing: f64,
+    /// Start of the first record, RFC 3339.
+    #[arg(long, default_value = "2026-01-01T00:00:00Z")]
+    pub start: String,
+    /// Seed of the structure, the loads and the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Folder to write: records/NAME.csv, fleet.toml (a manifest for era batch) and
+    /// truth.json (each record's exact modes and temperature).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub common: CommonArgs,
 }

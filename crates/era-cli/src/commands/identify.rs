@@ -45,7 +45,7 @@ impl Observed {
     }
 }
 
-pub fn run(a: &Identify) -> anyhow::Result<()> {
+pub fn run(a: &Identify) -> anyhow::Result<super::Done> {
     let settings = a.settings;
     let human = Human::new(&settings);
     let mut opts = a.options.clone();
@@ -75,6 +75,7 @@ pub fn run(a: &Identify) -> anyhow::Result<()> {
     apply_route(&mut opts, &route);
     correct_window(a, &route, &mut input, &human)?;
     let frf = &input.file.frf;
+    let names: Vec<String> = (1..=frf.outputs()).map(|o| o.to_string()).collect();
     if route.refine {
         crate::commands::refine::check_shape(&refine_options, frf)?;
     }
@@ -172,7 +173,10 @@ pub fn run(a: &Identify) -> anyhow::Result<()> {
     if settings.json {
         print_json(&model)?;
     }
-    Ok(())
+    Ok(super::Done {
+        json: serde_json::to_value(&model)?,
+        channels: names,
+    })
 }
 
 /// The summary of the identification, the fit per pair and the scan.

@@ -53,6 +53,13 @@ fn read_records(a: &Oma, spinner: &indicatif::ProgressBar) -> anyhow::Result<Rec
                     rate_from,
                     format: history.format.name().to_string(),
                     labels: columns.iter().map(|&c| label(c)).collect(),
+                    names: columns
+                        .iter()
+                        .map(|&c| match &history.names {
+                            Some(n) => n[c].clone(),
+                            None => (c + 1).to_string(),
+                        })
+                        .collect(),
                     columns,
                     references,
                 });
@@ -190,7 +197,7 @@ fn flagged(e: era::EraError, a: &Oma) -> anyhow::Error {
 }
 
 /// `era oma`.
-pub fn run(a: &Oma) -> anyhow::Result<()> {
+pub fn run(a: &Oma) -> anyhow::Result<super::Done> {
     let settings = a.settings;
     let human = Human::new(&settings);
     let mut outputs = match &a.out {
@@ -269,7 +276,10 @@ pub fn run(a: &Oma) -> anyhow::Result<()> {
     if settings.json {
         print_json(&json)?;
     }
-    Ok(())
+    Ok(super::Done {
+        json,
+        channels: records.names.clone(),
+    })
 }
 
 /// The paths, space-joined.

@@ -145,6 +145,7 @@ pub fn run(a: &Simulate) -> anyhow::Result<()> {
         Simulate::Modal(m) => modal(m),
         Simulate::Experiment(e) => super::experiment::run(e),
         Simulate::Shaker(s) => shaker(s),
+        Simulate::Fleet(f) => super::fleet::run(f),
     }
 }
 

@@ -32,6 +32,8 @@ pub struct Records {
     pub columns: Vec<usize>,
     /// Each output's label, `3 (y1)`.
     pub labels: Vec<String>,
+    /// Each output's name in the file (`y1`), or its 1-based column number.
+    pub names: Vec<String>,
     /// The references, 0-based among the outputs, when given.
     pub references: Option<Vec<usize>>,
 }

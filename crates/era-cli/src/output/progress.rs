@@ -34,3 +34,17 @@ pub fn bar(settings: &Settings, len: u64, message: &str) -> ProgressBar {
     bar.set_message(message.to_string());
     bar
 }
+
+/// A bar over a batch's records: done, failed (the message) and the time left.
+pub fn records_bar(settings: &Settings, len: u64) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(len), target(settings));
+    bar.set_style(
+        ProgressStyle::with_template(
+            "records {bar:30} {pos}/{len}, {msg} [{elapsed} elapsed, {eta} left]",
+        )
+        .expect("static template"),
+    );
+    bar.set_message("0 failed");
+    bar.enable_steady_tick(Duration::from_millis(250));
+    bar
+}
