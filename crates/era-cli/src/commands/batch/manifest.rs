@@ -316,11 +316,19 @@ mod tests {
 
     #[test]
     fn a_manifest_is_read_and_every_problem_names_its_line() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("a.csv"), "x").unwrap();
-        std::fs::write(dir.path().join("b.csv"), "x").unwrap();
+        let root = tempfile::tempdir().unwrap();
+        let dir = root.path().join("sub");
+        std::fs::create_dir(&dir).unwrap();
+        // `../a.csv` exists, outside the manifest's folder.
+        for f in [
+            root.path().join("a.csv"),
+            dir.join("a.csv"),
+            dir.join("b.csv"),
+        ] {
+            std::fs::write(f, "x").unwrap();
+        }
         let good = "verb = \"oma\"\nargs = [\"--outputs\", \"1-3\"]\n\n[[record]]\nid = \"a\"\npath = \"a.csv\"\ntime = 2026-05-01T10:00:00Z\n\n[[record]]\nid = \"b\"\npath = [\"a.csv\", \"b.csv\"]\n";
-        let m = manifest(dir.path(), good).unwrap();
+        let m = manifest(&dir, good).unwrap();
         assert_eq!(m.records.len(), 2);
         assert_eq!(m.records[1].files.len(), 2);
         assert_eq!(m.records[0].args, ["--outputs", "1-3"]);
@@ -350,7 +358,11 @@ mod tests {
                 "line 7",
                 "RFC 3339",
             ),
-            (good.replace("args =", "args = ["), "line 2", ""),
+            (
+                good.replace("\"--outputs\",", "\"--outputs\""),
+                "line 2",
+                "comma",
+            ),
             (
                 good.replace("path = \"a.csv\"", "pth = \"a.csv\""),
                 "line",
@@ -358,7 +370,7 @@ mod tests {
             ),
         ];
         for (text, line, word) in cases {
-            let e = format!("{:#}", manifest(dir.path(), &text).unwrap_err());
+            let e = format!("{:#}", manifest(&dir, &text).unwrap_err());
             assert!(e.contains(line) && e.contains(word), "{e}\n---\n{text}");
             assert!(e.contains("m.toml"), "{e}");
         }
