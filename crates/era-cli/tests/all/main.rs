@@ -2,6 +2,7 @@
 //! `common` holds the helpers (the era binary, data files, the hostile-input watchdog).
 
 mod auto_order;
+mod batch_cli;
 mod browser;
 mod cli;
 mod common;

@@ -121,7 +121,18 @@ pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
         let line = e.span().map(|s| line_of(&text, s.start));
         let message = e.message().trim().to_string();
         UsageError(match line {
-            Some(l) => format!("{}: line {l}: {message}", path.display()),
+            Some(l) => {
+                // The line itself, so a type error says which key it is about.
+                let quoted: String = text
+                    .lines()
+                    .nth(l - 1)
+                    .unwrap_or_default()
+                    .trim()
+                    .chars()
+                    .take(80)
+                    .collect();
+                format!("{}: line {l} ({:?}): {message}", path.display(), quoted)
+            }
             None => format!("{}: {message}", path.display()),
         })
     })?;
