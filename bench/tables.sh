@@ -18,7 +18,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out_dir=docs/src/perf
-all_names="thesis_peers hankel_peers cost_model partial_svd auto_order auto_peers okid okid_peers oma oma_peers stages read refine python"
+all_names="thesis_peers hankel_peers cost_model partial_svd auto_order auto_peers okid okid_peers oma oma_peers batch stages read refine python"
 
 command_of() {
   case $1 in
@@ -32,6 +32,7 @@ command_of() {
     okid_peers) echo "bash bench/okid_peers.sh" ;;
     oma) echo "cargo bench -q -p era --bench oma && python3 bench/criterion_table.py oma" ;;
     oma_peers) echo "bash bench/oma_peers.sh --no-unc" ;;
+    batch) echo "bash bench/batch.sh" ;;
     stages) echo "cargo bench -q -p era --bench stages && python3 bench/criterion_table.py dta_8x8_ns80_lh5 tsvd_dta_1592" ;;
     read) echo "cargo bench -q -p era-io --bench read && python3 bench/criterion_table.py read_dta_8x8_801" ;;
     refine) echo "cargo bench -q -p era --bench refine && python3 bench/criterion_table.py refine_dta_8x8_40modes_801lines refine_2x2_4modes_401lines refine_dta_from_era_auto" ;;
