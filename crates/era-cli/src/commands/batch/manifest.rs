@@ -11,8 +11,16 @@ use toml::Spanned;
 /// The verbs a batch runs.
 pub const VERBS: [&str; 2] = ["identify", "oma"];
 
-/// The most records a manifest may list.
-pub const MAX_RECORDS: usize = 10_000_000;
+/// The most records a manifest may list (a larger fleet is several manifests: each
+/// record costs about 2 kB while the manifest is checked).
+pub const MAX_RECORDS: usize = 1_000_000;
+
+/// The largest manifest read: about a million records.
+pub const MANIFEST_BYTES: era::limits::Limit = era::limits::Limit {
+    what: "bytes of a batch manifest",
+    default: 64 << 20,
+    env: "ERA_MAX_MANIFEST_BYTES",
+};
 
 /// The longest record id (it names a folder with `--keep-models`).
 const MAX_ID: usize = 200;
@@ -89,19 +97,37 @@ pub struct Manifest {
     pub records: Vec<Record>,
 }
 
-/// The 1-based line of byte `offset` in `text`.
-fn line_of(text: &str, offset: usize) -> usize {
-    text.as_bytes()[..offset.min(text.len())]
+/// The newlines of a text, to find the line of a byte offset by bisection (a manifest of
+/// a million records asks a million times).
+struct Lines(Vec<usize>);
+
+impl Lines {
+    fn new(text: &str) -> Self {
+        Lines(newlines(text.as_bytes()))
+    }
+
+    /// The 1-based line of byte `offset`.
+    fn of(&self, offset: usize) -> usize {
+        self.0.partition_point(|&n| n < offset) + 1
+    }
+}
+
+fn newlines(bytes: &[u8]) -> Vec<usize> {
+    bytes
         .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
+        .enumerate()
+        .filter_map(|(k, &b)| (b == b'\n').then_some(k))
+        .collect()
 }
 
 /// Reads and checks the manifest at `path`. `allow_outside` accepts record files
 /// outside the manifest's folder.
 pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
-    let bytes = era_io::input::read_input(path)?.into_vec();
+    let bytes = era_io::input::read_input_limited(path, MANIFEST_BYTES)?.into_vec();
+    MANIFEST_BYTES.check(
+        format!("{}: split the manifest", path.display()),
+        bytes.len() as u64,
+    )?;
     let text = String::from_utf8(bytes).map_err(|e| {
         UsageError(format!(
             "{}: not UTF-8 text (byte {}): a manifest is a TOML file",
@@ -109,6 +135,8 @@ pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
             e.utf8_error().valid_up_to() + 1
         ))
     })?;
+    let lines = Lines::new(&text);
+    let line_of = |_: &str, offset: usize| lines.of(offset);
     let at = |offset: usize, message: String| -> anyhow::Error {
         UsageError(format!(
             "{}: line {}: {message}",

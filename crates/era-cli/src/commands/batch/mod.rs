@@ -24,7 +24,7 @@ use crate::error::UsageError;
 use crate::output::{prepare_out_dir, write_output};
 use anyhow::Context as _;
 use era_io::fleet::ModeRow;
-use manifest::{Manifest, Record};
+use manifest::Record;
 use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -33,10 +33,9 @@ use std::time::Instant;
 /// The folder of the records' states, inside `--out`.
 pub const STATE_DIR: &str = ".era-batch";
 
-/// A record to run: its flags parsed as its verb's (and checked once already).
+/// A record to run.
 struct Planned {
     record: Record,
-    cli: crate::args::Cli,
     fingerprint: String,
 }
 
@@ -71,10 +70,28 @@ pub fn run(a: &Batch) -> anyhow::Result<()> {
         .filter(|(k, _)| a.shard.is_none_or(|(i, n)| k % n == i - 1))
         .map(|(_, r)| r)
         .collect();
-    let plans = chosen
+    // Each distinct list of flags is parsed once, as its verb's, before any work.
+    let mut checked = std::collections::HashSet::new();
+    for r in &chosen {
+        if checked.insert(&r.args) {
+            parse(&manifest.verb, r, a).map_err(|m| {
+                UsageError(format!(
+                    "{}: line {}: record {:?}: args of era {}: {m}",
+                    manifest.path.display(),
+                    r.args_line,
+                    r.id,
+                    manifest.verb
+                ))
+            })?;
+        }
+    }
+    let plans: Vec<Planned> = chosen
         .iter()
-        .map(|r| plan(&manifest, r, a))
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        .map(|r| Planned {
+            record: (*r).clone(),
+            fingerprint: fingerprint(&manifest.verb, &r.args, &r.files),
+        })
+        .collect();
     let mut set = prepare_out_dir(&a.out)?;
     let states = a.out.join(STATE_DIR);
     let earlier = prepare_states(&states, a.resume)?;
@@ -103,7 +120,7 @@ pub fn run(a: &Batch) -> anyhow::Result<()> {
     for &k in &done {
         outcomes[k] = Some(skipped(&earlier[&plans[k].record.id]));
     }
-    run_records(a, &plans, &todo, &states, &mut outcomes)?;
+    run_records(a, &manifest.verb, &plans, &todo, &states, &mut outcomes)?;
     let outcomes: Vec<Outcome> = outcomes
         .into_iter()
         .map(|o| o.expect("every record ran"))
@@ -127,10 +144,10 @@ pub fn run(a: &Batch) -> anyhow::Result<()> {
     )
 }
 
-/// Parses a record's flags as its verb's (with the files and, with `--keep-models`,
-/// its model folder): an unknown flag or a bad value names the manifest's line.
-fn plan(m: &Manifest, r: &Record, a: &Batch) -> anyhow::Result<Planned> {
-    let mut argv: Vec<std::ffi::OsString> = vec!["era".into(), m.verb.clone().into()];
+/// A record's flags parsed as its verb's (with the files and, with `--keep-models`, its
+/// model folder) and their values checked: what the verb's own run would refuse.
+fn parse(verb: &str, r: &Record, a: &Batch) -> Result<crate::args::Cli, String> {
+    let mut argv: Vec<std::ffi::OsString> = vec!["era".into(), verb.into()];
     argv.extend(r.files.iter().map(|f| f.clone().into_os_string()));
     argv.extend(r.args.iter().map(Into::into));
     if a.keep_models {
@@ -140,38 +157,18 @@ fn plan(m: &Manifest, r: &Record, a: &Batch) -> anyhow::Result<Planned> {
             argv.push("--no-figures".into());
         }
     }
-    let at = |message: String| -> anyhow::Error {
-        UsageError(format!(
-            "{}: line {}: record {:?}: {message}",
-            m.path.display(),
-            r.args_line,
-            r.id
-        ))
-        .into()
-    };
-    let cli = match <crate::args::Cli as clap::Parser>::try_parse_from(&argv) {
-        Ok(cli) => cli,
-        Err(e) => {
-            let text = e.render().to_string();
-            let first = text.lines().next().unwrap_or_default();
-            let first = first.strip_prefix("error: ").unwrap_or(first);
-            return Err(at(format!("args of era {}: {first}", m.verb)));
-        }
-    };
-    let flagged = |e: anyhow::Error| at(format!("args of era {}: {}", m.verb, crate::message(&e)));
-    // The values are checked now, before any record runs; each run checks them again.
-    match &cli.command {
-        crate::args::Command::Oma(x) => drop(crate::config::Oma::new(x).map_err(flagged)?),
-        crate::args::Command::Identify(x) => {
-            drop(crate::config::Identify::new(x).map_err(flagged)?);
-        }
+    let cli = <crate::args::Cli as clap::Parser>::try_parse_from(&argv).map_err(|e| {
+        let text = e.render().to_string();
+        let first = text.lines().next().unwrap_or_default();
+        first.strip_prefix("error: ").unwrap_or(first).to_string()
+    })?;
+    let checked = match &cli.command {
+        crate::args::Command::Oma(x) => crate::config::Oma::new(x).map(drop),
+        crate::args::Command::Identify(x) => crate::config::Identify::new(x).map(drop),
         _ => unreachable!("the manifest's verb is identify or oma"),
-    }
-    Ok(Planned {
-        record: r.clone(),
-        cli,
-        fingerprint: fingerprint(&m.verb, &r.args, &r.files),
-    })
+    };
+    checked.map_err(|e| crate::message(&e))?;
+    Ok(cli)
 }
 
 /// The verb, the flags and each file's path, size and modification time: what a
@@ -253,6 +250,7 @@ fn strings(v: &Value) -> Vec<String> {
 /// state as it finishes.
 fn run_records(
     a: &Batch,
+    verb: &str,
     plans: &[Planned],
     todo: &[usize],
     states: &Path,
@@ -271,7 +269,7 @@ fn run_records(
                 let work = || loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(&k) = todo.get(k) else { break };
-                    if send.send((k, run_one(&plans[k]))).is_err() {
+                    if send.send((k, run_one(&plans[k], verb, a))).is_err() {
                         break;
                     }
                 };
@@ -297,20 +295,23 @@ fn run_records(
 }
 
 /// One record through its verb, timed; any failure (a panic too) is its outcome.
-fn run_one(p: &Planned) -> Outcome {
+fn run_one(p: &Planned, verb: &str, a: &Batch) -> Outcome {
     let clock = Instant::now();
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &p.cli.command {
-        crate::args::Command::Oma(x) => {
-            let mut c = crate::config::Oma::new(x)?;
-            c.settings = Settings::silent();
-            super::oma::run(&c)
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let cli = parse(verb, &p.record, a).map_err(UsageError)?;
+        match &cli.command {
+            crate::args::Command::Oma(x) => {
+                let mut c = crate::config::Oma::new(x)?;
+                c.settings = Settings::silent();
+                super::oma::run(&c)
+            }
+            crate::args::Command::Identify(x) => {
+                let mut c = crate::config::Identify::new(x)?;
+                c.settings = Settings::silent();
+                super::identify::run(&c)
+            }
+            _ => unreachable!("the manifest's verb is identify or oma"),
         }
-        crate::args::Command::Identify(x) => {
-            let mut c = crate::config::Identify::new(x)?;
-            c.settings = Settings::silent();
-            super::identify::run(&c)
-        }
-        _ => unreachable!("the manifest's verb is identify or oma"),
     }));
     let seconds = clock.elapsed().as_secs_f64();
     match result {
