@@ -12,3 +12,4 @@ pub mod oma;
 pub mod plot;
 pub mod refine;
 pub mod simulate;
+pub mod track;

@@ -406,10 +406,8 @@ fn check(records: &[TrackRecord], o: &TrackOptions) -> Result<()> {
             return bad("time", r.id.clone(), "the record's time is not finite");
         }
         for (k, m) in r.modes.iter().enumerate() {
-            if !(m.frequency_hz.is_finite() && m.frequency_hz > 0.0)
-                || !m.damping_ratio.is_finite()
-                || m.shape.len() != m.channels.len()
-            {
+            let finite = m.frequency_hz.is_finite() && m.damping_ratio.is_finite();
+            if !(finite && m.frequency_hz > 0.0) || m.shape.len() != m.channels.len() {
                 return bad(
                     "modes",
                     format!("{} mode {}", r.id, k + 1),
@@ -559,7 +557,7 @@ pub fn trend(x: &[f64], y: &[f64], mean_y: f64) -> Option<Trend> {
     let mx = x.iter().sum::<f64>() / n as f64;
     let my = y.iter().sum::<f64>() / n as f64;
     let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
-    if sxx <= 0.0 || !(mean_y.abs() > 0.0) {
+    if sxx <= 0.0 || mean_y == 0.0 || !mean_y.is_finite() {
         return None;
     }
     let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();

@@ -245,7 +245,7 @@ fn random_fleet(n: usize, seed: u64) -> Vec<TrackRecord> {
     (0..n)
         .map(|i| TrackRecord {
             id: format!("r{i}"),
-            time_s: (seed % 2 == 0).then_some(600.0 * i as f64),
+            time_s: seed.is_multiple_of(2).then_some(600.0 * i as f64),
             modes: (0..4)
                 .filter(|_| g.next() > -0.5)
                 .collect::<Vec<usize>>()
