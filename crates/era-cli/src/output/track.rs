@@ -91,7 +91,7 @@ impl TrackRun<'_> {
         s
     }
 
-    /// The track's row for the table of record `r`'s mode `k`.
+    /// The rows of tracks.parquet, one per tracked mode, in time order.
     fn rows(&self) -> Vec<TrackRow> {
         let f = self.fleet;
         let t = self.tracking;

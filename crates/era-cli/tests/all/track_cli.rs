@@ -227,3 +227,45 @@ fn bad_folders_and_tables_are_named() {
     expect_input_error(&["track", s(&a), "--out", s(&out)], "records.jsonl: line 2");
     assert!(!out.join("tracks.parquet").exists());
 }
+
+#[test]
+fn without_times_the_trends_are_per_record_and_a_high_minimum_makes_every_track_sparse() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    std::fs::create_dir_all(&a).unwrap();
+    let rows: Vec<ModeRow> = fleet_rows()
+        .into_iter()
+        .map(|(mut r, _)| {
+            r.time_us = None;
+            r
+        })
+        .collect();
+    write_modes(&a.join("modes.parquet"), &rows).unwrap();
+    let out = dir.path().join("t");
+    let v = json_of(&[
+        "track",
+        s(&a),
+        "--out",
+        s(&out),
+        "--min-records",
+        "12",
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(v["trend_per"], "record");
+    assert!(v["origin"].is_null());
+    assert_eq!(v["options"]["min_records"], 12);
+    let tracks = v["tracks"].as_array().unwrap();
+    assert_eq!(tracks.len(), 6);
+    for t in tracks {
+        assert_eq!(t["sparse"], true);
+        // 2 % over 11 records, about -0.18 % per record.
+        let slope = t["trend"]["relative_slope"].as_f64().unwrap();
+        assert!((slope + 0.02 / 11.0).abs() < 0.2 * 0.02 / 11.0, "{slope}");
+    }
+    // Every track sparse: the figures draw them all rather than nothing.
+    let svg = std::fs::read_to_string(out.join("frequency.svg")).unwrap();
+    assert!(svg.contains("Track 6") && !svg.contains("no track"));
+    let table = era_io::tracks::read_tracks(&out.join("tracks.parquet")).unwrap();
+    assert!(table.iter().all(|r| r.sparse && r.time_us.is_none()));
+}
