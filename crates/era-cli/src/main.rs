@@ -147,6 +147,7 @@ fn main() -> ExitCode {
         args::Command::Convert(a) => commands::files::run_convert(&a.into()),
         args::Command::Compare(a) => commands::compare::run(&a.as_ref().into()),
         args::Command::Refine(a) => commands::refine::run(&config::Refine::new(a)?),
+        args::Command::Track(a) => commands::track::run(&config::Track::new(a)?),
     };
     // One thread setting for rayon and faer (era::parallel); a refused count is a usage
     // error like any flag's.

@@ -31,6 +31,7 @@ mod mat_check;
 pub mod model_json;
 pub mod text;
 pub mod time;
+pub mod tracks;
 pub mod uff;
 
 use std::path::PathBuf;

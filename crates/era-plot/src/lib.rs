@@ -1,7 +1,8 @@
 //! Figures for `era`: FRF overlays (thesis Figs. 5.1–5.11 and Appendices A–I) in the
 //! data's units with wrapped phase by default, the singular-value plot of the thesis's
 //! `cut` option, a q×p overview grid (wrapped when tall), coherence, and a
-//! self-contained HTML report that says what went in.
+//! self-contained HTML report that says what went in; and the tracks of a fleet's modes
+//! over time ([`track`]).
 //!
 //! Plotting stays out of the numeric core. A figure is first a [`Figure`]: panels with
 //! their series and axis ranges, computed from the data by pure functions that tests can
@@ -15,6 +16,7 @@ pub mod oma;
 pub mod render;
 pub mod report;
 pub mod stabilization;
+pub mod track;
 pub mod viewer;
 
 pub use figures::{

@@ -16,6 +16,7 @@ mod oma;
 mod plot;
 mod refine;
 mod simulate;
+mod track;
 
 pub use batch::*;
 pub use common::*;
@@ -31,6 +32,7 @@ pub use oma::*;
 pub use plot::*;
 pub use refine::*;
 pub use simulate::*;
+pub use track::*;
 
 use clap::{Parser, Subcommand};
 
@@ -86,4 +88,8 @@ pub enum Command {
     /// Refine a model identified earlier (model.json) against its FRF file: poles,
     /// residues and residual terms by maximum likelihood, with uncertainties.
     Refine(RefineArgs),
+    /// Follow the modes of a fleet of records over time: the modes.parquet of `era
+    /// batch` (any number of shards) clustered into tracks by frequency and MAC, with
+    /// each track's mean, spread and trend, figures and a report.
+    Track(TrackArgs),
 }

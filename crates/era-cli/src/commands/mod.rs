@@ -14,6 +14,7 @@ pub mod oma;
 pub mod plot;
 pub mod refine;
 pub mod simulate;
+pub mod track;
 
 /// What an identifying verb (`identify`, `oma`) hands back besides its files: the JSON
 /// it prints with `--json` and the name of each output channel (the entries of a shape),

@@ -20,4 +20,5 @@ mod oma_cli;
 mod refine_cli;
 mod report_cli;
 mod signals;
+mod track_cli;
 mod trust;

@@ -17,5 +17,6 @@ mod refine_quantity;
 mod round_trip;
 mod stabilization;
 mod thesis_equivalence;
+mod track;
 mod truth_model;
 mod welch_golden;
