@@ -244,8 +244,19 @@ pub fn read_modes(path: &Path) -> Result<Vec<ModeRow>, IoError> {
     // Read as every input is (a FIFO or a device is refused or bounded, not hung on).
     let bytes = bytes::Bytes::from(crate::input::read_input(path)?.into_vec());
     let failed = |e: &dyn std::fmt::Display| IoError::format(path, "", format!("parquet: {e}"));
-    let reader = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(bytes)
-        .map_err(|e| failed(&e))?
+    let builder = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(bytes)
+        .map_err(|e| failed(&e))?;
+    // The columns are checked up front, so an empty table of another kind is refused too.
+    for field in schema().fields() {
+        if builder.schema().field_with_name(field.name()).is_err() {
+            return Err(IoError::format(
+                path,
+                "",
+                format!("no column {}: not a modes table of era batch", field.name()),
+            ));
+        }
+    }
+    let reader = builder
         .with_batch_size(ROW_GROUP)
         .build()
         .map_err(|e| failed(&e))?;
@@ -363,6 +374,13 @@ mod tests {
         bad.channels.pop();
         let e = write_modes(&path, &[bad]).unwrap_err().to_string();
         assert!(e.contains("record a mode 1"), "{e}");
+        // A table of another kind, even an empty one, is refused by its columns.
+        let other = Arc::new(Schema::new(vec![Field::new("x", DataType::Float64, false)]));
+        let file = std::fs::File::create(&path).unwrap();
+        let w = parquet::arrow::ArrowWriter::try_new(file, other, None).unwrap();
+        w.close().unwrap();
+        let e = read_modes(&path).unwrap_err().to_string();
+        assert!(e.contains("no column record_id"), "{e}");
         std::fs::write(&path, b"not parquet").unwrap();
         let e = read_modes(&path).unwrap_err().to_string();
         assert!(e.contains("modes.parquet") && e.contains("parquet"), "{e}");
