@@ -52,6 +52,8 @@ pub struct TrackPlot {
     pub columns: usize,
     /// Size in pixels.
     pub size: (u32, u32),
+    /// The abscissa of a change, drawn as a dashed vertical line in every panel.
+    pub change: Option<f64>,
 }
 
 impl TrackPlot {
@@ -67,6 +69,7 @@ impl TrackPlot {
             panels,
             columns,
             size: (1200, 60 + 270 * rows),
+            change: None,
         }
     }
 
@@ -167,6 +170,17 @@ where
                 [x0, x1].map(|x| (x, a + b * x / k)),
                 TREND.stroke_width(2),
             ))
+            .map_err(err)?;
+    }
+    if let Some(c) = plot.change {
+        // A dashed vertical line: short strokes from the bottom to the top.
+        let (xc, dash) = (c * k, (y1 - y0) / 40.0);
+        let style = RGBColor(90, 90, 90).stroke_width(1);
+        chart
+            .draw_series((0..20).map(|j| {
+                let a = y0 + 2.0 * j as f64 * dash;
+                PathElement::new(vec![(xc, a), (xc, a + dash)], style)
+            }))
             .map_err(err)?;
     }
     // Error bars: a vertical stroke of ± one standard deviation with short caps.

@@ -88,7 +88,54 @@ impl TrackRun<'_> {
             t.tracks.len(),
             t.members.len()
         );
+        if let Some(line) = self.change_line() {
+            let _ = writeln!(s, "  {line}");
+        }
         s
+    }
+
+    /// The first record after the change's split: its id and time.
+    fn first_after(&self, split: f64) -> Option<(String, Option<i64>)> {
+        let t = self.tracking;
+        let m = t
+            .members
+            .iter()
+            .filter(|m| m.x > split)
+            .min_by(|a, b| a.x.total_cmp(&b.x))?;
+        let f = self.fleet;
+        Some((f.records[m.record].id.clone(), f.times_us[m.record]))
+    }
+
+    /// What the change test found, in a line.
+    pub fn change_line(&self) -> Option<String> {
+        let c = self.tracking.change.as_ref()?;
+        let (id, time) = self.first_after(c.split)?;
+        let when = time
+            .map(|us| format!(" ({})", era_io::fleet::format_time(us)))
+            .unwrap_or_default();
+        let steps: Vec<f64> = c
+            .steps
+            .iter()
+            .flatten()
+            .map(|s| 100.0 * s.relative)
+            .collect();
+        let lo = steps.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = steps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Some(if c.significant {
+            format!(
+                "a change from record {id}{when}: the frequencies step by {lo:+.2} to {hi:+.2} % beyond their trend (sum of t^2 {:.1} over {} tracks, above {:.1} at a 0.1 % false-alarm rate)",
+                c.score,
+                steps.len(),
+                c.threshold
+            )
+        } else {
+            format!(
+                "no change found: the largest step, from record {id}{when}, has a sum of t^2 of {:.1} over {} tracks, below {:.1} (0.1 % false-alarm rate)",
+                c.score,
+                steps.len(),
+                c.threshold
+            )
+        })
     }
 
     /// The rows of tracks.parquet, one per tracked mode, in time order.
@@ -190,6 +237,23 @@ pub fn tracks_json(run: &TrackRun) -> serde_json::Value {
             "min_records": t.min_records,
         },
         "tracks": tracks,
+        "change": t.change.as_ref().map(|c| {
+            let first = run.first_after(c.split);
+            json!({
+                "significant": c.significant,
+                "first_record": first.as_ref().map(|f| f.0.clone()),
+                "time": first.and_then(|f| f.1).map(era_io::fleet::format_time),
+                "split": c.split,
+                "score": c.score,
+                "threshold": c.threshold,
+                "steps": t.tracks.iter().zip(&c.steps).filter_map(|(k, st)| st.map(|st| json!({
+                    "track": k.id,
+                    "relative_step": st.relative,
+                    "step_hz": st.step_hz,
+                    "t": st.t,
+                }))).collect::<Vec<_>>(),
+            })
+        }),
     })
 }
 
@@ -277,7 +341,7 @@ pub fn write_track(
             "frequency",
             "Frequency of each track over time",
             "Natural frequency (Hz)",
-            format!("Each record's frequency of the track (dots) with ± one standard deviation where the identification estimated one (bars), and the least-squares trend (red line; its slope relative to the mean, % per {unit}, in the panel's title).{sparse_note}"),
+            format!("Each record's frequency of the track (dots) with ± one standard deviation where the identification estimated one (bars), and the least-squares trend (red line; its slope relative to the mean, % per {unit}, in the panel's title). A dashed line marks a change the fleet's step test found.{sparse_note}"),
         ),
         (
             "damping",
@@ -288,12 +352,18 @@ pub fn write_track(
     ];
     let mut sections = Vec::new();
     for (stem, heading, y_label, caption) in figures {
-        let plot = TrackPlot::new(
+        let mut plot = TrackPlot::new(
             heading,
             y_label,
             run.tracking.origin_s,
             panels(run, stem == "damping"),
         );
+        plot.change = run
+            .tracking
+            .change
+            .as_ref()
+            .filter(|c| c.significant)
+            .map(|c| c.split);
         let svg = track_svg(&plot)?;
         write_output(set, format!("{stem}.svg"), |p| {
             Ok(write_atomic(p, svg.as_bytes())?)

@@ -213,6 +213,10 @@ pub struct Tracking {
     pub order: Vec<usize>,
     /// The minimum records of a non-sparse track, as counted.
     pub min_records: usize,
+    /// The change in the fleet: where the non-sparse tracks' frequencies step together
+    /// ([`super::change::fleet_change`]), its steps in the order of `tracks` (`None`
+    /// for a sparse track); `None` when no split has enough records on each side.
+    pub change: Option<super::change::Change>,
 }
 
 /// A pair outside the gates: larger than any sum of allowed costs.
@@ -579,6 +583,39 @@ pub fn trend(x: &[f64], y: &[f64], mean_y: f64) -> Option<Trend> {
     })
 }
 
+/// The fleet's change over the non-sparse tracks; sparse tracks get no step.
+fn fleet_change(
+    tracks: &[Track],
+    members: &[Member],
+    records: &[TrackRecord],
+    timed: bool,
+) -> Option<super::change::Change> {
+    let series: Vec<(Vec<f64>, Vec<f64>)> = tracks
+        .iter()
+        .filter(|t| !t.sparse)
+        .map(|t| {
+            members
+                .iter()
+                .filter(|m| m.track == t.id)
+                .map(|m| (m.x, records[m.record].modes[m.mode].frequency_hz))
+                .unzip()
+        })
+        .collect();
+    let mut change = super::change::fleet_change(&series, timed)?;
+    let mut steps = change.steps.into_iter();
+    change.steps = tracks
+        .iter()
+        .map(|t| {
+            if t.sparse {
+                None
+            } else {
+                steps.next().flatten()
+            }
+        })
+        .collect();
+    Some(change)
+}
+
 /// The tracks' statistics and ids (by mean frequency) from the pass's results.
 fn summarize(
     records: &[TrackRecord],
@@ -631,7 +668,7 @@ fn summarize(
             ..stats[t].clone()
         })
         .collect();
-    let members = joined
+    let members: Vec<Member> = joined
         .into_iter()
         .map(|(record, mode, t, mac_to_track, x)| Member {
             record,
@@ -641,7 +678,9 @@ fn summarize(
             x,
         })
         .collect();
+    let change = fleet_change(&tracks, &members, records, timed);
     Tracking {
+        change,
         tracks,
         members,
         unit: if timed {
