@@ -34,6 +34,8 @@ pub struct TrackPanel {
     pub std: Vec<Option<f64>>,
     /// The trend line `(intercept, slope)` in the figure's unit, if drawn.
     pub line: Option<(f64, f64)>,
+    /// A fitted curve `(x, y)` drawn instead of the line (the model of a change).
+    pub curve: Option<Vec<(f64, f64)>>,
 }
 
 /// A figure of tracks: one panel per track.
@@ -164,7 +166,14 @@ where
         .light_line_style(RGBColor(246, 246, 246))
         .draw()
         .map_err(err)?;
-    if let Some((a, b)) = panel.line {
+    if let Some(curve) = &panel.curve {
+        chart
+            .draw_series(LineSeries::new(
+                curve.iter().map(|&(x, y)| (x * k, y)),
+                TREND.stroke_width(2),
+            ))
+            .map_err(err)?;
+    } else if let Some((a, b)) = panel.line {
         chart
             .draw_series(LineSeries::new(
                 [x0, x1].map(|x| (x, a + b * x / k)),
@@ -352,6 +361,7 @@ mod tests {
             std: vec![Some(0.002); n],
             x,
             line: Some((5.0, -0.1)),
+            curve: None,
         }
     }
 

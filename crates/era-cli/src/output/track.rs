@@ -308,15 +308,37 @@ fn panels(run: &TrackRun, damping: bool) -> Vec<TrackPanel> {
                     trend_text(k)
                 )
             };
+            // With a change found, the frequency panel draws the model of the change
+            // test (trend, daily cycle, step) instead of the straight trend.
+            let curve = (!damping).then(|| step_curve(t, k.id, &x)).flatten();
             TrackPanel {
                 title,
                 x,
                 y,
                 std,
                 line,
+                curve,
             }
         })
         .collect()
+}
+
+/// The fitted model of a significant change for track `id`, sampled across `x`'s span
+/// (each side of the split reaching it, so the step shows as a step).
+fn step_curve(t: &Tracking, id: usize, x: &[f64]) -> Option<Vec<(f64, f64)>> {
+    let change = t.change.as_ref().filter(|c| c.significant)?;
+    let k = t.tracks.iter().position(|tr| tr.id == id)?;
+    let model = change.steps.get(k).copied().flatten()?.model;
+    let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let n = 400;
+    let mut points: Vec<f64> = (0..=n)
+        .map(|j| lo + (hi - lo) * j as f64 / n as f64)
+        .collect();
+    let eps = 1e-9 * (hi - lo).max(1.0);
+    points.extend([model.split - eps, model.split + eps]);
+    points.sort_by(f64::total_cmp);
+    Some(points.into_iter().map(|v| (v, model.at(v))).collect())
 }
 
 /// tracks.parquet, tracks.json, the figures and report.html into `set`.
@@ -341,7 +363,7 @@ pub fn write_track(
             "frequency",
             "Frequency of each track over time",
             "Natural frequency (Hz)",
-            format!("Each record's frequency of the track (dots) with ± one standard deviation where the identification estimated one (bars), and the least-squares trend (red line; its slope relative to the mean, % per {unit}, in the panel's title). A dashed line marks a change the fleet's step test found.{sparse_note}"),
+            format!("Each record's frequency of the track (dots) with ± one standard deviation where the identification estimated one (bars), and the least-squares trend (red line; its slope relative to the mean, % per {unit}, in the panel's title). When the fleet's step test found a change, a dashed line marks it and the red curve is that test's model: trend, daily cycle and step.{sparse_note}"),
         ),
         (
             "damping",

@@ -37,6 +37,39 @@ pub struct Step {
     pub relative: f64,
     /// Its t statistic.
     pub t: f64,
+    /// The fitted model, to draw.
+    pub model: StepModel,
+}
+
+/// The model fitted at a split: `ȳ + c₀ + c₁ (x − x̄) [+ c₂ cos 2πx + c₃ sin 2πx] + c_step [x > split]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepModel {
+    /// `x̄`.
+    pub mean_x: f64,
+    /// `ȳ`.
+    pub mean_y: f64,
+    /// The split.
+    pub split: f64,
+    /// Whether the daily terms are in.
+    pub daily: bool,
+    /// `c₀, c₁, c₂, c₃, c_step` (`c₂ = c₃ = 0` without the daily terms).
+    pub coef: [f64; 5],
+}
+
+impl StepModel {
+    /// The model's value at `x`.
+    pub fn at(&self, x: f64) -> f64 {
+        let c = &self.coef;
+        let tau = std::f64::consts::TAU;
+        let mut v = self.mean_y + c[0] + c[1] * (x - self.mean_x);
+        if self.daily {
+            v += c[2] * (tau * x).cos() + c[3] * (tau * x).sin();
+        }
+        if x > self.split {
+            v += c[4];
+        }
+        v
+    }
 }
 
 /// The fleet's change.
@@ -130,10 +163,23 @@ pub fn step_at(x: &[f64], y: &[f64], split: f64, daily: bool) -> Option<Step> {
     if !(se > 0.0 && se.is_finite() && mean_before != 0.0) {
         return None;
     }
+    let mut all = [0.0; 5];
+    all[..2].copy_from_slice(&coef[..2]);
+    if daily {
+        all[2..4].copy_from_slice(&coef[2..4]);
+    }
+    all[4] = step;
     Some(Step {
         step_hz: step,
         relative: step / mean_before,
         t: step / se,
+        model: StepModel {
+            mean_x: mx,
+            mean_y: my,
+            split,
+            daily,
+            coef: all,
+        },
     })
 }
 
