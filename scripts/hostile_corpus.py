@@ -20,6 +20,8 @@ Cases:
   absurd observer flags;
 - output-only records through `era oma`, mutated and with absurd lags, blocks, orders,
   references and sample rates;
+- fleets: mutated `era batch` manifests and `era track` tables (modes.parquet), absurd
+  `--jobs`, `--shard`, tracking and `simulate fleet` values, special files as manifests;
 - signals: SIGINT, SIGTERM or SIGHUP at a random moment of a run (exit 0, or 128 + the
   signal within 1 s; nothing of era's left; the earlier outputs whole, or the new set);
 - two runs into one `--out` folder at once (one is refused, or they run one after the
@@ -411,6 +413,14 @@ def main():
             r2 = [1.20 * r2[0] - 0.97 * r2[1] + v, r2[0]]
             f.write(f"{k / 128:.6f},{r1[0] + 0.3 * r2[0]:.6e},{r1[0] - r2[0]:.6e},{0.5 * r1[0] + r2[0]:.6e}\n")
 
+    # A manifest of two records of oma.csv, and the modes table its batch writes.
+    with open(os.path.join(work, "fleet.toml"), "w") as f:
+        f.write('verb = "oma"\nargs = ["--outputs", "2-4", "--states", "4", "--blocks", "2"]\n'
+                '[[record]]\nid = "a"\npath = "oma.csv"\ntime = 2026-05-01T10:00:00Z\n'
+                '[[record]]\nid = "b"\npath = ["oma.csv", "oma.csv"]\ntime = "2026-05-01T11:00:00Z"\n')
+    sh(era, work, "batch", "fleet.toml", "--out", "batch-seed", "-q")
+    shutil.copy(os.path.join(work, "batch-seed", "modes.parquet"), os.path.join(work, "modes.parquet"))
+
     commands = {
         "truth.csv": [["info", "{f}"], ["identify", "{f}", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
                       ["convert", "{f}", "o.uff"], ["plot", "{f}", "--out", "plotdir"]],
@@ -428,8 +438,13 @@ def main():
                     ["oma", "{f}", "{f}", "--outputs", "2-4", "--time-lags", "40", "--out", "oma-out"]],
         "decay.csv": [["friction", "estimate", "{f}", "--stiffness", "1"]],
         "model.json": [["plot", "truth.csv", "--model", "{f}", "--out", "plotdir"]],
+        "fleet.toml": [["batch", "{f}", "--out", "batch-out", "-q"],
+                       ["batch", "{f}", "--out", "batch-out", "--jobs", "2", "--resume"]],
+        # `{d}`: a folder holding the mutant as modes.parquet.
+        "modes.parquet": [["track", "{d}", "--out", "track-out", "-q"],
+                          ["track", "{d}", "{d}", "--out", "track-out", "--all-modes"]],
     }
-    binary = {"truth_b.uff", "modal.mat"}
+    binary = {"truth_b.uff", "modal.mat", "modes.parquet"}
     for seed_name, cmds in commands.items():
         with open(os.path.join(work, seed_name), "rb") as f:
             original = f.read()
@@ -437,11 +452,20 @@ def main():
         for k in range(a.mutants):
             data, how = (binary_mutate if seed_name in binary else mutate)(original, rng)
             name = f"m_{os.path.splitext(seed_name)[0]}_{k}{ext}"
+            folder = None
+            if seed_name == "modes.parquet":
+                folder = f"m_modes_{k}"
+                os.makedirs(os.path.join(work, folder), exist_ok=True)
+                name = os.path.join(folder, "modes.parquet")
             with open(os.path.join(work, name), "wb") as f:
                 f.write(data)
             cmd = rng.choice(cmds)
-            r.run(f"mutated {seed_name}", [c.replace("{f}", name) for c in cmd], setup_note=how)
-            os.remove(os.path.join(work, name))
+            r.run(f"mutated {seed_name}",
+                  [c.replace("{f}", name).replace("{d}", folder or "") for c in cmd], setup_note=how)
+            if folder:
+                shutil.rmtree(os.path.join(work, folder))
+            else:
+                os.remove(os.path.join(work, name))
 
     # Absurd flag values.
     absurd = ["0", "-1", "1e-300", "1e300", "NaN", "inf", "-inf", "18446744073709551614",
@@ -471,6 +495,13 @@ def main():
         (["oma", "oma.csv", "--outputs", "2-4", "--no-figures", "--out", "oma-out"],
          ["--time-lags", "--blocks", "--states", "--sample-rate", "--orders", "--references", "--outputs"],
          ["--blocks", "4"]),
+        (["batch", "fleet.toml", "--out", "batch-out", "-q"], ["--jobs", "--shard"], []),
+        (["track", "batch-seed", "--out", "track-out", "-q"],
+         ["--min-records", "--frequency-tolerance", "--mac-min"], []),
+        (["simulate", "fleet", "--records", "2", "--record-length", "60", "--out", "fleet-out", "-q"],
+         ["--records", "--record-length", "--interval", "--sample-rate", "--drift", "--daily", "--missing",
+          "--damage", "--outputs", "--modes", "--noise", "--start"],
+         ["--records", "2", "--record-length", "60"]),
     ]
     for base, flags, defaults in flag_cases:
         for flag in flags:
@@ -545,7 +576,10 @@ def main():
                  ["identify", "/dev/zero", "--states", "4"], ["info", work], ["info", "/dev/null"],
                  ["frf", "/dev/zero", "--inputs", "1", "--outputs", "2", "--out", "x.csv"],
                  ["oma", fifo, "--outputs", "1"], ["oma", "/dev/zero", "--outputs", "1"],
-                 ["oma", work, "--outputs", "1"], ["oma", "/dev/null", "--outputs", "1"]):
+                 ["oma", work, "--outputs", "1"], ["oma", "/dev/null", "--outputs", "1"],
+                 ["batch", fifo, "--out", "b"], ["batch", "/dev/zero", "--out", "b"],
+                 ["batch", work, "--out", "b"], ["batch", "/dev/null", "--out", "b"],
+                 ["track", work + "/nowhere", "--out", "t"], ["track", "/dev", "--out", "t"]):
         r.run("input: special file", args, env={"ERA_MAX_INPUT_BYTES": "50000000"})
     with open(os.path.join(work, "truth.csv"), "rb") as f:
         truth = f.read()

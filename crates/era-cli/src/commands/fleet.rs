@@ -18,6 +18,21 @@ use std::fmt::Write as _;
 /// The core's spec from the flags; an out-of-range value names its flag.
 fn spec(a: &FleetArgs) -> anyhow::Result<FleetSpec> {
     let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
+    for (flag, v) in [
+        ("--record-length", a.record_length),
+        ("--interval", a.interval),
+        ("--sample-rate", a.sample_rate),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return crate::error::usage(format!("{flag} {v}: must be a positive number"));
+        }
+    }
+    if a.record_length * a.sample_rate < 16.0 {
+        return crate::error::usage(format!(
+            "--record-length {} at --sample-rate {}: a record needs at least 16 samples",
+            a.record_length, a.sample_rate
+        ));
+    }
     crate::config::check_noise(a.noise)?;
     let structure = ModalSpec {
         outputs: a.outputs,
@@ -46,10 +61,12 @@ fn spec(a: &FleetArgs) -> anyhow::Result<FleetSpec> {
             ))
         });
         match parsed {
-            Some((r, loss)) if r >= 1 => s.damage = Some((r - 1, loss)),
+            Some((r, loss)) if (1..=a.records).contains(&r) && (0.0..0.9).contains(&loss) => {
+                s.damage = Some((r - 1, loss));
+            }
             _ => {
                 return crate::error::usage(format!(
-                    "--damage {text}: expected R:LOSS, the first damaged record (1-based) and the stiffness loss, e.g. 7:0.05"
+                    "--damage {text}: expected R:LOSS, the first damaged record (1 to --records) and the stiffness loss (0 to 0.9), e.g. 7:0.05"
                 ))
             }
         }
