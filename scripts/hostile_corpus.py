@@ -415,7 +415,7 @@ def main():
 
     # A manifest of two records of oma.csv, and the modes table its batch writes.
     with open(os.path.join(work, "fleet.toml"), "w") as f:
-        f.write('verb = "oma"\nargs = ["--outputs", "2-4", "--states", "4", "--blocks", "2"]\n'
+        f.write('verb = "oma"\nargs = ["--outputs", "1-3", "--states", "4", "--blocks", "2"]\n'
                 '[[record]]\nid = "a"\npath = "oma.csv"\ntime = 2026-05-01T10:00:00Z\n'
                 '[[record]]\nid = "b"\npath = ["oma.csv", "oma.csv"]\ntime = "2026-05-01T11:00:00Z"\n')
     sh(era, work, "batch", "fleet.toml", "--out", "batch-seed", "-q")

@@ -20,6 +20,7 @@
 //! The shape is two lists (real and imaginary parts) because Parquet has no complex type;
 //! the channel names let records with missing channels be compared entry by entry.
 
+use crate::table::{cell, column};
 use crate::IoError;
 use arrow_array::builder::{
     BooleanBuilder, Float64Builder, ListBuilder, StringBuilder, TimestampMicrosecondBuilder,
@@ -63,9 +64,6 @@ pub struct ModeRow {
     /// The channel of each shape entry.
     pub channels: Vec<String>,
 }
-
-/// Rows per row group: a few MB of a typical table, so a reader streams it.
-const ROW_GROUP: usize = 65_536;
 
 fn schema() -> Arc<Schema> {
     let list_f64 = DataType::List(Arc::new(Field::new("item", DataType::Float64, true)));
@@ -169,55 +167,7 @@ pub fn write_modes(path: &Path, rows: &[ModeRow]) -> Result<(), IoError> {
             ),
         ));
     }
-    let failed = |e: &dyn std::fmt::Display| IoError::format(path, "", format!("parquet: {e}"));
-    crate::atomic::write_via(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| IoError::io(path, e))?;
-        let props = parquet::file::properties::WriterProperties::builder()
-            .set_compression(parquet::basic::Compression::SNAPPY)
-            .set_created_by(format!("era {}", env!("CARGO_PKG_VERSION")))
-            .build();
-        let mut writer = parquet::arrow::ArrowWriter::try_new(file, schema(), Some(props))
-            .map_err(|e| failed(&e))?;
-        for chunk in rows.chunks(ROW_GROUP) {
-            let b = batch(chunk).map_err(|e| failed(&e))?;
-            writer.write(&b).map_err(|e| failed(&e))?;
-            writer.flush().map_err(|e| failed(&e))?;
-        }
-        if rows.is_empty() {
-            let b = batch(&[]).map_err(|e| failed(&e))?;
-            writer.write(&b).map_err(|e| failed(&e))?;
-        }
-        writer.close().map_err(|e| failed(&e))?;
-        Ok(())
-    })
-}
-
-/// A column of `batch` by name, as `T`; a missing or mistyped column is named.
-fn column<'a, T: 'static>(
-    path: &Path,
-    batch: &'a RecordBatch,
-    name: &str,
-    kind: &str,
-) -> Result<&'a T, IoError> {
-    let Some(col) = batch.column_by_name(name) else {
-        return Err(IoError::format(
-            path,
-            "",
-            format!("no column {name}: not a modes table of era batch"),
-        ));
-    };
-    col.as_any().downcast_ref::<T>().ok_or_else(|| {
-        IoError::format(
-            path,
-            format!("column {name}: "),
-            format!("is {}, expected {kind}", col.data_type()),
-        )
-    })
-}
-
-/// A nullable float cell.
-fn cell(a: &Float64Array, i: usize) -> Option<f64> {
-    (!a.is_null(i)).then(|| a.value(i))
+    crate::table::write(path, schema(), rows, batch)
 }
 
 /// The floats of a list cell (nulls in it read as NaN).
@@ -241,28 +191,8 @@ fn floats(path: &Path, list: &ListArray, i: usize, name: &str) -> Result<Vec<f64
 /// [`IoError`] naming `path` when it cannot be read, is not Parquet, lacks a column or
 /// has one of another type, or holds a null where a value is required.
 pub fn read_modes(path: &Path) -> Result<Vec<ModeRow>, IoError> {
-    // Read as every input is (a FIFO or a device is refused or bounded, not hung on).
-    let bytes = bytes::Bytes::from(crate::input::read_input(path)?.into_vec());
-    let failed = |e: &dyn std::fmt::Display| IoError::format(path, "", format!("parquet: {e}"));
-    let builder = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(bytes)
-        .map_err(|e| failed(&e))?;
-    // The columns are checked up front, so an empty table of another kind is refused too.
-    for field in schema().fields() {
-        if builder.schema().field_with_name(field.name()).is_err() {
-            return Err(IoError::format(
-                path,
-                "",
-                format!("no column {}: not a modes table of era batch", field.name()),
-            ));
-        }
-    }
-    let reader = builder
-        .with_batch_size(ROW_GROUP)
-        .build()
-        .map_err(|e| failed(&e))?;
     let mut rows = Vec::new();
-    for b in reader {
-        let b = b.map_err(|e| failed(&e))?;
+    for b in crate::table::read(path, &schema(), "a modes table of era batch")? {
         let id = column::<StringArray>(path, &b, "record_id", "string")?;
         let time = column::<TimestampMicrosecondArray>(path, &b, "time", "timestamp[us]")?;
         let mode = column::<UInt32Array>(path, &b, "mode", "uint32")?;

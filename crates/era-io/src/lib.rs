@@ -29,6 +29,7 @@ pub mod input;
 pub mod mat;
 mod mat_check;
 pub mod model_json;
+mod table;
 pub mod text;
 pub mod time;
 pub mod tracks;

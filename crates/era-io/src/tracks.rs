@@ -19,6 +19,7 @@
 //! | `sparse` | bool | the track is seen in fewer than the minimum records |
 //! | `x` | float64 | days since the first record, or the record's position in time order when the records have no times |
 
+use crate::table::{cell, column};
 use crate::IoError;
 use arrow_array::builder::{
     BooleanBuilder, Float64Builder, StringBuilder, TimestampMicrosecondBuilder, UInt32Builder,
@@ -59,9 +60,6 @@ pub struct TrackRow {
     /// Days since the first record, or the record's position.
     pub x: f64,
 }
-
-/// Rows per row group.
-const ROW_GROUP: usize = 65_536;
 
 fn schema() -> Arc<Schema> {
     let f = |name: &str, nullable| Field::new(name, DataType::Float64, nullable);
@@ -133,54 +131,7 @@ fn batch(rows: &[TrackRow]) -> Result<RecordBatch, arrow_schema::ArrowError> {
 /// # Errors
 /// [`IoError`] naming `path` when it cannot be written.
 pub fn write_tracks(path: &Path, rows: &[TrackRow]) -> Result<(), IoError> {
-    let failed = |e: &dyn std::fmt::Display| IoError::format(path, "", format!("parquet: {e}"));
-    crate::atomic::write_via(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| IoError::io(path, e))?;
-        let props = parquet::file::properties::WriterProperties::builder()
-            .set_compression(parquet::basic::Compression::SNAPPY)
-            .set_created_by(format!("era {}", env!("CARGO_PKG_VERSION")))
-            .build();
-        let mut writer = parquet::arrow::ArrowWriter::try_new(file, schema(), Some(props))
-            .map_err(|e| failed(&e))?;
-        let mut chunks: Vec<&[TrackRow]> = rows.chunks(ROW_GROUP).collect();
-        if chunks.is_empty() {
-            chunks.push(&[]);
-        }
-        for chunk in chunks {
-            let b = batch(chunk).map_err(|e| failed(&e))?;
-            writer.write(&b).map_err(|e| failed(&e))?;
-            writer.flush().map_err(|e| failed(&e))?;
-        }
-        writer.close().map_err(|e| failed(&e))?;
-        Ok(())
-    })
-}
-
-/// A column of `batch` by name, as `T`; a missing or mistyped column is named.
-fn column<'a, T: 'static>(
-    path: &Path,
-    batch: &'a RecordBatch,
-    name: &str,
-    kind: &str,
-) -> Result<&'a T, IoError> {
-    let Some(col) = batch.column_by_name(name) else {
-        return Err(IoError::format(
-            path,
-            "",
-            format!("no column {name}: not a tracks table of era track"),
-        ));
-    };
-    col.as_any().downcast_ref::<T>().ok_or_else(|| {
-        IoError::format(
-            path,
-            format!("column {name}: "),
-            format!("is {}, expected {kind}", col.data_type()),
-        )
-    })
-}
-
-fn cell(a: &Float64Array, i: usize) -> Option<f64> {
-    (!a.is_null(i)).then(|| a.value(i))
+    crate::table::write(path, schema(), rows, batch)
 }
 
 /// Reads a tracks table written by [`write_tracks`].
@@ -189,32 +140,8 @@ fn cell(a: &Float64Array, i: usize) -> Option<f64> {
 /// [`IoError`] naming `path` when it cannot be read, is not Parquet, lacks a column or
 /// has one of another type, or holds a null where a value is required.
 pub fn read_tracks(path: &Path) -> Result<Vec<TrackRow>, IoError> {
-    let bytes = bytes::Bytes::from(crate::input::read_input(path)?.into_vec());
-    let failed = |e: &dyn std::fmt::Display| IoError::format(path, "", format!("parquet: {e}"));
-    let builder = parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder::try_new(bytes)
-        .map_err(|e| failed(&e))?;
-    // The columns by name up front: an empty table of another kind is refused too.
-    if let Some(missing) = schema()
-        .fields()
-        .iter()
-        .find(|f| builder.schema().field_with_name(f.name()).is_err())
-    {
-        return Err(IoError::format(
-            path,
-            "",
-            format!(
-                "no column {}: not a tracks table of era track",
-                missing.name()
-            ),
-        ));
-    }
-    let reader = builder
-        .with_batch_size(ROW_GROUP)
-        .build()
-        .map_err(|e| failed(&e))?;
     let mut rows = Vec::new();
-    for b in reader {
-        let b = b.map_err(|e| failed(&e))?;
+    for b in crate::table::read(path, &schema(), "a tracks table of era track")? {
         let id = column::<StringArray>(path, &b, "record_id", "string")?;
         let time = column::<TimestampMicrosecondArray>(path, &b, "time", "timestamp[us]")?;
         let track = column::<UInt32Array>(path, &b, "track", "uint32")?;
