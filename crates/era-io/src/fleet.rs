@@ -150,24 +150,40 @@ fn batch(rows: &[ModeRow]) -> Result<RecordBatch, arrow_schema::ArrowError> {
 /// [`IoError`] naming `path` when it cannot be written, or when a row's shape, its
 /// imaginary parts and its channels differ in length.
 pub fn write_modes(path: &Path, rows: &[ModeRow]) -> Result<(), IoError> {
-    if let Some(r) = rows
-        .iter()
-        .find(|r| r.shape_re.len() != r.shape_im.len() || r.shape_re.len() != r.channels.len())
-    {
-        return Err(IoError::format(
-            path,
-            "",
-            format!(
-                "record {} mode {}: the shape has {} real parts, {} imaginary parts and {} channels",
-                r.record_id,
-                r.mode,
-                r.shape_re.len(),
-                r.shape_im.len(),
-                r.channels.len()
-            ),
-        ));
-    }
-    crate::table::write(path, schema(), rows, batch)
+    write_modes_stream(path, std::iter::once(Ok(rows.to_vec())))
+}
+
+/// [`write_modes`] with the rows coming a record at a time, in bounded memory (a batch
+/// of a million records writes its table this way).
+///
+/// # Errors
+/// [`IoError`] naming `path` when it cannot be written, the first error of `records`,
+/// or a row whose shape, imaginary parts and channels differ in length.
+pub fn write_modes_stream(
+    path: &Path,
+    records: impl Iterator<Item = Result<Vec<ModeRow>, IoError>>,
+) -> Result<(), IoError> {
+    let checked = records.map(|rows| {
+        let rows = rows?;
+        if let Some(r) = rows.iter().find(|r| {
+            r.shape_re.len() != r.shape_im.len() || r.shape_re.len() != r.channels.len()
+        }) {
+            return Err(IoError::format(
+                path,
+                "",
+                format!(
+                    "record {} mode {}: the shape has {} real parts, {} imaginary parts and {} channels",
+                    r.record_id,
+                    r.mode,
+                    r.shape_re.len(),
+                    r.shape_im.len(),
+                    r.channels.len()
+                ),
+            ));
+        }
+        Ok(rows)
+    });
+    crate::table::write_stream(path, schema(), checked, batch)
 }
 
 /// The floats of a list cell (nulls in it read as NaN).
@@ -294,6 +310,13 @@ mod tests {
         assert_eq!(read_modes(&path).unwrap(), rows);
         write_modes(&path, &[]).unwrap();
         assert!(read_modes(&path).unwrap().is_empty());
+        // A record at a time, across row groups: the same rows.
+        let many: Vec<ModeRow> = (0..150_000)
+            .map(|k| row(&format!("r{}", k / 7), 1 + (k % 7) as u32, 2))
+            .collect();
+        let pieces = many.chunks(7).map(|c| Ok(c.to_vec()));
+        write_modes_stream(&path, pieces).unwrap();
+        assert_eq!(read_modes(&path).unwrap(), many);
     }
 
     #[test]

@@ -18,10 +18,28 @@ fn failed(path: &Path, e: &dyn std::fmt::Display) -> IoError {
 
 /// Writes `rows` to `path` (snappy-compressed, atomically), one row group per
 /// [`ROW_GROUP`] rows made into a batch by `batch`; an empty table keeps its schema.
-pub(crate) fn write<T>(
+pub(crate) fn write<T: Clone>(
     path: &Path,
     schema: Arc<Schema>,
     rows: &[T],
+    batch: impl Fn(&[T]) -> Result<RecordBatch, ArrowError>,
+) -> Result<(), IoError> {
+    write_stream(
+        path,
+        schema,
+        rows.chunks(ROW_GROUP).map(|c| Ok(c.to_vec())),
+        batch,
+    )
+}
+
+/// [`write`] with the rows coming in pieces (a record's modes at a time), so that a
+/// table of any length is written in bounded memory: the rows are gathered into row
+/// groups of [`ROW_GROUP`] and each is written as it fills. A piece that is an error
+/// ends the writing with it (the target is untouched).
+pub(crate) fn write_stream<T>(
+    path: &Path,
+    schema: Arc<Schema>,
+    pieces: impl Iterator<Item = Result<Vec<T>, IoError>>,
     batch: impl Fn(&[T]) -> Result<RecordBatch, ArrowError>,
 ) -> Result<(), IoError> {
     crate::atomic::write_via(path, |tmp| {
@@ -32,15 +50,26 @@ pub(crate) fn write<T>(
             .build();
         let mut writer = parquet::arrow::ArrowWriter::try_new(file, schema, Some(props))
             .map_err(|e| failed(path, &e))?;
-        let mut chunks: Vec<&[T]> = rows.chunks(ROW_GROUP).collect();
-        if chunks.is_empty() {
-            chunks.push(&[]);
-        }
-        for chunk in chunks {
-            let b = batch(chunk).map_err(|e| failed(path, &e))?;
+        let mut group: Vec<T> = Vec::new();
+        let mut written = false;
+        let mut flush = |group: &mut Vec<T>, last: bool| -> Result<(), IoError> {
+            if group.is_empty() && (written || !last) {
+                return Ok(());
+            }
+            let b = batch(group).map_err(|e| failed(path, &e))?;
             writer.write(&b).map_err(|e| failed(path, &e))?;
             writer.flush().map_err(|e| failed(path, &e))?;
+            group.clear();
+            written = true;
+            Ok(())
+        };
+        for piece in pieces {
+            group.extend(piece?);
+            if group.len() >= ROW_GROUP {
+                flush(&mut group, false)?;
+            }
         }
+        flush(&mut group, true)?;
         writer.close().map_err(|e| failed(path, &e))?;
         Ok(())
     })

@@ -45,9 +45,12 @@ struct Outcome {
     status: &'static str,
     message: String,
     seconds: f64,
-    /// The verb's modes (its JSON's `modes`) and the channels of their shapes.
-    modes: Vec<Value>,
-    channels: Vec<String>,
+    /// The verb's modes (its JSON's `modes`) and the channels of their shapes, until
+    /// they are saved in the record's state (then only counted).
+    found: Option<(Vec<Value>, Vec<String>)>,
+    /// Modes, and modes called physical.
+    modes: usize,
+    physical: usize,
     /// 2 for a failure on the record's input, 1 for one inside era.
     code: u8,
 }
@@ -125,9 +128,13 @@ pub fn run(a: &Batch) -> anyhow::Result<()> {
         .into_iter()
         .map(|o| o.expect("every record ran"))
         .collect();
-    let rows = mode_rows(&plans, &outcomes);
+    let rows: usize = outcomes.iter().map(|o| o.modes).sum();
     write_output(&mut set, "modes.parquet", |p| {
-        Ok(era_io::fleet::write_modes(p, &rows)?)
+        let pieces = plans
+            .iter()
+            .zip(&outcomes)
+            .map(|(plan, o)| record_rows(&states, plan, o));
+        Ok(era_io::fleet::write_modes_stream(p, pieces)?)
     })?;
     let lines = record_lines(&plans, &outcomes);
     write_output(&mut set, "records.jsonl", |p| {
@@ -138,7 +145,7 @@ pub fn run(a: &Batch) -> anyhow::Result<()> {
         a,
         &plans,
         &outcomes,
-        rows.len(),
+        rows,
         clock.elapsed().as_secs_f64(),
         &human,
     )
@@ -230,8 +237,9 @@ fn skipped(state: &Value) -> Outcome {
         status: "skipped",
         message: "finished by an earlier run (--resume)".into(),
         seconds: state["seconds"].as_f64().unwrap_or(0.0),
-        modes: state["modes"].as_array().cloned().unwrap_or_default(),
-        channels: strings(&state["channels"]),
+        found: None,
+        modes: state["modes"].as_array().map_or(0, Vec::len),
+        physical: physical_count(state["modes"].as_array().map_or(&[][..], Vec::as_slice)),
         code: 0,
     }
 }
@@ -285,6 +293,13 @@ fn run_records(
             if saved.is_ok() {
                 saved = save_state(states, &plans[k], &outcome);
             }
+            // Saved, the modes are counted and let go: the table is written from the
+            // states at the end, so memory does not grow with the fleet.
+            let mut outcome = outcome;
+            if let Some((modes, _)) = outcome.found.take() {
+                outcome.modes = modes.len();
+                outcome.physical = physical_count(&modes);
+            }
             outcomes[k] = Some(outcome);
             bar.set_message(format!("{failed} failed"));
             bar.inc(1);
@@ -319,16 +334,21 @@ fn run_one(p: &Planned, verb: &str, a: &Batch) -> Outcome {
             status: "ok",
             message: String::new(),
             seconds,
-            modes: done.json["modes"].as_array().cloned().unwrap_or_default(),
-            channels: done.channels,
+            found: Some((
+                done.json["modes"].as_array().cloned().unwrap_or_default(),
+                done.channels,
+            )),
+            modes: 0,
+            physical: 0,
             code: 0,
         },
         Ok(Err(e)) => Outcome {
             status: "error",
             message: crate::message(&e),
             seconds,
-            modes: Vec::new(),
-            channels: Vec::new(),
+            found: None,
+            modes: 0,
+            physical: 0,
             code: crate::exit_code(&e),
         },
         Err(panic) => Outcome {
@@ -342,8 +362,9 @@ fn run_one(p: &Planned, verb: &str, a: &Batch) -> Outcome {
                     .unwrap_or_else(|| "a panic".into())
             ),
             seconds,
-            modes: Vec::new(),
-            channels: Vec::new(),
+            found: None,
+            modes: 0,
+            physical: 0,
             code: 1,
         },
     }
@@ -357,23 +378,45 @@ fn save_state(states: &Path, p: &Planned, o: &Outcome) -> anyhow::Result<()> {
         "message": o.message,
         "seconds": o.seconds,
         "fingerprint": p.fingerprint,
-        "channels": o.channels,
-        "modes": o.modes,
+        "channels": o.found.as_ref().map(|f| &f.1),
+        "modes": o.found.as_ref().map(|f| &f.0),
     });
     let path = states.join(format!("{}.json", p.record.id));
     era_io::atomic::write_atomic(&path, state.to_string().as_bytes())?;
     Ok(())
 }
 
-/// The modes table: every `ok` (or skipped) record's modes, in the manifest's order.
-fn mode_rows(plans: &[Planned], outcomes: &[Outcome]) -> Vec<ModeRow> {
-    let mut rows = Vec::new();
-    for (p, o) in plans.iter().zip(outcomes) {
-        for (k, m) in o.modes.iter().enumerate() {
-            rows.push(mode_row(&p.record, k, m, &o.channels));
-        }
+/// Modes called physical (a mode without the flag counts as physical).
+fn physical_count(modes: &[Value]) -> usize {
+    modes
+        .iter()
+        .filter(|m| m["physical"].as_bool().unwrap_or(true))
+        .count()
+}
+
+/// The modes table's rows of one `ok` (or skipped) record, from its saved state; none
+/// for a record that failed.
+fn record_rows(states: &Path, p: &Planned, o: &Outcome) -> Result<Vec<ModeRow>, era_io::IoError> {
+    if o.status == "error" {
+        return Ok(Vec::new());
     }
-    rows
+    let path = states.join(format!("{}.json", p.record.id));
+    let bytes = era_io::input::read_input(&path)?.into_vec();
+    let state: Value = serde_json::from_slice(&bytes).map_err(|e| era_io::IoError::Io {
+        path: path.clone(),
+        error: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
+    })?;
+    let channels = strings(&state["channels"]);
+    Ok(state["modes"]
+        .as_array()
+        .map(|modes| {
+            modes
+                .iter()
+                .enumerate()
+                .map(|(k, m)| mode_row(&p.record, k, m, &channels))
+                .collect()
+        })
+        .unwrap_or_default())
 }
 
 /// One mode of a verb's JSON as a table row.
@@ -421,8 +464,8 @@ fn record_lines(plans: &[Planned], outcomes: &[Outcome]) -> String {
             "seconds": o.seconds,
             "time": p.record.time_us.map(era_io::fleet::format_time),
             "files": p.record.files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
-            "modes": o.modes.len(),
-            "physical": o.modes.iter().filter(|m| m["physical"].as_bool().unwrap_or(true)).count(),
+            "modes": o.modes,
+            "physical": o.physical,
         });
         text.push_str(&line.to_string());
         text.push('\n');
