@@ -134,6 +134,12 @@ fn main() -> ExitCode {
             let _ = writeln!(std::io::stderr(), "era: internal error: {info}");
         }
     }));
+    if matches!(cli.command, args::Command::Batch(_)) && cli.threads.is_some() {
+        eprintln!(
+            "era: error: --threads: era batch runs each record on one thread; give --jobs N for N records side by side"
+        );
+        return ExitCode::from(2);
+    }
     let run = || match &cli.command {
         args::Command::Demo(a) => commands::demo::run(&a.into()),
         args::Command::Identify(a) => commands::identify::run(&config::Identify::new(a)?).map(drop),

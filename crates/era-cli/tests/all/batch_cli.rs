@@ -146,7 +146,26 @@ fn jobs_side_by_side_give_the_same_table_and_a_killed_batch_resumes() {
     let (manifest, _) = fleet(dir.path(), 6);
     let (one, two) = (dir.path().join("one"), dir.path().join("two"));
     batch(&[s(&manifest), "--out", s(&one), "-q"]);
-    batch(&[s(&manifest), "--out", s(&two), "--jobs", "2", "-q"]);
+    // The corrupt record makes the exit 2; the summary is on stdout all the same.
+    let run = era()
+        .args([
+            "batch",
+            s(&manifest),
+            "--out",
+            s(&two),
+            "--jobs",
+            "2",
+            "--json",
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    let summary: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(
+        (summary["ok"].as_u64(), summary["error"].as_u64()),
+        (Some(6), Some(1))
+    );
     let a = read_modes(&one.join("modes.parquet")).unwrap();
     assert!(a.len() >= 6 * 6, "{} rows", a.len());
     assert_eq!(a, read_modes(&two.join("modes.parquet")).unwrap());
@@ -229,6 +248,10 @@ fn a_bad_manifest_is_refused_before_any_work() {
     expect_input_error(
         &["batch", s(&manifest), "--out", s(&out), "--jobs", "0"],
         "--jobs",
+    );
+    expect_input_error(
+        &["batch", s(&manifest), "--out", s(&out), "--threads", "2"],
+        "--jobs N",
     );
     // A FIFO as the manifest is read as a stream (bounded), not hung on.
     let fifo = dir.join("fifo.toml");

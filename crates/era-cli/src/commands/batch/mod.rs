@@ -505,6 +505,35 @@ fn report(
         a.out.join("records.jsonl").display()
     ));
     human.print(&text);
+    let records_s: f64 = outcomes
+        .iter()
+        .filter(|o| o.status != "skipped")
+        .map(|o| o.seconds)
+        .sum();
+    if a.settings.timings {
+        human.print(&format!(
+            "timings: {seconds:.3} s in all, {records_s:.3} s in the records themselves ({:+.1} % batch overhead)\n",
+            100.0 * (seconds / records_s.max(1e-9) - 1.0)
+        ));
+    }
+    if a.settings.json {
+        let mut v = json!({
+            "manifest": a.manifest.display().to_string(),
+            "out": a.out.display().to_string(),
+            "shard": a.shard.map(|(i, n)| format!("{i}/{n}")),
+            "records": plans.len(),
+            "ok": ok,
+            "error": failed,
+            "skipped": skipped,
+            "mode_rows": rows,
+            "seconds": seconds,
+            "records_per_s": (ok + failed) as f64 / seconds.max(1e-9),
+        });
+        if a.settings.timings {
+            v["timings_s"] = json!({"all": seconds, "records": records_s});
+        }
+        crate::output::report::print_json(&v)?;
+    }
     if failed == 0 {
         return Ok(());
     }
