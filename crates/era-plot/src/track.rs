@@ -280,6 +280,9 @@ pub struct TrackPage<'a> {
     pub unit: TrendUnit,
     /// The figures: (id, heading, caption, SVG).
     pub figures: &'a [(String, String, String, String)],
+    /// When a change was found: its first record, and each track's step (relative) and
+    /// t statistic, in the order of `tracks`.
+    pub change: Option<(&'a str, Vec<Option<(f64, f64)>>)>,
 }
 
 fn escape(text: &str) -> String {
@@ -318,13 +321,24 @@ pre{{background:#f7f7f7;padding:1em;white-space:pre-wrap}} figure{{margin:1em 0}
     let _ = write!(
         h,
         "<h2 id=\"tracks\">Tracks</h2>\n<p>One row per track: the records it appears in, the mean and standard deviation of its frequency and damping over those records, and the trend of its frequency (least-squares slope relative to the mean, % per {unit}, ± its standard error). Sparse tracks (grey) appear in too few records to be a mode followed through the fleet.</p>\n\
-<table><tr><th>track</th><th>records</th><th>f mean (Hz)</th><th>f std (Hz)</th><th>ζ mean (%)</th><th>ζ std (%)</th><th>trend (%/{unit})</th><th></th></tr>\n"
+<table><tr><th>track</th><th>records</th><th>f mean (Hz)</th><th>f std (Hz)</th><th>ζ mean (%)</th><th>ζ std (%)</th><th>trend (%/{unit})</th>{}<th></th></tr>\n",
+        match &p.change {
+            Some((first, _)) => format!("<th>step from {} (%)</th><th>t</th>", escape(first)),
+            None => String::new(),
+        }
     );
-    for t in p.tracks {
+    for (k, t) in p.tracks.iter().enumerate() {
         let class = if t.sparse { " class=\"sparse\"" } else { "" };
+        let step = match &p.change {
+            Some((_, steps)) => match steps.get(k).copied().flatten() {
+                Some((r, tt)) => format!("<td>{:+.2}</td><td>{tt:.1}</td>", 100.0 * r),
+                None => "<td>–</td><td>–</td>".to_string(),
+            },
+            None => String::new(),
+        };
         let _ = writeln!(
             h,
-            "<tr{class}><td>{}</td><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td><td>{}</td></tr>",
+            "<tr{class}><td>{}</td><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{:.3}</td><td>{:.3}</td><td>{}</td>{step}<td>{}</td></tr>",
             t.id,
             t.records,
             t.frequency_mean_hz,

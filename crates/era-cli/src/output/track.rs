@@ -409,12 +409,26 @@ pub fn write_track(
         env!("CARGO_PKG_VERSION"),
         super::utc_now()
     );
+    let first = run
+        .tracking
+        .change
+        .as_ref()
+        .filter(|c| c.significant)
+        .and_then(|c| run.first_after(c.split).map(|f| (f.0, c)));
     let html = track_html(&TrackPage {
         title: &title,
         notes: &notes,
         tracks: &run.tracking.tracks,
         unit: run.tracking.unit,
         figures: &sections,
+        change: first.as_ref().map(|(id, c)| {
+            let steps = c
+                .steps
+                .iter()
+                .map(|s| s.map(|s| (s.relative, s.t)))
+                .collect();
+            (id.as_str(), steps)
+        }),
     });
     write_output(set, "report.html", |p| {
         Ok(write_atomic(p, html.as_bytes())?)
