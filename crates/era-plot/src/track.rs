@@ -268,6 +268,9 @@ pub fn track_png(plot: &TrackPlot, path: &Path) -> Result<(), PlotError> {
     draw(root, plot)
 }
 
+/// A change in a track page: its first record, and each track's step (relative) and t.
+pub type ChangeSteps<'a> = (&'a str, Vec<Option<(f64, f64)>>);
+
 /// What the page of `era track` shows.
 pub struct TrackPage<'a> {
     /// Page title.
@@ -282,7 +285,7 @@ pub struct TrackPage<'a> {
     pub figures: &'a [(String, String, String, String)],
     /// When a change was found: its first record, and each track's step (relative) and
     /// t statistic, in the order of `tracks`.
-    pub change: Option<(&'a str, Vec<Option<(f64, f64)>>)>,
+    pub change: Option<ChangeSteps<'a>>,
 }
 
 fn escape(text: &str) -> String {
