@@ -92,7 +92,7 @@ def process_record(path_or_arrays: Any, verb: str = "oma", **options: Any) -> Di
         ``PermissionError``, ``IsADirectoryError``), naming the path.
     """
     clock = time.perf_counter()
-    if verb not in _KNOWN:
+    if not isinstance(verb, str) or verb not in _KNOWN:
         raise ValueError(f"verb {verb!r}: expected one of {', '.join(map(repr, VERBS))}")
     unknown = [k for k in options if k not in _KNOWN[verb]]
     if unknown:
@@ -114,12 +114,21 @@ def _is_path(value: Any) -> bool:
 
 
 def _paths_of(record: Any) -> Optional[List[Any]]:
-    """The record as a list of paths, or None when it is arrays."""
+    """The record as a list of paths, or None when it is arrays; a ValueError for
+    anything else (None, a mix of paths and arrays)."""
     if _is_path(record):
         return [record]
-    if isinstance(record, (list, tuple)) and record and all(_is_path(p) for p in record):
-        return list(record)
-    return None
+    if isinstance(record, (list, tuple)):
+        paths = [_is_path(p) for p in record]
+        if record and all(paths):
+            return list(record)
+        if any(paths):
+            raise ValueError("path_or_arrays: a list of paths or a list of arrays, not both")
+        return None
+    if isinstance(record, np.ndarray) or hasattr(record, "__array__"):
+        return None
+    raise ValueError("path_or_arrays: expected a path (str or os.PathLike), a list of paths, "
+                     f"or arrays (channels, samples); got {type(record).__name__}")
 
 
 def _source(paths: Optional[List[Any]]) -> str:

@@ -8,6 +8,8 @@ import functools
 import json
 import multiprocessing
 import pickle
+import subprocess
+import sys
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
@@ -142,6 +144,36 @@ def test_thread_and_process_pools_give_the_same_rows(records):
             np.testing.assert_array_equal(a[key], c[key])
 
 
+FORKED = """
+import multiprocessing, sys
+from concurrent.futures import ProcessPoolExecutor
+import era
+
+def task(path):
+    era.simulate_truth_model()
+    return era.process_record(path)["frequency_hz"].tolist()
+
+if __name__ == "__main__":
+    paths = sys.argv[1:]
+    before = [task(p) for p in paths]  # era's pools have run in this process
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork")) as pool:
+        after = list(pool.map(task, paths))
+    print(before == after)
+"""
+
+
+@pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="no fork here")
+def test_a_process_forked_after_a_call_can_call_again(records, tmp_path):
+    """Each call runs in a pool of its own, never in rayon's global pool, which a forked
+    child inherits without its threads (the call would wait for ever)."""
+    script = tmp_path / "forked.py"
+    script.write_text(FORKED)
+    done = subprocess.run([sys.executable, str(script), *map(str, records[:2])],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "True"
+
+
 def test_on_a_dask_local_cluster_of_two_processes(records, era_cli):
     # Not skipped when absent: scripts/python_tests.sh installs dask[distributed].
     from dask import distributed
@@ -156,7 +188,7 @@ def test_on_a_dask_local_cluster_of_two_processes(records, era_cli):
         assert_same_modes(row, cli_modes(era_cli, path))
 
 
-def test_bad_input_names_what_is_wrong(records, tmp_path):
+def test_bad_input_names_what_is_wrong(records, tmp_path, data_dir):
     with pytest.raises(ValueError, match=r"unknown keyword 'time_lag'.*time_lags"):
         era.process_record(records[0], time_lag=64)
     with pytest.raises(ValueError, match=r"verb 'ssi'.*'oma', 'identify'"):
@@ -168,6 +200,16 @@ def test_bad_input_names_what_is_wrong(records, tmp_path):
         era.process_record(str(missing))
     with pytest.raises(ValueError, match="sample_rate_hz"):
         era.process_record(np.zeros((3, 100)))
+    with pytest.raises(ValueError, match="path_or_arrays.*NoneType"):
+        era.process_record(None)
+    with pytest.raises(ValueError, match="not both"):
+        era.process_record([records[0], np.zeros((3, 100))])
+    with pytest.raises(ValueError, match="verb"):
+        era.process_record(records[0], verb=["oma"])
+    # A MAT file without a sample rate needs one, as `era oma --sample-rate` (DaISy).
+    mat = data_dir / "daisy-steel-subframe" / "flexible_structure_dat.mat"
+    with pytest.raises(ValueError, match=r"flexible_structure_dat.mat.*set sample_rate_hz"):
+        era.process_record(mat, outputs=list(range(2, 30)))
     with pytest.raises(ValueError, match=r"no channel named 'strain'.*acc1"):
         era.process_record(records[0], outputs=["acc1", "strain"])
     with pytest.raises(ValueError, match="time_lags 5000"):
