@@ -14,15 +14,20 @@ issue's target is 1.8x from 1 worker to 2. Beside them, the seconds of a task as
 worker saw it and how many tasks ran at once on average (the tasks' seconds over the
 wall time): with 2 workers close to 2 means Dask keeps both busy, and a task that takes
 longer than with 1 worker means the cores were shared. The load average is printed too:
-on a machine shared with other work the speed-up is lower than the cores allow.
+on a machine shared with other work the speed-up is lower than the cores allow. Last,
+the same fleet in a process pool of the standard library with 1 and 2 processes, no
+Dask: the speed-up two independent processes get from the cores at that moment.
 """
 
 import argparse
+import functools
+import multiprocessing
 import os
 import pathlib
 import sys
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "python" / "tests"))
@@ -67,6 +72,21 @@ def run(workers: int, paths: list, repeat: int) -> tuple:
         return min(timed(client, paths) for _ in range(repeat))
 
 
+def pooled(workers: int, paths: list, repeat: int) -> float:
+    """The same fleet in a process pool of the standard library, without Dask: what the
+    cores give two independent processes, the ceiling of Dask's speed-up."""
+    task = functools.partial(era.process_record, threads=1)
+    spawn = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, mp_context=spawn) as pool:
+        list(pool.map(task, paths[:workers]))  # warm-up: every process imports era
+        best = float("inf")
+        for _ in range(repeat):
+            clock = time.perf_counter()
+            list(pool.map(task, paths))
+            best = min(best, time.perf_counter() - clock)
+    return best
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--records", type=int, default=16)
@@ -93,6 +113,9 @@ def main() -> None:
               f"(load average before: {load:.2f})")
     print(f"speed-up from 1 to 2 workers: {rates[2] / rates[1]:.2f}x (target 1.8x); "
           f"{os.cpu_count()} cores, load average now {os.getloadavg()[0]:.2f}")
+    alone = {w: len(paths) / pooled(w, paths, args.repeat) for w in (1, 2)}
+    print(f"without Dask (a process pool of 1, then 2): {alone[1]:5.2f} and {alone[2]:5.2f} "
+          f"records/s, {alone[2] / alone[1]:.2f}x; load average now {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":
