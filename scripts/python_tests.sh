@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The Python package's tests: a fresh virtual environment, `pip install .` (the release
 # build of crates/era-py by maturin, in the workspace's target folder so that it is
-# incremental), pytest and numpy (and python-control when it installs), then pytest on
-# python/tests. The CLI the tests compare with is the workspace's release build.
+# incremental), pytest, numpy and dask.distributed (required: the fleet tests run
+# era.process_record on its LocalCluster), python-control when it installs, then pytest
+# on python/tests. The CLI the tests compare with is the workspace's release build.
 #
 # Usage: scripts/python_tests.sh [pytest args...]
 # Environment: PYTHON (default python3), VENV (default TARGET/python-venv, made anew),
@@ -24,7 +25,7 @@ rm -rf "$venv"
 "$python" -m venv "$venv"
 pip=("$venv/bin/python" -m pip --disable-pip-version-check --no-input)
 "${pip[@]}" install --quiet --upgrade pip >/dev/null 2>&1 || true
-"${pip[@]}" install --quiet numpy pytest
+"${pip[@]}" install --quiet numpy pytest "dask[distributed]"
 # python-control for to_control() and the side-by-side example: optional (the tests
 # that need it are skipped without it).
 "${pip[@]}" install --quiet control >/dev/null 2>&1 \

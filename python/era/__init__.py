@@ -20,6 +20,11 @@ Responses alone, to unmeasured forces (operational modal analysis), go through
 ``era.oma(data, sample_rate_hz)``: SSI-cov or NExT-ERA on the output correlations,
 modes with ``frequency_std_hz`` and ``damping_ratio_std`` from a jackknife.
 
+A fleet of records (a monitored structure's every ten minutes, a campaign's runs) goes
+through ``era.process_record(path_or_arrays, verb="oma", **options)``: one record in, a
+dict of plain values and numpy arrays out, a picklable task for ``concurrent.futures``,
+Dask or Ray.
+
 Thesis names (Woods 1994, Appendix J) beside ours: ``states`` = ns, ``hankel_factor``
 = lh, ``integrations`` = ni, ``zero_lines`` = nz, ``pad_to`` = ndpts, ``lowpass`` =
 (ford, Hzbreak), ``time_domain`` = cord.
@@ -46,6 +51,7 @@ from ._era import (
     write_frf,
 )
 from . import friction
+from .fleet import process_record
 
 __all__ = [
     "FrfData",
@@ -57,6 +63,7 @@ __all__ = [
     "identify",
     "identify_time",
     "oma",
+    "process_record",
     "read_frf",
     "read_geometry",
     "read_time",

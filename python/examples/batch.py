@@ -7,23 +7,10 @@ works the same way (FrfData and the results pickle).
 
     python python/examples/batch.py [FOLDER]   (default: 16 simulated files in a temp folder)
 
-When a study outgrows one machine, the same function runs unchanged as a Dask or Ray
-task (neither is a dependency of era; install the one you use):
-
-    # Dask
-    from dask.distributed import Client
-    client = Client("scheduler:8786")
-    futures = client.map(identify_file, paths)
-    rows = client.gather(futures)
-
-    # Ray
-    import ray
-    ray.init(address="auto")
-    remote = ray.remote(identify_file)
-    rows = ray.get([remote.remote(p) for p in paths])
-
-Each worker needs `pip install .` of this repository (or the wheel) and the files on a
-shared path.
+For a fleet of records (time files identified the same way, on Dask, Ray or a process
+pool) `era.process_record` is that function already, for `oma` and `identify`:
+python/examples/fleet_dask.py and the book's "A fleet on Dask". This example stays as
+the pattern for a function of your own (a study's own keywords, its own result dict).
 """
 
 import pathlib

@@ -22,7 +22,10 @@
 //!
 //! ## Threads and copies
 //! Every call that computes or reads a file releases the GIL (`Python::allow_threads`),
-//! so Python threads identify in parallel. Inputs are read in place when numpy's layout
+//! so Python threads identify in parallel. Each call runs in a rayon pool of its own
+//! (`threads=`, by default as many threads as rayon's global pool would have), never in
+//! the global pool, so that a process forked after a call (a process pool) can call
+//! again. Inputs are read in place when numpy's layout
 //! allows (a C-contiguous float64 time-history block is borrowed, not copied); FRF values
 //! are copied once into the validated [`era::FrfData`] the core owns; results move their
 //! Rust buffers into numpy arrays without a copy.
@@ -117,6 +120,26 @@ pub(crate) fn guarded<T: Send>(
     py: Python<'_>,
     work: impl FnOnce() -> PyResult<T> + Send,
 ) -> PyResult<T> {
+    guarded_in(py, None, work)
+}
+
+/// [`guarded`] with `threads` for the call's pool (`None`: [`default_threads`]).
+///
+/// Every call runs in a rayon pool of its own ([`era::parallel::with_threads`]), never
+/// in rayon's global pool: a process forked after the global pool started (a
+/// `concurrent.futures` process pool, `multiprocessing`'s default on Linux) inherits it
+/// without its threads, and a call there would wait for ever.
+pub(crate) fn guarded_in<T: Send>(
+    py: Python<'_>,
+    threads: Option<usize>,
+    work: impl FnOnce() -> PyResult<T> + Send,
+) -> PyResult<T> {
+    let threads = threads.unwrap_or_else(default_threads);
+    let work = move || {
+        era::parallel::with_threads(era::params::Naming::Keyword, Some(threads), work)
+            .map_err(era_error)
+            .and_then(|r| r)
+    };
     let token = era::cancel::Cancel::new();
     let token = &token;
     // Set by the worker when it is done; the condition variable wakes the waiter.
@@ -156,6 +179,17 @@ pub(crate) fn guarded<T: Send>(
         py.allow_threads(|| worker.join())
             .unwrap_or_else(|payload| Err(internal_error(payload.as_ref())))
     })
+}
+
+/// The threads of rayon's global pool, without starting it: `RAYON_NUM_THREADS` when it
+/// is a positive number, else the cores available, at most [`era::parallel::MAX_THREADS`].
+pub(crate) fn default_threads() -> usize {
+    std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .min(era::parallel::MAX_THREADS)
 }
 
 /// A panic's payload as the `RuntimeError` that reports it.

@@ -10,7 +10,7 @@
 //! checked by [`era::EraOptions::check`] with the CLI's messages.
 
 use crate::frf::PyFrfData;
-use crate::{era_error, guarded, value_error, vector, Int};
+use crate::{era_error, guarded, guarded_in, value_error, vector, Int};
 use era::identification::Identification;
 use era::identify::{
     identify as run_identify, identify_supplied, EraOptions, ModelDomain, Order, ScanOptions,
@@ -559,12 +559,8 @@ pub fn identify(
         domain: route.domain,
         fitted_hz: fit.fitted_hz,
     };
-    let found = guarded(py, || {
-        // One pool for the whole call: identification and refinement alike.
-        era::parallel::with_threads(Naming::Keyword, threads, || run.identify())
-            .and_then(|found| found)
-            .map_err(era_error)
-    })?;
+    // One pool for the whole call: identification and refinement alike.
+    let found = guarded_in(py, threads, || run.identify().map_err(era_error))?;
     Ok(PyIdentification {
         found,
         options,

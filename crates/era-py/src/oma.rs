@@ -4,7 +4,7 @@
 //! delete-one-block jackknife.
 
 use crate::model::{states_of, thread_count, OmaFacts, PyIdentification};
-use crate::{era_error, guarded, value_error, Int};
+use crate::{era_error, guarded_in, value_error, Int};
 use era::identify::oma::{oma, OmaMethod, OmaOptions};
 use era::params::Naming;
 use numpy::{PyArrayMethods, PyUntypedArrayMethods};
@@ -67,11 +67,9 @@ pub fn oma_py(
         .collect();
     check_channels(&records, &outputs)?;
     let method = options.method;
-    let found = guarded(py, || {
+    let found = guarded_in(py, threads, || {
         let views: Vec<&[&[f64]]> = records.iter().map(Vec::as_slice).collect();
-        era::parallel::with_threads(Naming::Keyword, threads, || oma(&views, &options))
-            .and_then(|r| r)
-            .map_err(|e| keyword_error(e, options.lags.is_none()))
+        oma(&views, &options).map_err(|e| keyword_error(e, options.lags.is_none()))
     })?;
     let facts = OmaFacts {
         method: found.method.to_string(),

@@ -6,7 +6,7 @@
 use crate::model::{
     era_options, refine_options_of, route_request, states_of, thread_count, PyIdentification, Run,
 };
-use crate::{era_error, guarded, value_error, Int};
+use crate::{era_error, guarded_in, value_error, Int};
 use era::frf::estimate::estimate;
 use era::identify::{EraOptions, ScanOptions};
 use era::params::Naming;
@@ -154,11 +154,7 @@ pub fn identify_time(
         },
         fixed_order: chosen.is_some(),
     };
-    let (found, facts, refine_options) = guarded(py, || {
-        era::parallel::with_threads(Naming::Keyword, threads, || job.run())
-            .and_then(|r| r)
-            .map_err(era_error)
-    })?;
+    let (found, facts, refine_options) = guarded_in(py, threads, || job.run().map_err(era_error))?;
     let mut source_facts = era_io::model_json::ModelParameters::default();
     source_facts.markov = Some(source);
     source_facts.frame = Some(frame);

@@ -19,6 +19,10 @@ use crate::params::Naming;
 /// the process's threads before any work began).
 pub const MAX_THREADS: usize = 1024;
 
+/// Stack of a pool's threads: a main thread's usual 8 MB, as the work would have outside
+/// a pool (a spawned thread's default is 2 MB).
+const STACK: usize = 8 << 20;
+
 /// Checks a thread count under its front end's name: 1 ..= [`MAX_THREADS`].
 ///
 /// # Errors
@@ -49,6 +53,7 @@ pub fn with_threads<R: Send>(
     check_threads(naming, n)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n)
+        .stack_size(STACK)
         .build()
         .map_err(|e| EraError::Numerical(format!("cannot start {n} threads: {e}")))?;
     // The call's cancel token follows it into the pool's thread.

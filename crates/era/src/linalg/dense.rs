@@ -67,19 +67,32 @@ fn stoppable<T: Send + 'static>(
 /// Runs `work` on a thread of its own while the caller watches `token`: the work's result,
 /// or [`EraError::Interrupted`] at once when the token is cancelled (the work finishes in
 /// the background and its result is dropped).
+///
+/// The work runs in a pool as large as the caller's ([`crate::parallel::with_threads`]):
+/// a spawned thread belongs to no pool, and rayon's global one would both ignore the
+/// call's thread count and, in a process forked after it started, have no threads at
+/// all (the SVD would wait for ever).
 fn on_own_thread<T: Send + 'static>(
     token: cancel::Cancel,
     work: impl FnOnce() -> T + Send + 'static,
     what: &str,
 ) -> Result<T> {
     token.check()?;
+    let threads = rayon::current_num_threads();
     let (send, receive) = std::sync::mpsc::channel();
     let spawned = std::thread::Builder::new()
         .name("era-svd".into())
         .stack_size(8 << 20)
         .spawn(move || {
+            // No pool (the system refused the threads): the sender is dropped, and the
+            // caller reports the SVD's thread ended without a result.
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .stack_size(8 << 20)
+                .build();
+            let Ok(pool) = pool else { return };
             // The receiver is gone when the call was cancelled: the result is dropped.
-            let _ = send.send(work());
+            let _ = send.send(pool.install(work));
         });
     if spawned.is_err() {
         return Err(EraError::Numerical(format!(
@@ -245,6 +258,24 @@ mod tests {
             for k in 0..found.s.len() {
                 assert_eq!(found.s[k].to_bits(), reference.S()[k].to_bits());
             }
+        }
+    }
+
+    #[test]
+    fn an_svd_on_its_own_thread_keeps_the_callers_thread_count() {
+        // Under a token the work leaves the caller's pool for a thread of its own; it
+        // runs in a pool as large as the caller's, not in rayon's global one.
+        for n in [1, 3] {
+            let token = cancel::Cancel::new();
+            let inside = token
+                .run(|| {
+                    crate::parallel::with_threads(crate::params::Naming::Flag, Some(n), || {
+                        on_own_thread(cancel::current().unwrap(), rayon::current_num_threads, "H")
+                    })
+                })
+                .unwrap()
+                .unwrap();
+            assert_eq!(inside, n);
         }
     }
 
