@@ -142,7 +142,8 @@ def _read(paths: List[Any], options: Dict[str, Any]) -> Tuple[List[np.ndarray], 
     selection = {k: options.pop(k) for k in _READ_TIME if k in options}
     records, rate, names = [], None, None
     for path in paths:
-        data, file_rate, file_names = read_time(path, **selection)
+        # The reader on the call's threads too: a task given one thread stays on one.
+        data, file_rate, file_names = read_time(path, threads=options.get("threads"), **selection)
         here = given if given is not None else file_rate
         if here is None:
             raise ValueError(f"{os.fspath(path)}: this file does not give the sample rate: "

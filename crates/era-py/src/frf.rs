@@ -498,17 +498,20 @@ pub fn simulate_modal(
 
 /// Reads time histories from a CSV, MAT v5 or HDF5 file (as `era frf` does).
 ///
-/// `variables` picks MAT variables (side by side), `datasets` HDF5 datasets. Returns
-/// `(data, sample_rate_hz, names)`: `data` float64 (channels, samples), the sample rate
-/// the file gives (None when it gives none), and the channel names (None when absent).
+/// `variables` picks MAT variables (side by side), `datasets` HDF5 datasets; `threads`
+/// the threads of the CSV reader (default: every core; 1 for a task beside others).
+/// Returns `(data, sample_rate_hz, names)`: `data` float64 (channels, samples), the
+/// sample rate the file gives (None when it gives none), and the channel names (None
+/// when absent).
 #[pyfunction]
-#[pyo3(signature = (path, variables=Vec::new(), datasets=Vec::new()))]
+#[pyo3(signature = (path, variables=Vec::new(), datasets=Vec::new(), threads=None))]
 #[allow(clippy::type_complexity)]
 pub fn read_time<'py>(
     py: Python<'py>,
     path: PathBuf,
     variables: Vec<String>,
     datasets: Vec<String>,
+    threads: Option<Int>,
 ) -> PyResult<(
     Bound<'py, numpy::PyArray2<f64>>,
     Option<f64>,
@@ -518,7 +521,8 @@ pub fn read_time<'py>(
         variables,
         datasets,
     };
-    let history = guarded(py, || {
+    let threads = crate::model::thread_count(threads)?;
+    let history = crate::guarded_in(py, threads, || {
         era_io::time::read_time_file(&path, &selection).map_err(io_error)
     })?;
     let (channels, samples) = (history.channels(), history.samples());

@@ -41,6 +41,13 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 
+
+/// mimalloc, not the system's: a worker process that runs record after record (a Dask
+/// or Ray worker, a process pool) reuses the memory of the last call instead of taking
+/// it from the system and faulting it in again each time.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod frf;
 mod friction;
 mod geometry;
