@@ -175,16 +175,22 @@ def _channels(keyword: str, value: Any, names: Optional[List[str]]) -> Any:
     return out
 
 
+def _array_rate(options: Dict[str, Any]) -> float:
+    """The sample rate of a record given as arrays (taken out of `options`), which no
+    file-reading keyword may accompany."""
+    for k in _READ_TIME:
+        if k in options:
+            raise ValueError(f"{k}: reads a file; the record here is arrays")
+    if options.get("sample_rate_hz") is None:
+        raise ValueError("sample_rate_hz: arrays need the sample rate (a file may give it)")
+    return float(options.pop("sample_rate_hz"))
+
+
 def _oma(record: Any, options: Dict[str, Any]) -> Tuple[Any, float, str]:
     options = dict(options)
     paths = _paths_of(record)
     if paths is None:
-        for k in _READ_TIME:
-            if k in options:
-                raise ValueError(f"{k}: reads a file; the record here is arrays")
-        if options.get("sample_rate_hz") is None:
-            raise ValueError("sample_rate_hz: arrays need the sample rate (a file may give it)")
-        rate = float(options.pop("sample_rate_hz"))
+        rate = _array_rate(options)
         return oma(record, rate, **options), rate, "arrays"
     records, rate, names = _read(paths, options)
     for k in ("outputs", "references"):
@@ -219,12 +225,7 @@ def _identify(record: Any, options: Dict[str, Any]) -> Tuple[Any, Optional[float
             raise ValueError(f"identify of time histories needs {k}= (0-based channels)")
     paths = _paths_of(record)
     if paths is None:
-        for k in _READ_TIME:
-            if k in options:
-                raise ValueError(f"{k}: reads a file; the record here is arrays")
-        if options.get("sample_rate_hz") is None:
-            raise ValueError("sample_rate_hz: arrays need the sample rate (a file may give it)")
-        rate = float(options.pop("sample_rate_hz"))
+        rate = _array_rate(options)
         data = record
         names = None
     else:

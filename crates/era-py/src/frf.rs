@@ -521,7 +521,7 @@ pub fn read_time<'py>(
         variables,
         datasets,
     };
-    let threads = crate::model::thread_count(threads)?;
+    let threads = crate::thread_count(threads)?;
     let history = crate::guarded_in(py, threads, || {
         era_io::time::read_time_file(&path, &selection).map_err(io_error)
     })?;

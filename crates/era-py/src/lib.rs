@@ -41,7 +41,6 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 
-
 /// mimalloc, not the system's: a worker process that runs record after record (a Dask
 /// or Ray worker, a process pool) reuses the memory of the last call instead of taking
 /// it from the system and faulting it in again each time.
@@ -128,6 +127,18 @@ pub(crate) fn guarded<T: Send>(
     work: impl FnOnce() -> PyResult<T> + Send,
 ) -> PyResult<T> {
     guarded_in(py, None, work)
+}
+
+/// `threads=`, checked as the CLI's `--threads`; `None` for every core.
+pub(crate) fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
+    match threads {
+        None => Ok(None),
+        Some(n) => {
+            let n = n.size("threads")?;
+            era::parallel::check_threads(era::params::Naming::Keyword, n).map_err(era_error)?;
+            Ok(Some(n))
+        }
+    }
 }
 
 /// [`guarded`] with `threads` for the call's pool (`None`: [`default_threads`]).

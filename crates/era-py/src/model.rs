@@ -10,7 +10,7 @@
 //! checked by [`era::EraOptions::check`] with the CLI's messages.
 
 use crate::frf::PyFrfData;
-use crate::{era_error, guarded, guarded_in, value_error, vector, Int};
+use crate::{era_error, guarded, guarded_in, thread_count, value_error, vector, Int};
 use era::identification::Identification;
 use era::identify::{
     identify as run_identify, identify_supplied, EraOptions, ModelDomain, Order, ScanOptions,
@@ -569,18 +569,6 @@ pub fn identify(
         source: Default::default(),
         oma: None,
     })
-}
-
-/// `threads=`, checked as the CLI's `--threads`; `None` for every core.
-pub(crate) fn thread_count(threads: Option<Int>) -> PyResult<Option<usize>> {
-    match threads {
-        None => Ok(None),
-        Some(n) => {
-            let n = n.size("threads")?;
-            era::parallel::check_threads(Naming::Keyword, n).map_err(era_error)?;
-            Ok(Some(n))
-        }
-    }
 }
 
 /// ERA's options from the keywords both `identify` and `identify_time` take, each

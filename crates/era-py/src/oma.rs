@@ -3,7 +3,8 @@
 //! NExT-ERA at the automatic or a fixed order, with standard deviations from a
 //! delete-one-block jackknife.
 
-use crate::model::{states_of, thread_count, OmaFacts, PyIdentification};
+use crate::model::{states_of, OmaFacts, PyIdentification};
+use crate::thread_count;
 use crate::{era_error, guarded_in, value_error, Int};
 use era::identify::oma::{oma, OmaMethod, OmaOptions};
 use era::params::Naming;

@@ -4,9 +4,9 @@
 //! from OKID's observer (the default) or from those FRFs.
 
 use crate::model::{
-    era_options, refine_options_of, route_request, states_of, thread_count, PyIdentification, Run,
+    era_options, refine_options_of, route_request, states_of, PyIdentification, Run,
 };
-use crate::{era_error, guarded_in, value_error, Int};
+use crate::{era_error, guarded_in, thread_count, value_error, Int};
 use era::frf::estimate::estimate;
 use era::identify::{EraOptions, ScanOptions};
 use era::params::Naming;
