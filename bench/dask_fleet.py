@@ -4,6 +4,7 @@
     VENV=/tmp/venv bash scripts/python_tests.sh -k fleet   # a venv with era and dask
     /tmp/venv/bin/python bench/dask_fleet.py [--records 16] [--channels 8] [--minutes 10]
                                              [--rate 64] [--repeat 2] [--folder DIR]
+                                             [--fleet DIR]
 
 The records are made with numpy (python/tests/fleet_records.py: three modes driven by
 white noise, 2 % sensor noise) and written as CSV once; `--folder` keeps them between
@@ -38,6 +39,11 @@ from fleet_records import fleet  # noqa: E402
 
 
 def records(args) -> list:
+    if args.fleet:
+        paths = sorted(pathlib.Path(args.fleet).glob("records/*.csv"))[: args.records]
+        if len(paths) < args.records:
+            sys.exit(f"{args.fleet}: {len(paths)} records, {args.records} asked for")
+        return paths
     folder = pathlib.Path(args.folder) if args.folder else pathlib.Path(
         tempfile.mkdtemp(prefix="era-dask-fleet-"))
     existing = sorted(folder.glob("rec_*.csv")) if folder.exists() else []
@@ -95,6 +101,9 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=64.0)
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--folder", default=None)
+    parser.add_argument("--fleet", default=None,
+                        help="the records of an `era simulate fleet` folder instead (such as "
+                        "target/bench-fleet-1000 of bench/batch.sh): the CLI's throughput data")
     args = parser.parse_args()
     paths = records(args)
     serial = time.perf_counter()

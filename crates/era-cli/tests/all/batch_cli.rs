@@ -181,7 +181,10 @@ fn jobs_side_by_side_give_the_same_table_and_a_killed_batch_resumes() {
     let saved = |d: &Path| {
         std::fs::read_dir(d).map_or(0, |e| {
             e.flatten()
-                .filter(|f| f.path().extension().is_some_and(|x| x == "json"))
+                .filter(|f| {
+                    let name = f.file_name().to_string_lossy().into_owned();
+                    name.ends_with(".json") && !name.starts_with('.')
+                })
                 .count()
         })
     };

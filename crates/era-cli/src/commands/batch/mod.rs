@@ -206,6 +206,8 @@ fn prepare_states(states: &Path, resume: bool) -> anyhow::Result<HashMap<String,
             .with_context(|| format!("clearing {}", states.display()))?;
     }
     std::fs::create_dir_all(states).with_context(|| format!("creating {}", states.display()))?;
+    // Temporary files of a killed run's saves go; the states themselves stay.
+    era_io::atomic::remove_stale(states);
     let mut earlier = HashMap::new();
     if resume {
         for entry in std::fs::read_dir(states)
@@ -223,7 +225,10 @@ fn prepare_states(states: &Path, resume: bool) -> anyhow::Result<HashMap<String,
             let Ok(state) = serde_json::from_str::<Value>(&text) else {
                 continue;
             };
-            if let Some(id) = state["id"].as_str() {
+            // Only `<id>.json` itself: a temporary file of a save that a kill cut short
+            // (hidden, its name random) may hold a whole state that never took its place.
+            let named = path.file_stem().and_then(|s| s.to_str());
+            if let Some(id) = state["id"].as_str().filter(|id| named == Some(*id)) {
                 earlier.insert(id.to_string(), state);
             }
         }
