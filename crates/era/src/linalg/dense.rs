@@ -40,6 +40,12 @@ pub(crate) struct ThinSvd {
 /// How often a waiting caller looks at its cancel token.
 const POLL: std::time::Duration = std::time::Duration::from_millis(20);
 
+/// Matrices of fewer entries are decomposed on the caller's thread even under a cancel
+/// token: their SVD takes milliseconds, while a thread and a pool of their own for each
+/// (two threads started and ended, their stacks mapped and unmapped) cost a Python
+/// worker a fifth of its time once another process ran beside it.
+const INLINE_ENTRIES: usize = 1 << 18;
+
 /// The thin SVD of `h` (consumed), `what` naming the matrix in a failure.
 ///
 /// # Errors
@@ -47,7 +53,8 @@ const POLL: std::time::Duration = std::time::Duration::from_millis(20);
 /// when the call's token is cancelled while it runs.
 pub(crate) fn thin_svd(h: Mat<f64>, what: &str) -> Result<ThinSvd> {
     let par = faer::get_global_parallelism();
-    stoppable(what, move || compute(&h, par))
+    let entries = h.nrows() * h.ncols();
+    stoppable(what, entries, move || compute(&h, par))
 }
 
 /// Runs the decomposition `work` under the calling thread's cancel token: right here when
@@ -55,12 +62,19 @@ pub(crate) fn thin_svd(h: Mat<f64>, what: &str) -> Result<ThinSvd> {
 /// faer's is an [`EraError::Numerical`] naming `what`.
 fn stoppable<T: Send + 'static>(
     what: &str,
+    entries: usize,
     work: impl FnOnce() -> std::result::Result<T, svd::SvdError> + Send + 'static,
 ) -> Result<T> {
     let failed = |e: svd::SvdError| EraError::Numerical(format!("SVD of {what}: {e:?}"));
     match cancel::current() {
+        Some(token) if entries >= INLINE_ENTRIES => {
+            on_own_thread(token, work, what)?.map_err(failed)
+        }
+        Some(token) => {
+            token.check()?;
+            work().map_err(failed)
+        }
         None => work().map_err(failed),
-        Some(token) => on_own_thread(token, work, what)?.map_err(failed),
     }
 }
 
@@ -130,7 +144,7 @@ pub(crate) fn thin_svd_leading(h: Mat<f64>, keep: usize, what: &str) -> Result<T
         return Ok(svd);
     }
     let par = faer::get_global_parallelism();
-    stoppable(what, move || {
+    stoppable(what, m * n, move || {
         if m >= n {
             tall_leading(h, keep, par)
         } else {
@@ -150,7 +164,8 @@ pub(crate) fn thin_svd_leading(h: Mat<f64>, keep: usize, what: &str) -> Result<T
 /// # Errors
 /// As [`thin_svd`].
 pub(crate) fn singular_values(h: Mat<f64>, what: &str) -> Result<Vec<f64>> {
-    stoppable(what, move || h.singular_values())
+    let entries = h.nrows() * h.ncols();
+    stoppable(what, entries, move || h.singular_values())
 }
 
 /// faer's ratio of sides above which its SVD starts with a QR (`SvdParams`'s default).
