@@ -193,16 +193,22 @@ pub fn fleet_change(tracks: &[(Vec<f64>, Vec<f64>)], daily: bool) -> Option<Chan
     xs.sort_by(f64::total_cmp);
     xs.dedup();
     let splits: Vec<f64> = xs.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+    // Whether each track's fit holds the daily cycle: its records span a day.
+    let cycles: Vec<bool> = tracks
+        .iter()
+        .map(|(x, _)| {
+            let span = x.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - x.iter().copied().fold(f64::INFINITY, f64::min);
+            daily && span >= 1.0
+        })
+        .collect();
     let mut best: Option<(f64, f64, Vec<Option<Step>>)> = None;
     let mut tried = 0usize;
     for &s in &splits {
         let steps: Vec<Option<Step>> = tracks
             .iter()
-            .map(|(x, y)| {
-                let span = x.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                    - x.iter().copied().fold(f64::INFINITY, f64::min);
-                step_at(x, y, s, daily && span >= 1.0)
-            })
+            .zip(&cycles)
+            .map(|((x, y), &cycle)| step_at(x, y, s, cycle))
             .collect();
         if steps.iter().all(Option::is_none) {
             continue;

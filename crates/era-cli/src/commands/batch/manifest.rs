@@ -136,17 +136,16 @@ pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
         ))
     })?;
     let lines = Lines::new(&text);
-    let line_of = |_: &str, offset: usize| lines.of(offset);
     let at = |offset: usize, message: String| -> anyhow::Error {
         UsageError(format!(
             "{}: line {}: {message}",
             path.display(),
-            line_of(&text, offset)
+            lines.of(offset)
         ))
         .into()
     };
     let raw: RawManifest = toml::from_str(&text).map_err(|e| {
-        let line = e.span().map(|s| line_of(&text, s.start));
+        let line = e.span().map(|s| lines.of(s.start));
         let message = e.message().trim().to_string();
         UsageError(match line {
             Some(l) => {
@@ -195,10 +194,7 @@ pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
         .as_ref()
         .map(|a| a.get_ref().clone())
         .unwrap_or_default();
-    let shared_line = raw
-        .args
-        .as_ref()
-        .map_or(1, |a| line_of(&text, a.span().start));
+    let shared_line = raw.args.as_ref().map_or(1, |a| lines.of(a.span().start));
     if let Some(a) = &raw.args {
         check_args(a.get_ref()).map_err(|m| at(a.span().start, m))?;
     }
@@ -208,7 +204,7 @@ pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
         let r = r.get_ref();
         let id = r.id.get_ref().clone();
         check_id(&id).map_err(|m| at(r.id.span().start, m))?;
-        if let Some(first) = seen.insert(id.clone(), line_of(&text, r.id.span().start)) {
+        if let Some(first) = seen.insert(id.clone(), lines.of(r.id.span().start)) {
             return Err(at(
                 r.id.span().start,
                 format!("record id {id:?} is given twice (first on line {first}): ids name the rows of the tables"),
@@ -250,7 +246,7 @@ pub fn read(path: &Path, allow_outside: bool) -> anyhow::Result<Manifest> {
             None => (shared_args.clone(), shared_line),
             Some(a) => {
                 check_args(a.get_ref()).map_err(|m| at(a.span().start, m))?;
-                (a.get_ref().clone(), line_of(&text, a.span().start))
+                (a.get_ref().clone(), lines.of(a.span().start))
             }
         };
         records.push(Record {
