@@ -311,8 +311,60 @@ fn judge_spread(found: &mut Identification, spread: &[Option<ModeSpread>], block
             q.reason = Some(why);
         }
     }
+    judge_doubles(found);
     found.suspects = crate::suspect::check_identification(found);
 }
+
+/// Two physical modes closer in frequency than [`DOUBLE_SIGMAS`] of their combined
+/// standard deviation, with shapes of MAC at least [`DOUBLE_MAC`], are one mode to the
+/// data: no test on these blocks tells them apart, and their shapes are one direction
+/// mixed. The one whose frequency scatters more is marked not physical. Two
+/// true close modes with distinct shapes (MAC ≤ 0.4 between their estimates on the
+/// simulated records) stay apart; a close pair the records cannot separate is reported
+/// once, as a peer's clustering would.
+fn judge_doubles(found: &mut Identification) {
+    let modes = &found.modal.modes;
+    let physical: Vec<usize> = (0..modes.len())
+        .filter(|&k| found.quality.get(k).is_some_and(|q| q.physical))
+        .collect();
+    let mut verdicts = Vec::new();
+    for (n, &a) in physical.iter().enumerate() {
+        for &b in &physical[n + 1..] {
+            let (qa, qb) = (&found.quality[a], &found.quality[b]);
+            let (Some(sa), Some(sb)) = (qa.frequency_std_hz, qb.frequency_std_hz) else {
+                continue;
+            };
+            let apart = (modes[a].frequency_hz - modes[b].frequency_hz).abs() / sa.hypot(sb);
+            let mac = crate::modal::indicators::mac(&modes[a].shape, &modes[b].shape);
+            if !(apart < DOUBLE_SIGMAS && mac >= DOUBLE_MAC) {
+                continue;
+            }
+            // The one the blocks pin down less is the one to drop.
+            let (weak, strong) = if sa > sb { (a, b) } else { (b, a) };
+            verdicts.push((
+                weak,
+                format!(
+                    "the data do not tell it from mode {} ({:.4} Hz): {apart:.1} standard deviations apart in frequency, MAC {mac:.2} between their shapes",
+                    strong + 1,
+                    modes[strong].frequency_hz
+                ),
+            ));
+        }
+    }
+    for (k, why) in verdicts {
+        let q = &mut found.quality[k];
+        if q.physical {
+            q.physical = false;
+            q.reason = Some(why);
+        }
+    }
+}
+
+/// Frequencies closer than this many combined standard deviations cannot be told apart.
+const DOUBLE_SIGMAS: f64 = 2.0;
+
+/// Shapes at least this collinear (MAC) are one direction.
+const DOUBLE_MAC: f64 = 0.6;
 
 /// Blocks a mode must be found again in for its spread to count.
 fn needed_blocks(blocks: usize) -> usize {
