@@ -20,6 +20,8 @@ Cases:
   absurd observer flags;
 - output-only records through `era oma`, mutated and with absurd lags, blocks, orders,
   references and sample rates;
+- geometries for `--geometry` (our CSV and the ARTeMIS UFF export in data/), mutated,
+  through `identify` with its report and through `refine`;
 - fleets: mutated `era batch` manifests and `era track` tables (modes.parquet), absurd
   `--jobs`, `--shard`, tracking and `simulate fleet` values, special files as manifests;
 - signals: SIGINT, SIGTERM or SIGHUP at a random moment of a run (exit 0, or 128 + the
@@ -421,7 +423,21 @@ def main():
     sh(era, work, "batch", "fleet.toml", "--out", "batch-seed", "-q")
     shutil.copy(os.path.join(work, "batch-seed", "modes.parquet"), os.path.join(work, "modes.parquet"))
 
+    # Geometries for --geometry: our CSV (the truth model's three outputs on nodes 1-3)
+    # and the real ARTeMIS export shipped in data/.
+    with open(os.path.join(work, "geometry.csv"), "w") as f:
+        f.write("# three masses and a ground\nnode,x,y,z\n1,0,0,1\n2,0,0,2\n3,0,0,3\n9,0,0,0\n"
+                "from,to\n9,1\n1,2\n2,3\n")
+    shutil.copy(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data",
+                             "pyuff-artemis-geometry", "artemis_geometry_rpbc.uff"),
+                os.path.join(work, "geometry.uff"))
+
     commands = {
+        "geometry.csv": [["identify", "truth.csv", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024",
+                          "--geometry", "{f}", "--out", "geo-out", "-q"]],
+        "geometry.uff": [["identify", "truth.csv", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024",
+                          "--geometry", "{f}", "--no-figures", "--out", "geo-out", "-q"],
+                         ["refine", "model.json", "truth.csv", "--geometry", "{f}", "--out", "geo-out", "-q"]],
         "truth.csv": [["info", "{f}"], ["identify", "{f}", "--states", "8", "--hankel-factor", "4", "--pad-to", "1024"],
                       ["convert", "{f}", "o.uff"], ["plot", "{f}", "--out", "plotdir"]],
         "modal.uff": [["info", "{f}"], ["identify", "{f}", "--states", "6"], ["convert", "{f}", "o.csv"]],
@@ -579,7 +595,9 @@ def main():
                  ["oma", work, "--outputs", "1"], ["oma", "/dev/null", "--outputs", "1"],
                  ["batch", fifo, "--out", "b"], ["batch", "/dev/zero", "--out", "b"],
                  ["batch", work, "--out", "b"], ["batch", "/dev/null", "--out", "b"],
-                 ["track", work + "/nowhere", "--out", "t"], ["track", "/dev", "--out", "t"]):
+                 ["track", work + "/nowhere", "--out", "t"], ["track", "/dev", "--out", "t"],
+                 *(["identify", "truth.csv", "--states", "8", "--geometry", g, "--no-figures", "--out", "g"]
+                   for g in (fifo, "/dev/zero", work, "/dev/null"))):
         r.run("input: special file", args, env={"ERA_MAX_INPUT_BYTES": "50000000"})
     with open(os.path.join(work, "truth.csv"), "rb") as f:
         truth = f.read()
