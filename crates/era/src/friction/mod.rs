@@ -171,7 +171,7 @@ pub fn check_stiffness(naming: crate::params::Naming, stiffness: f64) -> crate::
 /// stiffness, a frequency, a force, a displacement or a dead zone outside them is no
 /// actuator's (1e308 overflowed the estimate to inf, and 1e300 made the tuning run for
 /// 15 s and print coefficients of 300 digits).
-pub const PHYSICAL_RANGE: (f64, f64) = (1e-12, 1e12);
+pub(crate) const PHYSICAL_RANGE: (f64, f64) = (1e-12, 1e12);
 
 /// Whether `x`'s magnitude lies in [`PHYSICAL_RANGE`].
 pub(crate) fn physical(x: f64) -> bool {

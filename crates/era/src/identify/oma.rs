@@ -64,7 +64,7 @@ pub const DEFAULT_BLOCKS: usize = 6;
 /// Hankel factor of output-only identification by default: the correlations' Hankel
 /// spans half the lags whatever the factor, and a factor of 1 lets the scan reach
 /// 0.75 states per lag (96 at the least default lags), enough for a few dozen modes.
-pub const DEFAULT_OMA_HANKEL_FACTOR: usize = 1;
+pub(crate) const DEFAULT_OMA_HANKEL_FACTOR: usize = 1;
 
 /// Settings of [`oma`].
 #[derive(Debug, Clone, PartialEq)]

@@ -91,7 +91,7 @@ pub struct Change {
 /// The step of `(x, y)` at `split` with a common trend (and, with `daily`, a daily
 /// cycle: `x` in days); `None` without [`MIN_SIDE`] points on each side, too few points
 /// for the fit, or a singular fit.
-pub fn step_at(x: &[f64], y: &[f64], split: f64, daily: bool) -> Option<Step> {
+pub(crate) fn step_at(x: &[f64], y: &[f64], split: f64, daily: bool) -> Option<Step> {
     let n = x.len();
     let after = x.iter().filter(|&&v| v > split).count();
     if after < MIN_SIDE || n - after < MIN_SIDE || y.len() != n {

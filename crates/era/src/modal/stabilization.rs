@@ -179,7 +179,7 @@ impl OrderRange {
 }
 
 /// The most orders one scan realizes.
-pub const MAX_SCAN_ORDERS: usize = 500;
+pub(crate) const MAX_SCAN_ORDERS: usize = 500;
 
 impl std::fmt::Display for OrderRange {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -594,7 +594,7 @@ impl std::fmt::Display for Rejection {
 }
 
 /// The hard criteria of step 1 for one pole: `None` when it passes.
-pub fn hard_rejection(
+pub(crate) fn hard_rejection(
     frequency_hz: f64,
     damping_ratio: f64,
     cmi: Option<f64>,

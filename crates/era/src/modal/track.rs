@@ -229,7 +229,7 @@ struct Live {
 }
 
 /// `a` and `b` with runs of digits compared as numbers (`r2` before `r10`).
-pub fn natural_order(a: &str, b: &str) -> Ordering {
+pub(crate) fn natural_order(a: &str, b: &str) -> Ordering {
     let (mut x, mut y) = (a.as_bytes(), b.as_bytes());
     loop {
         match (x.first(), y.first()) {
@@ -263,7 +263,7 @@ pub fn natural_order(a: &str, b: &str) -> Ordering {
 }
 
 /// MAC of two shapes on the channels they share (by name); `None` with fewer than two.
-pub fn shared_mac(a: &TrackMode, b: &TrackMode) -> Option<f64> {
+pub(crate) fn shared_mac(a: &TrackMode, b: &TrackMode) -> Option<f64> {
     let mut x = Vec::new();
     let mut y = Vec::new();
     for (k, name) in a.channels.iter().enumerate() {
@@ -343,7 +343,7 @@ fn assign_rows(cost: &[Vec<f64>]) -> Vec<usize> {
 
 /// Minimum-cost one-to-one assignment of a rectangular matrix: `out[i]` is row i's
 /// column, `None` for the rows left over when there are more rows than columns.
-pub fn assign(cost: &[Vec<f64>]) -> Vec<Option<usize>> {
+pub(crate) fn assign(cost: &[Vec<f64>]) -> Vec<Option<usize>> {
     let n = cost.len();
     let m = cost.first().map_or(0, Vec::len);
     if n == 0 || m == 0 {

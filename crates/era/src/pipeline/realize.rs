@@ -168,7 +168,7 @@ pub fn realize(
 ///
 /// # Errors
 /// As [`realize`].
-pub fn realize_shift(
+pub(crate) fn realize_shift(
     markov: &MarkovSequence,
     sample_time_s: f64,
     options: &RealizeOptions,

@@ -119,7 +119,7 @@ impl FleetSpec {
 }
 
 /// The most records a fleet may have.
-pub const MAX_FLEET_RECORDS: usize = 1_000_000;
+pub(crate) const MAX_FLEET_RECORDS: usize = 1_000_000;
 
 /// Temperature span of the trend over the fleet, °C.
 const TREND_C: f64 = 10.0;

@@ -614,7 +614,8 @@ pub fn lowest_peak_hz(records: &[&[&[f64]]], sample_rate_hz: f64) -> Option<f64>
 }
 
 /// The direct definition of [`correlations`] (one block): a double loop, for tests.
-pub fn correlations_naive(
+#[cfg(test)]
+pub(crate) fn correlations_naive(
     records: &[&[&[f64]]],
     references: &[usize],
     lags: usize,

@@ -127,7 +127,7 @@ impl Default for OkidOptions {
 }
 
 /// Default number of system Markov blocks.
-pub const DEFAULT_MARKOV_SAMPLES: usize = 1024;
+pub(crate) const DEFAULT_MARKOV_SAMPLES: usize = 1024;
 
 /// The front ends' default number of Markov blocks for records whose longest has
 /// `longest` samples: the judging frame ([`crate::frf::estimate::DEFAULT_FRAME`]), or

@@ -29,14 +29,14 @@ pub struct OutputSpectrum {
 /// The default segment: a sixteenth of the longest record rounded down to a power of
 /// two, from 256 to 8192 samples (at least eight averages with half overlap on long
 /// records, and lines fine enough to part modes a few lines apart).
-pub fn default_segment(longest: usize) -> usize {
+pub(crate) fn default_segment(longest: usize) -> usize {
     let seg = (longest / 16).clamp(256, 8192);
     1usize << (usize::BITS - 1 - seg.leading_zeros())
 }
 
 /// The largest number of lines × channels² the spectral matrix may hold in memory
 /// (about 1.5 GB of complex values).
-pub const MAX_SPECTRAL_ENTRIES: usize = 100_000_000;
+pub(crate) const MAX_SPECTRAL_ENTRIES: usize = 100_000_000;
 
 /// The output spectrum of `records` (each a set of output channels of one length; the
 /// same channels in each) sampled at `sample_rate_hz`, in segments of `segment`
@@ -46,7 +46,7 @@ pub const MAX_SPECTRAL_ENTRIES: usize = 100_000_000;
 /// [`EraError::InvalidParameter`] for no record or channel, a segment below 16 or longer
 /// than every record, a spectral matrix above [`MAX_SPECTRAL_ENTRIES`], or a sample
 /// rate that is not positive; [`EraError::Numerical`] when a transform fails.
-pub fn output_spectrum(
+pub(crate) fn output_spectrum(
     records: &[&[&[f64]]],
     sample_rate_hz: f64,
     segment: Option<usize>,

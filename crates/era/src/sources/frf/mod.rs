@@ -239,7 +239,7 @@ pub(crate) fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
 ///
 /// # Errors
 /// [`EraError::TooFewLines`] for fewer than 2 samples, and [`FrfData::new`]'s.
-pub fn frf_of_markov(
+pub(crate) fn frf_of_markov(
     markov: &MarkovSequence,
     sample_time_s: f64,
     quantity: crate::frf::Quantity,
