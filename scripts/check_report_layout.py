@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""Checks that a report.html leads the eye, in headless Chromium at 1400 px wide.
+
+For each report given, or for the 8x8 thesis-size set it makes itself (`era simulate
+modal --collocated --noise 0.05`, then `era identify --states auto --out`):
+
+- the file is at most 3 MB;
+- the table of contents, the summary and the mode table start within the first 3000 px,
+  and the stabilization diagram (when the run scanned orders) ends within them;
+- every link of the table of contents names an element of the page;
+- the page logs no console error and requests nothing but itself.
+
+It saves a 1400 x 3000 screenshot of each report's top (layout_N.png) to look at.
+Standard library only; the DevTools client is check_viewer.py's.
+
+Usage: scripts/check_report_layout.py [--era target/release/era] [--out DIR] [REPORT ...]
+Exit status 0 when every check passes, 1 when one fails, 2 when Chromium or era is
+missing (said loudly: this is not a skip).
+"""
+
+import argparse
+import base64
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from check_viewer import DevTools, find_chromium  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+WIDTH, HEIGHT = 1400, 3000
+MAX_BYTES = 3 * 1024 * 1024
+
+GEOMETRY = """(() => {
+  const box = id => { const e = document.getElementById(id); if (!e) return null;
+    const r = e.getBoundingClientRect(); return [r.top + window.scrollY, r.bottom + window.scrollY]; };
+  const links = [...document.querySelectorAll('#toc a')].map(a => a.getAttribute('href'));
+  return { toc: box('toc'), summary: box('summary'), modes: box('modal-table'),
+           stabilization: box('fig-stabilization'), links: links,
+           missing: links.filter(h => !h.startsWith('#') || !document.getElementById(h.slice(1))) };
+})()"""
+
+
+def thesis_size_report(era, out):
+    frf = os.path.join(out, "dta.csv")
+    subprocess.run([era, "simulate", "modal", "--collocated", "--noise", "0.05", "--seed", "1",
+                    "--out", frf, "-q"], check=True)
+    run = os.path.join(out, "dta-auto")
+    subprocess.run([era, "identify", frf, "--states", "auto", "--out", run, "-q"], check=True)
+    return os.path.join(run, "report.html")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--era", default=os.path.join(ROOT, "target", "release", "era"))
+    ap.add_argument("--out", default=None, help="folder for the run and the screenshots (default: a temporary one, kept)")
+    ap.add_argument("--chromium", default=None)
+    ap.add_argument("reports", nargs="*")
+    a = ap.parse_args()
+    browser = find_chromium(a.chromium)
+    if not browser:
+        print("check_report_layout: FAILED: no chromium on PATH (apt-get install chromium)", file=sys.stderr)
+        return 2
+    out = a.out or tempfile.mkdtemp(prefix="check-layout-")
+    os.makedirs(out, exist_ok=True)
+    reports = a.reports
+    if not reports:
+        if not os.path.isfile(a.era):
+            print(f"check_report_layout: FAILED: no era binary at {a.era}", file=sys.stderr)
+            return 2
+        reports = [thesis_size_report(a.era, out)]
+
+    failures = []
+
+    def check(ok, what):
+        print(("  ok    " if ok else "  FAIL  ") + what)
+        if not ok:
+            failures.append(what)
+
+    profile = tempfile.mkdtemp(prefix="check-layout-profile-")
+    proc = subprocess.Popen(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage", "--no-first-run",
+         "--hide-scrollbars", "--remote-debugging-port=0", f"--window-size={WIDTH},{HEIGHT}",
+         f"--user-data-dir={profile}", "about:blank"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        port_file = os.path.join(profile, "DevToolsActivePort")
+        for _ in range(600):
+            if os.path.exists(port_file) and open(port_file).read().strip():
+                break
+            time.sleep(0.1)
+        port = int(open(port_file).read().split()[0])
+        targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list"))
+        cdp = DevTools(next(t for t in targets if t.get("type") == "page")["webSocketDebuggerUrl"])
+        for domain in ["Page", "Runtime", "Log", "Network"]:
+            cdp.call(f"{domain}.enable")
+        cdp.call("Emulation.setDeviceMetricsOverride", width=WIDTH, height=HEIGHT, deviceScaleFactor=1, mobile=False)
+        for n, page in enumerate(reports, start=1):
+            size = os.path.getsize(page)
+            print(f"check_report_layout: {page} ({size} bytes)")
+            check(size <= MAX_BYTES, f"at most 3 MB ({size / 1048576:.2f} MB)")
+            cdp.events = []
+            url = "file://" + os.path.abspath(page)
+            cdp.call("Page.navigate", url=url)
+            cdp.wait_event("Page.loadEventFired")
+            cdp.js("new Promise(r => setTimeout(r, 300))")
+            g = cdp.js(GEOMETRY)
+            for key, name in [("toc", "the table of contents"), ("summary", "the summary"), ("modes", "the mode table")]:
+                box = g[key]
+                check(box is not None and box[0] < HEIGHT,
+                      f"{name} starts within the first {HEIGHT} px ({'absent' if box is None else f'at {box[0]:.0f} px'})")
+            if g["stabilization"] is not None:
+                check(g["stabilization"][1] <= HEIGHT,
+                      f"the stabilization diagram ends within the first {HEIGHT} px (at {g['stabilization'][1]:.0f} px)")
+            else:
+                print("  --    no stabilization diagram in this report (a fixed order)")
+            check(len(g["links"]) >= 4 and not g["missing"],
+                  f"the table of contents' {len(g['links'])} links all resolve (missing: {g['missing']})")
+            data = cdp.call("Page.captureScreenshot", format="png",
+                            clip={"x": 0, "y": 0, "width": WIDTH, "height": HEIGHT, "scale": 1})["data"]
+            shot = os.path.join(out, f"layout_{n}.png")
+            with open(shot, "wb") as f:
+                f.write(base64.b64decode(data))
+            print(f"  saved {shot}")
+            errors = [e for e in cdp.events if e.get("method") == "Runtime.exceptionThrown"
+                      or (e.get("method") == "Runtime.consoleAPICalled" and e["params"]["type"] in ("error", "assert"))
+                      or (e.get("method") == "Log.entryAdded" and e["params"]["entry"]["level"] == "error")]
+            check(not errors, f"no console errors ({len(errors)}: {json.dumps(errors)[:300]})")
+            requests = [e["params"]["request"]["url"] for e in cdp.events if e.get("method") == "Network.requestWillBeSent"]
+            others = [r for r in requests if r != url]
+            check(not others, f"no network requests besides the page (others: {others[:5]})")
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+        shutil.rmtree(profile, ignore_errors=True)
+    if failures:
+        print(f"check_report_layout: FAILED {len(failures)} check(s)", file=sys.stderr)
+        return 1
+    print("check_report_layout: all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
