@@ -1,4 +1,4 @@
-//! `--geometry FILE`: the test geometry of a run (identify, refine).
+//! `--geometry FILE`: the test geometry of a run (identify, refine, oma, plot).
 
 use clap::Args;
 use std::path::PathBuf;

@@ -75,9 +75,30 @@ fn not_drawn(map: &ChannelMap, table: &ChannelTable) -> Vec<String> {
 /// a geometry. The outputs are placed as in [`notes`].
 pub fn shape_view(run: &super::RunInput, found: &Identification) -> Option<ShapeView> {
     let geometry = run.geometry.as_ref()?;
-    let outputs = found.measured.outputs();
+    let (nodes, segments, placed, not_drawn) = layout(
+        geometry,
+        run.channels.as_ref(),
+        found.measured.outputs(),
+    );
+    Some(ShapeView::new(nodes, segments, &placed, found, not_drawn))
+}
+
+/// What a shape view of `outputs` channels on `geometry` needs: the node positions,
+/// the segments as node indices, each channel placed (as in [`notes`]: the channel
+/// table, or era's numbering without one) and the channels not drawn.
+#[allow(clippy::type_complexity)]
+pub fn layout(
+    geometry: &Geometry,
+    channels: Option<&ChannelTable>,
+    outputs: usize,
+) -> (
+    Vec<[f64; 3]>,
+    Vec<(usize, usize)>,
+    Vec<Placement>,
+    Vec<String>,
+) {
     let numbered = ChannelTable::numbered(outputs, 0);
-    let table = run.channels.as_ref().unwrap_or(&numbered);
+    let table = channels.unwrap_or(&numbered);
     let map = map_channels(geometry, &table.outputs);
     let index = geometry.node_index();
     let segments = geometry
@@ -94,13 +115,12 @@ pub fn shape_view(run: &super::RunInput, found: &Identification) -> Option<Shape
             direction: p.direction,
         })
         .collect();
-    Some(ShapeView::new(
+    (
         geometry.nodes.iter().map(|n| n.xyz).collect(),
         segments,
-        &placed,
-        found,
+        placed,
         not_drawn(&map, table),
-    ))
+    )
 }
 
 /// `run` with the geometry and its notes.

@@ -6,6 +6,7 @@
 pub mod estimate;
 pub mod figures;
 pub mod geometry;
+pub mod shapes;
 pub mod identification;
 pub mod oma;
 pub mod progress;

@@ -11,6 +11,7 @@ mod formats_cli;
 mod frf_cli;
 mod friction_cli;
 mod geometry_cli;
+mod shapes_cli;
 mod hostile_inputs;
 mod hostile_outputs;
 mod hostile_params;
