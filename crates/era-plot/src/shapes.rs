@@ -132,9 +132,7 @@ where
 {
     crate::render::fonts();
     root.fill(&WHITE).map_err(err)?;
-    let root = root
-        .titled(&plot.title, ("sans-serif", 18))
-        .map_err(err)?;
+    let root = root.titled(&plot.title, ("sans-serif", 18)).map_err(err)?;
     let panels = root.split_evenly((1, 3));
     for (area, &(name, h, v)) in panels.iter().zip(VIEWS.iter()) {
         let (w, t) = area.dim_in_pixel();
@@ -159,10 +157,9 @@ where
             .draw()
             .map_err(err)?;
         let at = |p: &[f64; 3]| (p[h], p[v]);
-        for (positions, colour, width) in [
-            (&plot.nodes, UNDEFORMED, 1),
-            (&plot.deformed, DEFORMED, 2),
-        ] {
+        for (positions, colour, width) in
+            [(&plot.nodes, UNDEFORMED, 1), (&plot.deformed, DEFORMED, 2)]
+        {
             chart
                 .draw_series(plot.segments.iter().filter_map(|&(a, b)| {
                     let (pa, pb) = (positions.get(a)?, positions.get(b)?);
@@ -271,10 +268,7 @@ impl ComplexityPlot {
     pub fn new(title: &str, mut panels: Vec<ComplexityPanel>) -> Self {
         let mut title = title.to_string();
         if panels.len() > MAX_PANELS {
-            title.push_str(&format!(
-                " (the first {MAX_PANELS} of {})",
-                panels.len()
-            ));
+            title.push_str(&format!(" (the first {MAX_PANELS} of {})", panels.len()));
             panels.truncate(MAX_PANELS);
         }
         let columns = panels.len().clamp(1, 6);
@@ -297,9 +291,7 @@ where
 {
     crate::render::fonts();
     root.fill(&WHITE).map_err(err)?;
-    let root = root
-        .titled(&plot.title, ("sans-serif", 17))
-        .map_err(err)?;
+    let root = root.titled(&plot.title, ("sans-serif", 17)).map_err(err)?;
     let rows = plot.panels.len().div_ceil(plot.columns).max(1);
     let areas = root.split_evenly((rows, plot.columns));
     let circle: Vec<(f64, f64)> = (0..=72)
@@ -309,13 +301,18 @@ where
         })
         .collect();
     for (area, panel) in areas.iter().zip(&plot.panels) {
+        // A circle drawn round: the ranges widened to the plotting area's aspect (the
+        // panel less its margins and caption).
+        let (w, h) = area.dim_in_pixel();
+        let aspect = (f64::from(w) - 12.0).max(10.0) / (f64::from(h) - 32.0).max(10.0);
+        let (rx, ry) = (1.1 * aspect.max(1.0), 1.1 * (1.0 / aspect).max(1.0));
         let mut chart = ChartBuilder::on(area)
             .caption(
                 format!("{}, MPC {:.3}", panel.label, panel.mpc),
                 ("sans-serif", 12),
             )
             .margin(6)
-            .build_cartesian_2d(-1.1..1.1, -1.1..1.1)
+            .build_cartesian_2d(-rx..rx, -ry..ry)
             .map_err(err)?;
         let guide = UNDEFORMED.stroke_width(1);
         chart

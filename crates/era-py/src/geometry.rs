@@ -7,7 +7,9 @@ use crate::{guarded, io_error, value_error, vector};
 use era::identification::Identification;
 use era::Complex64;
 use era_io::frf_file::{direction_name, parse_direction, Channel, ChannelTable, Dof};
-use era_io::geometry::{map_channels, read_geometry as read_geometry_file, Geometry, Node, TraceLine};
+use era_io::geometry::{
+    map_channels, read_geometry as read_geometry_file, Geometry, Node, TraceLine,
+};
 use numpy::PyArrayMethods;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -29,9 +31,7 @@ use std::path::PathBuf;
 /// `FileNotFoundError`.
 #[pyfunction]
 pub fn read_geometry(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
-    let g = guarded(py, || {
-        read_geometry_file(&path).map_err(io_error)
-    })?;
+    let g = guarded(py, || read_geometry_file(&path).map_err(io_error))?;
     let index = g.node_index();
     let segments = g.segments();
     let n = g.nodes.len();
@@ -62,9 +62,7 @@ pub fn read_geometry(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict
 fn geometry_of(geometry: &Bound<'_, PyAny>) -> PyResult<Geometry> {
     let Ok(d) = geometry.downcast::<PyDict>() else {
         let path: PathBuf = geometry.extract().map_err(|_| {
-            PyTypeError::new_err(
-                "geometry: give a path or the dict era.read_geometry returns",
-            )
+            PyTypeError::new_err("geometry: give a path or the dict era.read_geometry returns")
         })?;
         return read_geometry_file(&path).map_err(io_error);
     };
@@ -76,7 +74,9 @@ fn geometry_of(geometry: &Bound<'_, PyAny>) -> PyResult<Geometry> {
         }
     };
     let (Some(ids), Some(xyz)) = (listed("ids")?, listed("xyz")?) else {
-        return value_error("geometry: the dict needs 'ids' and 'xyz' (as era.read_geometry returns)");
+        return value_error(
+            "geometry: the dict needs 'ids' and 'xyz' (as era.read_geometry returns)",
+        );
     };
     let ids: Vec<i64> = ids
         .extract()
@@ -229,17 +229,11 @@ pub(crate) fn shapes_on<'py>(
         "xyz",
         vector(py, g.nodes.iter().flat_map(|x| x.xyz).collect()).reshape([n, 3])?,
     )?;
-    d.set_item(
-        "displacement",
-        vector(py, u).reshape([modes.len(), n, 3])?,
-    )?;
+    d.set_item("displacement", vector(py, u).reshape([modes.len(), n, 3])?)?;
     d.set_item("measured", vector(py, measured))?;
     d.set_item(
         "not_drawn_outputs",
-        vector(
-            py,
-            map.not_drawn.iter().map(|x| x.channel as i64).collect(),
-        ),
+        vector(py, map.not_drawn.iter().map(|x| x.channel as i64).collect()),
     )?;
     d.set_item("not_drawn", not_drawn)?;
     Ok(d)

@@ -318,7 +318,8 @@ fn on_shear_frame(source: RunInput, outputs: usize, inputs: usize) -> RunInput {
     crate::output::geometry::attach(
         source,
         Some((
-            "the truth model's chain drawn by era demo as a 4-storey shear frame, masses along x".into(),
+            "the truth model's chain drawn by era demo as a 4-storey shear frame, masses along x"
+                .into(),
             frame,
         )),
         outputs,

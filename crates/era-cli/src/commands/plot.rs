@@ -66,7 +66,9 @@ pub fn run(a: &Plot) -> anyhow::Result<()> {
     let drawn = match (&geometry, &model) {
         (Some((file, g)), Some(m)) => {
             let view = model_view(g, m, input.file.channels.as_ref());
-            for note in crate::output::geometry::notes(file, g, input.file.channels.as_ref(), m.outputs) {
+            for note in
+                crate::output::geometry::notes(file, g, input.file.channels.as_ref(), m.outputs)
+            {
                 human.print(&format!("  {note}\n"));
             }
             bar.inc_length(view.modes.len() as u64);

@@ -6,15 +6,15 @@ use era::{FrfData, Quantity};
 use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::uff::ChannelTable;
 use era_io::IoError;
+use era_plot::oma::{mac_png, mac_svg};
 use era_plot::report::{report_html, CoherenceInput, ReportInput, ReportSection};
+use era_plot::shapes::{complexity_png, complexity_svg, three_view_png, three_view_svg, ThreeView};
 use era_plot::stabilization::{stabilization_png, stabilization_svg, StabilizationPlot};
+use era_plot::viewer::ShapeView;
 use era_plot::{
     coherence_grid, frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure,
     FrfUnits, FrfView, PhaseView,
 };
-use era_plot::oma::{mac_png, mac_svg};
-use era_plot::shapes::{complexity_png, complexity_svg, three_view_png, three_view_svg, ThreeView};
-use era_plot::viewer::ShapeView;
 use std::path::Path;
 
 /// How many times a quantity is integrated to become another (acceleration → velocity
@@ -164,7 +164,10 @@ pub fn write_shape_figures(
     progress: &indicatif::ProgressBar,
 ) -> anyhow::Result<Vec<super::shapes::Section>> {
     let mut sections = Vec::new();
-    if let Some(mac) = automac.then(|| super::shapes::automac_plot(found)).flatten() {
+    if let Some(mac) = automac
+        .then(|| super::shapes::automac_plot(found))
+        .flatten()
+    {
         let svg = mac_svg(&mac)?;
         write_svg_png(set, folder, "automac", &svg, |p| {
             write_png_with(p, |tmp| mac_png(&mac, tmp))
@@ -330,14 +333,7 @@ pub fn write_all(
     let (grid_svg, overlays) =
         write_frf_figures(set, folder, measured, Some(&model), &view, progress)?;
     let shapes = super::geometry::shape_view(source, found);
-    let own = write_shape_figures(
-        set,
-        folder,
-        found,
-        shapes.as_ref(),
-        true,
-        progress,
-    )?;
+    let own = write_shape_figures(set, folder, found, shapes.as_ref(), true, progress)?;
     let sections: Vec<ReportSection> = own.iter().map(super::shapes::Section::view).collect();
     let html = report_html(&ReportInput {
         title,

@@ -75,11 +75,8 @@ fn not_drawn(map: &ChannelMap, table: &ChannelTable) -> Vec<String> {
 /// a geometry. The outputs are placed as in [`notes`].
 pub fn shape_view(run: &super::RunInput, found: &Identification) -> Option<ShapeView> {
     let geometry = run.geometry.as_ref()?;
-    let (nodes, segments, placed, not_drawn) = layout(
-        geometry,
-        run.channels.as_ref(),
-        found.measured.outputs(),
-    );
+    let (nodes, segments, placed, not_drawn) =
+        layout(geometry, run.channels.as_ref(), found.measured.outputs());
     Some(ShapeView::new(nodes, segments, &placed, found, not_drawn))
 }
 

@@ -6,11 +6,11 @@
 pub mod estimate;
 pub mod figures;
 pub mod geometry;
-pub mod shapes;
 pub mod identification;
 pub mod oma;
 pub mod progress;
 pub mod report;
+pub mod shapes;
 pub mod track;
 
 use anyhow::Context;

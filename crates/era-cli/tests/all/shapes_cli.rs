@@ -13,8 +13,20 @@ fn simulated(dir: &Path, name: &str, q: usize) -> (std::path::PathBuf, std::path
     let frf = dir.join(format!("{name}.csv"));
     let q = q.to_string();
     let v = json_of(&[
-        "simulate", "modal", "--outputs", &q, "--inputs", "2", "--modes", "6", "--seed", "5",
-        "--out", s(&frf), "--json", "-q",
+        "simulate",
+        "modal",
+        "--outputs",
+        &q,
+        "--inputs",
+        "2",
+        "--modes",
+        "6",
+        "--seed",
+        "5",
+        "--out",
+        s(&frf),
+        "--json",
+        "-q",
     ]);
     let geometry = dir.join(format!("{name}_geometry.csv"));
     assert_eq!(v["geometry"].as_str().unwrap(), s(&geometry));
@@ -50,7 +62,15 @@ fn identify_on_the_ring_draws_three_views_automac_and_complexity() {
     let (frf, geometry) = simulated(dir.path(), "dta", 6);
     let out = dir.path().join("run");
     era()
-        .args(["identify", s(&frf), "--states", "12", "--preset", "thesis", "-q"])
+        .args([
+            "identify",
+            s(&frf),
+            "--states",
+            "12",
+            "--preset",
+            "thesis",
+            "-q",
+        ])
         .args(["--geometry", s(&geometry), "--out", s(&out)])
         .assert()
         .success();
@@ -65,7 +85,9 @@ fn identify_on_the_ring_draws_three_views_automac_and_complexity() {
         }
         assert!(out.join(format!("shapes/mode_{k:02}.png")).is_file());
     }
-    assert!(!out.join(format!("shapes/mode_{:02}.svg", modes.len() + 1)).exists());
+    assert!(!out
+        .join(format!("shapes/mode_{:02}.svg", modes.len() + 1))
+        .exists());
     // The complexity panels are the physical modes', their MPC the indicator's.
     let physical: Vec<&serde_json::Value> = modes
         .iter()
@@ -97,10 +119,16 @@ fn identify_on_the_ring_draws_three_views_automac_and_complexity() {
 fn the_demo_draws_its_chain_as_a_shear_frame() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    era().args(["demo", "-q", "--out", s(&out)]).assert().success();
+    era()
+        .args(["demo", "-q", "--out", s(&out)])
+        .assert()
+        .success();
     for run in ["no_noise", "noisy"] {
         let report = std::fs::read_to_string(out.join(run).join("report.html")).unwrap();
-        assert!(report.contains("<canvas id=\"shape-canvas\""), "{run}: no viewer");
+        assert!(
+            report.contains("<canvas id=\"shape-canvas\""),
+            "{run}: no viewer"
+        );
         assert!(report.contains("4-storey shear frame"));
         assert!(report.contains("Every output channel is drawn."));
         assert!(out.join(run).join("shapes/mode_01.png").is_file());
@@ -115,7 +143,15 @@ fn the_demo_draws_its_chain_as_a_shear_frame() {
 fn shaker(dir: &Path) -> std::path::PathBuf {
     let file = dir.join("shaker.csv");
     era()
-        .args(["simulate", "shaker", "--seed", "3", "--duration", "200", "-q"])
+        .args([
+            "simulate",
+            "shaker",
+            "--seed",
+            "3",
+            "--duration",
+            "200",
+            "-q",
+        ])
         .args(["--out", s(&file)])
         .assert()
         .success();
@@ -145,14 +181,24 @@ fn oma_takes_a_geometry_and_refuses_a_bad_one_before_reading() {
     assert!(out.join("complexity.svg").is_file());
     // The geometry goes into modes.uff ahead of the shapes.
     let back = era_io::geometry::read_geometry(&out.join("modes.uff")).unwrap();
-    assert_eq!(back.nodes.len(), era_io::geometry::layouts::dta_like(8).nodes.len());
+    assert_eq!(
+        back.nodes.len(),
+        era_io::geometry::layouts::dta_like(8).nodes.len()
+    );
 
     let bad = dir.path().join("bad.csv");
     std::fs::write(&bad, "node,x,y,z\n1,0,0,0\nfrom,to\n1,9\n").unwrap();
     let never = dir.path().join("never");
     expect_input_error(
         &[
-            "oma", s(&file), "--outputs", "3-10", "--geometry", s(&bad), "--out", s(&never),
+            "oma",
+            s(&file),
+            "--outputs",
+            "3-10",
+            "--geometry",
+            s(&bad),
+            "--out",
+            s(&never),
         ],
         "bad.csv: trace line 1 (line 4) names node 9",
     );
@@ -172,8 +218,16 @@ fn plot_draws_the_models_modes_on_a_geometry() {
     let out = dir.path().join("plots");
     let model = run.join("model.json");
     let v = json_of(&[
-        "plot", s(&frf), "--model", s(&model), "--geometry", s(&geometry), "--out", s(&out),
-        "--json", "-q",
+        "plot",
+        s(&frf),
+        "--model",
+        s(&model),
+        "--geometry",
+        s(&geometry),
+        "--out",
+        s(&out),
+        "--json",
+        "-q",
     ]);
     let drawn = v["shapes_drawn"].as_u64().unwrap() as usize;
     let modes: serde_json::Value =
@@ -188,13 +242,27 @@ fn plot_draws_the_models_modes_on_a_geometry() {
     let never = dir.path().join("never");
     expect_input_error(
         &[
-            "plot", s(&frf), "--model", s(&model), "--geometry", s(&bad), "--out", s(&never),
+            "plot",
+            s(&frf),
+            "--model",
+            s(&model),
+            "--geometry",
+            s(&bad),
+            "--out",
+            s(&never),
         ],
         "nan.csv: node 2 (line 3): coordinate x is NaN",
     );
     assert!(!never.exists());
     expect_input_error(
-        &["plot", s(&frf), "--geometry", s(&geometry), "--out", s(&never)],
+        &[
+            "plot",
+            s(&frf),
+            "--geometry",
+            s(&geometry),
+            "--out",
+            s(&never),
+        ],
         "--geometry draws the model's mode shapes: give --model",
     );
 }
