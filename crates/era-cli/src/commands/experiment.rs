@@ -442,8 +442,8 @@ pub fn run(a: &config::Experiment) -> anyhow::Result<()> {
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     write_frfs(a, sets.frf, sets.exact, &found, &spec)?;
-    let geometry = super::simulate::geometry_beside(&a.out);
-    super::simulate::write_dta_geometry(&human, &geometry, found.frf.outputs())?;
+    let geometry = crate::output::geometry::beside(&a.out);
+    crate::output::geometry::write_dta_like(&human, &geometry, found.frf.outputs())?;
     let dead_zone = spec
         .compensation
         .as_ref()

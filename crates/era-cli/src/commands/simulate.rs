@@ -127,12 +127,16 @@ fn modal(a: &Modal) -> anyhow::Result<()> {
         .zip(&structure.damping_ratios)
         .map(|(f, z)| json!({"frequency_hz": f, "damping_ratio": z}))
         .collect();
-    let geometry_path = geometry_beside(&a.sim.out);
+    let geometry_path = crate::output::geometry::beside(&a.sim.out);
     let summary = json!({"file": a.sim.out, "model": "modal", "outputs": a.outputs, "inputs": a.inputs, "lines": a.lines,
         "spacing_hz": a.df, "quantity": quantity.name(), "collocated": a.collocated, "noise": a.sim.noise, "seed": a.sim.seed, "modes": modes,
         "geometry": geometry_path});
     let simulate_s = clock.elapsed().as_secs_f64();
-    write_dta_geometry(&Human::new(&a.sim.settings), &geometry_path, a.outputs)?;
+    crate::output::geometry::write_dta_like(
+        &Human::new(&a.sim.settings),
+        &geometry_path,
+        a.outputs,
+    )?;
     finish(
         &a.sim,
         &frf,
@@ -140,42 +144,6 @@ fn modal(a: &Modal) -> anyhow::Result<()> {
         summary,
         simulate_s,
     )
-}
-
-/// `dir/STEM_geometry.csv` beside `out` (`dta.csv` → `dta_geometry.csv`).
-pub fn geometry_beside(out: &std::path::Path) -> std::path::PathBuf {
-    let stem = out
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "frf".into());
-    out.with_file_name(format!("{stem}_geometry.csv"))
-}
-
-/// The DTA-like ring truss with its tripod ([`era_io::geometry::layouts::dta_like`]),
-/// the outputs on its ring, as our geometry CSV at `path`, so that `--geometry` draws
-/// the simulated shapes.
-pub fn write_dta_geometry(
-    human: &Human,
-    path: &std::path::Path,
-    outputs: usize,
-) -> anyhow::Result<()> {
-    let g = era_io::geometry::layouts::dta_like(outputs);
-    let text = era_io::geometry::csv::geometry_csv_text(
-        &g,
-        &[
-            "the DTA-like structure of era simulate (thesis chapter II): a ring truss, its tripod,",
-            "two solar-array masts and three mass simulators. Outputs 1..q are nodes 1..q (+Z) on the",
-            "ring's upper chord. A layout to draw on, not a finite-element model: the simulated",
-            "shapes are random vectors placed on it.",
-        ],
-    );
-    era_io::atomic::write_atomic(path, text.as_bytes())?;
-    human.print(&format!(
-        "wrote {}: {} (give it to identify/refine/oma with --geometry)\n",
-        path.display(),
-        g.summary()
-    ));
-    Ok(())
 }
 
 pub fn run(a: &Simulate) -> anyhow::Result<()> {
