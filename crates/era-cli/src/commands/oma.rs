@@ -273,7 +273,7 @@ pub fn run(a: &Oma) -> anyhow::Result<super::Done> {
         set.commit()?;
         human.print(&format!(
             "\nwrote {}\n",
-            crate::output::oma::written_list(dir, !a.no_figures)
+            crate::output::oma::written_list(dir, !a.no_figures, a.geometry.is_some())
         ));
     }
     if settings.json {

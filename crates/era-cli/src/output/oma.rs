@@ -427,15 +427,16 @@ fn run_input(run: &OmaRun) -> RunInput {
 }
 
 /// What the run wrote, for the closing line.
-pub fn written_list(dir: &Path, figures: bool) -> String {
+pub fn written_list(dir: &Path, figures: bool, shapes: bool) -> String {
     let files = format!(
         "{0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json",
         dir.display()
     );
     if figures {
         format!(
-            "{files}, {}/report.html and figures (singular_values, stabilization, spectral, mac)",
-            dir.display()
+            "{files}, {}/report.html and figures (singular_values, stabilization, spectral, mac, complexity{})",
+            dir.display(),
+            if shapes { ", shapes/" } else { "" }
         )
     } else {
         format!("{files} (no figures)")
