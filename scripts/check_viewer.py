@@ -13,10 +13,14 @@ DevTools protocol and checks that:
   changes the picture and the caption;
 - the page logs no console error and throws no exception;
 - the page requests nothing but itself (no network);
-- with prefers-reduced-motion it starts paused.
+- with prefers-reduced-motion it starts paused;
+- the three-views button changes the picture.
 
-It saves screenshots of the viewer (viewer_mode1.png, viewer_mode3.png) in the output
-folder to look at. Standard library only (a minimal WebSocket client is below).
+With --report on a report made without a geometry it checks instead that the report
+says so, carries no viewer and has its mode table.
+
+It saves screenshots of the viewer (viewer_mode1.png, viewer_mode3.png,
+viewer_three.png) in the output folder to look at. Standard library only (a minimal WebSocket client is below).
 
 Usage: scripts/check_viewer.py [--era target/release/era] [--out DIR] [--chromium PATH]
 Exit status 0 when every check passes, 1 when one fails, 2 when Chromium or era is
@@ -250,6 +254,15 @@ def main():
         cdp.js("new Promise(r => setTimeout(r, 300))")
 
         canvas = "document.getElementById('shape-canvas').toDataURL()"
+        if a.report and not cdp.js("!!document.getElementById('shape-canvas')"):
+            # A report without a geometry: one line says so, and no viewer runs.
+            none = cdp.js("(document.getElementById('shapes-none') || {}).textContent || ''")
+            check("geometry" in none, f"without a geometry the report says so ({none[:80]!r})")
+            check(not cdp.js("!!document.getElementById('era-shapes')"), "and carries no viewer data")
+            check(cdp.js("document.querySelectorAll('#modal-table tr').length") >= 2, "the mode table is there")
+            errors = [e for e in cdp.events if e.get("method") == "Runtime.exceptionThrown"]
+            check(not errors, f"no exceptions ({len(errors)})")
+            return report_failures(failures)
         check(cdp.js("!!document.getElementById('shape-canvas')"), "the report has the viewer's canvas")
         listed = cdp.js("document.querySelectorAll('#shape-mode option').length")
         table = cdp.js("document.querySelectorAll('#modal-table tr').length - 1")
@@ -303,6 +316,13 @@ def main():
         cdp.js("(() => { const a = document.getElementById('shape-amplitude'); a.value = '30'; a.dispatchEvent(new Event('input')); })()")
         check(cdp.js(canvas) != before, "a larger amplitude changes the picture")
         check(cdp.js("document.getElementById('shape-amplitude-value').textContent") == "30 %", "the amplitude reads 30 %")
+        # The three views side by side, as the static pictures show them.
+        before = cdp.js(canvas)
+        cdp.js("document.querySelector('[data-shape-view=three]').click()")
+        cdp.js("document.getElementById('shape-canvas').eraShowPhase(0)")
+        check(cdp.js(canvas) != before, "the three-views button changes the picture")
+        shot("viewer_three.png")
+        cdp.js("document.querySelector('[data-shape-view=iso]').click()")
         if not a.report:
             not_drawn = cdp.js("document.getElementById('shapes-not-drawn').textContent")
             check("node 999 is not in the geometry" in not_drawn, "the channel on node 999 is listed as not drawn")
@@ -334,6 +354,10 @@ def main():
             proc.kill()
         shutil.rmtree(profile, ignore_errors=True)
     print(f"check_viewer: screenshots in {out}")
+    return report_failures(failures)
+
+
+def report_failures(failures):
     if failures:
         print(f"check_viewer: FAILED {len(failures)} check(s)", file=sys.stderr)
         return 1

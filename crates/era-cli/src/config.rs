@@ -164,6 +164,8 @@ pub struct Plot<'a> {
     pub phase: era_plot::PhaseView,
     /// Folder for the figures.
     pub out: PathBuf,
+    /// `--geometry`, when given: the model's modes drawn on it.
+    pub geometry: Option<PathBuf>,
     /// The output switches.
     pub settings: Settings,
 }
@@ -178,6 +180,7 @@ impl<'a> From<&'a PlotArgs> for Plot<'a> {
             read: FrfFlags::from(&a.read),
             phase: a.phase.into(),
             out: a.out.clone(),
+            geometry: a.geometry.geometry.clone(),
             settings: Settings::from(&a.common),
         }
     }
@@ -1192,6 +1195,8 @@ pub struct Oma {
     pub no_figures: bool,
     /// Folder for the files, when asked for.
     pub out: Option<PathBuf>,
+    /// `--geometry`, when given.
+    pub geometry: Option<PathBuf>,
     /// The output switches.
     pub settings: Settings,
 }
@@ -1257,6 +1262,7 @@ impl Oma {
             auto,
             no_figures: a.no_figures,
             out: a.out.clone(),
+            geometry: a.geometry.geometry.clone(),
             settings: Settings::from(&a.common),
         })
     }

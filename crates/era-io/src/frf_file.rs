@@ -180,7 +180,9 @@ pub fn channel_metadata(table: &ChannelTable) -> Vec<(String, String)> {
     outputs.chain(inputs).collect()
 }
 
-fn parse_direction(text: &str) -> Option<i64> {
+/// A direction as written in a channel table (`+X`, `-Z`, `Y`, `RZ`, `S`, or its number)
+/// as its UFF number; `None` when it is none of these.
+pub fn parse_direction(text: &str) -> Option<i64> {
     let t = text.to_ascii_uppercase();
     if t == "S" {
         return Some(0);

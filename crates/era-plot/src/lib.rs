@@ -15,6 +15,7 @@ pub mod figures;
 pub mod oma;
 pub mod render;
 pub mod report;
+pub mod shapes;
 pub mod stabilization;
 pub mod track;
 pub mod viewer;

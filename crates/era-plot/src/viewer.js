@@ -41,14 +41,25 @@
     started: null,
     phaseAtStart: 0,
     zoom: 0.8,
-    shift: [0, 0]
+    shift: [0, 0],
+    three: false
   };
+
+  // The three orthographic views drawn side by side (the static pictures' layout).
+  var THREE_VIEWS = [
+    { name: "front (x\u2013z)", yaw: 0, pitch: 0 },
+    { name: "side (y\u2013z)", yaw: -Math.PI / 2, pitch: 0 },
+    { name: "top (x\u2013y)", yaw: 0, pitch: Math.PI / 2 }
+  ];
 
   // The zoom that fills the canvas with the undeformed structure seen from the current
   // view, leaving room for the deflection; kept while dragging, so rotating never zooms.
   function fit() {
-    var width = canvas.clientWidth || 800;
-    var height = canvas.clientHeight || 480;
+    fitTo(canvas.clientWidth || 800, canvas.clientHeight || 480);
+  }
+
+  // The same for a picture of width x height pixels.
+  function fitTo(width, height) {
     state.zoom = 1;
     state.shift = [0, 0];
     var project = projector(width, height);
@@ -176,6 +187,45 @@
     ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
     ctx.fillStyle = "#ffffff";
     ctx.fillRect(0, 0, width, height);
+    if (!state.three) {
+      scene(width, height);
+      triad(width, height);
+      return;
+    }
+    // Three panels, each fitted to its own view; the 3-D camera is kept for later.
+    var kept = [state.yaw, state.pitch, state.zoom, state.shift];
+    var w = width / 3;
+    THREE_VIEWS.forEach(function (v, i) {
+      state.yaw = v.yaw;
+      state.pitch = v.pitch;
+      fitTo(w, height);
+      ctx.save();
+      ctx.translate(i * w, 0);
+      ctx.beginPath();
+      ctx.rect(0, 0, w, height);
+      ctx.clip();
+      scene(w, height);
+      ctx.fillStyle = "#333333";
+      ctx.font = "13px sans-serif";
+      ctx.fillText(v.name, 8, 18);
+      if (i > 0) {
+        ctx.strokeStyle = "#dddddd";
+        ctx.lineWidth = 1;
+        ctx.beginPath();
+        ctx.moveTo(0.5, 0);
+        ctx.lineTo(0.5, height);
+        ctx.stroke();
+      }
+      ctx.restore();
+    });
+    state.yaw = kept[0];
+    state.pitch = kept[1];
+    state.zoom = kept[2];
+    state.shift = kept[3];
+  }
+
+  // The structure, undeformed under deformed, in a picture of width x height pixels.
+  function scene(width, height) {
     var project = projector(width, height);
     var rest = nodes.map(project);
     var moved = displaced(state.phase).map(project);
@@ -187,7 +237,6 @@
     strokeSegments(moved, "#1f4e9c", 2, []);
     dots(moved, "#9a9a9a", 2.5, still);
     dots(moved, "#1f4e9c", 2.5, measured);
-    triad(width, height);
   }
 
   // One animation loop at a time: a loop whose token is stale stops.
@@ -270,7 +319,15 @@
   };
   Array.prototype.forEach.call(document.querySelectorAll("[data-shape-view]"), function (b) {
     b.addEventListener("click", function () {
-      var v = views[b.getAttribute("data-shape-view")];
+      var name = b.getAttribute("data-shape-view");
+      state.three = name === "three";
+      if (state.three) {
+        if (!state.playing) {
+          draw();
+        }
+        return;
+      }
+      var v = views[name];
       state.yaw = v[0];
       state.pitch = v[1];
       fit();
@@ -294,6 +351,9 @@
   // tilts (clamped at straight down and straight up).
   var drag = null;
   canvas.addEventListener("pointerdown", function (e) {
+    if (state.three) {
+      return;
+    }
     drag = { x: e.clientX, y: e.clientY, yaw: state.yaw, pitch: state.pitch };
     canvas.setPointerCapture(e.pointerId);
   });

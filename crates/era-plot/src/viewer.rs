@@ -70,29 +70,38 @@ impl ShapeView {
         found: &Identification,
         not_drawn: Vec<String>,
     ) -> Self {
-        let modes = found
+        let shapes: Vec<(String, &[Complex64])> = found
             .modal
             .modes
             .iter()
             .enumerate()
             .map(|(k, m)| {
                 let q = found.quality.get(k);
-                let mut label = format!(
-                    "Mode {}: {:.4} Hz, damping {:.3} %",
-                    k + 1,
+                let label = mode_label(
+                    k,
                     m.frequency_hz,
-                    100.0 * m.damping_ratio
+                    m.damping_ratio,
+                    q.map(|q| (q.indicators.mpc, q.physical)),
                 );
-                if let Some(q) = q {
-                    let _ = write!(label, ", MPC {:.3}", q.indicators.mpc);
-                    if !q.physical {
-                        label.push_str(" (not judged physical)");
-                    }
-                }
-                ShapeMode {
-                    label,
-                    displacement: node_displacements(nodes.len(), placed, &m.shape),
-                }
+                (label, m.shape.as_slice())
+            })
+            .collect();
+        Self::from_shapes(nodes, segments, placed, &shapes, not_drawn)
+    }
+
+    /// As [`ShapeView::new`], from each mode's label and shape (one entry per output).
+    pub fn from_shapes(
+        nodes: Vec<[f64; 3]>,
+        segments: Vec<(usize, usize)>,
+        placed: &[Placement],
+        shapes: &[(String, &[Complex64])],
+        not_drawn: Vec<String>,
+    ) -> Self {
+        let modes = shapes
+            .iter()
+            .map(|(label, shape)| ShapeMode {
+                label: label.clone(),
+                displacement: node_displacements(nodes.len(), placed, shape),
             })
             .collect();
         ShapeView {
@@ -149,6 +158,29 @@ impl ShapeView {
         s.push_str("]}");
         s
     }
+}
+
+/// A mode's label in the viewer and the pictures: `Mode 2: 12.3456 Hz, damping
+/// 1.234 %, MPC 0.998`, and ` (not judged physical)` when it is not.
+pub fn mode_label(
+    k: usize,
+    frequency_hz: f64,
+    damping_ratio: f64,
+    quality: Option<(f64, bool)>,
+) -> String {
+    let mut label = format!(
+        "Mode {}: {:.4} Hz, damping {:.3} %",
+        k + 1,
+        frequency_hz,
+        100.0 * damping_ratio
+    );
+    if let Some((mpc, physical)) = quality {
+        let _ = write!(label, ", MPC {mpc:.3}");
+        if !physical {
+            label.push_str(" (not judged physical)");
+        }
+    }
+    label
 }
 
 /// Each node's complex displacement: `Σ shape[channel] · direction` over its channels,
@@ -245,7 +277,7 @@ fn escape(text: &str) -> String {
 /// line saying that there is none.
 pub fn shapes_html(view: Option<&ShapeView>) -> String {
     let Some(v) = view else {
-        return "<p id=\"shapes-none\">No test geometry was given, so the mode shapes are not drawn (identify and refine take --geometry FILE).</p>\n".into();
+        return "<p id=\"shapes-none\">No test geometry was given, so the mode shapes are not drawn (identify, refine and oma take --geometry FILE).</p>\n".into();
     };
     if v.modes.is_empty() {
         return "<p id=\"shapes-none\">The model has no modes to draw on the test geometry.</p>\n"
@@ -261,7 +293,7 @@ pub fn shapes_html(view: Option<&ShapeView>) -> String {
     let measured = (0..v.nodes.len()).filter(|&k| v.measured(k)).count();
     let _ = writeln!(
         h,
-        "<p>Each mode on the test geometry ({} nodes, {} of them with channels, {} trace-line segments), animated over one cycle: the deformed structure (blue) over the undeformed one (grey, dashed). A hollow dot is a node without channels, drawn where it is. Drag to rotate; click a row of the mode table to show its mode. The amplitude is the largest displacement as a share of the structure's size.</p>",
+        "<p>Each mode on the test geometry ({} nodes, {} of them with channels, {} trace-line segments), animated over one cycle: the deformed structure (blue) over the undeformed one (grey, dashed). A hollow dot is a node without channels, drawn where it is. Drag to rotate; “three views” shows the front, side and top side by side (as the pictures shapes/mode_NN.svg and .png beside the report do); click a row of the mode table to show its mode. The amplitude is the largest displacement as a share of the structure's size.</p>",
         v.nodes.len(),
         measured,
         v.segments.len()
@@ -272,7 +304,7 @@ pub fn shapes_html(view: Option<&ShapeView>) -> String {
     }
     h.push_str("</select></label><button type=\"button\" id=\"shape-play\" aria-pressed=\"true\">Pause</button>\
 <label>Amplitude <input type=\"range\" id=\"shape-amplitude\" min=\"0\" max=\"40\" step=\"1\" value=\"10\"> <span id=\"shape-amplitude-value\">10 %</span></label>\
-<span>View <button type=\"button\" data-shape-view=\"iso\">3-D</button> <button type=\"button\" data-shape-view=\"front\">front (x–z)</button> <button type=\"button\" data-shape-view=\"side\">side (y–z)</button> <button type=\"button\" data-shape-view=\"top\">top (x–y)</button></span></div>\n");
+<span>View <button type=\"button\" data-shape-view=\"iso\">3-D</button> <button type=\"button\" data-shape-view=\"front\">front (x–z)</button> <button type=\"button\" data-shape-view=\"side\">side (y–z)</button> <button type=\"button\" data-shape-view=\"top\">top (x–y)</button> <button type=\"button\" data-shape-view=\"three\">three views</button></span></div>\n");
     let _ = write!(
         h,
         "<canvas id=\"shape-canvas\" role=\"img\" aria-label=\"Animated mode shape\"></canvas>\n<p id=\"shape-caption\">{}</p></div>\n",

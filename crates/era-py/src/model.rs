@@ -134,6 +134,31 @@ fn matrix<'py>(py: Python<'py>, m: &faer::Mat<f64>) -> PyResult<Bound<'py, PyArr
 
 #[pymethods]
 impl PyIdentification {
+    /// Each mode's displacement at the nodes of a geometry: `geometry` is a path (a
+    /// UFF or geometry CSV, as `read_geometry` reads it) or the dict `read_geometry`
+    /// returns; `channels` one `(node, direction)` per output (direction `"+X"`,
+    /// `"-Z"` ... or its UFF number), era's numbering when left out (output `i` at node
+    /// `i`, +Z). Returns a dict:
+    ///
+    /// - `ids` int64 (n,), `xyz` float64 (n, 3): the nodes;
+    /// - `displacement` complex128 (modes, n, 3): at each node the sum of the shape's
+    ///   entries times their global directions (unscaled, as `Mode.shape`); NaN at a
+    ///   node without a channel (not measured, not zero);
+    /// - `measured` bool (n,): which nodes carry a channel;
+    /// - `not_drawn_outputs` int64: the outputs (0-based) on no node, or on a scalar or
+    ///   rotational direction; `not_drawn` one sentence each saying why.
+    ///
+    /// Raises `ValueError` when the geometry is malformed or carries none of the
+    /// outputs, or `channels` does not give one pair per output.
+    #[pyo3(signature = (geometry, channels=None))]
+    fn shapes_on<'py>(
+        &self,
+        py: Python<'py>,
+        geometry: &Bound<'py, PyAny>,
+        channels: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        crate::geometry::shapes_on(py, &self.found, geometry, channels)
+    }
     /// State matrix A (n, n).
     #[getter]
     fn a<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {

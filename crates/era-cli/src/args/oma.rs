@@ -73,5 +73,7 @@ pub struct OmaArgs {
     #[arg(long, requires = "out")]
     pub no_figures: bool,
     #[command(flatten)]
+    pub geometry: super::GeometryArgs,
+    #[command(flatten)]
     pub common: CommonArgs,
 }

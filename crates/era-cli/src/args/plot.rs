@@ -19,6 +19,8 @@ pub struct PlotArgs {
     pub zero_lines: Option<usize>,
     #[command(flatten)]
     pub read: FrfReadArgs,
+    #[command(flatten)]
+    pub geometry: super::GeometryArgs,
     /// Phase in the figures: wrapped (−180…180°, the default) or unwrapped (where the
     /// step between lines is unambiguous, the measurement on the model's branch).
     #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped)]

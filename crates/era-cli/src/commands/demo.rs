@@ -266,19 +266,64 @@ fn write_files(
         );
         let fit = FitJson::from_report(&found.fit);
         let echo = parameter_echo(options);
+        let states = options.order.states().unwrap_or(0);
         let bundle = Bundle {
             found,
             fit: &fit,
             source: &source,
             title: &title,
             echo: &echo,
-            states: options.order.states().unwrap_or(0),
-            figures: true,
+            states,
+            figures: false,
         };
+        // modes.uff keeps era's numbering; the figures and the report draw the modes on
+        // the chain drawn as a shear frame.
         write_identification(&mut set, Path::new(label), &model, &bundle, settings)?;
+        let source = on_shear_frame(source, found.measured.outputs(), found.measured.inputs());
+        let pairs = found.measured.outputs() * found.measured.inputs();
+        let bar = crate::output::progress::bar(settings, pairs as u64, "figures");
+        crate::output::figures::write_all(
+            &mut set,
+            Path::new(label),
+            &title,
+            &echo,
+            found,
+            &source,
+            states,
+            &bar,
+        )?;
+        bar.finish_and_clear();
     }
     set.commit()?;
     Ok(())
+}
+
+/// `source` with the truth model's chain drawn as a 4-storey shear frame
+/// ([`era_io::geometry::layouts::shear_frame`]): output `i` and input `j` at masses `i`
+/// and `j`, along x (the chain's direction), for the report's shapes.
+fn on_shear_frame(source: RunInput, outputs: usize, inputs: usize) -> RunInput {
+    let along_x = |node: usize| era_io::frf_file::Channel {
+        dof: era_io::frf_file::Dof {
+            node: node as i64,
+            direction: 1,
+        },
+        entity: "NONE".into(),
+    };
+    let mut source = source;
+    source.channels = Some(era_io::frf_file::ChannelTable {
+        outputs: (1..=outputs).map(along_x).collect(),
+        inputs: (1..=inputs).map(along_x).collect(),
+    });
+    let frame = era_io::geometry::layouts::shear_frame(4);
+    crate::output::geometry::attach(
+        source,
+        Some((
+            "the truth model's chain drawn by era demo as a 4-storey shear frame, masses along x"
+                .into(),
+            frame,
+        )),
+        outputs,
+    )
 }
 
 /// The demo's JSON: the truth, each run's modes, the refinement, the errors and the

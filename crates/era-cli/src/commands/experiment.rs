@@ -442,6 +442,8 @@ pub fn run(a: &config::Experiment) -> anyhow::Result<()> {
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     write_frfs(a, sets.frf, sets.exact, &found, &spec)?;
+    let geometry = crate::output::geometry::beside(&a.out);
+    crate::output::geometry::write_dta_like(&human, &geometry, found.frf.outputs())?;
     let dead_zone = spec
         .compensation
         .as_ref()
@@ -465,7 +467,7 @@ pub fn run(a: &config::Experiment) -> anyhow::Result<()> {
     }
     let c = found.counts;
     let summary = json!({
-        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out,
+        "file": a.out, "coherence_file": coherence, "exact_file": a.exact_out, "geometry": geometry,
         "time_histories": a.time_histories,
         "outputs": found.frf.outputs(), "inputs": found.frf.inputs(), "lines": found.frf.lines(),
         "spacing_hz": found.frf.spacing_hz(), "compensation": spec.compensation.is_some(),

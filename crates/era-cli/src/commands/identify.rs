@@ -232,7 +232,11 @@ fn run_input(
 
 /// The closing line: what the run wrote in `dir`.
 fn written_line(a: &Identify, dir: &std::path::Path) -> String {
-    let figures = " (singular_values, grid, pairs/)";
+    let figures = if a.geometry.is_some() {
+        " (singular_values, grid, pairs/, automac, complexity, shapes/)"
+    } else {
+        " (singular_values, grid, pairs/, automac, complexity)"
+    };
     format!(
         "\nwrote {}{}\n",
         crate::output::identification::written_list(dir, !a.no_figures),

@@ -204,6 +204,8 @@ pub fn run(a: &Oma) -> anyhow::Result<super::Done> {
         Some(dir) => Some(prepare_out_dir(dir)?),
         None => None,
     };
+    // The geometry is read and checked before the records: a bad one costs no time.
+    let geometry = crate::output::geometry::read(a.geometry.as_deref(), &human)?;
     let spinner = crate::output::progress::spinner(&settings);
     let clock = Instant::now();
     let records = read_records(a, &spinner)?;
@@ -235,6 +237,7 @@ pub fn run(a: &Oma) -> anyhow::Result<super::Done> {
         oma: &found,
         options: &options,
         auto: a.auto,
+        geometry: geometry.as_ref(),
     };
     human.print(&format!("era oma {}\n", joined(&a.files)));
     human.print(&run.summary());
@@ -270,7 +273,7 @@ pub fn run(a: &Oma) -> anyhow::Result<super::Done> {
         set.commit()?;
         human.print(&format!(
             "\nwrote {}\n",
-            crate::output::oma::written_list(dir, !a.no_figures)
+            crate::output::oma::written_list(dir, !a.no_figures, a.geometry.is_some())
         ));
     }
     if settings.json {

@@ -18,6 +18,11 @@ use std::path::Path;
 pub fn run(a: &Plot) -> anyhow::Result<()> {
     let settings = a.settings;
     let human = Human::new(&settings);
+    if a.geometry.is_some() && a.model.is_none() {
+        return usage("--geometry draws the model's mode shapes: give --model model.json too");
+    }
+    // Checked before anything is read or written: a bad geometry exits with code 2.
+    let geometry = crate::output::geometry::read(a.geometry.as_deref(), &human)?;
     let mut set = prepare_out_dir(&a.out)?;
     let input = read_frf_with(&a.file, &a.read)?;
     let frf = input.file.frf.clone();
@@ -58,23 +63,82 @@ pub fn run(a: &Plot) -> anyhow::Result<()> {
         &view,
         &bar,
     )?;
+    let drawn = match (&geometry, &model) {
+        (Some((file, g)), Some(m)) => {
+            let view = model_view(g, m, input.file.channels.as_ref());
+            for note in
+                crate::output::geometry::notes(file, g, input.file.channels.as_ref(), m.outputs)
+            {
+                human.print(&format!("  {note}\n"));
+            }
+            bar.inc_length(view.modes.len() as u64);
+            crate::output::figures::write_three_views(&mut set, Path::new(""), &view, &bar)?;
+            view.modes.len()
+        }
+        _ => 0,
+    };
     bar.finish_and_clear();
     set.commit()?;
     human.print(&format!(
         "wrote {0}/grid.{{svg,png}} and {1} pair overlays in {0}/pairs{2} ({3} FRFs, {4} integration(s), {5} zeroed line(s))\n",
         a.out.display(),
         overlays.len(),
-        if model.is_some() { format!(", and {}/singular_values.{{svg,png}}", a.out.display()) } else { String::new() },
+        if model.is_some() { format!(", {}/singular_values.{{svg,png}}", a.out.display()) } else { String::new() },
         measured.quantity(),
         integrations,
         zero_lines
     ));
+    if drawn > 0 {
+        human.print(&format!(
+            "wrote {drawn} mode shapes in three views in {}/shapes (mode_NN.{{svg,png}})\n",
+            a.out.display()
+        ));
+    }
     if settings.json {
         print_json(
-            &json!({"out": a.out, "pairs": overlays.len(), "model": a.model, "integrations": integrations, "zero_lines": zero_lines}),
+            &json!({"out": a.out, "pairs": overlays.len(), "model": a.model, "integrations": integrations, "zero_lines": zero_lines, "geometry": a.geometry, "shapes_drawn": drawn}),
         )?;
     }
     Ok(())
+}
+
+/// The modes of model.json `m` on `g`, the outputs placed by the FRF file's channel
+/// table (era's numbering without one).
+fn model_view(
+    g: &era_io::geometry::Geometry,
+    m: &ModelJson,
+    channels: Option<&era_io::frf_file::ChannelTable>,
+) -> era_plot::viewer::ShapeView {
+    let (nodes, segments, placed, not_drawn) =
+        crate::output::geometry::layout(g, channels, m.outputs);
+    let shapes: Vec<Vec<era::Complex64>> = m
+        .modes
+        .iter()
+        .map(|mode| {
+            mode.shape_re
+                .iter()
+                .zip(&mode.shape_im)
+                .map(|(&re, &im)| era::Complex64::new(re, im))
+                .collect()
+        })
+        .collect();
+    let labelled: Vec<(String, &[era::Complex64])> = m
+        .modes
+        .iter()
+        .zip(&shapes)
+        .enumerate()
+        .map(|(k, (mode, shape))| {
+            let quality = mode
+                .indicators
+                .as_ref()
+                .map(|i| (i.mpc, mode.physical.unwrap_or(true)));
+            (
+                era_plot::viewer::mode_label(k, mode.frequency_hz, mode.damping_ratio, quality),
+                shape.as_slice(),
+            )
+        })
+        .collect();
+    era_plot::viewer::ShapeView::from_shapes(nodes, segments, &placed, &labelled, not_drawn)
 }
 
 /// The model to overlay (`--model`), refused when its shape is not the FRFs', and the

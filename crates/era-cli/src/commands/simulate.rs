@@ -12,12 +12,15 @@ use era_io::uff::UffWriteOptions;
 use serde_json::json;
 use std::time::Instant;
 
+/// Writes `frf` where `sim.out` says, then runs `after` (a file beside it, written only
+/// once the FRFs are), prints what was written and the summary.
 fn finish(
     sim: &SimOutput,
     frf: &FrfData,
     extra: &[(&str, &str)],
     summary: serde_json::Value,
     simulate_s: f64,
+    after: impl FnOnce() -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let settings = sim.settings;
     let human = Human::new(&settings);
@@ -42,6 +45,7 @@ fn finish(
         }
         _ => write_frf_csv(&sim.out, frf, &meta)?,
     }
+    after()?;
     human.print(&format!(
         "wrote {}: {} outputs x {} inputs, {} lines at {} Hz, {}{}\n",
         sim.out.display(),
@@ -90,6 +94,7 @@ fn truth(sim: &SimOutput) -> anyhow::Result<()> {
         ],
         summary,
         clock.elapsed().as_secs_f64(),
+        || Ok(()),
     )
 }
 
@@ -127,15 +132,19 @@ fn modal(a: &Modal) -> anyhow::Result<()> {
         .zip(&structure.damping_ratios)
         .map(|(f, z)| json!({"frequency_hz": f, "damping_ratio": z}))
         .collect();
+    let geometry_path = crate::output::geometry::beside(&a.sim.out);
     let summary = json!({"file": a.sim.out, "model": "modal", "outputs": a.outputs, "inputs": a.inputs, "lines": a.lines,
-        "spacing_hz": a.df, "quantity": quantity.name(), "collocated": a.collocated, "noise": a.sim.noise, "seed": a.sim.seed, "modes": modes});
+        "spacing_hz": a.df, "quantity": quantity.name(), "collocated": a.collocated, "noise": a.sim.noise, "seed": a.sim.seed, "modes": modes,
+        "geometry": geometry_path});
     let simulate_s = clock.elapsed().as_secs_f64();
+    let human = Human::new(&a.sim.settings);
     finish(
         &a.sim,
         &frf,
         &[("source", "era simulate modal")],
         summary,
         simulate_s,
+        || crate::output::geometry::write_dta_like(&human, &geometry_path, a.outputs),
     )
 }
 

@@ -6,8 +6,11 @@ use era::{FrfData, Quantity};
 use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::uff::ChannelTable;
 use era_io::IoError;
-use era_plot::report::{report_html, CoherenceInput, ReportInput};
+use era_plot::oma::{mac_png, mac_svg};
+use era_plot::report::{report_html, CoherenceInput, ReportInput, ReportSection};
+use era_plot::shapes::{complexity_png, complexity_svg, three_view_png, three_view_svg, ThreeView};
 use era_plot::stabilization::{stabilization_png, stabilization_svg, StabilizationPlot};
+use era_plot::viewer::ShapeView;
 use era_plot::{
     coherence_grid, frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure,
     FrfUnits, FrfView, PhaseView,
@@ -134,6 +137,89 @@ pub fn write_figure(
     Ok(svg)
 }
 
+/// Writes `folder/stem.svg` (the text `svg`) and `folder/stem.png` (drawn by `png`,
+/// which gets the staged path) into `set`.
+pub fn write_svg_png(
+    set: &mut OutputSet,
+    folder: &Path,
+    stem: &str,
+    svg: &str,
+    png: impl FnOnce(&Path) -> Result<(), IoError>,
+) -> anyhow::Result<()> {
+    write_output(set, folder.join(format!("{stem}.svg")), |p| {
+        Ok(write_atomic(p, svg.as_bytes())?)
+    })?;
+    write_output(set, folder.join(format!("{stem}.png")), |p| Ok(png(p)?))
+}
+
+/// Writes `automac` (with `automac`), `complexity` and, with a geometry, each mode's
+/// three views into `folder` of `set`; returns the report's sections (the AutoMAC and
+/// the complexity). The three views count on `progress`.
+pub fn write_shape_figures(
+    set: &mut OutputSet,
+    folder: &Path,
+    found: &Identification,
+    view: Option<&ShapeView>,
+    automac: bool,
+    progress: &indicatif::ProgressBar,
+) -> anyhow::Result<Vec<super::shapes::Section>> {
+    let mut sections = Vec::new();
+    if let Some(mac) = automac
+        .then(|| super::shapes::automac_plot(found))
+        .flatten()
+    {
+        let svg = mac_svg(&mac)?;
+        write_svg_png(set, folder, "automac", &svg, |p| {
+            write_png_with(p, |tmp| mac_png(&mac, tmp))
+        })?;
+        sections.push(super::shapes::Section {
+            id: "automac",
+            heading: mac.title.clone(),
+            caption: "The modal assurance criterion between the modes' shapes (AutoMAC): 1 on the diagonal; an entry near 1 off it says two modes look alike at these sensors (too few sensors to tell them apart, or one mode found twice).".into(),
+            svg,
+        });
+    }
+    if let Some(plot) = super::shapes::complexity_plot(found) {
+        let svg = complexity_svg(&plot)?;
+        write_svg_png(set, folder, "complexity", &svg, |p| {
+            write_png_with(p, |tmp| complexity_png(&plot, tmp))
+        })?;
+        sections.push(super::shapes::Section {
+            id: "complexity",
+            heading: "Complexity of the shapes".into(),
+            caption: "Each entry of a shape as a vector in the complex plane, divided by the largest entry (which lies on the positive real axis, the circle is 1). A real normal mode's entries lie on one line through 0 (MPC 1); entries spread round the circle are a complex shape: close modes mixed, non-proportional damping, or noise.".into(),
+            svg,
+        });
+    }
+    if let Some(v) = view {
+        progress.inc_length(v.modes.len() as u64);
+        write_three_views(set, folder, v, progress)?;
+    }
+    Ok(sections)
+}
+
+/// Each mode of `view` in three views ([`ThreeView`]), `folder/shapes/mode_NN.svg/png`,
+/// one step of `progress` each.
+pub fn write_three_views(
+    set: &mut OutputSet,
+    folder: &Path,
+    view: &ShapeView,
+    progress: &indicatif::ProgressBar,
+) -> anyhow::Result<()> {
+    let dir = folder.join("shapes");
+    for k in 0..view.modes.len() {
+        let Some(plot) = ThreeView::new(view, k, super::shapes::AMPLITUDE) else {
+            continue;
+        };
+        let svg = three_view_svg(&plot)?;
+        write_svg_png(set, &dir, &format!("mode_{:02}", k + 1), &svg, |p| {
+            write_png_with(p, |tmp| three_view_png(&plot, tmp))
+        })?;
+        progress.inc(1);
+    }
+    Ok(())
+}
+
 /// The overview grid and every pair's overlay of `measured` (and `model` when given)
 /// into `folder` and `folder/pairs` of `set`; returns the grid SVG and the (title, SVG)
 /// per pair.
@@ -197,7 +283,8 @@ pub fn write_stabilization(
 }
 
 /// Figures and report of `found` into `folder` of `set`: `singular_values`, `grid`,
-/// `pairs/pair_I_J`, `coherence` when `source` carries it (SVG and PNG) and
+/// `pairs/pair_I_J`, `coherence` when `source` carries it, `automac`, `complexity` and
+/// with a geometry `shapes/mode_NN` ([`super::shapes`]) (SVG and PNG) and
 /// `report.html`, in the units and with the collocation `source` gives.
 #[allow(clippy::too_many_arguments)]
 pub fn write_all(
@@ -246,6 +333,8 @@ pub fn write_all(
     let (grid_svg, overlays) =
         write_frf_figures(set, folder, measured, Some(&model), &view, progress)?;
     let shapes = super::geometry::shape_view(source, found);
+    let own = write_shape_figures(set, folder, found, shapes.as_ref(), true, progress)?;
+    let sections: Vec<ReportSection> = own.iter().map(super::shapes::Section::view).collect();
     let html = report_html(&ReportInput {
         title,
         source: &source.section,
@@ -262,7 +351,7 @@ pub fn write_all(
         found,
         singular_values_svg: &sv_svg,
         stabilization_svg: stabilization_svg.as_deref(),
-        sections: &[],
+        sections: &sections,
         grid_svg: Some(&grid_svg),
         overlays: &overlays,
         shapes: shapes.as_ref(),

@@ -1,7 +1,8 @@
 //! `--geometry FILE`: read and checked before a run (a bad file exits with code 2), then
 //! described in the run's notes with the channels it cannot draw, written into
 //! modes.uff with the shapes ([`super::identification::write_bundle`]), and drawn in
-//! the report's mode-shape viewer ([`shape_view`]).
+//! the report's mode-shape viewer ([`shape_view`]). And the geometry the simulators
+//! write beside their FRFs ([`write_dta_like`]).
 
 use era::identification::Identification;
 use era_io::frf_file::{direction_name, ChannelTable};
@@ -75,9 +76,27 @@ fn not_drawn(map: &ChannelMap, table: &ChannelTable) -> Vec<String> {
 /// a geometry. The outputs are placed as in [`notes`].
 pub fn shape_view(run: &super::RunInput, found: &Identification) -> Option<ShapeView> {
     let geometry = run.geometry.as_ref()?;
-    let outputs = found.measured.outputs();
+    let (nodes, segments, placed, not_drawn) =
+        layout(geometry, run.channels.as_ref(), found.measured.outputs());
+    Some(ShapeView::new(nodes, segments, &placed, found, not_drawn))
+}
+
+/// What a shape view of `outputs` channels on `geometry` needs: the node positions,
+/// the segments as node indices, each channel placed (as in [`notes`]: the channel
+/// table, or era's numbering without one) and the channels not drawn.
+#[allow(clippy::type_complexity)]
+pub fn layout(
+    geometry: &Geometry,
+    channels: Option<&ChannelTable>,
+    outputs: usize,
+) -> (
+    Vec<[f64; 3]>,
+    Vec<(usize, usize)>,
+    Vec<Placement>,
+    Vec<String>,
+) {
     let numbered = ChannelTable::numbered(outputs, 0);
-    let table = run.channels.as_ref().unwrap_or(&numbered);
+    let table = channels.unwrap_or(&numbered);
     let map = map_channels(geometry, &table.outputs);
     let index = geometry.node_index();
     let segments = geometry
@@ -94,13 +113,12 @@ pub fn shape_view(run: &super::RunInput, found: &Identification) -> Option<Shape
             direction: p.direction,
         })
         .collect();
-    Some(ShapeView::new(
+    (
         geometry.nodes.iter().map(|n| n.xyz).collect(),
         segments,
-        &placed,
-        found,
+        placed,
         not_drawn(&map, table),
-    ))
+    )
 }
 
 /// `run` with the geometry and its notes.
@@ -115,4 +133,40 @@ pub fn attach(
         run.geometry = Some(g);
     }
     run
+}
+
+/// `dir/STEM_geometry.csv` beside `out` (`dta.csv` → `dta_geometry.csv`).
+pub fn beside(out: &std::path::Path) -> std::path::PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "frf".into());
+    out.with_file_name(format!("{stem}_geometry.csv"))
+}
+
+/// The DTA-like ring truss with its tripod ([`era_io::geometry::layouts::dta_like`]),
+/// the outputs on its ring, as our geometry CSV at `path`, so that `--geometry` draws
+/// the simulated shapes.
+pub fn write_dta_like(
+    human: &super::report::Human,
+    path: &std::path::Path,
+    outputs: usize,
+) -> anyhow::Result<()> {
+    let g = era_io::geometry::layouts::dta_like(outputs);
+    let text = era_io::geometry::csv::geometry_csv_text(
+        &g,
+        &[
+            "the DTA-like structure of era simulate (thesis chapter II): a ring truss, its tripod,",
+            "two solar-array masts and three mass simulators. Outputs 1..q are nodes 1..q (+Z) on the",
+            "ring's upper chord. A layout to draw on, not a finite-element model: the simulated",
+            "shapes are random vectors placed on it.",
+        ],
+    );
+    era_io::atomic::write_atomic(path, text.as_bytes())?;
+    human.print(&format!(
+        "wrote {}: {} (give it to identify/refine/oma with --geometry)\n",
+        path.display(),
+        g.summary()
+    ));
+    Ok(())
 }

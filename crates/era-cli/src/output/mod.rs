@@ -10,6 +10,7 @@ pub mod identification;
 pub mod oma;
 pub mod progress;
 pub mod report;
+pub mod shapes;
 pub mod track;
 
 use anyhow::Context;

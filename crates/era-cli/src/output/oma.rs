@@ -4,7 +4,7 @@
 //! singular values with the modes marked, the MAC matrix of the physical modes) and
 //! report.html.
 
-use super::figures::{write_figure, write_png_with, write_stabilization};
+use super::figures::{write_figure, write_png_with, write_shape_figures, write_stabilization};
 use super::identification::{write_bundle, Bundle};
 use super::{stamped, write_output, RunInput};
 use era::identify::oma::Oma;
@@ -51,6 +51,8 @@ pub struct OmaRun<'a> {
     pub options: &'a era::identify::oma::OmaOptions,
     /// `--states auto`.
     pub auto: bool,
+    /// The test geometry (`--geometry`): its file and nodes.
+    pub geometry: Option<&'a (String, era_io::geometry::Geometry)>,
 }
 
 /// The most channels listed by label in the summary.
@@ -311,7 +313,11 @@ pub fn write_oma(
             svg,
         ));
     }
-    let sections: Vec<ReportSection> = sections_svg
+    let shapes = super::geometry::shape_view(&source, found);
+    let bar = super::progress::bar(settings, 0, "figures");
+    let own = write_shape_figures(set, here, found, shapes.as_ref(), false, &bar)?;
+    bar.finish_and_clear();
+    let mut sections: Vec<ReportSection> = sections_svg
         .iter()
         .map(|(id, heading, caption, svg)| ReportSection {
             id,
@@ -320,6 +326,7 @@ pub fn write_oma(
             svg,
         })
         .collect();
+    sections.extend(own.iter().map(super::shapes::Section::view));
     let view = FrfView::by_index(found.measured.outputs(), found.measured.inputs());
     let html = report_html(&ReportInput {
         title: &title,
@@ -333,7 +340,7 @@ pub fn write_oma(
         sections: &sections,
         grid_svg: None,
         overlays: &[],
-        shapes: None,
+        shapes: shapes.as_ref(),
     });
     write_output(set, "report.html", |p| {
         Ok(write_atomic(p, html.as_bytes())?)
@@ -382,7 +389,7 @@ fn mac_plot(run: &OmaRun) -> Option<MacPlot> {
 fn run_input(run: &OmaRun) -> RunInput {
     let r = run.records;
     let o = run.oma;
-    RunInput {
+    let source = RunInput {
         section: InputSection {
             file: run
                 .files
@@ -414,19 +421,22 @@ fn run_input(run: &OmaRun) -> RunInput {
         coherence: None,
         phase: PhaseView::Wrapped,
         geometry: None,
-    }
+    };
+    let outputs = o.identification.measured.outputs();
+    super::geometry::attach(source, run.geometry.cloned(), outputs)
 }
 
 /// What the run wrote, for the closing line.
-pub fn written_list(dir: &Path, figures: bool) -> String {
+pub fn written_list(dir: &Path, figures: bool, shapes: bool) -> String {
     let files = format!(
         "{0}/model.json, {0}/model.mat, {0}/modes.uff, {0}/model_frf.uff, {0}/fit.json",
         dir.display()
     );
     if figures {
         format!(
-            "{files}, {}/report.html and figures (singular_values, stabilization, spectral, mac)",
-            dir.display()
+            "{files}, {}/report.html and figures (singular_values, stabilization, spectral, mac, complexity{})",
+            dir.display(),
+            if shapes { ", shapes/" } else { "" }
         )
     } else {
         format!("{files} (no figures)")

@@ -65,8 +65,9 @@ fn report_renders_in_a_headless_browser() {
     let dom = headless(&browser, &dir.path().join("p1"), &page, &["--dump-dom"]);
     assert_success(&dom);
     let dom = String::from_utf8_lossy(&dom.stdout);
-    // Singular values + grid + 9 overlays, each a rendered <svg> in its <figure>.
-    assert_eq!(dom.matches("<svg").count(), 11, "rendered SVG elements");
+    // Singular values + AutoMAC + complexity + grid + 9 overlays, each a rendered <svg>
+    // in its <figure>.
+    assert_eq!(dom.matches("<svg").count(), 13, "rendered SVG elements");
     for id in [
         "fig-singular-values",
         "fig-grid",

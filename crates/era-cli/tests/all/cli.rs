@@ -541,7 +541,16 @@ fn identify_out_writes_every_figure_and_the_report() {
         html.matches("http://www.w3.org/2000/svg").count()
     );
     assert!(!html.contains("<script") && !html.contains("<link") && !html.contains("src="));
-    assert_eq!(html.matches("<svg").count(), 66);
+    // 64 overlays, the grid, the singular values, the AutoMAC and the complexity.
+    assert_eq!(html.matches("<svg").count(), 68);
+    for f in [
+        "automac.svg",
+        "automac.png",
+        "complexity.svg",
+        "complexity.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
 }
 
 #[test]

@@ -240,8 +240,9 @@ fn an_8x8_report_stays_under_2_mb() {
     assert!(size < 2_000_000, "report.html is {size} bytes");
     let html = read(out.join("report.html"));
     assert_eq!(html.matches("class=\"plot overlay\"").count(), 64);
-    // Each figure once: 64 overlays, the grid and the singular values.
-    assert_eq!(html.matches("<svg").count(), 66);
+    // Each figure once: 64 overlays, the grid, the singular values, the AutoMAC and the
+    // complexity.
+    assert_eq!(html.matches("<svg").count(), 68);
 }
 
 #[test]

@@ -172,10 +172,19 @@ fn int_cell(cell: &str) -> Option<i64> {
 /// # Errors
 /// [`IoError`] naming the file.
 pub fn write_geometry_csv(path: &Path, g: &Geometry) -> Result<(), IoError> {
+    crate::atomic::write_atomic(path, geometry_csv_text(g, &[]).as_bytes())
+}
+
+/// The geometry CSV text of `g`: `# era geometry: SUMMARY`, then each line of
+/// `comments` as a `#` line, the nodes and the segments.
+pub fn geometry_csv_text(g: &Geometry, comments: &[&str]) -> String {
     use std::fmt::Write;
     let mut w = String::new();
     // Writing to a String cannot fail.
     let _ = writeln!(w, "# era geometry: {}", g.summary());
+    for c in comments {
+        let _ = writeln!(w, "# {c}");
+    }
     let _ = writeln!(w, "node,x,y,z");
     for n in &g.nodes {
         let _ = writeln!(w, "{},{},{},{}", n.id, n.xyz[0], n.xyz[1], n.xyz[2]);
@@ -187,5 +196,5 @@ pub fn write_geometry_csv(path: &Path, g: &Geometry) -> Result<(), IoError> {
             let _ = writeln!(w, "{a},{b}");
         }
     }
-    crate::atomic::write_atomic(path, w.as_bytes())
+    w
 }

@@ -17,6 +17,7 @@
 
 pub mod csv;
 mod frames;
+pub mod layouts;
 
 pub use frames::{CoordinateSystem, SystemKind};
 
