@@ -4,7 +4,7 @@
 //! modes matched side by side.
 
 use crate::figures::{
-    log_range, pair_title, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind,
+    log_range, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind,
     YScale,
 };
 use era::{Complex64, FrfData};
@@ -87,7 +87,7 @@ pub fn compare_overlay(
         legend: false,
     };
     Figure {
-        title: pair_title(output, input, view.is_collocated(output, input)),
+        title: view.pair_title(output, input),
         panels: vec![magnitude, phase],
         columns: 1,
         size: (900, 640),

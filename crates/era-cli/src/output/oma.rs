@@ -413,6 +413,8 @@ fn run_input(run: &OmaRun) -> RunInput {
         channels: None,
         coherence: None,
         phase: PhaseView::Wrapped,
+        pairs: era_plot::PairSelection::All,
+        hankel: None,
         geometry: None,
     }
 }

@@ -534,13 +534,15 @@ fn identify_out_writes_every_figure_and_the_report() {
     ] {
         assert!(html.contains(id), "{id}");
     }
-    assert!(html.contains("Measurement 8, Excitation Actuator 8 (collocated)"));
+    assert!(html.contains("output 8 / input 8 (collocated)"));
     // Self-contained: the only URLs are the SVG namespace names, and nothing is loaded.
     assert_eq!(
         html.matches("http").count(),
         html.matches("http://www.w3.org/2000/svg").count()
     );
-    assert!(!html.contains("<script") && !html.contains("<link") && !html.contains("src="));
+    // The one script is inline (the pair picker): nothing is fetched.
+    assert_eq!(html.matches("<script>").count(), 1);
+    assert!(!html.contains("<script src") && !html.contains("<link") && !html.contains("src="));
     assert_eq!(html.matches("<svg").count(), 66);
 }
 
