@@ -4,8 +4,7 @@
 //! modes matched side by side.
 
 use crate::figures::{
-    log_range, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind,
-    YScale,
+    log_range, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind, YScale,
 };
 use era::{Complex64, FrfData};
 use std::fmt::Write as _;

@@ -296,7 +296,13 @@ pub fn typeset_units(text: &str) -> String {
     while let Some(at) = rest.find(['^', '*']) {
         let (head, tail) = rest.split_at(at);
         out.push_str(head);
-        let marker = if tail.starts_with("**") { 2 } else if tail.starts_with('^') { 1 } else { 0 };
+        let marker = if tail.starts_with("**") {
+            2
+        } else if tail.starts_with('^') {
+            1
+        } else {
+            0
+        };
         let power = &tail[marker..];
         let digits = power
             .char_indices()
@@ -434,7 +440,10 @@ impl std::str::FromStr for PairSelection {
         for item in text.split(',') {
             let item = item.trim();
             let parsed = item.split_once(':').and_then(|(o, i)| {
-                Some((o.trim().parse::<usize>().ok()?, i.trim().parse::<usize>().ok()?))
+                Some((
+                    o.trim().parse::<usize>().ok()?,
+                    i.trim().parse::<usize>().ok()?,
+                ))
             });
             match parsed {
                 Some((o, i)) if o >= 1 && i >= 1 => {
@@ -767,7 +776,10 @@ pub fn frf_grid(measured: &FrfData, model: Option<&FrfData>, view: &FrfView) -> 
         }
     }
     let title = if model.is_some() {
-        format!("All pairs: measured (solid) and {} (dashed), magnitude", view.model)
+        format!(
+            "All pairs: measured (solid) and {} (dashed), magnitude",
+            view.model
+        )
     } else {
         "All pairs: measured magnitude".into()
     };
@@ -832,7 +844,11 @@ pub fn singular_value_figure(singular_values: &[f64], order: usize) -> Figure {
         // Room past the order marker, so it never sits on the right border.
         x_range: (
             0.0,
-            singular_values.len().max(order + (order / 10).max(2)).max(1) as f64 + 1.0,
+            singular_values
+                .len()
+                .max(order + (order / 10).max(2))
+                .max(1) as f64
+                + 1.0,
         ),
         y_range: log_range(singular_values.iter().copied().chain(floor)),
         series: vec![Series {
@@ -896,8 +912,13 @@ mod tests {
         };
         let fig = frf_overlay(&m, Some(&m), 1, 2, &named);
         assert_eq!(fig.title, "output 2 (node 2 +Z) / input 3 (node 7 -X)");
-        assert!(fig.panels.iter().all(|p| p.series[1].label == "refined model"));
-        assert!(frf_grid(&m, Some(&m), &named).title.contains("refined model (dashed)"));
+        assert!(fig
+            .panels
+            .iter()
+            .all(|p| p.series[1].label == "refined model"));
+        assert!(frf_grid(&m, Some(&m), &named)
+            .title
+            .contains("refined model (dashed)"));
         assert_eq!(fig.panels.len(), 2);
         for p in &fig.panels {
             assert_eq!(p.series.len(), 2);
@@ -934,7 +955,10 @@ mod tests {
         let all: PairSelection = "all".parse().unwrap();
         assert_eq!(all.pairs(3, 3, &view).unwrap().len(), 9);
         let col: PairSelection = "collocated".parse().unwrap();
-        assert_eq!(col.pairs(3, 3, &view).unwrap(), vec![(0, 0), (1, 1), (2, 2)]);
+        assert_eq!(
+            col.pairs(3, 3, &view).unwrap(),
+            vec![(0, 0), (1, 1), (2, 2)]
+        );
         let list: PairSelection = "2:3, 1:1,2:3".parse().unwrap();
         assert_eq!(list, PairSelection::List(vec![(2, 3), (1, 1)]));
         assert_eq!(list.pairs(3, 3, &view).unwrap(), vec![(1, 2), (0, 0)]);

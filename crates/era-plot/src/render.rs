@@ -21,9 +21,7 @@
 //! A series is cut where a point is not drawable (NaN marks a gap, such as a wrapped
 //! phase passing ±180°); a piece of one point is drawn as a dot.
 
-use crate::figures::{
-    log_tick_label, typeset_units, Figure, Panel, Series, SeriesKind, YScale,
-};
+use crate::figures::{log_tick_label, typeset_units, Figure, Panel, Series, SeriesKind, YScale};
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -924,7 +922,10 @@ mod tests {
         let grid = render_svg(&frf_grid(&m, Some(&m), &view)).unwrap();
         assert!(grid.contains("|G| (m/s²)/N") && grid.contains("Frequency (Hz)"));
         // Log ticks in superscripts, never `1e-2`.
-        assert!(svg.contains("10⁰") || svg.contains("10¹"), "superscript ticks");
+        assert!(
+            svg.contains("10⁰") || svg.contains("10¹"),
+            "superscript ticks"
+        );
         assert!(!svg.contains(">1e"), "an e-notation tick");
     }
 

@@ -278,7 +278,10 @@ e.hidden=!v;if(v)k++;});n.textContent=k+' of '+f.length+' shown';}\
 /// (output, input, collocated only) above it.
 fn overlays_html(input: &ReportInput<'_>) -> String {
     let mut h = String::from("<h2 id=\"overlays\">Each pair</h2>\n");
-    let (q, p) = (input.found.measured.outputs(), input.found.measured.inputs());
+    let (q, p) = (
+        input.found.measured.outputs(),
+        input.found.measured.inputs(),
+    );
     let overlays = input.overlays;
     if overlays.len() < q * p {
         let _ = writeln!(
@@ -378,18 +381,32 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
     let warnings = f.warnings(era::params::Naming::Flag);
     let mut sections: Vec<(&str, &str, String)> = vec![
         ("modes", "Modes", modes_html(f)),
-        ("stabilization", "Stabilization diagram", stabilization_html(input)),
+        (
+            "stabilization",
+            "Stabilization diagram",
+            stabilization_html(input),
+        ),
     ];
     for section in input.sections {
-        sections.push((section.id, section.heading, sections_html(std::slice::from_ref(section))));
+        sections.push((
+            section.id,
+            section.heading,
+            sections_html(std::slice::from_ref(section)),
+        ));
     }
     let shapes = crate::viewer::shapes_html(input.shapes);
     let shapes_heading = shapes.contains("id=\"shapes\"");
-    sections.push((if shapes_heading { "shapes" } else { "" }, "Mode shapes", shapes));
+    sections.push((
+        if shapes_heading { "shapes" } else { "" },
+        "Mode shapes",
+        shapes,
+    ));
     // Results to treat with care (era::suspect): counted and named in the summary at
     // the top, listed in full here. The report is the CLI's: flags are named.
     if !warnings.is_empty() {
-        let mut w = String::from("<h2 id=\"warnings\">Warnings</h2>\n<ul id=\"warning-list\" class=\"suspect\">");
+        let mut w = String::from(
+            "<h2 id=\"warnings\">Warnings</h2>\n<ul id=\"warning-list\" class=\"suspect\">",
+        );
         for line in &warnings {
             let _ = write!(w, "<li>{}</li>", escape(line));
         }
@@ -397,7 +414,11 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
         sections.push(("warnings", "Warnings", w));
     }
     sections.push(("fit", "Fit", fit_html(input)));
-    sections.push(("singular-values", "Singular values", singular_values_html(input)));
+    sections.push((
+        "singular-values",
+        "Singular values",
+        singular_values_html(input),
+    ));
     if let Some(c) = &input.coherence {
         sections.push((
             "coherence",
@@ -448,12 +469,13 @@ td,th{border:1px solid #ccc;padding:3px 8px;text-align:right} th{background:#f3f
 pre{background:#f7f7f7;padding:1em;overflow-x:auto} figure{margin:1em 0} svg{max-width:100%;height:auto}\
 .col{background:#eef6ff} .bad{background:#fff1f0} .suspect{color:#a8071a}\
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 1em} dt{font-weight:bold} dd{margin:0;font-family:monospace;overflow-wrap:anywhere}\
-table.matrix td{font-size:.85em} table.matrix small{color:#666} figure.wide{width:calc(100vw - 5em);max-width:1500px}\
+table.matrix{display:block;overflow-x:auto;max-width:100%} table.matrix td{font-size:.85em}\
+#modal-table td{white-space:nowrap} #modal-table td:last-child{white-space:normal} table.matrix small{color:#666} figure.wide{width:calc(100vw - 5em);max-width:1500px}\
 #toc{display:flex;flex-wrap:wrap;gap:.3em 1.2em;padding:.5em .8em;background:#f7f7f7;border:1px solid #ddd;border-radius:4px}\
 #toc b{margin-right:.5em}\
 #summary{border:1px solid #9bb7d4;background:#f4f8fc;border-radius:4px;padding:.2em 1.2em .8em;margin:1em 0}\
 #summary h2{margin-top:.5em;border:0} #summary dd{font-family:inherit} #summary ul{margin:.2em 0;padding-left:1.2em}\
-.pairs{display:grid;grid-template-columns:repeat(auto-fill,minmax(430px,1fr));gap:.5em 1em}\
+.pairs{display:grid;grid-template-columns:repeat(auto-fill,minmax(400px,1fr));gap:.5em 1em}\
 .pairs figure{margin:0} #pair-picker{display:flex;flex-wrap:wrap;gap:.5em 1.5em;align-items:center;margin:.5em 0}";
 
 /// A relative error as a percentage with the digits it needs: `29.4 %`, `4.98 %`,
@@ -502,7 +524,9 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
         .modes
         .iter()
         .map(|m| m.frequency_hz)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
     let mut h = String::from("<section id=\"summary\"><h2>Summary</h2><dl>");
     let _ = write!(
         h,
@@ -540,7 +564,11 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
     let _ = write!(
         h,
         "<dt>Fit</dt><dd id=\"summary-fit\"><a href=\"#fit\">mean relative error</a>: {}</dd>",
-        if fit.is_empty() { "–".to_string() } else { fit.join(", ") }
+        if fit.is_empty() {
+            "–".to_string()
+        } else {
+            fit.join(", ")
+        }
     );
     let _ = write!(
         h,
@@ -561,7 +589,11 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
             let _ = write!(h, "<li>{}</li>", escape(&brief(w, 160)));
         }
         if warnings.len() > SHOWN {
-            let _ = write!(h, "<li><a href=\"#warnings\">and {} more</a></li>", warnings.len() - SHOWN);
+            let _ = write!(
+                h,
+                "<li><a href=\"#warnings\">and {} more</a></li>",
+                warnings.len() - SHOWN
+            );
         }
         h.push_str("</ul>");
     }
@@ -686,4 +718,25 @@ fn fit_html(input: &ReportInput<'_>) -> String {
         f.measured.inputs(),
     ));
     h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn errors_read_in_percent_with_the_digits_they_need() {
+        assert_eq!(percent(0.2937), "29.4 %");
+        assert_eq!(percent(0.04976), "4.98 %");
+        assert_eq!(percent(0.001234), "0.123 %");
+        assert_eq!(percent(0.0), "0.000 %");
+        assert_eq!(percent(3.2e-5), "3.2e-3 %");
+        assert_eq!(percent(f64::NAN), "–");
+    }
+
+    #[test]
+    fn long_warnings_are_cut_at_a_word() {
+        assert_eq!(brief("short", 10), "short");
+        assert_eq!(brief("one two three four", 10), "one two…");
+    }
 }

@@ -245,6 +245,22 @@ fn an_8x8_report_stays_under_2_mb() {
     assert_eq!(html.matches("class=\"plot overlay\"").count(), 64);
     // Each figure once: 64 overlays, the grid and the singular values.
     assert_eq!(html.matches("<svg").count(), 66);
+    // The fixed order's H0 (1592 x 1592) went matrix-free, which computes its 80 values
+    // only: the figure shows more of the same H0, so that the gap after the order
+    // shows; the model keeps the run's values.
+    let svg = read(out.join("singular_values.svg"));
+    let title = &svg[svg.find("Hankel singular values (").expect("title")..];
+    let shown: usize = title["Hankel singular values (".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let model: serde_json::Value = serde_json::from_str(&read(out.join("model.json"))).unwrap();
+    let kept = model["singular_values"].as_array().unwrap().len();
+    assert!(html.contains("matrix-free path"));
+    assert!(shown > 80 && kept <= 80, "{shown} shown, {kept} in model.json");
+    assert!(title.contains("order 80)"));
 }
 
 #[test]

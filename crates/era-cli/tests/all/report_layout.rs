@@ -12,9 +12,29 @@ fn small_set(dir: &Path) -> PathBuf {
     let file = dir.join("small.csv");
     era()
         .args([
-            "simulate", "modal", "-q", "--outputs", "3", "--inputs", "3", "--modes", "4",
-            "--fmin", "1", "--fmax", "6", "--lines", "401", "--df", "0.025", "--collocated",
-            "--noise", "0.02", "--seed", "5", "--out",
+            "simulate",
+            "modal",
+            "-q",
+            "--outputs",
+            "3",
+            "--inputs",
+            "3",
+            "--modes",
+            "4",
+            "--fmin",
+            "1",
+            "--fmax",
+            "6",
+            "--lines",
+            "401",
+            "--df",
+            "0.025",
+            "--collocated",
+            "--noise",
+            "0.02",
+            "--seed",
+            "5",
+            "--out",
         ])
         .arg(&file)
         .assert()
@@ -42,7 +62,15 @@ fn the_report_opens_with_contents_and_a_summary_that_agree_with_the_model() {
     let file = small_set(dir.path());
     let out = dir.path().join("out");
     era()
-        .args(["identify", s(&file), "--states", "auto", "--refine", "-q", "--out"])
+        .args([
+            "identify",
+            s(&file),
+            "--states",
+            "auto",
+            "--refine",
+            "-q",
+            "--out",
+        ])
         .arg(&out)
         .assert()
         .success();
@@ -67,7 +95,10 @@ fn the_report_opens_with_contents_and_a_summary_that_agree_with_the_model() {
         "input",
         "parameters",
     ] {
-        assert!(links.contains(&id), "{id} missing from the contents: {links:?}");
+        assert!(
+            links.contains(&id),
+            "{id} missing from the contents: {links:?}"
+        );
     }
     for id in &links {
         assert_eq!(
@@ -97,8 +128,14 @@ fn the_report_opens_with_contents_and_a_summary_that_agree_with_the_model() {
     let model: serde_json::Value = serde_json::from_str(&read(out.join("model.json"))).unwrap();
     let modes = model["modes"].as_array().unwrap();
     let physical = modes.iter().filter(|m| m["physical"] == true).count();
-    assert_eq!(attribute(&html, "summary-modes", "data-modes"), modes.len().to_string());
-    assert_eq!(attribute(&html, "summary-modes", "data-physical"), physical.to_string());
+    assert_eq!(
+        attribute(&html, "summary-modes", "data-modes"),
+        modes.len().to_string()
+    );
+    assert_eq!(
+        attribute(&html, "summary-modes", "data-physical"),
+        physical.to_string()
+    );
     assert_eq!(
         attribute(&html, "summary-model", "data-states"),
         model["states"].to_string()
@@ -106,13 +143,18 @@ fn the_report_opens_with_contents_and_a_summary_that_agree_with_the_model() {
     let summary = &html[at("id=\"summary\"")..at("id=\"modes\"")];
     assert!(summary.contains("refined"), "{summary}");
     let fit: serde_json::Value = serde_json::from_str(&read(out.join("fit.json"))).unwrap();
-    let expected = fit["collocated_mean_relative_error"].as_f64().expect("fit.json mean");
+    let expected = fit["collocated_mean_relative_error"]
+        .as_f64()
+        .expect("fit.json mean");
     let shown: f64 = summary
         .split("data-error=\"")
         .nth(1)
         .and_then(|t| t[..t.find('"')?].parse().ok())
         .expect("the collocated mean in the summary");
-    assert!((shown - expected).abs() <= 1e-12 * expected.abs(), "{shown} vs {expected}");
+    assert!(
+        (shown - expected).abs() <= 1e-12 * expected.abs(),
+        "{shown} vs {expected}"
+    );
     // Errors read in percent: the summary, the fit matrix and the refinement line.
     assert!(summary.contains(&format!("{:.2} %", 100.0 * expected)) || summary.contains(" %"));
     let table = &html[at("id=\"fit-table\"")..];
@@ -123,7 +165,10 @@ fn the_report_opens_with_contents_and_a_summary_that_agree_with_the_model() {
     let refinement = &refinement[..refinement.find("</p>").unwrap()];
     assert!(refinement.contains(" % to "), "{refinement}");
     let warnings = attribute(&html, "summary-warnings", "data-count");
-    assert_eq!(warnings, model["warnings"].as_array().unwrap().len().to_string());
+    assert_eq!(
+        warnings,
+        model["warnings"].as_array().unwrap().len().to_string()
+    );
     // After --refine the legends and the grid's title name the refined model.
     let pair = read(out.join("pairs/pair_1_2.svg"));
     assert!(pair.contains("refined model") && !pair.contains("ERA model"));
@@ -148,18 +193,39 @@ fn pairs_writes_and_shows_only_the_chosen_pairs() {
     };
     let plot = dir.path().join("plot");
     era()
-        .args(["plot", s(&file), "-q", "--pairs", "3:1, 1:2", "--out", s(&plot)])
+        .args([
+            "plot",
+            s(&file),
+            "-q",
+            "--pairs",
+            "3:1, 1:2",
+            "--out",
+            s(&plot),
+        ])
         .assert()
         .success();
     assert_eq!(
         listed(&plot),
-        ["pair_1_2.png", "pair_1_2.svg", "pair_3_1.png", "pair_3_1.svg"]
+        [
+            "pair_1_2.png",
+            "pair_1_2.svg",
+            "pair_3_1.png",
+            "pair_3_1.svg"
+        ]
     );
     // The grid still shows every pair.
     assert!(read(plot.join("grid.svg")).contains("Y3 / F3"));
     let out = dir.path().join("out");
     era()
-        .args(["identify", s(&file), "--states", "8", "--pairs", "collocated", "-q"])
+        .args([
+            "identify",
+            s(&file),
+            "--states",
+            "8",
+            "--pairs",
+            "collocated",
+            "-q",
+        ])
         .args(["--out", s(&out)])
         .assert()
         .success();
@@ -170,7 +236,14 @@ fn pairs_writes_and_shows_only_the_chosen_pairs() {
     assert!(html.contains("3 of the 9 pairs"));
     let refined = dir.path().join("refined");
     era()
-        .args(["refine", s(&out.join("model.json")), s(&file), "--pairs", "2:3", "-q"])
+        .args([
+            "refine",
+            s(&out.join("model.json")),
+            s(&file),
+            "--pairs",
+            "2:3",
+            "-q",
+        ])
         .args(["--out", s(&refined)])
         .assert()
         .success();
@@ -184,7 +257,9 @@ fn pairs_writes_and_shows_only_the_chosen_pairs() {
         ("identify", "diagonal"),
         ("refine", "3:4"),
     ] {
-        let target = dir.path().join(format!("bad-{verb}-{}", bad.replace(':', "_")));
+        let target = dir
+            .path()
+            .join(format!("bad-{verb}-{}", bad.replace(':', "_")));
         let mut cmd = era();
         match verb {
             "plot" => cmd.args(["plot", s(&file)]),
