@@ -569,7 +569,13 @@ fn plot_overlays_a_file_with_a_model_or_alone() {
     assert_eq!(std::fs::read_dir(with.join("pairs")).unwrap().count(), 18);
     assert!(with.join("singular_values.svg").is_file());
     let svg = std::fs::read_to_string(with.join("pairs/pair_2_2.svg")).unwrap();
-    assert!(svg.contains("ERA model") && svg.contains("(collocated)"));
+    // The legend names the model: refined when model.json says a refinement ran.
+    let model: Value =
+        serde_json::from_str(&std::fs::read_to_string(model_dir.join("model.json")).unwrap())
+            .unwrap();
+    let refined = !model["refinement"].is_null();
+    let name = if refined { "refined model" } else { "ERA model" };
+    assert!(svg.contains(name) && svg.contains("(collocated)"), "{name}");
 
     let alone = dir.path().join("alone");
     era()
