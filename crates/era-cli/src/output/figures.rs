@@ -242,11 +242,7 @@ pub fn write_stabilization(
 /// modes shows. At a fixed order on the matrix-free path the run computed its `states`
 /// values only: more of the same H0 are computed here for the figure (up to
 /// `2·states + 20`, at most [`FIGURE_SINGULAR_VALUES`]); the model is not touched.
-fn figure_singular_values(
-    found: &Identification,
-    source: &RunInput,
-    states: usize,
-) -> Vec<f64> {
+fn figure_singular_values(found: &Identification, source: &RunInput, states: usize) -> Vec<f64> {
     let computed = match &found.stabilization {
         Some(st) => &st.singular_values,
         None => &found.realization.singular_values,

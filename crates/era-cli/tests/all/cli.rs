@@ -574,7 +574,11 @@ fn plot_overlays_a_file_with_a_model_or_alone() {
         serde_json::from_str(&std::fs::read_to_string(model_dir.join("model.json")).unwrap())
             .unwrap();
     let refined = !model["refinement"].is_null();
-    let name = if refined { "refined model" } else { "ERA model" };
+    let name = if refined {
+        "refined model"
+    } else {
+        "ERA model"
+    };
     assert!(svg.contains(name) && svg.contains("(collocated)"), "{name}");
 
     let alone = dir.path().join("alone");

@@ -259,7 +259,10 @@ fn an_8x8_report_stays_under_2_mb() {
     let model: serde_json::Value = serde_json::from_str(&read(out.join("model.json"))).unwrap();
     let kept = model["singular_values"].as_array().unwrap().len();
     assert!(html.contains("matrix-free path"));
-    assert!(shown > 80 && kept <= 80, "{shown} shown, {kept} in model.json");
+    assert!(
+        shown > 80 && kept <= 80,
+        "{shown} shown, {kept} in model.json"
+    );
     assert!(title.contains("order 80)"));
 }
 

@@ -83,7 +83,9 @@ fn the_figure_sees_past_a_fixed_order_on_the_same_hankel() {
     // ERA/DC factors another matrix: nothing to show.
     let mut dc = options(SvdPath::MatrixFree);
     dc.realizer = era::identify::Realizer::EraDc;
-    assert!(era::identify::hankel_singular_values(&noisy, &dc, 180).unwrap().is_none());
+    assert!(era::identify::hankel_singular_values(&noisy, &dc, 180)
+        .unwrap()
+        .is_none());
 }
 
 /// Markov blocks `C A^(k−1) B` of a random stable discrete system (modal blocks with
