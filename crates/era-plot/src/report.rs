@@ -1,8 +1,11 @@
-//! `report.html`: one self-contained file (inline SVG, inline CSS, no network) with
-//! what went in (file, format, units, channel table, command line, version, date), the
-//! parameters, singular values, modal table, the modes on the geometry when one is given
-//! (the one script, [`crate::viewer`]), the fit as an outputs × inputs matrix, the
-//! coherence when the input carries it, the overview grid and every pair's overlay.
+//! `report.html`: one self-contained file (inline SVG, inline CSS, no network), laid out
+//! for a reader who starts at the top ([`report_html`]): a table of contents and a
+//! summary (modes, model, fit in %, warnings), the modal table, the stabilization
+//! diagram, the modes on the geometry when one is given ([`crate::viewer`]), the
+//! warnings, the fit as an outputs × inputs matrix, the singular values, the coherence
+//! when the input carries it, the overview grid, the pairs' overlays in a grid with a
+//! picker (a few lines of inline script), and last what went in (file, format, units,
+//! channel table, command line, version, date) and the parameters.
 //!
 //! Size: each figure appears once, its elements share style rules
 //! ([`crate::render::compact_svg`]) and its curves are thinned to what a pixel shows
