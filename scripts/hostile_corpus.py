@@ -507,7 +507,7 @@ def main():
           "--no-figures", "--out", "okid-out"],
          ["--observer-order", "--markov-samples", "--states", "--frame", "--sample-rate"],
          ["--states", "4"]),
-        (["plot", "truth.csv", "--out", "p"], ["--integrations", "--zero-lines"], []),
+        (["plot", "truth.csv", "--out", "p"], ["--integrations", "--zero-lines", "--pairs"], []),
         (["oma", "oma.csv", "--outputs", "2-4", "--no-figures", "--out", "oma-out"],
          ["--time-lags", "--blocks", "--states", "--sample-rate", "--orders", "--references", "--outputs"],
          ["--blocks", "4"]),
@@ -529,6 +529,22 @@ def main():
                     del d[i : i + 2]
                 args += d + [flag, value]
                 r.run(f"flag {base[0]} {flag}", args)
+
+    # --pairs lists that are not pairs, or name a pair outside the set (truth.csv is
+    # 6 x 3): exit 2 with a message naming the flag and the value.
+    for value in ["1:0", "99:1", "1:99", "1:2,", "all,1:1", "1-2", ":", "1:1:1", "\u00b9:1", "1:1,,2:2",
+                  "999999999999999999999:1", " ", "collocated,1:1"]:
+        code, err = r.run("flag --pairs", ["plot", "truth.csv", "--out", "p", "--pairs", value])
+        if code != 2 or "--pairs" not in err or value.strip() not in err:
+            r.failures.append(("flag --pairs", f"plot truth.csv --pairs {value!r}", "",
+                               [f"exit {code}, the flag and value not both named"], err[-400:]))
+            r.results["flag --pairs"][1] += 1
+        for verb in (["identify", "truth.csv", "--states", "4", "--pad-to", "1024", "-q", "--out", "pairs-out"],):
+            code, err = r.run("flag --pairs", verb + ["--pairs", value])
+            if code != 2 or "--pairs" not in err:
+                r.failures.append(("flag --pairs", " ".join(verb) + f" --pairs {value!r}", "",
+                                   [f"exit {code}, the flag not named"], err[-400:]))
+                r.results["flag --pairs"][1] += 1
 
     # Hostile output targets.
     decoy = os.path.join(work, "decoy.txt")

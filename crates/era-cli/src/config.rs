@@ -162,6 +162,8 @@ pub struct Plot<'a> {
     pub read: FrfFlags<'a>,
     /// How the phase is drawn.
     pub phase: era_plot::PhaseView,
+    /// The pairs overlaid one by one (`--pairs`).
+    pub pairs: era_plot::PairSelection,
     /// Folder for the figures.
     pub out: PathBuf,
     /// `--geometry`, when given: the model's modes drawn on it.
@@ -179,6 +181,7 @@ impl<'a> From<&'a PlotArgs> for Plot<'a> {
             zero_lines: a.zero_lines,
             read: FrfFlags::from(&a.read),
             phase: a.phase.into(),
+            pairs: a.pairs.pairs.clone(),
             out: a.out.clone(),
             geometry: a.geometry.geometry.clone(),
             settings: Settings::from(&a.common),
@@ -759,6 +762,8 @@ pub struct Refine<'a> {
     pub settings: Settings,
     /// `--geometry`, when given.
     pub geometry: Option<PathBuf>,
+    /// The pairs overlaid one by one (`--pairs`).
+    pub pairs: era_plot::PairSelection,
 }
 
 impl<'a> Refine<'a> {
@@ -778,6 +783,7 @@ impl<'a> Refine<'a> {
             no_figures: a.no_figures,
             settings: Settings::from(&a.common),
             geometry: a.geometry.geometry.clone(),
+            pairs: a.pairs.pairs.clone(),
         })
     }
 }
@@ -840,6 +846,8 @@ pub struct Identify<'a> {
     pub save_frf: Option<PathBuf>,
     /// How the figures draw the phase.
     pub phase: era_plot::PhaseView,
+    /// The pairs overlaid one by one (`--pairs`).
+    pub pairs: era_plot::PairSelection,
     /// Folder for the files, when asked for.
     pub out: Option<PathBuf>,
     /// Model files but no figures and no report.
@@ -887,6 +895,7 @@ impl<'a> Identify<'a> {
             welch: Welch::from(&a.welch),
             save_frf: a.save_frf.clone(),
             phase: a.phase.into(),
+            pairs: a.pairs.pairs.clone(),
             out: a.out.clone(),
             no_figures: a.no_figures,
             settings: Settings::from(&a.common),

@@ -4,8 +4,7 @@
 //! modes matched side by side.
 
 use crate::figures::{
-    log_range, pair_title, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind,
-    YScale,
+    log_range, phase_curves, phase_series, Figure, FrfView, Panel, Series, SeriesKind, YScale,
 };
 use era::{Complex64, FrfData};
 use std::fmt::Write as _;
@@ -87,7 +86,7 @@ pub fn compare_overlay(
         legend: false,
     };
     Figure {
-        title: pair_title(output, input, view.is_collocated(output, input)),
+        title: view.pair_title(output, input),
         panels: vec![magnitude, phase],
         columns: 1,
         size: (900, 640),

@@ -265,6 +265,85 @@ impl FrfUnits {
     }
 }
 
+/// The superscript of a decimal digit or a minus sign, if it has one.
+fn superscript(c: char) -> Option<char> {
+    Some(match c {
+        '0' => '⁰',
+        '1' => '¹',
+        '2' => '²',
+        '3' => '³',
+        '4' => '⁴',
+        '5' => '⁵',
+        '6' => '⁶',
+        '7' => '⁷',
+        '8' => '⁸',
+        '9' => '⁹',
+        '-' => '⁻',
+        _ => return None,
+    })
+}
+
+/// `n` in superscript digits (`-2` → `⁻²`).
+pub fn superscript_number(n: i64) -> String {
+    n.to_string().chars().filter_map(superscript).collect()
+}
+
+/// A unit label as it is printed: powers written `^2` or `**2` (`m/s^2`, `s**-1`)
+/// become superscripts (`m/s²`, `s⁻¹`); anything else is left as it is.
+pub fn typeset_units(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(at) = rest.find(['^', '*']) {
+        let (head, tail) = rest.split_at(at);
+        out.push_str(head);
+        let marker = if tail.starts_with("**") {
+            2
+        } else if tail.starts_with('^') {
+            1
+        } else {
+            0
+        };
+        let power = &tail[marker..];
+        let digits = power
+            .char_indices()
+            .take_while(|(k, c)| c.is_ascii_digit() || (*k == 0 && *c == '-'))
+            .count();
+        let exponent = &power[..digits];
+        if marker > 0 && exponent.chars().any(|c| c.is_ascii_digit()) {
+            out.extend(exponent.chars().filter_map(superscript));
+            rest = &power[digits..];
+        } else {
+            // A lone `*` (a product) or a `^` with no number after it stays.
+            let one = tail.chars().next().map_or(1, char::len_utf8);
+            out.push_str(&tail[..one]);
+            rest = &tail[one..];
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// A tick label of a log axis: `10⁻²` at a decade, `2×10⁻³` between decades (the
+/// mantissa to one digit), `0` for zero.
+pub fn log_tick_label(value: f64) -> String {
+    if !(value.is_finite() && value > 0.0) {
+        return format!("{value}");
+    }
+    let mut exponent = value.log10().floor();
+    let mut mantissa = value / 10f64.powf(exponent);
+    // 9.9999… is the next decade, not 10×10ⁿ.
+    if mantissa.round() >= 10.0 {
+        exponent += 1.0;
+        mantissa /= 10.0;
+    }
+    let power = format!("10{}", superscript_number(exponent as i64));
+    if (mantissa - 1.0).abs() < 1e-6 {
+        power
+    } else {
+        format!("{}×{power}", mantissa.round())
+    }
+}
+
 /// `u` in parentheses when it is compound (`m/s^2` → `(m/s^2)`), so that `… / N`
 /// reads unambiguously.
 fn parenthesised(u: &str) -> String {
@@ -287,6 +366,13 @@ pub struct FrfView {
     pub collocated: Vec<bool>,
     /// Inputs (columns of the FRF matrix), to index `collocated`.
     pub inputs: usize,
+    /// The legend of the model's curve: `ERA model`, or `refined model` after a
+    /// refinement.
+    pub model: String,
+    /// Where each output is (`node 11 +Z`), from the channel table; empty without one.
+    pub output_names: Vec<String>,
+    /// Where each input is, as `output_names`.
+    pub input_names: Vec<String>,
 }
 
 impl FrfView {
@@ -301,6 +387,9 @@ impl FrfView {
                 .map(|k| square && k / inputs.max(1) == k % inputs.max(1))
                 .collect(),
             inputs,
+            model: "ERA model".into(),
+            output_names: Vec::new(),
+            input_names: Vec::new(),
         }
     }
 
@@ -311,14 +400,132 @@ impl FrfView {
             .copied()
             .unwrap_or(false)
     }
+
+    /// The title of a pair ([`pair_title`]).
+    pub fn pair_title(&self, output: usize, input: usize) -> String {
+        pair_title(
+            output,
+            input,
+            self.output_names.get(output).map(String::as_str),
+            self.input_names.get(input).map(String::as_str),
+            self.is_collocated(output, input),
+        )
+    }
 }
 
-/// Thesis-style title of a pair (1-based), marked when collocated.
-pub fn pair_title(output: usize, input: usize, collocated: bool) -> String {
+/// Which pairs get an overlay of their own (`--pairs`): all of them, the collocated
+/// ones, or a list of `output:input` pairs (1-based).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum PairSelection {
+    /// Every pair (the default).
+    #[default]
+    All,
+    /// The collocated pairs only.
+    Collocated,
+    /// These pairs, 1-based `(output, input)`, in the order given.
+    List(Vec<(usize, usize)>),
+}
+
+impl std::str::FromStr for PairSelection {
+    type Err = String;
+
+    /// `all`, `collocated`, or `OUT:IN[,OUT:IN…]` with 1-based indices (`1:1,2:3`).
+    fn from_str(text: &str) -> Result<Self, String> {
+        match text.trim() {
+            "all" => return Ok(PairSelection::All),
+            "collocated" => return Ok(PairSelection::Collocated),
+            _ => {}
+        }
+        let mut pairs = Vec::new();
+        for item in text.split(',') {
+            let item = item.trim();
+            let parsed = item.split_once(':').and_then(|(o, i)| {
+                Some((
+                    o.trim().parse::<usize>().ok()?,
+                    i.trim().parse::<usize>().ok()?,
+                ))
+            });
+            match parsed {
+                Some((o, i)) if o >= 1 && i >= 1 => {
+                    if !pairs.contains(&(o, i)) {
+                        pairs.push((o, i));
+                    }
+                }
+                _ => {
+                    return Err(format!(
+                        "'{item}' is not a pair: give all, collocated, or OUTPUT:INPUT pairs counted from 1, comma-separated (e.g. 1:1,2:3)"
+                    ))
+                }
+            }
+        }
+        Ok(PairSelection::List(pairs))
+    }
+}
+
+impl std::fmt::Display for PairSelection {
+    /// As it is written on the command line: `all`, `collocated`, `1:1,2:3`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PairSelection::All => f.write_str("all"),
+            PairSelection::Collocated => f.write_str("collocated"),
+            PairSelection::List(list) => {
+                let items: Vec<String> = list.iter().map(|(o, i)| format!("{o}:{i}")).collect();
+                f.write_str(&items.join(","))
+            }
+        }
+    }
+}
+
+impl PairSelection {
+    /// The chosen pairs of a `outputs × inputs` set, 0-based, row by row for `All` and
+    /// `Collocated` (collocation as `view` says), in the given order for a list.
+    ///
+    /// # Errors
+    /// A message naming the first pair outside the set.
+    pub fn pairs(
+        &self,
+        outputs: usize,
+        inputs: usize,
+        view: &FrfView,
+    ) -> Result<Vec<(usize, usize)>, String> {
+        let every = (0..outputs).flat_map(|i| (0..inputs).map(move |j| (i, j)));
+        match self {
+            PairSelection::All => Ok(every.collect()),
+            PairSelection::Collocated => Ok(every.filter(|&(i, j)| view.is_collocated(i, j)).collect()),
+            PairSelection::List(list) => list
+                .iter()
+                .map(|&(o, i)| {
+                    if o <= outputs && i <= inputs {
+                        Ok((o - 1, i - 1))
+                    } else {
+                        Err(format!(
+                            "pair {o}:{i} is not in the set, which has {outputs} output(s) and {inputs} input(s)"
+                        ))
+                    }
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The title of a pair (1-based) in words that suit any test (shaker, hammer,
+/// actuator): `output 2 / input 3`, each with where it is when the channel table says
+/// (`output 2 (node 11 +Z) / input 3 (node 5 +Z)`), marked when collocated.
+pub fn pair_title(
+    output: usize,
+    input: usize,
+    output_name: Option<&str>,
+    input_name: Option<&str>,
+    collocated: bool,
+) -> String {
+    let side = |role: &str, k: usize, name: Option<&str>| match name.filter(|n| !n.is_empty()) {
+        Some(n) => format!("{role} {} ({n})", k + 1),
+        None => format!("{role} {}", k + 1),
+    };
     let base = format!(
-        "Measurement {}, Excitation Actuator {}",
-        output + 1,
-        input + 1
+        "{} / {}",
+        side("output", output, output_name),
+        side("input", input, input_name)
     );
     if collocated {
         format!("{base} (collocated)")
@@ -435,7 +642,7 @@ pub fn frf_overlay(
         }];
         if let Some(b) = b {
             out.push(Series {
-                label: "ERA model".into(),
+                label: view.model.clone(),
                 x: x.clone(),
                 y: b.clone(),
                 kind: SeriesKind::Model,
@@ -474,7 +681,7 @@ pub fn frf_overlay(
         ))
         .chain(
             px.as_ref()
-                .map(|p| phase_series(&x, p, "ERA model", SeriesKind::Model, view.phase)),
+                .map(|p| phase_series(&x, p, &view.model, SeriesKind::Model, view.phase)),
         )
         .collect(),
         marker_x: None,
@@ -482,12 +689,15 @@ pub fn frf_overlay(
         legend: false,
     };
     Figure {
-        title: pair_title(output, input, view.is_collocated(output, input)),
+        title: view.pair_title(output, input),
         panels: vec![magnitude, phase],
         columns: 1,
-        size: (900, 640),
+        size: OVERLAY_SIZE,
     }
 }
+
+/// Pixel size of a pair's overlay: three side by side in a 1400 px page.
+pub const OVERLAY_SIZE: (u32, u32) = (720, 540);
 
 /// The most panel columns an overview grid takes.
 pub const MAX_GRID_COLUMNS: usize = 10;
@@ -566,11 +776,14 @@ pub fn frf_grid(measured: &FrfData, model: Option<&FrfData>, view: &FrfView) -> 
         }
     }
     let title = if model.is_some() {
-        "All pairs: measured (solid) and ERA model (dashed), magnitude"
+        format!(
+            "All pairs: measured (solid) and {} (dashed), magnitude",
+            view.model
+        )
     } else {
-        "All pairs: measured magnitude"
+        "All pairs: measured magnitude".into()
     };
-    small_multiples(title.into(), panels, p)
+    small_multiples(title, panels, p)
 }
 
 /// Coherence (0 … 1) over frequency, one small panel per curve: `curves` holds each
@@ -628,7 +841,15 @@ pub fn singular_value_figure(singular_values: &[f64], order: usize) -> Figure {
         x_label: "Index (states)".into(),
         y_label: "Singular value of H0".into(),
         y_scale: YScale::Log,
-        x_range: (0.0, singular_values.len().max(1) as f64 + 1.0),
+        // Room past the order marker, so it never sits on the right border.
+        x_range: (
+            0.0,
+            singular_values
+                .len()
+                .max(order + (order / 10).max(2))
+                .max(1) as f64
+                + 1.0,
+        ),
         y_range: log_range(singular_values.iter().copied().chain(floor)),
         series: vec![Series {
             label: "singular values".into(),
@@ -679,7 +900,25 @@ mod tests {
         let m = sample();
         let view = FrfView::by_index(2, 3);
         let fig = frf_overlay(&m, Some(&m), 1, 2, &view);
-        assert_eq!(fig.title, "Measurement 2, Excitation Actuator 3");
+        assert_eq!(fig.title, "output 2 / input 3");
+        assert!(fig.panels[0].series[1].label == "ERA model");
+        // After a refinement the legend names the refined model, and the channel
+        // table's nodes name the pair.
+        let named = FrfView {
+            model: "refined model".into(),
+            output_names: vec!["node 1 +Z".into(), "node 2 +Z".into()],
+            input_names: vec!["node 7 -X".into(); 3],
+            ..view.clone()
+        };
+        let fig = frf_overlay(&m, Some(&m), 1, 2, &named);
+        assert_eq!(fig.title, "output 2 (node 2 +Z) / input 3 (node 7 -X)");
+        assert!(fig
+            .panels
+            .iter()
+            .all(|p| p.series[1].label == "refined model"));
+        assert!(frf_grid(&m, Some(&m), &named)
+            .title
+            .contains("refined model (dashed)"));
         assert_eq!(fig.panels.len(), 2);
         for p in &fig.panels {
             assert_eq!(p.series.len(), 2);
@@ -708,6 +947,42 @@ mod tests {
         assert!(frf_overlay(&m, Some(&m), 0, 0, &marked)
             .title
             .ends_with("(collocated)"));
+    }
+
+    #[test]
+    fn pair_selections_parse_and_pick_their_pairs() {
+        let view = FrfView::by_index(3, 3);
+        let all: PairSelection = "all".parse().unwrap();
+        assert_eq!(all.pairs(3, 3, &view).unwrap().len(), 9);
+        let col: PairSelection = "collocated".parse().unwrap();
+        assert_eq!(
+            col.pairs(3, 3, &view).unwrap(),
+            vec![(0, 0), (1, 1), (2, 2)]
+        );
+        let list: PairSelection = "2:3, 1:1,2:3".parse().unwrap();
+        assert_eq!(list, PairSelection::List(vec![(2, 3), (1, 1)]));
+        assert_eq!(list.pairs(3, 3, &view).unwrap(), vec![(1, 2), (0, 0)]);
+        let err = list.pairs(2, 2, &view).unwrap_err();
+        assert!(err.contains("2:3") && err.contains("2 input"), "{err}");
+        for bad in ["", "1", "0:1", "1:x", "1:2,", "some", "1:-2", "1:2:3"] {
+            let e = bad.parse::<PairSelection>().unwrap_err();
+            assert!(e.contains("is not a pair"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn log_ticks_and_units_are_typeset() {
+        assert_eq!(log_tick_label(1e-2), "10⁻²");
+        assert_eq!(log_tick_label(1.0), "10⁰");
+        assert_eq!(log_tick_label(1000.0), "10³");
+        assert_eq!(log_tick_label(0.099_999_999_9), "10⁻¹");
+        assert_eq!(log_tick_label(2e-3), "2×10⁻³");
+        assert_eq!(log_tick_label(1e-12), "10⁻¹²");
+        assert_eq!(superscript_number(-305), "⁻³⁰⁵");
+        assert_eq!(typeset_units("|G| (m/s^2)/N"), "|G| (m/s²)/N");
+        assert_eq!(typeset_units("s**-1"), "s⁻¹");
+        assert_eq!(typeset_units("kg*m^"), "kg*m^");
+        assert_eq!(typeset_units("unit/unit"), "unit/unit");
     }
 
     #[test]

@@ -21,7 +21,7 @@ pub mod track;
 pub mod viewer;
 
 pub use figures::{
-    coherence_grid, frf_grid, frf_overlay, singular_value_figure, Figure, FrfUnits, FrfView, Panel,
-    PhaseView, Series, SeriesKind, YScale,
+    coherence_grid, frf_grid, frf_overlay, singular_value_figure, Figure, FrfUnits, FrfView,
+    PairSelection, Panel, PhaseView, Series, SeriesKind, YScale,
 };
 pub use render::{render_png, render_svg, PlotError};

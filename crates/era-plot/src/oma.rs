@@ -88,9 +88,9 @@ where
     chart
         .configure_mesh()
         .x_desc("Frequency (Hz)")
-        .y_desc(plot.y_label.as_str())
+        .y_desc(crate::figures::typeset_units(&plot.y_label))
         .label_style(("sans-serif", 14))
-        .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
+        .y_label_formatter(&|v: &f64| crate::figures::log_tick_label(*v))
         .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(err)?;

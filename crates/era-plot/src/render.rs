@@ -21,7 +21,7 @@
 //! A series is cut where a point is not drawable (NaN marks a gap, such as a wrapped
 //! phase passing ±180°); a piece of one point is drawn as a dot.
 
-use crate::figures::{Figure, Panel, Series, SeriesKind, YScale};
+use crate::figures::{log_tick_label, typeset_units, Figure, Panel, Series, SeriesKind, YScale};
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -218,8 +218,12 @@ where
             (true, false) => 76,
             (false, _) => 70,
         });
+    // Room on the right for the last abscissa tick, centred on the axis's end.
+    if compact {
+        builder.margin_right(14);
+    }
     if !panel.title.is_empty() {
-        builder.caption(&panel.title, ("sans-serif", font));
+        builder.caption(typeset_units(&panel.title), ("sans-serif", font));
     }
     let frame = Frame {
         x: safe_range(panel.x_range, false),
@@ -292,8 +296,9 @@ where
 {
     let ((x0, x1), (y0, y1)) = (frame.x, frame.y);
     let mut mesh = chart.configure_mesh();
-    mesh.x_desc(panel.x_label.as_str())
-        .y_desc(panel.y_label.as_str())
+    let (x_desc, y_desc) = (typeset_units(&panel.x_label), typeset_units(&panel.y_label));
+    mesh.x_desc(x_desc.as_str())
+        .y_desc(y_desc.as_str())
         .label_style(("sans-serif", frame.font - 2));
     if frame.compact {
         mesh.x_labels(4)
@@ -323,7 +328,7 @@ where
         (1.0 - y_span.log10().floor()).clamp(1.0, 6.0) as usize
     };
     let y_format = move |v: &f64| match panel.y_scale {
-        YScale::Log => format!("{v:.0e}"),
+        YScale::Log => log_tick_label(*v),
         // A tick at 0 that roundoff put at -1e-17 is "0", not "-0.0".
         YScale::Linear if v.abs() < 0.5 * 10f64.powi(-(decimals as i32)) => {
             format!("{:.decimals$}", 0.0)
@@ -525,7 +530,7 @@ where
     } else {
         // A wide grid gets a title to match (20 px at 900 px wide, up to 32).
         root.titled(
-            &figure.title,
+            &typeset_units(&figure.title),
             ("sans-serif", (figure.size.0 / 60).clamp(20, 32)),
         )
         .map_err(err)?
@@ -912,10 +917,16 @@ mod tests {
         }
         .label();
         let svg = render_svg(&frf_overlay(&m, Some(&m), 0, 0, &view)).unwrap();
-        assert!(svg.contains("|G| (m/s^2)/N"));
-        assert!(!svg.contains("lbf") && !svg.contains("in/s"));
+        assert!(svg.contains("|G| (m/s²)/N"), "units typeset");
+        assert!(!svg.contains("lbf") && !svg.contains("in/s") && !svg.contains("s^2"));
         let grid = render_svg(&frf_grid(&m, Some(&m), &view)).unwrap();
-        assert!(grid.contains("|G| (m/s^2)/N") && grid.contains("Frequency (Hz)"));
+        assert!(grid.contains("|G| (m/s²)/N") && grid.contains("Frequency (Hz)"));
+        // Log ticks in superscripts, never `1e-2`.
+        assert!(
+            svg.contains("10⁰") || svg.contains("10¹"),
+            "superscript ticks"
+        );
+        assert!(!svg.contains(">1e"), "an e-notation tick");
     }
 
     #[test]

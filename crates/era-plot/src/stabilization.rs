@@ -156,7 +156,7 @@ where
         .configure_secondary_axes()
         .y_desc("CMIF: singular values of the FRF matrix")
         .label_style(("sans-serif", 14))
-        .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
+        .y_label_formatter(&|v: &f64| crate::figures::log_tick_label(*v))
         .draw()
         .map_err(err)
 }

@@ -87,6 +87,22 @@ fn dispatch(
     }
 }
 
+/// The leading `count` singular values of the `H0` a fixed-order [`identify`] of `frf`
+/// with `options` factors (same sequence, Hankel and scale), for a plot that shows the
+/// values past the order when the run computed only its own (the matrix-free path).
+/// The identification is not touched. `None` for ERA/DC.
+///
+/// # Errors
+/// As [`identify`]'s Markov and SVD stages; [`EraError::InvalidParameter`](crate::EraError::InvalidParameter)
+/// when `options.order` has no fixed number of states.
+pub fn hankel_singular_values(
+    frf: &FrfData,
+    options: &EraOptions,
+    count: usize,
+) -> Result<Option<Vec<f64>>> {
+    crate::pipeline::run::hankel_singular_values(frf, options, count)
+}
+
 /// [`identify`] with the naive reference of every stage: DFT by definition, element-wise
 /// Hankels, full SVD, loop products, a dense solve per line for the fit. It realizes the
 /// fixed order of `options.order` (a scan's order, without the scan).

@@ -34,6 +34,21 @@ pub struct CommonArgs {
     pub quiet: bool,
 }
 
+/// Which pairs get an overlay of their own (identify, refine, plot).
+#[derive(Debug, Args, Clone)]
+pub struct PairsArgs {
+    /// Pairs drawn one by one (pairs/ and the report): all, collocated, or
+    /// OUTPUT:INPUT pairs counted from 1, comma-separated (e.g. 1:1,2:3). The grid
+    /// always shows every pair.
+    #[arg(long, value_name = "LIST", default_value = "all", value_parser = parse_pairs)]
+    pub pairs: era_plot::PairSelection,
+}
+
+/// Parses `--pairs`.
+fn parse_pairs(text: &str) -> Result<era_plot::PairSelection, String> {
+    text.parse()
+}
+
 /// What an FRF file may not say about itself, given on the command line (identify,
 /// plot, convert, refine).
 #[derive(Debug, Args)]

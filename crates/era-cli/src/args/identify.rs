@@ -231,6 +231,8 @@ pub struct IdentifyArgs {
     /// unambiguous: the model's phase, the measurement on its branch).
     #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped, help_heading = "Output")]
     pub phase: PhaseArg,
+    #[command(flatten, next_help_heading = "Output")]
+    pub pairs: super::common::PairsArgs,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
     /// figures (created if missing).
     #[arg(long, value_name = "DIR", help_heading = "Output")]

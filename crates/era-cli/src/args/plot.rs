@@ -25,6 +25,8 @@ pub struct PlotArgs {
     /// step between lines is unambiguous, the measurement on the model's branch).
     #[arg(long, value_enum, default_value_t = PhaseArg::Wrapped)]
     pub phase: PhaseArg,
+    #[command(flatten)]
+    pub pairs: super::common::PairsArgs,
     /// Folder for the figures (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,

@@ -16,6 +16,8 @@ pub struct RefineArgs {
     pub fit: RefineFitArgs,
     #[command(flatten)]
     pub geometry: super::GeometryArgs,
+    #[command(flatten)]
+    pub pairs: super::common::PairsArgs,
     /// Folder for model.json, fit.json, model.mat, modes.uff, the report and the
     /// figures of the refined model (created if missing).
     #[arg(long, value_name = "DIR")]

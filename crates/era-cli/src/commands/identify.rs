@@ -75,6 +75,9 @@ pub fn run(a: &Identify) -> anyhow::Result<super::Done> {
     apply_route(&mut opts, &route);
     correct_window(a, &route, &mut input, &human)?;
     let frf = &input.file.frf;
+    if a.out.is_some() {
+        crate::output::figures::check_pairs(&a.pairs, frf.outputs(), frf.inputs())?;
+    }
     let names: Vec<String> = (1..=frf.outputs()).map(|o| o.to_string()).collect();
     if route.refine {
         crate::commands::refine::check_shape(&refine_options, frf)?;
@@ -156,6 +159,15 @@ pub fn run(a: &Identify) -> anyhow::Result<super::Done> {
     let run_input = outputs
         .as_ref()
         .map(|_| run_input(a, &input, time_format, coherence))
+        .map(|mut r| {
+            // The singular-value figure of a fixed order looks past it.
+            if !auto && supplied.is_none() && a.orders.is_none() && !a.no_figures {
+                let mut options = era_opts.clone();
+                options.order = Order::Fixed(states);
+                r.hankel = Some((input.file.frf.clone(), options));
+            }
+            r
+        })
         .map(|r| crate::output::geometry::attach(r, geometry, input.file.frf.outputs()));
     let model = write(
         a,
@@ -227,6 +239,7 @@ fn run_input(
         run_input.coherence = coherence;
     }
     run_input.phase = a.phase;
+    run_input.pairs = a.pairs.clone();
     run_input
 }
 

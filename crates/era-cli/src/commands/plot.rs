@@ -4,7 +4,7 @@
 use crate::config::Plot;
 use crate::error::usage;
 use crate::input::read_frf_with;
-use crate::output::figures::{frf_view, write_figure, write_frf_figures};
+use crate::output::figures::{chosen_pairs, frf_view, write_figure, write_frf_figures};
 use crate::output::prepare_out_dir;
 use crate::output::report::{print_json, Human};
 use anyhow::Context;
@@ -26,6 +26,7 @@ pub fn run(a: &Plot) -> anyhow::Result<()> {
     let mut set = prepare_out_dir(&a.out)?;
     let input = read_frf_with(&a.file, &a.read)?;
     let frf = input.file.frf.clone();
+    crate::output::figures::check_pairs(&a.pairs, frf.outputs(), frf.inputs())?;
     let (model, integrations, zero_lines) = overlay_model(a, &frf)?;
     let measured = zero_leading_lines(&integrate(&frf, integrations)?, zero_lines);
     let model_frf = match &model {
@@ -43,24 +44,24 @@ pub fn run(a: &Plot) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let bar = crate::output::progress::bar(
-        &settings,
-        (measured.outputs() * measured.inputs()) as u64,
-        "figures",
-    );
-    let view = frf_view(
+    let mut view = frf_view(
         &FrfUnits::from_metadata(&input.file.metadata),
         frf.quantity(),
         input.file.channels.as_ref(),
         &measured,
         a.phase,
     );
+    if model.as_ref().is_some_and(|m| m.refinement.is_some()) {
+        view.model = "refined model".into();
+    }
+    let pairs = chosen_pairs(&a.pairs, &view, measured.outputs(), measured.inputs())?;
+    let bar = crate::output::progress::bar(&settings, pairs.len() as u64, "figures");
     let (_, overlays) = write_frf_figures(
         &mut set,
         Path::new(""),
-        &measured,
-        model_frf.as_ref(),
+        (&measured, model_frf.as_ref()),
         &view,
+        &pairs,
         &bar,
     )?;
     let drawn = match (&geometry, &model) {

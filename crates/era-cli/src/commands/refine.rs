@@ -133,6 +133,9 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
     };
     let input = read_frf_with(&a.file, &a.read)?;
     let frf = &input.file.frf;
+    if a.out.is_some() {
+        crate::output::figures::check_pairs(&a.pairs, frf.outputs(), frf.inputs())?;
+    }
     check_model_fits(a, &model, frf)?;
     check_shape(&ropts, frf)?;
     human.print(&format!(
@@ -172,7 +175,8 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
     if let Some(set) = outputs.as_mut() {
         let fit = FitJson::from_report(&found.fit);
         let title = format!("era refine {} {}", a.model.display(), a.file.display());
-        let source = crate::output::RunInput::from_file(&a.file, &input);
+        let mut source = crate::output::RunInput::from_file(&a.file, &input);
+        source.pairs = a.pairs.clone();
         let source = crate::output::geometry::attach(source, geometry, frf.outputs());
         let echo = format!("refined from {}\n", a.model.display());
         let bundle = Bundle {

@@ -7,13 +7,13 @@ use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::uff::ChannelTable;
 use era_io::IoError;
 use era_plot::oma::{mac_png, mac_svg};
-use era_plot::report::{report_html, CoherenceInput, ReportInput, ReportSection};
+use era_plot::report::{report_html, CoherenceInput, PairFigure, ReportInput, ReportSection};
 use era_plot::shapes::{complexity_png, complexity_svg, three_view_png, three_view_svg, ThreeView};
 use era_plot::stabilization::{stabilization_png, stabilization_svg, StabilizationPlot};
 use era_plot::viewer::ShapeView;
 use era_plot::{
     coherence_grid, frf_grid, frf_overlay, render_png, render_svg, singular_value_figure, Figure,
-    FrfUnits, FrfView, PhaseView,
+    FrfUnits, FrfView, PairSelection, PhaseView,
 };
 use std::path::Path;
 
@@ -68,8 +68,45 @@ pub fn frf_view(
     view.phase = phase;
     if let Some(t) = channels.filter(|t| (t.outputs.len(), t.inputs.len()) == (q, p)) {
         view.collocated = (0..q * p).map(|k| collocated_in(t, k / p, k % p)).collect();
+        let names = |side: &[era_io::uff::Channel]| {
+            side.iter()
+                .map(|c| {
+                    format!(
+                        "node {} {}",
+                        c.dof.node,
+                        era_io::frf_file::direction_name(c.dof.direction)
+                    )
+                })
+                .collect()
+        };
+        view.output_names = names(&t.outputs);
+        view.input_names = names(&t.inputs);
     }
     view
+}
+
+/// The pairs `selection` (`--pairs`) picks from a `q × p` set, 0-based; a pair
+/// outside the set is the flag's error.
+///
+/// # Errors
+/// A usage error naming `--pairs` and its value.
+pub fn chosen_pairs(
+    selection: &PairSelection,
+    view: &FrfView,
+    q: usize,
+    p: usize,
+) -> anyhow::Result<Vec<(usize, usize)>> {
+    selection
+        .pairs(q, p, view)
+        .or_else(|e| crate::error::usage(format!("--pairs {selection}: {e}")))
+}
+
+/// Refuses a `--pairs` list that names a pair outside a `q × p` set, before any work.
+///
+/// # Errors
+/// As [`chosen_pairs`].
+pub fn check_pairs(selection: &PairSelection, q: usize, p: usize) -> anyhow::Result<()> {
+    chosen_pairs(selection, &FrfView::by_index(q, p), q, p).map(|_| ())
 }
 
 /// The last 12 bytes of every complete PNG: the empty IEND chunk and its CRC.
@@ -220,27 +257,31 @@ pub fn write_three_views(
     Ok(())
 }
 
-/// The overview grid and every pair's overlay of `measured` (and `model` when given)
-/// into `folder` and `folder/pairs` of `set`; returns the grid SVG and the (title, SVG)
-/// per pair.
+/// The overview grid (every pair) and the overlay of each of `pairs` (0-based) of
+/// `measured` (and `model` when given) into `folder` and `folder/pairs` of `set`;
+/// returns the grid SVG and the overlays.
 pub fn write_frf_figures(
     set: &mut OutputSet,
     folder: &Path,
-    measured: &FrfData,
-    model: Option<&FrfData>,
+    frfs: (&FrfData, Option<&FrfData>),
     view: &FrfView,
+    pairs: &[(usize, usize)],
     progress: &indicatif::ProgressBar,
-) -> anyhow::Result<(String, Vec<(String, String)>)> {
+) -> anyhow::Result<(String, Vec<PairFigure>)> {
+    let (measured, model) = frfs;
     let grid_svg = write_figure(set, folder, "grid", &frf_grid(measured, model, view))?;
-    let pairs = folder.join("pairs");
-    let mut overlays = Vec::new();
-    for i in 0..measured.outputs() {
-        for j in 0..measured.inputs() {
-            let figure = frf_overlay(measured, model, i, j, view);
-            let svg = write_figure(set, &pairs, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
-            overlays.push((figure.title.clone(), svg));
-            progress.inc(1);
-        }
+    let folder = folder.join("pairs");
+    let mut overlays = Vec::with_capacity(pairs.len());
+    for &(i, j) in pairs {
+        let figure = frf_overlay(measured, model, i, j, view);
+        let svg = write_figure(set, &folder, &format!("pair_{}_{}", i + 1, j + 1), &figure)?;
+        overlays.push(PairFigure {
+            output: i,
+            input: j,
+            title: figure.title.clone(),
+            svg,
+        });
+        progress.inc(1);
     }
     Ok((grid_svg, overlays))
 }
@@ -282,6 +323,34 @@ pub fn write_stabilization(
     })
 }
 
+/// The singular values the figure shows. With a scan, the factored H0's: on the
+/// matrix-free path they run past the largest order, so the gap after the physical
+/// modes shows. At a fixed order on the matrix-free path the run computed its `states`
+/// values only: more of the same H0 are computed here for the figure (up to
+/// `2·states + 20`, at most [`FIGURE_SINGULAR_VALUES`]); the model is not touched.
+fn figure_singular_values(found: &Identification, source: &RunInput, states: usize) -> Vec<f64> {
+    let computed = match &found.stabilization {
+        Some(st) => &st.singular_values,
+        None => &found.realization.singular_values,
+    };
+    let short = computed.len() <= states + 1
+        && found.stabilization.is_none()
+        && found.realization.svd_path == era::pipeline::factor::SvdPath::MatrixFree;
+    if let (true, Some((frf, options))) = (short, &source.hankel) {
+        let count = (2 * states + 20).min(FIGURE_SINGULAR_VALUES.max(states + 20));
+        // For the figure only: should it fail, the figure shows what the run computed.
+        if let Ok(Some(more)) = era::identify::hankel_singular_values(frf, options, count) {
+            if more.len() > computed.len() {
+                return more;
+            }
+        }
+    }
+    computed.clone()
+}
+
+/// The most singular values a fixed-order figure computes past what the run did.
+pub const FIGURE_SINGULAR_VALUES: usize = 400;
+
 /// Figures and report of `found` into `folder` of `set`: `singular_values`, `grid`,
 /// `pairs/pair_I_J`, `coherence` when `source` carries it, `automac`, `complexity` and
 /// with a geometry `shapes/mode_NN` ([`super::shapes`]) (SVG and PNG) and
@@ -301,26 +370,25 @@ pub fn write_all(
     // model's FRF on its lines.
     let measured = &found.measured;
     let model = found.model_frf()?;
-    // With a scan, the factored H0's values: on the matrix-free path they run past the
-    // largest order, so the gap after the physical modes shows.
-    let singular_values = match &found.stabilization {
-        Some(st) => &st.singular_values,
-        None => &found.realization.singular_values,
-    };
+    let singular_values = figure_singular_values(found, source, states);
     let sv_svg = write_figure(
         set,
         folder,
         "singular_values",
-        &singular_value_figure(singular_values, states),
+        &singular_value_figure(&singular_values, states),
     )?;
     let stabilization_svg = write_stabilization(set, folder, found)?;
-    let view = frf_view(
+    let mut view = frf_view(
         &source.units,
         source.quantity,
         source.channels.as_ref(),
         measured,
         source.phase,
     );
+    if found.refinement.is_some() {
+        view.model = "refined model".into();
+    }
+    let pairs = chosen_pairs(&source.pairs, &view, measured.outputs(), measured.inputs())?;
     let coherence_svg = match &source.coherence {
         Some(c) => Some(write_figure(
             set,
@@ -330,8 +398,14 @@ pub fn write_all(
         )?),
         None => None,
     };
-    let (grid_svg, overlays) =
-        write_frf_figures(set, folder, measured, Some(&model), &view, progress)?;
+    let (grid_svg, overlays) = write_frf_figures(
+        set,
+        folder,
+        (measured, Some(&model)),
+        &view,
+        &pairs,
+        progress,
+    )?;
     let shapes = super::geometry::shape_view(source, found);
     let own = write_shape_figures(set, folder, found, shapes.as_ref(), true, progress)?;
     let sections: Vec<ReportSection> = own.iter().map(super::shapes::Section::view).collect();

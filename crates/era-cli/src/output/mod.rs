@@ -167,6 +167,12 @@ pub struct RunInput {
     pub coherence: Option<InputCoherence>,
     /// Phase view of the figures.
     pub phase: PhaseView,
+    /// The pairs overlaid one by one (`--pairs`).
+    pub pairs: era_plot::PairSelection,
+    /// The FRFs and options of a fixed-order ERA run, from which the singular-value
+    /// figure computes the values past the order that the run did not
+    /// ([`era::identify::hankel_singular_values`]).
+    pub hankel: Option<(era::FrfData, era::EraOptions)>,
     /// The test geometry (`--geometry`), written into modes.uff.
     pub geometry: Option<era_io::geometry::Geometry>,
 }
@@ -202,6 +208,8 @@ impl RunInput {
             channels: file.channels.clone(),
             coherence,
             phase: PhaseView::Wrapped,
+            pairs: era_plot::PairSelection::All,
+            hankel: None,
             geometry: None,
         }
     }
@@ -221,6 +229,8 @@ impl RunInput {
             channels: None,
             coherence: None,
             phase: PhaseView::Wrapped,
+            pairs: era_plot::PairSelection::All,
+            hankel: None,
             geometry: None,
         }
     }

@@ -420,6 +420,8 @@ fn run_input(run: &OmaRun) -> RunInput {
         channels: None,
         coherence: None,
         phase: PhaseView::Wrapped,
+        pairs: era_plot::PairSelection::All,
+        hankel: None,
         geometry: None,
     };
     let outputs = o.identification.measured.outputs();

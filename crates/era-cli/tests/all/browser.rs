@@ -87,6 +87,8 @@ fn report_renders_in_a_headless_browser() {
             "overlay {k} missing"
         );
     }
+    // The pair picker's script ran in the page: it counts what it shows.
+    assert!(dom.contains("9 of 9 shown"), "the pair picker did not run");
     // The modal table (a header and 4 modes) and the fit matrix (a header and one row
     // per output of the 3 x 3 set).
     assert_eq!(

@@ -534,13 +534,15 @@ fn identify_out_writes_every_figure_and_the_report() {
     ] {
         assert!(html.contains(id), "{id}");
     }
-    assert!(html.contains("Measurement 8, Excitation Actuator 8 (collocated)"));
+    assert!(html.contains("output 8 / input 8 (collocated)"));
     // Self-contained: the only URLs are the SVG namespace names, and nothing is loaded.
     assert_eq!(
         html.matches("http").count(),
         html.matches("http://www.w3.org/2000/svg").count()
     );
-    assert!(!html.contains("<script") && !html.contains("<link") && !html.contains("src="));
+    // The one script is inline (the pair picker): nothing is fetched.
+    assert_eq!(html.matches("<script>").count(), 1);
+    assert!(!html.contains("<script src") && !html.contains("<link") && !html.contains("src="));
     // 64 overlays, the grid, the singular values, the AutoMAC and the complexity.
     assert_eq!(html.matches("<svg").count(), 68);
     for f in [
@@ -576,7 +578,17 @@ fn plot_overlays_a_file_with_a_model_or_alone() {
     assert_eq!(std::fs::read_dir(with.join("pairs")).unwrap().count(), 18);
     assert!(with.join("singular_values.svg").is_file());
     let svg = std::fs::read_to_string(with.join("pairs/pair_2_2.svg")).unwrap();
-    assert!(svg.contains("ERA model") && svg.contains("(collocated)"));
+    // The legend names the model: refined when model.json says a refinement ran.
+    let model: Value =
+        serde_json::from_str(&std::fs::read_to_string(model_dir.join("model.json")).unwrap())
+            .unwrap();
+    let refined = !model["refinement"].is_null();
+    let name = if refined {
+        "refined model"
+    } else {
+        "ERA model"
+    };
+    assert!(svg.contains(name) && svg.contains("(collocated)"), "{name}");
 
     let alone = dir.path().join("alone");
     era()

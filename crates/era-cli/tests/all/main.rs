@@ -19,6 +19,7 @@ mod okid_cli;
 mod oma_cli;
 mod refine_cli;
 mod report_cli;
+mod report_layout;
 mod shapes_cli;
 mod signals;
 mod track_cli;

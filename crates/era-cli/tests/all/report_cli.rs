@@ -63,7 +63,7 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
         .success();
     for svg in ["grid.svg", "pairs/pair_1_2.svg"] {
         let text = read(plots.join(svg));
-        assert!(text.contains("(m/s^2)/N"), "{svg}");
+        assert!(text.contains("(m/s²)/N"), "{svg}: units typeset");
         assert!(!text.contains("lbf") && !text.contains("in/s"), "{svg}");
     }
     assert!(read(plots.join("pairs/pair_1_2.svg")).contains("Phase (deg, wrapped)"));
@@ -110,7 +110,7 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
         s(&file),
         "CSV",
         "acceleration",
-        "(m/s^2)/N",
+        "(m/s²)/N",
         "--integrations 1",
         env!("CARGO_PKG_VERSION"),
         " UTC",
@@ -121,8 +121,11 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
         assert!(input.contains(needle), "{needle} missing from: {input}");
     }
     // Collocation from the channel table: 2/2 (node 5 with node 5), not 1/1 (11 vs 101).
-    assert!(html.contains("Measurement 2, Excitation Actuator 2 (collocated)"));
-    assert!(!html.contains("Measurement 1, Excitation Actuator 1 (collocated)"));
+    // Neutral words, with where each channel is.
+    assert!(html.contains("output 2 (node 5 +Z) / input 2 (node 5 +Z) (collocated)"));
+    assert!(html.contains("output 1 (node 11 +Z) / input 1 (node 101 +Z)"));
+    assert!(!html.contains("output 1 (node 11 +Z) / input 1 (node 101 +Z) (collocated)"));
+    assert!(!html.contains("Excitation Actuator"));
     // fit.json and model.json's run say the same: one collocated pair, 2/2.
     let fit: serde_json::Value = serde_json::from_str(&read(out.join("fit.json"))).unwrap();
     let collocated: Vec<(u64, u64)> = fit["pairs"]
@@ -183,7 +186,7 @@ fn si_units_channel_table_and_input_section_reach_figures_and_report() {
     // Each pair's title once: drawn in its figure, not repeated as a caption.
     assert!(!html.contains("<figcaption>"));
     assert_eq!(
-        html.matches("\nMeasurement 1, Excitation Actuator 2\n")
+        html.matches("\noutput 1 (node 11 +Z) / input 2 (node 5 +Z)\n")
             .count(),
         1
     );
@@ -243,6 +246,25 @@ fn an_8x8_report_stays_under_2_mb() {
     // Each figure once: 64 overlays, the grid, the singular values, the AutoMAC and the
     // complexity.
     assert_eq!(html.matches("<svg").count(), 68);
+    // The fixed order's H0 (1592 x 1592) went matrix-free, which computes its 80 values
+    // only: the figure shows more of the same H0, so that the gap after the order
+    // shows; the model keeps the run's values.
+    let svg = read(out.join("singular_values.svg"));
+    let title = &svg[svg.find("Hankel singular values (").expect("title")..];
+    let shown: usize = title["Hankel singular values (".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let model: serde_json::Value = serde_json::from_str(&read(out.join("model.json"))).unwrap();
+    let kept = model["singular_values"].as_array().unwrap().len();
+    assert!(html.contains("matrix-free path"));
+    assert!(
+        shown > 80 && kept <= 80,
+        "{shown} shown, {kept} in model.json"
+    );
+    assert!(title.contains("order 80)"));
 }
 
 #[test]

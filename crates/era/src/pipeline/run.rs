@@ -316,6 +316,69 @@ pub(crate) fn run(
     )
 }
 
+/// The leading `count` singular values (at most `min(rows, cols)`) of the thesis `H0`
+/// that a fixed-order run of `frf` with `options` factors: the same Markov sequence,
+/// Hankel shape and magnitude scale, for a plot of what follows the order when the run
+/// itself computed only its `states` values (the matrix-free path). Each converges to a
+/// residual of `1e-6 σ₁`; should the tail not, the values past the order are the Ritz
+/// values of the oversampled block, as a scan's are
+/// ([`crate::pipeline::factor::EXTRA_SINGULAR_VALUES`]). `None` for ERA/DC, which
+/// factors another matrix.
+pub(crate) fn hankel_singular_values(
+    frf: &FrfData,
+    options: &EraOptions,
+    count: usize,
+) -> Result<Option<Vec<f64>>> {
+    use crate::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
+    use crate::pipeline::hankel::ThesisHankel;
+    use crate::pipeline::hankel_op::HankelOperator;
+    if options.realizer == Realizer::EraDc {
+        return Ok(None);
+    }
+    let states = options
+        .order
+        .states()
+        .ok_or_else(|| EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: "the Hankel of one fixed order: give `states N`".into(),
+        })?;
+    let mut timings = StageTimings::default();
+    let f = front(frf, None, options, Path::Fast, &mut |_| {}, &mut timings)?;
+    let shapes = ThesisHankel::new(states, options.hankel_factor)?;
+    let short =
+        (shapes.h0.block_rows * f.markov.outputs()).min(shapes.h0.block_cols * f.markov.inputs());
+    let kept = count.max(states).min(short);
+    let op = HankelOperator::new(&f.markov, shapes.h0)?;
+    // Every value shown converged to a residual of 1e-6 σ₁ (a plot's accuracy); when
+    // the tail's cluster does not get there, the realized triplets converge as in the
+    // run and the rest are the Ritz values of the oversampled block.
+    let all = TruncatedSvdOptions {
+        tolerance: 1e-6,
+        ..TruncatedSvdOptions::new(kept)
+    };
+    let mut svd = match truncated_svd(&op, &all) {
+        Ok(svd) => svd,
+        Err(_) => {
+            let defaults = TruncatedSvdOptions::new(states.min(short));
+            truncated_svd(
+                &op,
+                &TruncatedSvdOptions {
+                    tolerance: 1e-12,
+                    oversample: defaults.oversample.max(kept.saturating_sub(states)),
+                    ..defaults
+                },
+            )?
+        }
+    };
+    svd.s.truncate(kept);
+    if let Some(sc) = f.scale {
+        let inv = MagnitudeScale::factor(-sc.exponent);
+        svd.s.iter_mut().for_each(|s| *s *= inv);
+    }
+    Ok(Some(svd.s))
+}
+
 /// Supplied Markov parameters are a sequence, not one period of a circular impulse
 /// response: the warning about the FRFs' wrap-around does not apply to them.
 pub(crate) fn not_circular(realization: &mut Realization) {

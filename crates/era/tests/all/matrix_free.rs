@@ -55,6 +55,39 @@ fn dta_like_set_without_and_with_noise() {
     );
 }
 
+#[test]
+fn the_figure_sees_past_a_fixed_order_on_the_same_hankel() {
+    // A matrix-free run keeps its 80 values; hankel_singular_values gives more of the
+    // same H0, which the dense path computes all of.
+    let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
+    let clean = structure.frf(801, 0.025, Quantity::Acceleration).unwrap();
+    let noisy = add_noise(&clean, 0.15, 42).unwrap();
+    let options = |svd| {
+        let mut o = EraOptions::thesis_dta();
+        o.svd = svd;
+        o
+    };
+    let dense = identify(&noisy, &options(SvdPath::Dense)).unwrap();
+    let more = era::identify::hankel_singular_values(&noisy, &options(SvdPath::MatrixFree), 180)
+        .unwrap()
+        .expect("ERA factors the thesis Hankel");
+    assert_eq!(more.len(), 180);
+    let all = &dense.realization.singular_values;
+    let largest = all[0];
+    for (k, (a, b)) in more.iter().zip(all).enumerate() {
+        assert!((a - b).abs() <= 1e-5 * largest, "σ{}: {a} vs {b}", k + 1);
+    }
+    // The run itself is the run: its model and values do not depend on the figure.
+    let free = identify(&noisy, &options(SvdPath::MatrixFree)).unwrap();
+    assert_eq!(free.realization.singular_values.len(), 80);
+    // ERA/DC factors another matrix: nothing to show.
+    let mut dc = options(SvdPath::MatrixFree);
+    dc.realizer = era::identify::Realizer::EraDc;
+    assert!(era::identify::hankel_singular_values(&noisy, &dc, 180)
+        .unwrap()
+        .is_none());
+}
+
 /// Markov blocks `C A^(k−1) B` of a random stable discrete system (modal blocks with
 /// radius 0.6–0.97, hidden by a similarity), plus noise of `noise` × each pair's RMS.
 fn markov_of_random_system(
