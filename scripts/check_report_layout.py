@@ -10,10 +10,11 @@ modal --collocated --noise 0.05`, then `era identify --states auto --out`):
 - every link of the table of contents names an element of the page;
 - the page logs no console error and requests nothing but itself.
 
-It saves a 1400 x 3000 screenshot of each report's top (layout_N.png) to look at.
+It saves a 1400 x 3000 screenshot of each report's top (layout_N.png) to look at, and
+with --shoot the elements of those ids (ID_N.png).
 Standard library only; the DevTools client is check_viewer.py's.
 
-Usage: scripts/check_report_layout.py [--era target/release/era] [--out DIR] [REPORT ...]
+Usage: scripts/check_report_layout.py [--era target/release/era] [--out DIR] [--shoot ID,...] [REPORT ...]
 Exit status 0 when every check passes, 1 when one fails, 2 when Chromium or era is
 missing (said loudly: this is not a skip).
 """
@@ -60,6 +61,7 @@ def main():
     ap.add_argument("--era", default=os.path.join(ROOT, "target", "release", "era"))
     ap.add_argument("--out", default=None, help="folder for the run and the screenshots (default: a temporary one, kept)")
     ap.add_argument("--chromium", default=None)
+    ap.add_argument("--shoot", default="", help="comma list of element ids to save as pictures too (ID_N.png)")
     ap.add_argument("reports", nargs="*")
     a = ap.parse_args()
     browser = find_chromium(a.chromium)
@@ -128,6 +130,20 @@ def main():
             with open(shot, "wb") as f:
                 f.write(base64.b64decode(data))
             print(f"  saved {shot}")
+            for ident in filter(None, a.shoot.split(",")):
+                box = cdp.js(f"""(() => {{ const e = document.getElementById({json.dumps(ident)}); if (!e) return null;
+                    e.scrollIntoView(); const r = e.getBoundingClientRect();
+                    return [r.left + window.scrollX, r.top + window.scrollY, r.width, r.height]; }})()""")
+                if box is None:
+                    print(f"  --    no element {ident}")
+                    continue
+                cdp.js("new Promise(r => setTimeout(r, 200))")
+                data = cdp.call("Page.captureScreenshot", format="png", captureBeyondViewport=True,
+                                clip={"x": box[0], "y": box[1], "width": box[2], "height": box[3], "scale": 1})["data"]
+                path = os.path.join(out, f"{ident}_{n}.png")
+                with open(path, "wb") as f:
+                    f.write(base64.b64decode(data))
+                print(f"  saved {path}")
             errors = [e for e in cdp.events if e.get("method") == "Runtime.exceptionThrown"
                       or (e.get("method") == "Runtime.consoleAPICalled" and e["params"]["type"] in ("error", "assert"))
                       or (e.get("method") == "Log.entryAdded" and e["params"]["entry"]["level"] == "error")]

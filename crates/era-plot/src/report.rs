@@ -90,6 +90,9 @@ pub struct ReportInput<'a> {
     pub overlays: &'a [PairFigure],
     /// The modes on the test geometry, when one was given ([`crate::viewer`]).
     pub shapes: Option<&'a crate::viewer::ShapeView>,
+    /// Responses alone (`era oma`): the model is fitted to the half spectrum of the
+    /// output correlations, its columns are references, and nothing is collocated.
+    pub output_only: bool,
 }
 
 /// A figure of its own in the report: its anchor, heading, caption and SVG.
@@ -169,11 +172,11 @@ fn input_html(s: &InputSection) -> String {
 fn fit_matrix_html(
     fit: &era::pipeline::fit::FitReport,
     view: &FrfView,
-    q: usize,
-    p: usize,
+    (q, p): (usize, usize),
+    columns: &str,
 ) -> String {
     let mut h =
-        String::from("<table id=\"fit-table\" class=\"matrix\"><tr><th>output \\ input</th>");
+        format!("<table id=\"fit-table\" class=\"matrix\"><tr><th>output \\ {columns}</th>");
     for j in 1..=p {
         let _ = write!(h, "<th>{j}</th>");
     }
@@ -383,7 +386,7 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
     // shapes), then how well it fits and why, then the pairs, and what went in last.
     let warnings = f.warnings(era::params::Naming::Flag);
     let mut sections: Vec<(&str, &str, String)> = vec![
-        ("modes", "Modes", modes_html(f)),
+        ("modes", "Modes", modes_html(f, input.output_only)),
         (
             "stabilization",
             "Stabilization diagram",
@@ -549,6 +552,25 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
         f.model.states(),
         escape(&model_words(f))
     );
+    if input.output_only {
+        let _ = write!(
+            h,
+            "<dt>Fit</dt><dd id=\"summary-fit\"><a href=\"#fit\">mean relative error</a> to the half spectrum of the output correlations (not an FRF): {}; each mode's ± says how well it is known</dd>",
+            match all_pairs_mean(&f.fit) {
+                Some((e, db)) => format!("<span data-error=\"{e:e}\">{}</span> ({db:.2} dB)", percent(e)),
+                None => "–".to_string(),
+            }
+        );
+    } else {
+        summary_fit(&mut h, input);
+    }
+    summary_warnings(&mut h, warnings);
+    h
+}
+
+/// The summary's fit line of an input-output run: collocated and non-collocated means.
+fn summary_fit(h: &mut String, input: &ReportInput<'_>) {
+    let f = input.found;
     let (col, noncol) = (
         fit_means(&f.fit, input.view, true),
         fit_means(&f.fit, input.view, false),
@@ -573,6 +595,10 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
             fit.join(", ")
         }
     );
+}
+
+/// The summary's warnings: how many, the first few in brief, and its closing tags.
+fn summary_warnings(h: &mut String, warnings: &[String]) {
     let _ = write!(
         h,
         "<dt>Warnings</dt><dd id=\"summary-warnings\" data-count=\"{}\">",
@@ -601,7 +627,6 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
         h.push_str("</ul>");
     }
     h.push_str("</dd></dl></section>\n");
-    h
 }
 
 /// `text` cut to about `chars` characters at a word, with an ellipsis when cut.
@@ -654,8 +679,8 @@ fn stabilization_html(input: &ReportInput<'_>) -> String {
 }
 
 /// The modes section: the refinement paragraph, the modal table and the real poles.
-fn modes_html(f: &Identification) -> String {
-    let mut h = format!("<h2 id=\"modes\">Modes</h2>\n<p>MPC: modal phase collinearity (1 for a real normal mode). EMAC: extended modal amplitude coherence, how consistently the mode appears over the record (1 = fully). CMI = MPC × EMAC. Share: the mode's part of the measured FRF. Orders: scanned orders in which the mode's cluster has a pole. A mode not judged physical is marked, with the reason.</p>\n{}<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th><th>MPC</th><th>EMAC</th><th>CMI</th><th>share</th><th>orders</th><th>physical</th></tr>\n", refinement_html(f));
+fn modes_html(f: &Identification, output_only: bool) -> String {
+    let mut h = format!("<h2 id=\"modes\">Modes</h2>\n<p>MPC: modal phase collinearity (1 for a real normal mode). EMAC: extended modal amplitude coherence, how consistently the mode appears over the record (1 = fully). CMI = MPC × EMAC. Share: the mode's part of the {}. Orders: scanned orders in which the mode's cluster has a pole. A mode not judged physical is marked, with the reason.</p>\n{}<table id=\"modal-table\"><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio (%)</th><th>|λ|</th><th>MPC</th><th>EMAC</th><th>CMI</th><th>share</th><th>orders</th><th>physical</th></tr>\n", if output_only { "output correlations' half spectrum" } else { "measured FRF" }, refinement_html(f));
     for (k, m) in f.modal.modes.iter().enumerate() {
         let q = f.quality.get(k);
         let i = q.map(|q| q.indicators);
@@ -704,6 +729,22 @@ fn fit_html(input: &ReportInput<'_>) -> String {
         fit_means(fit, input.view, true),
         fit_means(fit, input.view, false),
     );
+    if input.output_only {
+        let (e, db) = all_pairs_mean(fit).unzip();
+        let mut h = format!(
+            "<h2 id=\"fit\">Fit</h2>\n<p>{} lines of the half spectrum of the output correlations: each output against each reference, what the model is fitted to when no force was measured. Mean relative error {}, mean RMS log-magnitude error {} dB. The correlations end at the last lag, so this half spectrum leaks around every lightly damped peak: its misfit is no measure of the modes' accuracy, which each mode's ± gives. Each cell: relative error ‖G − Ĝ‖/‖G‖ of the pair over the band, and below it the RMS log-magnitude error; rows are outputs, columns references.</p>\n",
+            fit.lines,
+            e.map_or("–".into(), percent),
+            opt(db, 3),
+        );
+        h.push_str(&fit_matrix_html(
+            fit,
+            input.view,
+            (f.measured.outputs(), f.measured.inputs()),
+            "reference",
+        ));
+        return h;
+    }
     let mut h = format!(
         "<h2 id=\"fit\">Fit</h2>\n<p>{} lines from line {} ({} FRFs). Mean relative error: collocated {}, non-collocated {}. Mean RMS log-magnitude error: collocated {} dB, non-collocated {} dB. Each cell: relative error ‖G − Ĝ‖/‖G‖ of the pair over the band, and below it the RMS log-magnitude error; rows are outputs, columns inputs, collocated pairs shaded.</p>\n",
         fit.lines,
@@ -717,10 +758,20 @@ fn fit_html(input: &ReportInput<'_>) -> String {
     h.push_str(&fit_matrix_html(
         fit,
         input.view,
-        f.measured.outputs(),
-        f.measured.inputs(),
+        (f.measured.outputs(), f.measured.inputs()),
+        "input",
     ));
     h
+}
+
+/// Mean relative error and mean RMS log-magnitude error (dB) over every pair.
+fn all_pairs_mean(fit: &era::pipeline::fit::FitReport) -> Option<(f64, f64)> {
+    let n = fit.pairs.len();
+    (n > 0).then(|| {
+        let e: f64 = fit.pairs.iter().map(|p| p.relative_error).sum();
+        let db: f64 = fit.pairs.iter().map(|p| p.rms_log_magnitude_db).sum();
+        (e / n as f64, db / n as f64)
+    })
 }
 
 #[cfg(test)]

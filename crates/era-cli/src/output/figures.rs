@@ -429,6 +429,7 @@ pub fn write_all(
         grid_svg: Some(&grid_svg),
         overlays: &overlays,
         shapes: shapes.as_ref(),
+        output_only: false,
     });
     write_output(set, folder.join("report.html"), |p| {
         Ok(write_atomic(p, html.as_bytes())?)

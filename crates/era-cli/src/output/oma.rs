@@ -341,6 +341,7 @@ pub fn write_oma(
         grid_svg: None,
         overlays: &[],
         shapes: shapes.as_ref(),
+        output_only: true,
     });
     write_output(set, "report.html", |p| {
         Ok(write_atomic(p, html.as_bytes())?)

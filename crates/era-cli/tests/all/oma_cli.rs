@@ -253,9 +253,18 @@ fn records_references_and_the_files_written() {
         "id=\"fig-spectral\"",
         " ± ",
         "unscaled",
+        "half spectrum of the output correlations",
+        "output \\ reference",
     ] {
         assert!(html.contains(needle), "report lacks {needle}");
     }
+    // Responses alone have no inputs, so nothing is collocated: the summary and the
+    // fit speak of the correlations' half spectrum, not of collocated FRFs.
+    let summary = &html[html.find("id=\"summary-fit\"").unwrap()..];
+    let summary = &summary[..summary.find("</dd>").unwrap()];
+    assert!(!summary.contains("collocated"), "{summary}");
+    let fit = &html[html.find("<h2 id=\"fit\">").unwrap()..];
+    assert!(!fit[..fit.find("</p>").unwrap()].contains("collocated"));
     // No figures: the model files only.
     let bare = dir.path().join("bare");
     json_of(&[
