@@ -393,13 +393,13 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
             stabilization_html(input),
         ),
     ];
-    for section in input.sections {
-        sections.push((
-            section.id,
-            section.heading,
-            sections_html(std::slice::from_ref(section)),
-        ));
+    // The shapes come right after the diagram (an output-only run's spectral singular
+    // values, its quick look, before them); the figures that compare shapes follow.
+    let (quick, others): (Vec<_>, Vec<_>) = input.sections.iter().partition(|s| s.id == "spectral");
+    fn own<'s>(s: &'s ReportSection<'s>) -> (&'s str, &'s str, String) {
+        (s.id, s.heading, sections_html(std::slice::from_ref(s)))
     }
+    sections.extend(quick.into_iter().map(own));
     let shapes = crate::viewer::shapes_html(input.shapes);
     let shapes_heading = shapes.contains("id=\"shapes\"");
     sections.push((
@@ -407,6 +407,7 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
         "Mode shapes",
         shapes,
     ));
+    sections.extend(others.into_iter().map(own));
     // Results to treat with care (era::suspect): counted and named in the summary at
     // the top, listed in full here. The report is the CLI's: flags are named.
     if !warnings.is_empty() {
