@@ -23,15 +23,12 @@ import argparse
 import base64
 import json
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
-import time
-import urllib.request
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_viewer import DevTools, find_chromium  # noqa: E402
+from check_viewer import chromium_page, find_chromium  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WIDTH, HEIGHT = 1400, 3000
@@ -84,24 +81,7 @@ def main():
         if not ok:
             failures.append(what)
 
-    profile = tempfile.mkdtemp(prefix="check-layout-profile-")
-    proc = subprocess.Popen(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage", "--no-first-run",
-         "--hide-scrollbars", "--remote-debugging-port=0", f"--window-size={WIDTH},{HEIGHT}",
-         f"--user-data-dir={profile}", "about:blank"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        port_file = os.path.join(profile, "DevToolsActivePort")
-        for _ in range(600):
-            if os.path.exists(port_file) and open(port_file).read().strip():
-                break
-            time.sleep(0.1)
-        port = int(open(port_file).read().split()[0])
-        targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list"))
-        cdp = DevTools(next(t for t in targets if t.get("type") == "page")["webSocketDebuggerUrl"])
-        for domain in ["Page", "Runtime", "Log", "Network"]:
-            cdp.call(f"{domain}.enable")
+    with chromium_page(browser, WIDTH, HEIGHT) as cdp:
         cdp.call("Emulation.setDeviceMetricsOverride", width=WIDTH, height=HEIGHT, deviceScaleFactor=1, mobile=False)
         for n, page in enumerate(reports, start=1):
             size = os.path.getsize(page)
@@ -151,13 +131,6 @@ def main():
             requests = [e["params"]["request"]["url"] for e in cdp.events if e.get("method") == "Network.requestWillBeSent"]
             others = [r for r in requests if r != url]
             check(not others, f"no network requests besides the page (others: {others[:5]})")
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        shutil.rmtree(profile, ignore_errors=True)
     if failures:
         print(f"check_report_layout: FAILED {len(failures)} check(s)", file=sys.stderr)
         return 1

@@ -29,6 +29,7 @@ missing (said loudly: this is not a skip).
 
 import argparse
 import base64
+import contextlib
 import json
 import math
 import os
@@ -195,6 +196,38 @@ def find_chromium(given):
     return None
 
 
+@contextlib.contextmanager
+def chromium_page(browser, width, height, domains=("Page", "Runtime", "Log", "Network")):
+    """A headless Chromium with one page at `width` x `height`, its DevTools client
+    (`domains` enabled); the browser and its profile are gone afterwards."""
+    profile = tempfile.mkdtemp(prefix="era-chromium-profile-")
+    proc = subprocess.Popen(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage", "--no-first-run",
+         "--hide-scrollbars", "--remote-debugging-port=0", f"--window-size={width},{height}",
+         f"--user-data-dir={profile}", "about:blank"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        port_file = os.path.join(profile, "DevToolsActivePort")
+        for _ in range(600):
+            if os.path.exists(port_file) and open(port_file).read().strip():
+                break
+            time.sleep(0.1)
+        port = int(open(port_file).read().split()[0])
+        targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list"))
+        cdp = DevTools(next(t for t in targets if t.get("type") == "page")["webSocketDebuggerUrl"])
+        for domain in domains:
+            cdp.call(f"{domain}.enable")
+        yield cdp
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+        shutil.rmtree(profile, ignore_errors=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--era", default=os.path.join(ROOT, "target", "release", "era"))
@@ -230,24 +263,7 @@ def main():
         if not ok:
             failures.append(what)
 
-    profile = tempfile.mkdtemp(prefix="check-viewer-profile-")
-    proc = subprocess.Popen(
-        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage", "--no-first-run",
-         "--remote-debugging-port=0", "--window-size=1200,1000", f"--user-data-dir={profile}", "about:blank"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        port_file = os.path.join(profile, "DevToolsActivePort")
-        for _ in range(600):
-            if os.path.exists(port_file) and open(port_file).read().strip():
-                break
-            time.sleep(0.1)
-        port = int(open(port_file).read().split()[0])
-        targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list"))
-        target = next(t for t in targets if t.get("type") == "page")
-        cdp = DevTools(target["webSocketDebuggerUrl"])
-        for domain in ["Page", "Runtime", "Log", "Network"]:
-            cdp.call(f"{domain}.enable")
+    with chromium_page(browser, 1200, 1000) as cdp:
         url = "file://" + os.path.abspath(page)
         cdp.call("Page.navigate", url=url)
         cdp.wait_event("Page.loadEventFired")
@@ -346,13 +362,6 @@ def main():
         requests = [e["params"]["request"]["url"] for e in cdp.events if e.get("method") == "Network.requestWillBeSent"]
         others = [r for r in requests if r != url]
         check(not others, f"no network requests besides the page ({len(requests)} request(s); others: {others[:5]})")
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        shutil.rmtree(profile, ignore_errors=True)
     print(f"check_viewer: screenshots in {out}")
     return report_failures(failures)
 

@@ -247,6 +247,18 @@ fn supplied_front(
     })
 }
 
+/// The fixed order of `options`; `auto` is refused, `what` saying what needs one.
+fn fixed_states(options: &EraOptions, what: &str) -> Result<usize> {
+    options
+        .order
+        .states()
+        .ok_or_else(|| EraError::InvalidParameter {
+            name: "states",
+            value: "auto".into(),
+            reason: format!("{what}: give `states N`").into(),
+        })
+}
+
 pub(crate) fn run(
     frf: &FrfData,
     supplied: Option<&MarkovSequence>,
@@ -254,14 +266,7 @@ pub(crate) fn run(
     path: Path,
     observer: &mut dyn FnMut(Stage),
 ) -> Result<Identification> {
-    let states = options
-        .order
-        .states()
-        .ok_or_else(|| EraError::InvalidParameter {
-            name: "states",
-            value: "auto".into(),
-            reason: "this path realizes one fixed order: give `states N`".into(),
-        })?;
+    let states = fixed_states(options, "this path realizes one fixed order")?;
     let mut timings = StageTimings::default();
     let f = front(frf, supplied, options, path, observer, &mut timings)?;
     let clock = Instant::now();
@@ -335,14 +340,7 @@ pub(crate) fn hankel_singular_values(
     if options.realizer == Realizer::EraDc {
         return Ok(None);
     }
-    let states = options
-        .order
-        .states()
-        .ok_or_else(|| EraError::InvalidParameter {
-            name: "states",
-            value: "auto".into(),
-            reason: "the Hankel of one fixed order: give `states N`".into(),
-        })?;
+    let states = fixed_states(options, "the Hankel of one fixed order")?;
     let mut timings = StageTimings::default();
     let f = front(frf, None, options, Path::Fast, &mut |_| {}, &mut timings)?;
     let shapes = ThesisHankel::new(states, options.hankel_factor)?;
