@@ -463,6 +463,16 @@ pub fn compare_identify_options(
             "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
         );
     }
+    let a = &parsed.args;
+    if a.out.is_some()
+        || a.no_figures
+        || a.geometry.geometry.is_some()
+        || !matches!(a.pairs.pairs, era_plot::PairSelection::All)
+    {
+        return crate::error::usage(
+            "--identify: compare writes its own outputs; --out, --no-figures, --geometry and --pairs of identify do not apply (compare's --out holds compare.html and one PNG per pair)",
+        );
+    }
     let mut opts = options(&parsed.args)?;
     if opts.order.states().unwrap_or(0) == 0 {
         return crate::error::usage(

@@ -258,6 +258,18 @@ fn bad_input_exits_2_naming_the_flag() {
     run_capped(&["compare", "p.csv", "r.csv"], Some(d), None)
         .assert_input_error()
         .says("not on the same pairs");
+    // compare --identify: identify's output flags would be silently dropped.
+    for flag in [
+        &["--pairs", "1:1"][..],
+        &["--out", "elsewhere"],
+        &["--geometry", "g.csv"],
+    ] {
+        let mut args = vec!["compare", "p.csv", "p.csv", "--identify", "--states", "4"];
+        args.extend(flag);
+        run_capped(&args, Some(d), None)
+            .assert_input_error()
+            .says("compare writes its own outputs");
+    }
 }
 
 /// `--time-histories`: one CSV `era frf` reads and one figure per run, and the share of
