@@ -6,7 +6,7 @@
 use crate::{guarded, io_error, value_error, vector};
 use era::identification::Identification;
 use era::Complex64;
-use era_io::frf_file::{direction_name, parse_direction, Channel, ChannelTable, Dof};
+use era_io::frf_file::{parse_direction, Channel, ChannelTable, Dof};
 use era_io::geometry::{
     map_channels, read_geometry as read_geometry_file, Geometry, Node, TraceLine,
 };
@@ -209,20 +209,7 @@ pub(crate) fn shapes_on<'py>(
             }
         }
     }
-    let not_drawn: Vec<String> = map
-        .not_drawn
-        .iter()
-        .map(|x| {
-            let c = &outputs[x.channel];
-            format!(
-                "output {} (node {} {}): {}",
-                x.channel + 1,
-                c.dof.node,
-                direction_name(c.dof.direction),
-                x.reason
-            )
-        })
-        .collect();
+    let not_drawn = map.not_drawn_sentences(&outputs);
     let d = PyDict::new(py);
     d.set_item("ids", vector(py, g.nodes.iter().map(|x| x.id).collect()))?;
     d.set_item(

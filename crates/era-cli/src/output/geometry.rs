@@ -5,8 +5,8 @@
 //! write beside their FRFs ([`write_dta_like`]).
 
 use era::identification::Identification;
-use era_io::frf_file::{direction_name, ChannelTable};
-use era_io::geometry::{map_channels, read_geometry, ChannelMap, Geometry};
+use era_io::frf_file::ChannelTable;
+use era_io::geometry::{map_channels, read_geometry, Geometry};
 use era_plot::viewer::{Placement, ShapeView};
 use std::path::Path;
 
@@ -46,30 +46,13 @@ pub fn notes(
         table.outputs.len()
     ));
     if !map.not_drawn.is_empty() {
-        let list = not_drawn(&map, table);
+        let list = map.not_drawn_sentences(&table.outputs);
         notes.push(format!(
             "geometry: not drawn: {}",
             era_io::frf_file::listed(&list)
         ));
     }
     notes
-}
-
-/// One sentence per channel `map` does not draw: `output 3 (node 3 +Z): why`.
-fn not_drawn(map: &ChannelMap, table: &ChannelTable) -> Vec<String> {
-    map.not_drawn
-        .iter()
-        .map(|u| {
-            let c = &table.outputs[u.channel];
-            format!(
-                "output {} (node {} {}): {}",
-                u.channel + 1,
-                c.dof.node,
-                direction_name(c.dof.direction),
-                u.reason
-            )
-        })
-        .collect()
 }
 
 /// The modes of `found` on the run's geometry, for the report's viewer; `None` without
@@ -117,7 +100,7 @@ pub fn layout(
         geometry.nodes.iter().map(|n| n.xyz).collect(),
         segments,
         placed,
-        not_drawn(&map, table),
+        map.not_drawn_sentences(&table.outputs),
     )
 }
 

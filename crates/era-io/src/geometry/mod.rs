@@ -230,6 +230,26 @@ pub struct ChannelMap {
     pub not_drawn: Vec<UndrawnChannel>,
 }
 
+impl ChannelMap {
+    /// One sentence per channel not drawn, `channels` the list that was mapped:
+    /// `output 3 (node 3 +Z): why`.
+    pub fn not_drawn_sentences(&self, channels: &[Channel]) -> Vec<String> {
+        self.not_drawn
+            .iter()
+            .map(|u| {
+                let c = &channels[u.channel];
+                format!(
+                    "output {} (node {} {}): {}",
+                    u.channel + 1,
+                    c.dof.node,
+                    crate::frf_file::direction_name(c.dof.direction),
+                    u.reason
+                )
+            })
+            .collect()
+    }
+}
+
 /// Places each channel (node and direction, as [`crate::frf_file::ChannelTable`] gives
 /// them) on the geometry. A channel whose node is not in the geometry, or whose
 /// direction is a scalar (0) or a rotation (±4..±6), is not drawn and listed with the
