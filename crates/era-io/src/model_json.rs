@@ -20,7 +20,7 @@ use era::identification::{Identification, StageTimings};
 use era::identify::EraOptions;
 use era::pipeline::fit::FitReport;
 use era::pipeline::modes::{ModalParameters, Mode};
-use era::{StateSpace, TimeDomain};
+use era::{Complex64, StateSpace, TimeDomain};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -83,6 +83,16 @@ pub struct IndicatorsJson {
 }
 
 impl ModeJson {
+    /// The shape `Cφ` as complex numbers (`shape_re + i shape_im`; the shorter list
+    /// decides the length).
+    pub fn shape(&self) -> Vec<Complex64> {
+        self.shape_re
+            .iter()
+            .zip(&self.shape_im)
+            .map(|(&re, &im)| Complex64::new(re, im))
+            .collect()
+    }
+
     /// From a library mode.
     pub fn from_mode(m: &Mode) -> Self {
         ModeJson {

@@ -10,7 +10,7 @@ use crate::output::report::{print_json, Human};
 use anyhow::Context;
 use era::pipeline::fit::model_frf;
 use era::sources::frf::preprocess::{integrate, zero_leading_lines};
-use era_io::model_json::ModelJson;
+use era_io::model_json::{ModeJson, ModelJson};
 use era_plot::{singular_value_figure, FrfUnits};
 use serde_json::json;
 use std::path::Path;
@@ -112,17 +112,7 @@ fn model_view(
 ) -> era_plot::viewer::ShapeView {
     let (nodes, segments, placed, not_drawn) =
         crate::output::geometry::layout(g, channels, m.outputs);
-    let shapes: Vec<Vec<era::Complex64>> = m
-        .modes
-        .iter()
-        .map(|mode| {
-            mode.shape_re
-                .iter()
-                .zip(&mode.shape_im)
-                .map(|(&re, &im)| era::Complex64::new(re, im))
-                .collect()
-        })
-        .collect();
+    let shapes: Vec<Vec<era::Complex64>> = m.modes.iter().map(ModeJson::shape).collect();
     let labelled: Vec<(String, &[era::Complex64])> = m
         .modes
         .iter()
