@@ -14,9 +14,7 @@ const OTHER: RGBColor = RGBColor(120, 150, 190);
 const PHYSICAL: RGBColor = RGBColor(214, 39, 40);
 const OTHER_MODE: RGBColor = RGBColor(255, 127, 14);
 
-fn err(e: impl std::fmt::Display) -> PlotError {
-    PlotError(e.to_string())
-}
+use crate::render::err;
 
 /// The spectral singular values and the modes to mark.
 #[derive(Debug, Clone, PartialEq)]

@@ -56,7 +56,9 @@ const MEASURED: RGBColor = RGBColor(31, 119, 180);
 const MODEL: RGBColor = RGBColor(214, 39, 40);
 const GUIDE: RGBColor = RGBColor(120, 120, 120);
 
-fn err(e: impl std::fmt::Display) -> PlotError {
+/// A drawing backend's error as ours (every figure module maps plotters' errors
+/// through it).
+pub(crate) fn err(e: impl std::fmt::Display) -> PlotError {
     PlotError(e.to_string())
 }
 

@@ -214,19 +214,23 @@ fn fit_means(
     view: &FrfView,
     collocated: bool,
 ) -> (Option<f64>, Option<f64>) {
-    let chosen: Vec<_> = fit
-        .pairs
-        .iter()
-        .filter(|f| view.is_collocated(f.output, f.input) == collocated)
-        .collect();
-    if chosen.is_empty() {
-        return (None, None);
-    }
+    pairs_mean(fit, |f| view.is_collocated(f.output, f.input) == collocated).unzip()
+}
+
+/// Mean relative error and mean RMS log-magnitude error (dB) of the pairs `keep` keeps;
+/// `None` when it keeps none.
+fn pairs_mean(
+    fit: &era::pipeline::fit::FitReport,
+    keep: impl Fn(&era::pipeline::fit::PairFit) -> bool,
+) -> Option<(f64, f64)> {
+    let chosen: Vec<_> = fit.pairs.iter().filter(|f| keep(f)).collect();
     let n = chosen.len() as f64;
-    (
-        Some(chosen.iter().map(|f| f.relative_error).sum::<f64>() / n),
-        Some(chosen.iter().map(|f| f.rms_log_magnitude_db).sum::<f64>() / n),
-    )
+    (!chosen.is_empty()).then(|| {
+        (
+            chosen.iter().map(|f| f.relative_error).sum::<f64>() / n,
+            chosen.iter().map(|f| f.rms_log_magnitude_db).sum::<f64>() / n,
+        )
+    })
 }
 
 /// The report's figures of their own, each a heading, a caption and the figure.
@@ -557,7 +561,7 @@ fn summary_html(input: &ReportInput<'_>, warnings: &[String]) -> String {
         let _ = write!(
             h,
             "<dt>Fit</dt><dd id=\"summary-fit\"><a href=\"#fit\">mean relative error</a> to the half spectrum of the output correlations (not an FRF): {}; each mode's ± says how well it is known</dd>",
-            match all_pairs_mean(&f.fit) {
+            match pairs_mean(&f.fit, |_| true) {
                 Some((e, db)) => format!("<span data-error=\"{e:e}\">{}</span> ({db:.2} dB)", percent(e)),
                 None => "–".to_string(),
             }
@@ -731,7 +735,7 @@ fn fit_html(input: &ReportInput<'_>) -> String {
         fit_means(fit, input.view, false),
     );
     if input.output_only {
-        let (e, db) = all_pairs_mean(fit).unzip();
+        let (e, db) = pairs_mean(fit, |_| true).unzip();
         let mut h = format!(
             "<h2 id=\"fit\">Fit</h2>\n<p>{} lines of the half spectrum of the output correlations: each output against each reference, what the model is fitted to when no force was measured. Mean relative error {}, mean RMS log-magnitude error {} dB. The correlations end at the last lag, so this half spectrum leaks around every lightly damped peak: its misfit is no measure of the modes' accuracy, which each mode's ± gives. Each cell: relative error ‖G − Ĝ‖/‖G‖ of the pair over the band, and below it the RMS log-magnitude error; rows are outputs, columns references.</p>\n",
             fit.lines,
@@ -763,16 +767,6 @@ fn fit_html(input: &ReportInput<'_>) -> String {
         "input",
     ));
     h
-}
-
-/// Mean relative error and mean RMS log-magnitude error (dB) over every pair.
-fn all_pairs_mean(fit: &era::pipeline::fit::FitReport) -> Option<(f64, f64)> {
-    let n = fit.pairs.len();
-    (n > 0).then(|| {
-        let e: f64 = fit.pairs.iter().map(|p| p.relative_error).sum();
-        let db: f64 = fit.pairs.iter().map(|p| p.rms_log_magnitude_db).sum();
-        (e / n as f64, db / n as f64)
-    })
 }
 
 #[cfg(test)]

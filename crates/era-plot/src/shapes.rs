@@ -19,9 +19,7 @@ const DEFORMED: RGBColor = RGBColor(31, 78, 156);
 const UNDEFORMED: RGBColor = RGBColor(175, 175, 175);
 const UNMEASURED: RGBColor = RGBColor(140, 140, 140);
 
-fn err(e: impl std::fmt::Display) -> PlotError {
-    PlotError(e.to_string())
-}
+use crate::render::err;
 
 /// The three views: their names and the global axes they show (horizontal, vertical).
 pub const VIEWS: [(&str, usize, usize); 3] = [

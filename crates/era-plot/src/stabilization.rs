@@ -79,9 +79,7 @@ impl StabilizationPlot {
     }
 }
 
-fn err(e: impl std::fmt::Display) -> PlotError {
-    PlotError(e.to_string())
-}
+use crate::render::err;
 
 /// The diagram's chart: poles on (frequency, order), the CMIF on a secondary log axis.
 type Diagram<'a, DB> = DualCoordChartContext<

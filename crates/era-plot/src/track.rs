@@ -17,9 +17,7 @@ use std::path::Path;
 const POINT: RGBColor = RGBColor(31, 119, 180);
 const TREND: RGBColor = RGBColor(214, 39, 40);
 
-fn err(e: impl std::fmt::Display) -> PlotError {
-    PlotError(e.to_string())
-}
+use crate::render::err;
 
 /// One track's points in a figure.
 #[derive(Debug, Clone, PartialEq)]
