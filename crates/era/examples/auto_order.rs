@@ -35,6 +35,14 @@ fn main() -> era::Result<()> {
                 frf = add_noise(&frf, noise, seed)?;
             }
             let mut options = EraOptions::thesis_dta();
+            if std::env::var("PRESET").as_deref() == Ok("measured") {
+                // What `era identify` does on a measured-FRF file (the auto_seeds bench).
+                options.integrations = 0;
+                options.zero_lines = 0;
+                options.pad_to = 0;
+                options.direct_term = era::pipeline::realize::DirectTerm::FirstMarkov;
+                options.domain = era::identify::ModelDomain::Continuous;
+            }
             options.order = Order::Auto;
             let mut scan = {
                 let mut o = ScanOptions::default();
@@ -43,6 +51,9 @@ fn main() -> era::Result<()> {
             };
             if let Ok(v) = std::env::var("TOL") {
                 scan.svd_tolerance = v.parse().unwrap();
+            }
+            if let Ok(v) = std::env::var("FLOOR") {
+                scan.svd_floor_fraction = v.parse().unwrap();
             }
             if let Ok(v) = std::env::var("CMI") {
                 scan.selection.cmi_minimum = v.parse().unwrap();

@@ -494,6 +494,7 @@ fn jackknife(
                         hankel_factor: era.hankel_factor,
                         svd: era.svd,
                         svd_tolerance: era.scan.svd_tolerance,
+                        svd_floor_fraction: era.scan.svd_floor_fraction,
                     },
                 )?,
             };

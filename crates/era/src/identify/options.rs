@@ -220,6 +220,9 @@ impl EraOptions {
     }
 }
 
+/// The default [`ScanOptions::svd_floor_fraction`].
+pub const SCAN_FLOOR_FRACTION: f64 = 0.03;
+
 /// Settings of a scan across orders.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
@@ -230,6 +233,13 @@ pub struct ScanOptions {
     /// (1e-6: the scan needs the leading subspace, not 12 digits of the noise floor; on
     /// noise-free DTA-like sets the poles still come out to 1e-11).
     pub svd_tolerance: f64,
+    /// The truncated SVD also stops once its residuals are below this fraction of the
+    /// smallest singular value it keeps, which on noisy data lies in the noise floor: the
+    /// triplets are then exact for the data plus a perturbation this fraction of the
+    /// noise's own, so more passes would move the poles by a small part of their noise
+    /// spread ([`crate::linalg::TruncatedSvdOptions::floor_fraction`]; 0: the tolerance
+    /// alone).
+    pub svd_floor_fraction: f64,
     /// Diagram tolerances.
     pub diagram: DiagramCriteria,
     /// Automatic-choice thresholds.
@@ -247,6 +257,7 @@ impl Default for ScanOptions {
         ScanOptions {
             orders: None,
             svd_tolerance: 1e-6,
+            svd_floor_fraction: SCAN_FLOOR_FRACTION,
             diagram: DiagramCriteria::default(),
             selection: SelectionCriteria::default(),
             band_hz: None,

@@ -79,6 +79,16 @@
 //! stops when `max ρ_i ≤ tolerance` over the wanted triplets. A triplet with residual `ρ`
 //! has its singular value correct to `ρ²σ₁²/gap` and its vectors to `ρσ₁/gap`.
 //!
+//! **Stopping on noisy data** ([`TruncatedSvdOptions::floor_fraction`]). The computed
+//! triplets are the exact ones of `H + E` for some `E` with `‖E‖` of the order of the
+//! largest residual `ρσ₁`. When the wanted rank reaches into the noise floor (the order
+//! scan asks for twice the signal's order and more), its smallest wanted singular value
+//! `σ_rank` is of the order of the noise's own perturbation of `H`. Stopping once
+//! `ρσ₁ ≤ f·σ_rank` then adds a perturbation a fraction `f` of the noise's, which moves
+//! the poles by about that fraction of their scatter over noise realizations; more passes
+//! buy nothing a user could see. On exact data `σ_rank` is at rounding and the tolerance
+//! alone applies. `cargo run --release -p era --example scan_floor` measures the shift.
+//!
 //! **Restarts.** The basis grows by `b` columns a pass on each side, and the small SVD
 //! costs `O((s b)³)`. Once the basis holds `depth` blocks (fewer when it would pass a
 //! memory budget; the first cycle counts the opening's block) the iteration restarts from `orth(Hᵀ U X_b)`, the block subspace iteration
@@ -138,6 +148,10 @@ pub struct TruncatedSvdOptions {
     /// opening when it has room for `rank + oversample` and a block and the opening has
     /// not converged, and not at all with less room.
     pub block: usize,
+    /// Also stop once every wanted residual is below this fraction of the smallest wanted
+    /// singular value, `ρ_i σ₁ ≤ floor_fraction · σ_rank` (0: off; the tolerance alone).
+    /// See the module doc's "Stopping on noisy data".
+    pub floor_fraction: f64,
 }
 
 /// Memory the two Krylov bases may take before the depth is cut (the large cases).
@@ -156,6 +170,19 @@ impl TruncatedSvdOptions {
             seed: 1,
             depth: 4,
             block: default_block(rank),
+            floor_fraction: 0.0,
+        }
+    }
+
+    /// The residual at which the iteration stops, given the current Ritz values `sigma`
+    /// (largest first): the tolerance, or `floor_fraction · σ_rank / σ₁` where that is
+    /// larger.
+    fn target(&self, sigma: &[f64]) -> f64 {
+        match (sigma.first(), sigma.get(self.rank.wrapping_sub(1))) {
+            (Some(&s1), Some(&sk)) if self.floor_fraction > 0.0 && s1 > 0.0 && sk.is_finite() => {
+                self.tolerance.max(self.floor_fraction * sk / s1)
+            }
+            _ => self.tolerance,
         }
     }
 }
@@ -392,7 +419,7 @@ pub fn truncated_svd(
     let mut opened = None;
     if !(room && deep_width >= 2 * k) {
         let step = opening(op, k, options, &mut rng, &mut timings)?;
-        if step.residual <= options.tolerance || !room {
+        if step.residual <= options.target(&step.s) || !room {
             opened = Some((step, 2));
         } else {
             before = (2, 2 * k);
@@ -415,7 +442,7 @@ pub fn truncated_svd(
     let columns = |passes: usize| before.1 + (passes - before.0) * k;
     loop {
         crate::cancel::check()?;
-        if step.residual <= options.tolerance {
+        if step.residual <= options.target(&step.s) {
             return Ok(TruncatedSvd {
                 u: step.u,
                 s: step.s,
@@ -675,7 +702,7 @@ fn krylov(
         let inner = (&s_mat - t.transpose()) * wanted;
         let outer = &tail * wanted.subrows(j * k, k);
         residual = ritz_residual(inner.as_ref(), outer.as_ref(), s1);
-        if residual <= options.tolerance {
+        if residual <= options.target(&sigma) {
             let keep = k.min(width);
             let u = combine(&u_blocks, x.subcols(0, keep));
             let v = combine(&v_blocks, y.subcols(0, keep));
@@ -834,7 +861,8 @@ fn deep_krylov(
         let outer = s_mat.subrows(w, b) * wanted;
         let residual = ritz_residual(inner.as_ref(), outer.as_ref(), s1);
         let xk = x.subcols(0, k);
-        if residual <= options.tolerance {
+        let target = options.target(&sigma);
+        if residual <= target {
             let (ritz_u, ritz_v) = (&u * xk, v.subcols(0, w) * y.subcols(0, k));
             clock.lap(&mut timings.rayleigh_ritz);
             return Ok(Deep::Converged(TruncatedSvd {
@@ -873,7 +901,7 @@ fn deep_krylov(
                 passes: pass,
             });
         }
-        next_check = next_checkpoint(w, residual, last, options.tolerance, b);
+        next_check = next_checkpoint(w, residual, last, target, b);
         last = Some((w, residual));
         clock.lap(&mut timings.rayleigh_ritz);
     }
@@ -942,6 +970,48 @@ mod tests {
         assert_matches_naive("truncated σ, dense SVD", fast, &dense, scale, 1e-12);
         assert!(t.residual <= 1e-12);
         assert!(truncated_svd(&a, &TruncatedSvdOptions::new(0)).is_err());
+    }
+
+    /// The noise-floor stop: on a rank-10 signal plus white noise, asked for 30 triplets
+    /// (20 in the noise floor), it stops with every residual below the fraction of
+    /// `σ_30`, sooner than the tolerance alone, and its top ten triplets are those of the
+    /// tight run to a small part of the noise's own size.
+    #[test]
+    fn the_floor_stop_ends_at_a_fraction_of_the_smallest_wanted_value() {
+        let (m, n, signal) = (400, 300, 10);
+        let mut rng = Minstd::new(21);
+        let left = block_qr(Mat::from_fn(m, signal, |_, _| rng.normal())).0;
+        let right = block_qr(Mat::from_fn(n, signal, |_, _| rng.normal())).0;
+        let d = Mat::from_fn(signal, signal, |i, j| {
+            if i == j {
+                0.8f64.powi(i as i32)
+            } else {
+                0.0
+            }
+        });
+        let noise = 1e-3;
+        let a = &left * &d * right.transpose() + Mat::from_fn(m, n, |_, _| noise * rng.normal());
+        let mut tight = TruncatedSvdOptions::new(30);
+        tight.tolerance = 1e-10;
+        let mut loose = tight;
+        loose.floor_fraction = 0.03;
+        let t = truncated_svd(&a, &tight).unwrap();
+        let l = truncated_svd(&a, &loose).unwrap();
+        assert!(t.residual <= 1e-10);
+        assert!(l.residual <= 0.03 * l.s[29] / l.s[0], "{:e}", l.residual);
+        assert!(l.residual > 1e-10, "the floor stop never ended early");
+        assert!(
+            l.columns < t.columns,
+            "{} vs {} columns",
+            l.columns,
+            t.columns
+        );
+        // The signal's values move by far less than the noise (σ of the noise matrix's
+        // entries × the size of its spectrum, √m + √n ≈ 37 of them).
+        for i in 0..signal {
+            let shift = (l.s[i] - t.s[i]).abs();
+            assert!(shift < 0.03 * noise, "σ_{i}: shift {shift:e}");
+        }
     }
 
     /// `P = Q R`, `QᵀQ = I` and `R` upper triangular on the three paths of

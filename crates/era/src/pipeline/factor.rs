@@ -245,6 +245,9 @@ pub struct FactorOptions {
     pub svd: SvdPath,
     /// Residual tolerance of the truncated SVD, relative to `σ₁`.
     pub svd_tolerance: f64,
+    /// Stop the truncated SVD also at this fraction of its smallest wanted singular value
+    /// ([`crate::linalg::TruncatedSvdOptions::floor_fraction`]; 0: off).
+    pub svd_floor_fraction: f64,
 }
 
 impl FactorOptions {
@@ -257,6 +260,7 @@ impl FactorOptions {
             hankel_factor,
             svd: SvdPath::Auto,
             svd_tolerance: 1e-12,
+            svd_floor_fraction: 0.0,
         }
     }
 }
@@ -311,6 +315,8 @@ pub(super) struct Keep {
     pub svd: SvdPath,
     /// Residual tolerance of the truncated SVD, relative to `σ₁`.
     pub svd_tolerance: f64,
+    /// See [`FactorOptions::svd_floor_fraction`].
+    pub svd_floor_fraction: f64,
     /// Singular values computed past `max_states` on the matrix-free path (for the plot;
     /// 0 for a realization at one order).
     pub extra: usize,
@@ -369,6 +375,7 @@ impl Factorization {
             max_states: options.max_states,
             svd: options.svd,
             svd_tolerance: options.svd_tolerance,
+            svd_floor_fraction: options.svd_floor_fraction,
             extra: EXTRA_SINGULAR_VALUES,
         };
         Self::of_shapes(markov, sample_time_s, &keep, shapes.h0, shapes.h1, warnings)
@@ -390,6 +397,7 @@ impl Factorization {
             max_states,
             svd,
             svd_tolerance: 1e-12,
+            svd_floor_fraction: 0.0,
             extra: EXTRA_SINGULAR_VALUES,
         };
         Self::of_shapes(markov, sample_time_s, &keep, shape, h1, Vec::new())
@@ -420,6 +428,7 @@ impl Factorization {
             let defaults = TruncatedSvdOptions::new(max_states);
             let tsvd_options = TruncatedSvdOptions {
                 tolerance: keep.svd_tolerance,
+                floor_fraction: keep.svd_floor_fraction,
                 oversample: defaults.oversample.max(kept - max_states),
                 ..defaults
             };

@@ -252,6 +252,7 @@ fn scan_front(
                 hankel_factor: options.hankel_factor,
                 svd: options.svd,
                 svd_tolerance: scan_options.svd_tolerance,
+                svd_floor_fraction: scan_options.svd_floor_fraction,
             },
         )
         .map(|f| {

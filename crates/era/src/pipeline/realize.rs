@@ -227,6 +227,7 @@ fn realize_shapes(
         max_states: options.states,
         svd: options.svd,
         svd_tolerance: options.svd_tolerance,
+        svd_floor_fraction: 0.0,
         extra: 0,
     };
     let mut factors =
