@@ -9,7 +9,8 @@
 //! `cargo run --release -p era --example partial_svd_peer`. Knobs for tuning era's
 //! iteration: `BLOCK=b` and `DEPTH=d` set its block width and depth, `BIGK=k` the
 //! triplets of the larger Hankel, `BIG=1` skips the thesis size, `NOISY=1` the noise-free
-//! data, `NOFAER=1` faer's runs.
+//! data, `NOFAER=1` faer's runs, `FLOOR=f` sets era's noise-floor stop
+//! (`TruncatedSvdOptions::floor_fraction`), `SPLIT=1` prints where each era run's time went.
 
 use era::linalg::tsvd::{truncated_svd, TruncatedSvdOptions};
 use era::linalg::LinearOperator;
@@ -134,8 +135,18 @@ fn main() {
                 if let Some(d) = std::env::var("DEPTH").ok().and_then(|v| v.parse().ok()) {
                     options.depth = d;
                 }
+                if let Some(f) = std::env::var("FLOOR").ok().and_then(|v| v.parse().ok()) {
+                    options.floor_fraction = f;
+                }
                 let svd = truncated_svd(&op, &options).unwrap();
                 let t = clock.elapsed().as_secs_f64();
+                if std::env::var_os("SPLIT").is_some() {
+                    let tt = svd.timings;
+                    eprintln!(
+                        "  era {t:.3} s: products {:.3}, orthogonalisation {:.3}, Rayleigh-Ritz {:.3}; {} passes",
+                        tt.products, tt.orthogonalisation, tt.rayleigh_ritz, svd.iterations
+                    );
+                }
                 if t < era_best.0 {
                     era_best = (t, 2 * svd.columns, worst(&svd.s, &dense, k));
                 }

@@ -712,12 +712,18 @@ impl Refinement {
         );
         let mut out = vec![Complex64::new(0.0, 0.0); q * p * nl];
         let terms = self.residual_terms(quantity);
-        for (k, f) in frequency_hz.iter().enumerate() {
-            let w = 2.0 * PI * f;
-            let jw = Complex64::new(0.0, w);
-            for mode in &self.modes {
-                let s = mode.pole;
-                let (a, b) = match ts {
+        // Mode by mode, each pair's lines in one contiguous run; every entry still sums
+        // the modes in order, then the residual terms, as line by line would.
+        let (mut a, mut b) = (
+            vec![Complex64::new(0.0, 0.0); nl],
+            vec![Complex64::new(0.0, 0.0); nl],
+        );
+        for mode in &self.modes {
+            let s = mode.pole;
+            for (k, f) in frequency_hz.iter().enumerate() {
+                let w = 2.0 * PI * f;
+                let jw = Complex64::new(0.0, w);
+                (a[k], b[k]) = match ts {
                     Some(_) => (
                         partial_fraction(s, w, k_out, ts).0,
                         partial_fraction(s.conj(), w, k_out, ts).0,
@@ -727,13 +733,17 @@ impl Refinement {
                         power(s.conj(), k_out) / (jw - s.conj()),
                     ),
                 };
-                for pair in 0..q * p {
-                    let r = mode.residue[pair];
-                    out[pair * nl + k] += r * a + r.conj() * b;
+            }
+            for (pair, row) in out.chunks_exact_mut(nl.max(1)).enumerate().take(q * p) {
+                let r = mode.residue[pair];
+                for ((o, ak), bk) in row.iter_mut().zip(&a).zip(&b) {
+                    *o += r * ak + r.conj() * bk;
                 }
             }
-            for (e, m) in &terms {
-                let factor = residual_factor(w, *e, ts);
+        }
+        for (e, m) in &terms {
+            for (k, f) in frequency_hz.iter().enumerate() {
+                let factor = residual_factor(2.0 * PI * f, *e, ts);
                 for i in 0..q {
                     for j in 0..p {
                         out[(i * p + j) * nl + k] += factor * m[(i, j)];
