@@ -128,6 +128,11 @@ fn probe_shape(markov: &MarkovSequence, hankel_factor: usize) -> Option<HankelSh
     })
 }
 
+/// The lowest noise floor, relative to `σ₁`, that the probe takes from the Gram
+/// matrix's eigenvalues ([`crate::linalg::dense::gram_singular_values`]): values there
+/// are known to about 1e-5 of themselves. Below it the probe takes the SVD.
+const GRAM_PROBE_FLOOR: f64 = 1e-4;
+
 /// The order the data supports: the number of singular values of a small Hankel of
 /// the Markov sequence ([`probe_shape`], its singular values only) above the noise
 /// floor. The floor is Gavish & Donoho's (2014) optimal hard threshold for a matrix of
@@ -147,21 +152,42 @@ pub(crate) fn signal_order(markov: &MarkovSequence, hankel_factor: usize) -> Res
         return Ok(None);
     };
     let (rows, cols) = h.shape();
-    let sv = match crate::linalg::dense::singular_values(h, "the probe Hankel") {
-        Ok(sv) => sv,
-        Err(EraError::Interrupted) => return Err(EraError::Interrupted),
-        Err(_) => return Ok(None),
-    };
-    if sv.len() < 8 || sv[0] <= 0.0 {
-        return Ok(None);
-    }
     let beta = rows.min(cols) as f64 / rows.max(cols) as f64;
     let omega = 0.56 * beta.powi(3) - 0.95 * beta.powi(2) + 1.82 * beta + 1.43;
-    let mut sorted = sv.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    // The floor ω·σ_med, or None when the values cannot tell (fewer than 8, or none).
+    let floor_of = |sv: &[f64]| {
+        if sv.len() < 8 || sv[0] <= 0.0 || !sv[0].is_finite() {
+            return None;
+        }
+        let mut sorted = sv.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        Some(omega * sorted[sorted.len() / 2])
+    };
+    // Noisy data first, from the Gram matrix (half the SVD's flops); where its floor
+    // lies below what the Gram matrix resolves (exact or nearly exact data), the SVD.
+    let gram = match crate::linalg::dense::gram_singular_values(h, "the probe Hankel") {
+        Err(EraError::Interrupted) => return Err(EraError::Interrupted),
+        Ok(sv) if floor_of(&sv).is_some_and(|f| f >= GRAM_PROBE_FLOOR * sv[0]) => Some(sv),
+        _ => None,
+    };
+    let sv = match gram {
+        Some(sv) => sv,
+        None => {
+            let Ok(h) = crate::pipeline::hankel::build(markov, shape) else {
+                return Ok(None);
+            };
+            match crate::linalg::dense::singular_values(h, "the probe Hankel") {
+                Ok(sv) => sv,
+                Err(EraError::Interrupted) => return Err(EraError::Interrupted),
+                Err(_) => return Ok(None),
+            }
+        }
+    };
+    let Some(floor) = floor_of(&sv) else {
+        return Ok(None);
+    };
     // Exact data: the floor is rounding, far below the signal.
-    let floor = (omega * median).max(1e-13 * sv[0]);
+    let floor = floor.max(1e-13 * sv[0]);
     let rank = sv.iter().take_while(|&&v| v > floor).count();
     Ok((rank * 3 <= sv.len()).then_some(rank))
 }
