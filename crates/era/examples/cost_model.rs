@@ -17,13 +17,24 @@
 //! of `n` states), with 1 % white noise on every Markov sample so that the spectrum past
 //! the order has no gap, as measured data has none; and the DTA-like thesis case
 //! (`ModalSpec::default()`, 801 lines, 5 % noise on the FRFs, thesis preprocessing).
+//!
+//! **The automatic path** (a second table): `identify` at `Order::Auto` with the measured
+//! preset's preprocessing (what `era identify FILE --states auto` runs on a CSV), then
+//! the refinement from its start with the CLI's defaults, on 8 × 8 sets of 10, 20, 40
+//! and 60 modes in 0.5–14 Hz (5 % noise, 801 lines), each stage from `StageTimings`:
+//! the probe and the scan's factorization (`hankel_svd`), the realizations of the scan,
+//! the choice, and the refinement, with the exponent of each in the number of modes.
 
+use era::identify::{identify, EraOptions, ModelDomain, Order};
 use era::linalg::rng::Minstd;
 use era::linalg::tsvd::TruncatedSvdOptions;
 use era::linalg::LinearOperator;
 use era::pipeline::hankel::HankelShape;
 use era::pipeline::hankel_op::HankelOperator;
+use era::pipeline::realize::DirectTerm;
 use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
+use era::refine::identification::refine_identification;
+use era::refine::{RefineOptions, Weighting};
 use era::sim::{add_noise, lightly_damped_markov, ModalSpec, ModalStructure};
 use era::sources::frf::preprocess::preprocess;
 use era::sources::frf::{markov_from_frf, MarkovSequence};
@@ -254,4 +265,79 @@ fn main() {
     for (name, k, kf) in fits {
         println!("| {name} | {k:.2} | {kf:.2} |");
     }
+    auto_path(repeats);
+}
+
+/// The automatic path's stages against the number of modes (module doc), medians of
+/// `repeats` runs each.
+fn auto_path(repeats: usize) {
+    println!("\n| modes (8×8, 5 %) | states scanned | probe + factorization | scan | choice | refinement | refinement iterations | found physical |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut options = EraOptions::thesis_dta();
+    options.integrations = 0;
+    options.zero_lines = 0;
+    options.pad_to = 0;
+    options.direct_term = DirectTerm::FirstMarkov;
+    options.domain = ModelDomain::Continuous;
+    options.order = Order::Auto;
+    let mut refine = RefineOptions::default();
+    refine.weighting = Weighting::PairNoise;
+    let mut points: [Vec<(f64, f64)>; 4] = Default::default();
+    for modes in [10usize, 20, 40, 60] {
+        let spec = ModalSpec {
+            modes,
+            collocated: true,
+            seed: 11,
+            ..ModalSpec::default()
+        };
+        let structure = ModalStructure::random(&spec).expect("DTA-like set");
+        let frf = add_noise(
+            &structure
+                .frf(801, 0.025, Quantity::Acceleration)
+                .expect("FRF"),
+            0.05,
+            11,
+        )
+        .expect("noise");
+        let mut stages: [Vec<f64>; 4] = Default::default();
+        let (mut scanned, mut iterations, mut physical) = (0, 0, 0);
+        for _ in 0..repeats {
+            let found = identify(&frf, &options).expect("the automatic order");
+            let t = found.timings;
+            scanned = found
+                .stabilization
+                .as_ref()
+                .map_or(0, |s| s.scan.orders.last().copied().unwrap_or(0));
+            let refined = refine_identification(found, &frf, &refine, &mut |_| {}, &mut |_, _| {})
+                .expect("the refinement");
+            iterations = refined
+                .refinement
+                .as_ref()
+                .map_or(0, |r| r.refinement.iterations);
+            physical = refined.quality.iter().filter(|q| q.physical).count();
+            for (slot, v) in
+                stages
+                    .iter_mut()
+                    .zip([t.hankel_svd, t.scan, t.selection, refined.timings.refine])
+            {
+                slot.push(v);
+            }
+        }
+        let medians: Vec<f64> = stages.into_iter().map(median).collect();
+        for (p, &m) in points.iter_mut().zip(&medians) {
+            p.push((modes as f64, m));
+        }
+        println!(
+            "| {modes} | {scanned} | {:.3} s | {:.3} s | {:.3} s | {:.3} s | {iterations} | {physical} |",
+            medians[0], medians[1], medians[2], medians[3]
+        );
+    }
+    let k: Vec<String> = points
+        .iter()
+        .map(|p| format!("{:.2}", exponent(p)))
+        .collect();
+    println!(
+        "| exponent in the modes | | {} | {} | {} | {} | | |",
+        k[0], k[1], k[2], k[3]
+    );
 }
