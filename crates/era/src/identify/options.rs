@@ -237,7 +237,7 @@ pub struct ScanOptions {
     /// smallest singular value it keeps, which on noisy data lies in the noise floor: the
     /// triplets are then exact for the data plus a perturbation this fraction of the
     /// noise's own, so more passes would move the poles by a small part of their noise
-    /// spread ([`crate::linalg::TruncatedSvdOptions::floor_fraction`]; 0: the tolerance
+    /// spread ([`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0: the tolerance
     /// alone).
     pub svd_floor_fraction: f64,
     /// Diagram tolerances.

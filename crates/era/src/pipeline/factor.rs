@@ -246,7 +246,7 @@ pub struct FactorOptions {
     /// Residual tolerance of the truncated SVD, relative to `σ₁`.
     pub svd_tolerance: f64,
     /// Stop the truncated SVD also at this fraction of its smallest wanted singular value
-    /// ([`crate::linalg::TruncatedSvdOptions::floor_fraction`]; 0: off).
+    /// ([`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0: off).
     pub svd_floor_fraction: f64,
 }
 
