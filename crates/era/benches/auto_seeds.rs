@@ -14,13 +14,15 @@
 //! outside the timed closures.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use era::identify::{identify, EraOptions, ModelDomain, Order};
-use era::pipeline::realize::DirectTerm;
+use era::identify::identify;
 use era::refine::identification::refine_identification;
 use era::refine::{RefineOptions, Weighting};
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::{FrfData, Quantity};
 use std::hint::black_box;
+
+#[path = "support/sets.rs"]
+mod sets;
 
 const SEEDS: std::ops::RangeInclusive<u64> = 1001..=1016;
 
@@ -39,19 +41,8 @@ fn set(seed: u64) -> FrfData {
     .unwrap()
 }
 
-fn measured() -> EraOptions {
-    let mut o = EraOptions::thesis_dta();
-    o.integrations = 0;
-    o.zero_lines = 0;
-    o.pad_to = 0;
-    o.direct_term = DirectTerm::FirstMarkov;
-    o.domain = ModelDomain::Continuous;
-    o.order = Order::Auto;
-    o
-}
-
 fn auto_seeds(c: &mut Criterion) {
-    let options = measured();
+    let options = sets::measured_auto();
     let sets: Vec<(u64, FrfData)> = SEEDS.map(|s| (s, set(s))).collect();
     let mut g = c.benchmark_group("auto_order_5_percent");
     g.sample_size(10);

@@ -11,6 +11,9 @@ use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::Quantity;
 use std::time::Instant;
 
+#[path = "../benches/support/sets.rs"]
+mod sets;
+
 fn main() -> era::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let seeds: Vec<u64> = args
@@ -34,15 +37,12 @@ fn main() -> era::Result<()> {
             if noise > 0.0 {
                 frf = add_noise(&frf, noise, seed)?;
             }
-            let mut options = EraOptions::thesis_dta();
-            if std::env::var("PRESET").as_deref() == Ok("measured") {
-                // What `era identify` does on a measured-FRF file (the auto_seeds bench).
-                options.integrations = 0;
-                options.zero_lines = 0;
-                options.pad_to = 0;
-                options.direct_term = era::pipeline::realize::DirectTerm::FirstMarkov;
-                options.domain = era::identify::ModelDomain::Continuous;
-            }
+            // PRESET=measured: what `era identify` does on a measured-FRF file.
+            let mut options = if std::env::var("PRESET").as_deref() == Ok("measured") {
+                sets::measured_auto()
+            } else {
+                EraOptions::thesis_dta()
+            };
             options.order = Order::Auto;
             let mut scan = {
                 let mut o = ScanOptions::default();
@@ -62,14 +62,7 @@ fn main() -> era::Result<()> {
             options.scan = scan;
             let found = identify(&frf, &options)?;
             let seconds = clock.elapsed().as_secs_f64();
-            let physical: Vec<(f64, f64)> = found
-                .modal
-                .modes
-                .iter()
-                .zip(&found.quality)
-                .filter(|(_, q)| q.physical)
-                .map(|(m, _)| (m.frequency_hz, m.damping_ratio))
-                .collect();
+            let physical = sets::physical(&found);
             // One-to-one matching, nearest first.
             let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
             for (i, f) in structure.frequencies_hz.iter().enumerate() {

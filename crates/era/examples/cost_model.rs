@@ -25,13 +25,12 @@
 //! the probe and the scan's factorization (`hankel_svd`), the realizations of the scan,
 //! the choice, and the refinement, with the exponent of each in the number of modes.
 
-use era::identify::{identify, EraOptions, ModelDomain, Order};
+use era::identify::identify;
 use era::linalg::rng::Minstd;
 use era::linalg::tsvd::TruncatedSvdOptions;
 use era::linalg::LinearOperator;
 use era::pipeline::hankel::HankelShape;
 use era::pipeline::hankel_op::HankelOperator;
-use era::pipeline::realize::DirectTerm;
 use era::pipeline::realize::{realize_general, RealizeOptions, SvdPath};
 use era::refine::identification::refine_identification;
 use era::refine::{RefineOptions, Weighting};
@@ -41,6 +40,9 @@ use era::sources::frf::{markov_from_frf, MarkovSequence};
 use era::Quantity;
 use faer::Mat;
 use std::time::Instant;
+
+#[path = "../benches/support/sets.rs"]
+mod sets;
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -273,13 +275,7 @@ fn main() {
 fn auto_path(repeats: usize) {
     println!("\n| modes (8×8, 5 %) | states scanned | probe + factorization | scan | choice | refinement | refinement iterations | found physical |");
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let mut options = EraOptions::thesis_dta();
-    options.integrations = 0;
-    options.zero_lines = 0;
-    options.pad_to = 0;
-    options.direct_term = DirectTerm::FirstMarkov;
-    options.domain = ModelDomain::Continuous;
-    options.order = Order::Auto;
+    let options = sets::measured_auto();
     let mut refine = RefineOptions::default();
     refine.weighting = Weighting::PairNoise;
     let mut points: [Vec<(f64, f64)>; 4] = Default::default();

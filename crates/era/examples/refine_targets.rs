@@ -28,6 +28,9 @@ use era::sources::frf::preprocess::integrate;
 use era::{FrfData, Quantity};
 use std::time::Instant;
 
+#[path = "../benches/support/sets.rs"]
+mod sets;
+
 fn list<T: std::str::FromStr>(arg: Option<&String>, default: Vec<T>) -> Vec<T>
 where
     T::Err: std::fmt::Debug,
@@ -152,14 +155,7 @@ fn report_dta(
     era_fit: f64,
     seconds: f64,
 ) -> era::Result<()> {
-    let physical: Vec<(f64, f64)> = found
-        .modal
-        .modes
-        .iter()
-        .zip(&found.quality)
-        .filter(|(_, q)| q.physical)
-        .map(|(m, _)| (m.frequency_hz, m.damping_ratio))
-        .collect();
+    let physical = sets::physical(found);
     let freqs: Vec<f64> = physical.iter().map(|p| p.0).collect();
     let m = matching(&structure.frequencies_hz, &freqs);
     let ferr: Vec<f64> = m

@@ -9,11 +9,13 @@
 //! `cargo run --release -p era --example scan_floor -- [STRUCTURES] [REALIZATIONS] [NOISE] [FRACTION]`,
 //! e.g. `-- 201,202,203,204 8 0.05 0.01`.
 
-use era::identify::{identify, EraOptions, ModelDomain, Order, ScanOptions};
-use era::pipeline::realize::DirectTerm;
+use era::identify::{identify, ScanOptions};
 use era::sim::{add_noise, ModalSpec, ModalStructure};
 use era::Quantity;
 use std::time::Instant;
+
+#[path = "../benches/support/sets.rs"]
+mod sets;
 
 fn main() -> era::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -22,6 +24,10 @@ fn main() -> era::Result<()> {
         .map(|s| s.split(',').map(|v| v.parse().unwrap()).collect())
         .unwrap_or(vec![201, 202, 203, 204]);
     let realizations: u64 = args.get(1).map_or(8, |v| v.parse().unwrap());
+    assert!(
+        realizations >= 3,
+        "REALIZATIONS: at least 3, for a spread over the noise"
+    );
     let noise: f64 = args.get(2).map_or(0.05, |v| v.parse().unwrap());
     let fraction: f64 = args.get(3).map_or(0.01, |v| v.parse().unwrap());
     let (mut df_ratios, mut dz_ratios) = (Vec::new(), Vec::new());
@@ -41,27 +47,14 @@ fn main() -> era::Result<()> {
         for r in 0..realizations {
             let frf = add_noise(&clean, noise, 1000 * seed + r)?;
             for (f, store, times) in [(0.0, &mut off, &mut t_off), (fraction, &mut on, &mut t_on)] {
-                let mut options = EraOptions::thesis_dta();
-                options.integrations = 0;
-                options.zero_lines = 0;
-                options.pad_to = 0;
-                options.direct_term = DirectTerm::FirstMarkov;
-                options.domain = ModelDomain::Continuous;
-                options.order = Order::Auto;
+                let mut options = sets::measured_auto();
                 let mut scan = ScanOptions::default();
                 scan.svd_floor_fraction = f;
                 options.scan = scan;
                 let clock = Instant::now();
                 let found = identify(&frf, &options)?;
                 times.push(clock.elapsed().as_secs_f64());
-                let physical: Vec<(f64, f64)> = found
-                    .modal
-                    .modes
-                    .iter()
-                    .zip(&found.quality)
-                    .filter(|(_, q)| q.physical)
-                    .map(|(m, _)| (m.frequency_hz, m.damping_ratio))
-                    .collect();
+                let physical = sets::physical(&found);
                 for (i, truth) in structure.frequencies_hz.iter().enumerate() {
                     let best = physical
                         .iter()
