@@ -1006,8 +1006,8 @@ mod tests {
             l.columns,
             t.columns
         );
-        // The signal's values move by far less than the noise (σ of the noise matrix's
-        // entries × the size of its spectrum, √m + √n ≈ 37 of them).
+        // The signal's values move by far less than the noise's own size: entries of
+        // 1e-3, whose spectrum reaches about (√m + √n)·1e-3 ≈ 0.037.
         for i in 0..signal {
             let shift = (l.s[i] - t.s[i]).abs();
             assert!(shift < 0.03 * noise, "σ_{i}: shift {shift:e}");
