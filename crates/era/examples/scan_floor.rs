@@ -7,7 +7,7 @@
 //! (the run with the stop off), and the modes found, spurious ones and times are printed.
 //!
 //! `cargo run --release -p era --example scan_floor -- [STRUCTURES] [REALIZATIONS] [NOISE] [FRACTION]`,
-//! e.g. `-- 201,202,203,204 8 0.05 0.01`.
+//! e.g. `-- 205,206,207,208 6 0.05 0.03` (the fraction defaults to the scan's).
 
 use era::identify::{identify, ScanOptions};
 use era::sim::{add_noise, ModalSpec, ModalStructure};
@@ -29,7 +29,11 @@ fn main() -> era::Result<()> {
         "REALIZATIONS: at least 3, for a spread over the noise"
     );
     let noise: f64 = args.get(2).map_or(0.05, |v| v.parse().unwrap());
-    let fraction: f64 = args.get(3).map_or(0.01, |v| v.parse().unwrap());
+    let fraction: f64 = args
+        .get(3)
+        .map_or(ScanOptions::default().svd_floor_fraction, |v| {
+            v.parse().unwrap()
+        });
     let (mut df_ratios, mut dz_ratios) = (Vec::new(), Vec::new());
     let (mut t_off, mut t_on) = (Vec::new(), Vec::new());
     for &seed in &structures {
@@ -83,11 +87,18 @@ fn main() -> era::Result<()> {
                 (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
             };
             let (sf, sz) = (spread(|m| m.0), spread(|m| m.1));
+            if !(sf > 0.0 && sz > 0.0) {
+                continue;
+            }
             for (a, b) in &both {
                 df_ratios.push((a.0 - b.0).abs() / sf);
                 dz_ratios.push((a.1 - b.1).abs() / sz);
             }
         }
+    }
+    if df_ratios.is_empty() {
+        println!("no mode was found in both runs of 3 or more realizations: nothing to compare");
+        return Ok(());
     }
     let summary = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);

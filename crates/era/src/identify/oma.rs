@@ -494,7 +494,9 @@ fn jackknife(
                         hankel_factor: era.hankel_factor,
                         svd: era.svd,
                         svd_tolerance: era.scan.svd_tolerance,
-                        svd_floor_fraction: era.scan.svd_floor_fraction,
+                        // Its blocks' orders are not bounded by a probe: the
+                        // tolerance alone.
+                        svd_floor_fraction: 0.0,
                     },
                 )?,
             };

@@ -234,10 +234,12 @@ pub struct ScanOptions {
     /// noise-free DTA-like sets the poles still come out to 1e-11).
     pub svd_tolerance: f64,
     /// The truncated SVD also stops once its residuals are below this fraction of the
-    /// smallest singular value it keeps, which on noisy data lies in the noise floor: the
-    /// triplets are then exact for the data plus a perturbation this fraction of the
-    /// noise's own, so more passes would move the poles by a small part of their noise
-    /// spread ([`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0: the tolerance
+    /// smallest singular value it keeps. Used only by a default scan whose top order is
+    /// at least twice the order the probe found, so that this value lies in the noise
+    /// floor: the triplets are then exact for the data plus a perturbation this fraction
+    /// of the noise's own, and more passes would move the poles by a small part of their
+    /// noise spread ([`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0:
+    /// the tolerance alone; explicit orders and the output-only scan use the tolerance
     /// alone).
     pub svd_floor_fraction: f64,
     /// Diagram tolerances.

@@ -170,9 +170,9 @@ pub(crate) fn singular_values(h: Mat<f64>, what: &str) -> Result<Vec<f64>> {
 
 /// The singular values of `h`, descending, from the eigenvalues of the Gram matrix of
 /// its short side (`h hᵀ` or `hᵀ h`, lower triangle by one GEMM). Each eigenvalue
-/// carries an error of about `n ε σ₁²`, so a value `σ` is known to a relative
-/// `n ε (σ₁/σ)² / 2`: to 1e-5 at `1e-4 σ₁` for `n = 800`, and not at all below
-/// `√ε σ₁`. For a caller that needs no smaller ones (the order probe on noisy data) it
+/// carries an error of about `m ε σ₁²`, `m` the long side (the Gram product's inner
+/// dimension), so a value `σ` is known to a relative `m ε (σ₁/σ)² / 2`: to about 4e-5
+/// at `1e-4 σ₁` for the probe's `m = 3184`, and not at all below `√ε σ₁`. For a caller that needs no smaller ones (the order probe on noisy data) it
 /// costs about half the SVD's flops.
 pub(crate) fn gram_singular_values(h: Mat<f64>, what: &str) -> Result<Vec<f64>> {
     use faer::linalg::matmul::triangular::{matmul, BlockStructure};
@@ -300,9 +300,9 @@ mod tests {
     }
 
     /// The Gram route against the SVD, wide and tall, on a spectrum from 1 down to 1e-3:
-    /// each value to `n ε (σ₁/σ)²` of itself (the module doc's bound, times 10).
+    /// each value to `m ε (σ₁/σ)²` of itself, `m` the long side (the doc's bound, times 10).
     #[test]
-    fn gram_singular_values_match_the_svd_above_the_square_root_of_epsilon() {
+    fn gram_singular_values_match_the_svd_down_to_a_thousandth_of_sigma1() {
         let (m, n) = (50, 140);
         let mut rng = crate::linalg::rng::Minstd::new(17);
         let left = Mat::from_fn(m, m, |_, _| rng.normal())
@@ -322,7 +322,7 @@ mod tests {
             let svd = singular_values(h, "a test matrix").unwrap();
             assert_eq!(gram.len(), m);
             for (i, (g, s)) in gram.iter().zip(&svd).enumerate() {
-                let bound = 10.0 * m as f64 * f64::EPSILON * (svd[0] / s).powi(2);
+                let bound = 10.0 * n as f64 * f64::EPSILON * (svd[0] / s).powi(2);
                 assert!((g - s).abs() <= bound * s, "σ_{i}: {g:e} against {s:e}");
                 assert!(
                     (s - known[i]).abs() <= 1e-12,

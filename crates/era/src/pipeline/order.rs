@@ -130,7 +130,7 @@ fn probe_shape(markov: &MarkovSequence, hankel_factor: usize) -> Option<HankelSh
 
 /// The lowest noise floor, relative to `σ₁`, that the probe takes from the Gram
 /// matrix's eigenvalues ([`crate::linalg::dense::gram_singular_values`]): values there
-/// are known to about 1e-5 of themselves. Below it the probe takes the SVD.
+/// are known to a few 1e-5 of themselves. Below it the probe takes the SVD as well.
 const GRAM_PROBE_FLOOR: f64 = 1e-4;
 
 /// The order the data supports: the number of singular values of a small Hankel of
@@ -240,6 +240,8 @@ fn scan_front(
     timings: &mut StageTimings,
 ) -> Result<(Front, Factorization, OrderRange, Scan, f64)> {
     let f = front(frf, supplied, options, Path::Fast, observer, timings)?;
+    // The data's order from the probe, when a default scan asked it.
+    let mut probe_rank = None;
     let range = match scan_options.orders.clone() {
         Some(r) => r,
         None => {
@@ -250,8 +252,8 @@ fn scan_front(
                 frf.inputs(),
             )?;
             let clock = Instant::now();
-            let bounded = signal_order(&f.markov, options.hankel_factor)?
-                .and_then(|rank| orders_for_rank(rank, &default));
+            probe_rank = signal_order(&f.markov, options.hankel_factor)?;
+            let bounded = probe_rank.and_then(|rank| orders_for_rank(rank, &default));
             timings.hankel_svd += clock.elapsed().as_secs_f64();
             bounded.unwrap_or(default)
         }
@@ -278,7 +280,15 @@ fn scan_front(
                 hankel_factor: options.hankel_factor,
                 svd: options.svd,
                 svd_tolerance: scan_options.svd_tolerance,
-                svd_floor_fraction: scan_options.svd_floor_fraction,
+                // The noise-floor stop only where the smallest kept singular value is
+                // known to lie in the noise: a default scan whose top order is at least
+                // twice the order the probe found (an explicit range may stop inside
+                // the signal).
+                svd_floor_fraction: if probe_rank.is_some_and(|r| range.max >= 2 * r) {
+                    scan_options.svd_floor_fraction
+                } else {
+                    0.0
+                },
             },
         )
         .map(|f| {
