@@ -235,8 +235,8 @@ pub struct ScanOptions {
     pub svd_tolerance: f64,
     /// The truncated SVD also stops once its residuals are below this fraction of the
     /// smallest singular value it keeps. Used only by a default scan whose top order is
-    /// at least twice the order the probe found, so that this value lies in the noise
-    /// floor: the triplets are then exact for the data plus a perturbation this fraction
+    /// at least 1.5 times the order the probe found, so that this value lies in the
+    /// noise floor: the triplets are then exact for the data plus a perturbation this fraction
     /// of the noise's own, and more passes would move the poles by a small part of their
     /// noise spread ([`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0:
     /// the tolerance alone; explicit orders and the output-only scan use the tolerance

@@ -281,10 +281,11 @@ fn scan_front(
                 svd: options.svd,
                 svd_tolerance: scan_options.svd_tolerance,
                 // The noise-floor stop only where the smallest kept singular value is
-                // known to lie in the noise: a default scan whose top order is at least
-                // twice the order the probe found (an explicit range may stop inside
-                // the signal).
-                svd_floor_fraction: if probe_rank.is_some_and(|r| range.max >= 2 * r) {
+                // known to lie in the noise: a default scan whose top order is half as
+                // much again as the order the probe found, past which the probe's own
+                // singular values were below the noise floor (an explicit range may
+                // stop inside the signal).
+                svd_floor_fraction: if probe_rank.is_some_and(|r| 2 * range.max >= 3 * r) {
                     scan_options.svd_floor_fraction
                 } else {
                     0.0
