@@ -28,7 +28,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_viewer import chromium_page, find_chromium  # noqa: E402
+from check_viewer import chromium_page, console_errors, find_chromium, requests_besides  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WIDTH, HEIGHT = 1400, 3000
@@ -124,12 +124,9 @@ def main():
                 with open(path, "wb") as f:
                     f.write(base64.b64decode(data))
                 print(f"  saved {path}")
-            errors = [e for e in cdp.events if e.get("method") == "Runtime.exceptionThrown"
-                      or (e.get("method") == "Runtime.consoleAPICalled" and e["params"]["type"] in ("error", "assert"))
-                      or (e.get("method") == "Log.entryAdded" and e["params"]["entry"]["level"] == "error")]
+            errors = console_errors(cdp, ("error", "assert"))
             check(not errors, f"no console errors ({len(errors)}: {json.dumps(errors)[:300]})")
-            requests = [e["params"]["request"]["url"] for e in cdp.events if e.get("method") == "Network.requestWillBeSent"]
-            others = [r for r in requests if r != url]
+            _, others = requests_besides(cdp, url)
             check(not others, f"no network requests besides the page (others: {others[:5]})")
     if failures:
         print(f"check_report_layout: FAILED {len(failures)} check(s)", file=sys.stderr)

@@ -355,15 +355,26 @@ def main():
 
         # Let any late error surface, then read the events.
         cdp.js("new Promise(r => setTimeout(r, 300))")
-        errors = [e for e in cdp.events if e.get("method") == "Runtime.exceptionThrown"
-                  or (e.get("method") == "Runtime.consoleAPICalled" and e["params"]["type"] in ("error", "assert", "warning"))
-                  or (e.get("method") == "Log.entryAdded" and e["params"]["entry"]["level"] in ("error", "warning"))]
+        errors = console_errors(cdp, ("error", "assert", "warning"))
         check(not errors, f"no console errors or exceptions ({len(errors)}: {json.dumps(errors)[:500]})")
-        requests = [e["params"]["request"]["url"] for e in cdp.events if e.get("method") == "Network.requestWillBeSent"]
-        others = [r for r in requests if r != url]
+        requests, others = requests_besides(cdp, url)
         check(not others, f"no network requests besides the page ({len(requests)} request(s); others: {others[:5]})")
     print(f"check_viewer: screenshots in {out}")
     return report_failures(failures)
+
+
+def console_errors(cdp, levels):
+    """The page's exceptions, and its console calls and log entries at one of `levels`
+    ("error", "assert", "warning"), from the events a chromium_page session recorded."""
+    return [e for e in cdp.events if e.get("method") == "Runtime.exceptionThrown"
+            or (e.get("method") == "Runtime.consoleAPICalled" and e["params"]["type"] in levels)
+            or (e.get("method") == "Log.entryAdded" and e["params"]["entry"]["level"] in levels)]
+
+
+def requests_besides(cdp, url):
+    """Every URL the page requested, and those other than `url` itself."""
+    requests = [e["params"]["request"]["url"] for e in cdp.events if e.get("method") == "Network.requestWillBeSent"]
+    return requests, [r for r in requests if r != url]
 
 
 def report_failures(failures):
