@@ -61,17 +61,19 @@ pub fn json_of(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&stdout_of(args)).expect("stdout is JSON")
 }
 
-/// Runs `era ARGS` and expects exit code 2 with `needle` in stderr, and no panic.
+/// Runs `era ARGS` and expects exit code 2 with `needle` in stderr, and no panic;
+/// returns the stderr, for further checks.
 #[track_caller]
-pub fn expect_input_error(args: &[&str], needle: &str) {
+pub fn expect_input_error(args: &[&str], needle: &str) -> String {
     let out = era().args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
     assert!(
         stderr.contains(needle),
         "{args:?}: expected '{needle}' in: {stderr}"
     );
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    stderr
 }
 
 /// Writes the truth model's FRFs into `dir/truth.csv` with `era simulate truth-model`.
@@ -86,25 +88,26 @@ pub fn simulated_truth(dir: &Path) -> PathBuf {
     frf
 }
 
-/// A thesis-size set written to `dir/name` (8 x 8, 40 modes, collocated, 5 % noise),
-/// whose `--states auto --refine` takes seconds.
+/// Writes `dir/name` with `era simulate modal -q ARGS --out dir/name` (`args`: the
+/// structure, lines, noise and seed), expecting success.
 #[track_caller]
-pub fn dta_like_set(dir: &Path, name: &str) -> PathBuf {
+pub fn simulate_modal(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
     let path = dir.join(name);
     era()
-        .args([
-            "simulate",
-            "modal",
-            "--collocated",
-            "--noise",
-            "0.05",
-            "-q",
-            "--out",
-        ])
+        .args(["simulate", "modal", "-q"])
+        .args(args)
+        .arg("--out")
         .arg(&path)
         .assert()
         .success();
     path
+}
+
+/// A thesis-size set written to `dir/name` (8 x 8, 40 modes, collocated, 5 % noise),
+/// whose `--states auto --refine` takes seconds.
+#[track_caller]
+pub fn dta_like_set(dir: &Path, name: &str) -> PathBuf {
+    simulate_modal(dir, name, &["--collocated", "--noise", "0.05"])
 }
 
 /// The arguments of `era identify` of the truth model `frf` at `states` into `out`, at

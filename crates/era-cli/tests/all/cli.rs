@@ -160,12 +160,10 @@ fn simulate_then_identify_the_truth_model() {
 #[test]
 fn continuous_model_from_a_noisy_modal_set() {
     let dir = tempfile::tempdir().unwrap();
-    let frf = dir.path().join("modal.csv");
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "-q",
+    let frf = crate::common::simulate_modal(
+        dir.path(),
+        "modal.csv",
+        &[
             "--outputs",
             "3",
             "--inputs",
@@ -176,8 +174,6 @@ fn continuous_model_from_a_noisy_modal_set() {
             "2",
             "--fmax",
             "8",
-        ])
-        .args([
             "--lines",
             "401",
             "--df",
@@ -188,11 +184,8 @@ fn continuous_model_from_a_noisy_modal_set() {
             "0.01",
             "--seed",
             "3",
-            "--out",
-        ])
-        .arg(&frf)
-        .assert()
-        .success();
+        ],
+    );
     let out = era()
         .arg("identify")
         .arg(&frf)
@@ -459,20 +452,11 @@ fn identify_reports_the_svd_path() {
 #[test]
 fn identify_out_writes_every_figure_and_the_report() {
     let dir = tempfile::tempdir().unwrap();
-    let frf = dir.path().join("dta.csv");
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "-q",
-            "--collocated",
-            "--seed",
-            "987654321",
-            "--out",
-        ])
-        .arg(&frf)
-        .assert()
-        .success();
+    let frf = crate::common::simulate_modal(
+        dir.path(),
+        "dta.csv",
+        &["--collocated", "--seed", "987654321"],
+    );
     let out = dir.path().join("out");
     let run = era()
         .arg("identify")
@@ -604,23 +588,11 @@ fn plot_overlays_a_file_with_a_model_or_alone() {
     assert!(!alone.join("singular_values.svg").exists());
 
     // A model of another shape is refused.
-    let other = dir.path().join("m.csv");
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "-q",
-            "--outputs",
-            "2",
-            "--inputs",
-            "2",
-            "--modes",
-            "2",
-            "--out",
-        ])
-        .arg(&other)
-        .assert()
-        .success();
+    let other = crate::common::simulate_modal(
+        dir.path(),
+        "m.csv",
+        &["--outputs", "2", "--inputs", "2", "--modes", "2"],
+    );
     expect_input_error(
         &[
             "plot",

@@ -4,19 +4,17 @@
 
 use crate::common;
 
-use common::{era, read, s, DTA_SETTINGS};
+use common::{era, read, s, simulate_modal, DTA_SETTINGS};
 use std::path::{Path, PathBuf};
 
 /// A 2 x 2 acceleration set (3 modes) with SI units and a channel table in which
 /// output 1 (node 11) and input 1 (node 101) are not collocated, but output 2 and
 /// input 2 (node 5, +Z) are.
 fn si_set(dir: &Path) -> PathBuf {
-    let plain = dir.join("plain.csv");
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "-q",
+    let plain = simulate_modal(
+        dir,
+        "plain.csv",
+        &[
             "--outputs",
             "2",
             "--inputs",
@@ -34,11 +32,8 @@ fn si_set(dir: &Path) -> PathBuf {
             "--collocated",
             "--seed",
             "3",
-            "--out",
-        ])
-        .arg(&plain)
-        .assert()
-        .success();
+        ],
+    );
     let text = std::fs::read_to_string(&plain).unwrap();
     let file = dir.join("si.csv");
     std::fs::write(
@@ -215,22 +210,11 @@ fn the_demo_says_its_units_are_inches_and_pounds_force() {
 #[test]
 fn an_8x8_report_stays_under_2_mb() {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("dta.csv");
-    era()
-        .args([
-            "simulate",
-            "modal",
-            "-q",
-            "--collocated",
-            "--seed",
-            "3",
-            "--noise",
-            "0.15",
-            "--out",
-            s(&file),
-        ])
-        .assert()
-        .success();
+    let file = simulate_modal(
+        dir.path(),
+        "dta.csv",
+        &["--collocated", "--seed", "3", "--noise", "0.15"],
+    );
     let out = dir.path().join("out");
     era()
         .args(["identify", s(&file), "-q", "--states", "80"])

@@ -3,8 +3,8 @@
 #![allow(dead_code)]
 
 pub use era_testkit::cli::{
-    assert_success, dta_like_set, era, expect_input_error, json_of, s, simulated_truth, stdout_of,
-    truth_identify, DTA_SETTINGS, TRUTH_SETTINGS,
+    assert_success, dta_like_set, era, expect_input_error, json_of, s, simulate_modal,
+    simulated_truth, stdout_of, truth_identify, DTA_SETTINGS, TRUTH_SETTINGS,
 };
 pub use era_testkit::data_file;
 pub use era_testkit::files::{modes_of, read, write};
