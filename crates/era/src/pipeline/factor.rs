@@ -231,6 +231,24 @@ pub(super) fn check_rank(
 /// so that the singular-value plot shows whether a gap follows it.
 pub const EXTRA_SINGULAR_VALUES: usize = 20;
 
+/// The truncated SVD's settings for `max_states` realized triplets among `kept` values:
+/// only the realized ones must converge (to `tolerance`, or `floor_fraction`), the rest
+/// ride along as oversampling and come out as the block's Ritz values.
+pub(crate) fn realized_svd_options(
+    max_states: usize,
+    kept: usize,
+    tolerance: f64,
+    floor_fraction: f64,
+) -> TruncatedSvdOptions {
+    let defaults = TruncatedSvdOptions::new(max_states);
+    TruncatedSvdOptions {
+        tolerance,
+        floor_fraction,
+        oversample: defaults.oversample.max(kept.saturating_sub(max_states)),
+        ..defaults
+    }
+}
+
 /// What [`Factorization::thesis`] factors and keeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -425,13 +443,12 @@ impl Factorization {
             // Only the realized triplets must converge; the extra singular values are the
             // Ritz values of the oversampled block (lower bounds, for the plot).
             let kept = (max_states + keep.extra).min(rows.min(cols));
-            let defaults = TruncatedSvdOptions::new(max_states);
-            let tsvd_options = TruncatedSvdOptions {
-                tolerance: keep.svd_tolerance,
-                floor_fraction: keep.svd_floor_fraction,
-                oversample: defaults.oversample.max(kept - max_states),
-                ..defaults
-            };
+            let tsvd_options = realized_svd_options(
+                max_states,
+                kept,
+                keep.svd_tolerance,
+                keep.svd_floor_fraction,
+            );
             let mut svd = truncated_svd(&op0, &tsvd_options)?;
             svd.s.truncate(kept);
             let u = svd.u.subcols(0, kept).to_owned();

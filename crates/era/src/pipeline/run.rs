@@ -357,17 +357,10 @@ pub(crate) fn hankel_singular_values(
     };
     let mut svd = match truncated_svd(&op, &all) {
         Ok(svd) => svd,
-        Err(_) => {
-            let defaults = TruncatedSvdOptions::new(states.min(short));
-            truncated_svd(
-                &op,
-                &TruncatedSvdOptions {
-                    tolerance: 1e-12,
-                    oversample: defaults.oversample.max(kept.saturating_sub(states)),
-                    ..defaults
-                },
-            )?
-        }
+        Err(_) => truncated_svd(
+            &op,
+            &crate::pipeline::factor::realized_svd_options(states.min(short), kept, 1e-12, 0.0),
+        )?,
     };
     svd.s.truncate(kept);
     if let Some(sc) = f.scale {
