@@ -167,24 +167,27 @@ pub(crate) fn signal_order(markov: &MarkovSequence, hankel_factor: usize) -> Res
     // lies below what the Gram matrix resolves (exact or nearly exact data), the SVD.
     let gram = match crate::linalg::dense::gram_singular_values(h, "the probe Hankel") {
         Err(EraError::Interrupted) => return Err(EraError::Interrupted),
-        Ok(sv) if floor_of(&sv).is_some_and(|f| f >= GRAM_PROBE_FLOOR * sv[0]) => Some(sv),
-        _ => None,
+        Ok(sv) => floor_of(&sv)
+            .filter(|&f| f >= GRAM_PROBE_FLOOR * sv[0])
+            .map(|f| (sv, f)),
+        Err(_) => None,
     };
-    let sv = match gram {
-        Some(sv) => sv,
+    let (sv, floor) = match gram {
+        Some(found) => found,
         None => {
             let Ok(h) = crate::pipeline::hankel::build(markov, shape) else {
                 return Ok(None);
             };
-            match crate::linalg::dense::singular_values(h, "the probe Hankel") {
+            let sv = match crate::linalg::dense::singular_values(h, "the probe Hankel") {
                 Ok(sv) => sv,
                 Err(EraError::Interrupted) => return Err(EraError::Interrupted),
                 Err(_) => return Ok(None),
-            }
+            };
+            let Some(floor) = floor_of(&sv) else {
+                return Ok(None);
+            };
+            (sv, floor)
         }
-    };
-    let Some(floor) = floor_of(&sv) else {
-        return Ok(None);
     };
     // Exact data: the floor is rounding, far below the signal.
     let floor = floor.max(1e-13 * sv[0]);
@@ -240,10 +243,9 @@ fn scan_front(
     timings: &mut StageTimings,
 ) -> Result<(Front, Factorization, OrderRange, Scan, f64)> {
     let f = front(frf, supplied, options, Path::Fast, observer, timings)?;
-    // The data's order from the probe, when a default scan asked it.
-    let mut probe_rank = None;
-    let range = match scan_options.orders.clone() {
-        Some(r) => r,
+    // The range, and the data's order from the probe when a default scan asked it.
+    let (range, probe_rank) = match scan_options.orders.clone() {
+        Some(r) => (r, None),
         None => {
             let default = default_orders(
                 f.markov.samples(),
@@ -252,10 +254,10 @@ fn scan_front(
                 frf.inputs(),
             )?;
             let clock = Instant::now();
-            probe_rank = signal_order(&f.markov, options.hankel_factor)?;
+            let probe_rank = signal_order(&f.markov, options.hankel_factor)?;
             let bounded = probe_rank.and_then(|rank| orders_for_rank(rank, &default));
             timings.hankel_svd += clock.elapsed().as_secs_f64();
-            bounded.unwrap_or(default)
+            (bounded.unwrap_or(default), probe_rank)
         }
     };
     let supported = supported_hankel_states(f.markov.samples(), options.hankel_factor);
