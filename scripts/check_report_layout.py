@@ -28,7 +28,8 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_viewer import chromium_page, console_errors, find_chromium, requests_besides  # noqa: E402
+from check_viewer import (chromium_page, console_errors, find_chromium, report_failures,  # noqa: E402
+                          requests_besides)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WIDTH, HEIGHT = 1400, 3000
@@ -128,11 +129,7 @@ def main():
             check(not errors, f"no console errors ({len(errors)}: {json.dumps(errors)[:300]})")
             _, others = requests_besides(cdp, url)
             check(not others, f"no network requests besides the page (others: {others[:5]})")
-    if failures:
-        print(f"check_report_layout: FAILED {len(failures)} check(s)", file=sys.stderr)
-        return 1
-    print("check_report_layout: all checks passed")
-    return 0
+    return report_failures(failures, "check_report_layout")
 
 
 if __name__ == "__main__":

@@ -377,11 +377,12 @@ def requests_besides(cdp, url):
     return requests, [r for r in requests if r != url]
 
 
-def report_failures(failures):
+def report_failures(failures, name="check_viewer"):
+    """The closing line of a check script named `name`, and its exit code."""
     if failures:
-        print(f"check_viewer: FAILED {len(failures)} check(s)", file=sys.stderr)
+        print(f"{name}: FAILED {len(failures)} check(s)", file=sys.stderr)
         return 1
-    print("check_viewer: all checks passed")
+    print(f"{name}: all checks passed")
     return 0
 
 
