@@ -52,7 +52,7 @@ impl std::fmt::Display for Quantity {
 /// exactly that order, so [`FrfData::pair`] is one contiguous slice per output/input
 /// pair, which is what the FFT of the next stage wants.
 ///
-/// Construct with [`FrfData::new`], which validates everything the pipeline relies on.
+/// Construct with `FrfData::new`, which validates everything the pipeline relies on.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrfData {
     frequency_hz: Vec<f64>,
@@ -148,7 +148,7 @@ pub const FREQUENCY_SPACING_TOLERANCE: f64 = 1e-6;
 
 impl FrfData {
     /// The same lines, channels and quantity with other `values` (same layout as
-    /// [`FrfData::values`]), validated as [`FrfData::new`] validates them.
+    /// [`FrfData::values`]), validated as `FrfData::new` validates them.
     pub(crate) fn with_values(&self, values: Vec<Complex64>) -> Result<Self> {
         FrfData::new(
             self.frequency_hz().to_vec(),

@@ -21,9 +21,7 @@ pub mod route;
 
 mod zero_start;
 
-pub use crate::pipeline::order::{
-    cmif, default_orders, supported_hankel_states, DEFAULT_MAX_ORDER, DEFAULT_ORDER_STRETCH,
-};
+pub use crate::pipeline::order::cmif;
 pub use options::{EraOptions, ModelDomain, Order, Realizer, ScanOptions};
 pub use zero_start::zero_start;
 

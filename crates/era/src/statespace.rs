@@ -2,7 +2,7 @@
 //! and the zero-order-hold conversions between them (docs/src/design.md §1.10).
 //!
 //! `c2d` uses the matrix exponential of the augmented matrix `[[A, B], [0, 0]]·Ts`.
-//! `faer` has no matrix exponential, so [`expm`] is written here: Higham's (2005)
+//! `faer` has no matrix exponential, so `expm` is written here: Higham's (2005)
 //! scaling-and-squaring with the degree-13 Padé approximant, every product and solve by
 //! `faer`. `d2c` takes the principal logarithm through the eigendecomposition of `A`
 //! (diagonalisable models, which ERA's distinct poles give) and then checks itself by
@@ -14,7 +14,7 @@ use faer::Mat;
 use num_complex::Complex64;
 
 use crate::linalg::eigen::balanced_eigen;
-pub use crate::linalg::expm::expm;
+use crate::linalg::expm::expm;
 
 /// Continuous or discrete time.
 #[derive(Debug, Clone, Copy, PartialEq)]

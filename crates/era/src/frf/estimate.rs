@@ -219,7 +219,7 @@ pub struct WelchOptions {
 }
 
 impl WelchOptions {
-    /// The overlap of [`WelchOptions::new`]: half a frame.
+    /// The overlap of `WelchOptions::new`: half a frame.
     pub const DEFAULT_OVERLAP: f64 = 0.5;
 
     /// `frame`-sample frames of time histories sampled at `sample_rate_hz`, with the

@@ -264,7 +264,7 @@ pub fn oma_observed(
 fn scan_factor(factor: usize, lags: usize, references: usize) -> usize {
     let mut lh = factor.max(1);
     while lh < 8 {
-        let states = super::supported_hankel_states(lags, lh);
+        let states = crate::pipeline::order::supported_hankel_states(lags, lh);
         match crate::pipeline::hankel::ThesisHankel::new(states.max(2), lh) {
             Ok(t) if t.h0.block_cols * references >= states => break,
             _ => lh += 1,
@@ -404,7 +404,8 @@ fn mode_orders(found: &Identification, era: &EraOptions) -> Vec<usize> {
 /// The Hankel the identification factored, in states at its Hankel factor: a fixed
 /// order's own (the thesis Hankel of that order), or the scan's for the automatic order.
 fn hankel_states(era: &EraOptions, markov_samples: usize, orders_max: usize) -> usize {
-    let supported = super::supported_hankel_states(markov_samples, era.hankel_factor);
+    let supported =
+        crate::pipeline::order::supported_hankel_states(markov_samples, era.hankel_factor);
     match era.order {
         Order::Fixed(n) | Order::Scan { states: n } => n,
         Order::Auto => match &era.scan.orders {

@@ -105,7 +105,7 @@ impl Order {
     }
 }
 
-/// The defaults a front end offers: the thesis's ERA ([`EraOptions::new`]) at a Hankel
+/// The defaults a front end offers: the thesis's ERA (`EraOptions::new`) at a Hankel
 /// factor of [`EraOptions::DEFAULT_HANKEL_FACTOR`], with the order chosen from the data
 /// ([`Order::Auto`]); a front end sets the order the user gives.
 impl Default for EraOptions {
@@ -221,13 +221,13 @@ impl EraOptions {
 }
 
 /// The default [`ScanOptions::svd_floor_fraction`].
-pub const SCAN_FLOOR_FRACTION: f64 = 0.03;
+pub(crate) const SCAN_FLOOR_FRACTION: f64 = 0.03;
 
 /// Settings of a scan across orders.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct ScanOptions {
-    /// Orders to scan; `None` for the default range of the data ([`default_orders`](crate::pipeline::order::default_orders)).
+    /// Orders to scan; `None` for the default range of the data (`default_orders`).
     pub orders: Option<OrderRange>,
     /// Residual tolerance of the truncated SVD on the matrix-free path, relative to `σ₁`
     /// (1e-6: the scan needs the leading subspace, not 12 digits of the noise floor; on

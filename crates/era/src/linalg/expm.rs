@@ -12,7 +12,7 @@ use faer::Mat;
 /// # Panics
 /// If `m` is not square.
 #[track_caller]
-pub fn expm(m: &Mat<f64>) -> Mat<f64> {
+pub(crate) fn expm(m: &Mat<f64>) -> Mat<f64> {
     assert_eq!(m.nrows(), m.ncols(), "expm needs a square matrix");
     const B: [f64; 14] = [
         64764752532480000.0,

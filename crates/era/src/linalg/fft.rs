@@ -24,7 +24,9 @@ pub(crate) fn fast_fft_len(min: usize) -> usize {
 
 /// Forward and inverse real FFT plans of length `len`, from a planner shared by the
 /// process: `realfft` caches plans per planner, so each length is planned once.
-pub fn real_fft_plans(len: usize) -> (Arc<dyn RealToComplex<f64>>, Arc<dyn ComplexToReal<f64>>) {
+pub(crate) fn real_fft_plans(
+    len: usize,
+) -> (Arc<dyn RealToComplex<f64>>, Arc<dyn ComplexToReal<f64>>) {
     static PLANNER: OnceLock<Mutex<RealFftPlanner<f64>>> = OnceLock::new();
     let mut planner = PLANNER
         .get_or_init(|| Mutex::new(RealFftPlanner::new()))

@@ -188,7 +188,7 @@ pub(crate) fn step_at(x: &[f64], y: &[f64], split: f64, daily: bool) -> Option<S
 /// tracks; `None` when no split has a track with [`MIN_SIDE`] records on each side.
 /// `daily`: the abscissae are days, and each track's fit holds a daily cycle when its
 /// records span at least a day.
-pub fn fleet_change(tracks: &[(Vec<f64>, Vec<f64>)], daily: bool) -> Option<Change> {
+pub(crate) fn fleet_change(tracks: &[(Vec<f64>, Vec<f64>)], daily: bool) -> Option<Change> {
     let mut xs: Vec<f64> = tracks.iter().flat_map(|t| t.0.iter().copied()).collect();
     xs.sort_by(f64::total_cmp);
     xs.dedup();

@@ -4,7 +4,7 @@
 //! [`crate::pipeline::modes`]. Over a fleet of records, [`track`] follows each mode
 //! from record to record.
 
-pub mod change;
+pub(crate) mod change;
 pub mod indicators;
 pub mod stabilization;
 pub mod track;

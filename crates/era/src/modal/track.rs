@@ -214,7 +214,7 @@ pub struct Tracking {
     /// The minimum records of a non-sparse track, as counted.
     pub min_records: usize,
     /// The change in the fleet: where the non-sparse tracks' frequencies step together
-    /// ([`super::change::fleet_change`]), its steps in the order of `tracks` (`None`
+    /// (`super::change::fleet_change`), its steps in the order of `tracks` (`None`
     /// for a sparse track); `None` when no split has enough records on each side.
     pub change: Option<super::change::Change>,
 }

@@ -201,7 +201,7 @@ pub(crate) fn check_dense_svd(rows: usize, cols: usize) -> Result<()> {
 }
 
 /// Numerical rank of a singular-value list: values above `max(rows, cols)·ε·σ₁`.
-pub fn numerical_rank(singular_values: &[f64], rows: usize, cols: usize) -> (usize, f64) {
+pub(crate) fn numerical_rank(singular_values: &[f64], rows: usize, cols: usize) -> (usize, f64) {
     let threshold =
         singular_values.first().copied().unwrap_or(0.0) * rows.max(cols) as f64 * f64::EPSILON;
     (
@@ -511,7 +511,7 @@ impl Factorization {
         self.max_states
     }
 
-    /// Numerical rank of `H0` (as [`numerical_rank`]; on the matrix-free path, among the
+    /// Numerical rank of `H0` (as `numerical_rank`; on the matrix-free path, among the
     /// singular values computed).
     pub fn rank(&self) -> usize {
         self.rank

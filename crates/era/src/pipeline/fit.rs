@@ -5,7 +5,7 @@
 //!
 //! Two ways to evaluate it, and [`frequency_response`] picks one per model:
 //!
-//! - **Modal form** ([`frequency_response_modal`]). With `A = V Λ V⁻¹`,
+//! - **Modal form** (`frequency_response_modal`). With `A = V Λ V⁻¹`,
 //!   `G(z) = Σ_k (C φ_k)(ψ_k B)/(z − λ_k) + D`: O(n·q·p) per line, and all lines at once
 //!   are one complex matrix product (lines × n by n × q·p). It loses about
 //!   `log10 κ(V)` digits to the eigenvector condition (Higham 2002, §14; Golub & Van Loan
@@ -16,11 +16,11 @@
 //!   form, `A = Q H Qᵀ` with `Q` orthogonal (`faer`), then `(zI − H) X = Qᵀ B` is solved
 //!   at each line by Gaussian elimination with adjacent-row pivoting (Laub 1981): O(n²·p)
 //!   per line and backward stable, as accurate as a dense solve
-//!   ([`frequency_response_naive`], the reference). The truth model in physical
+//!   (`frequency_response_naive`, the reference). The truth model in physical
 //!   coordinates (9 decades, κ(V) ≈ 1e5) takes this path. Lines run in parallel.
 //!
 //! The solves are written here because `faer` has no shifted Hessenberg solver, and a
-//! general complex LU per line ([`frequency_response_naive`]) costs O(n³).
+//! general complex LU per line (`frequency_response_naive`) costs O(n³).
 
 use crate::error::{EraError, Result};
 use crate::frf::FrfData;
@@ -221,7 +221,7 @@ pub(crate) fn evaluation_point(domain: TimeDomain, frequency_hz: f64) -> Complex
 
 /// The irreducible diagonal blocks of `A`: groups of states that `A` couples (directly
 /// or through others), each sorted, the groups by their first state.
-pub fn diagonal_blocks(a: &Mat<f64>) -> Vec<Vec<usize>> {
+pub(crate) fn diagonal_blocks(a: &Mat<f64>) -> Vec<Vec<usize>> {
     let n = a.nrows();
     let mut parent: Vec<usize> = (0..n).collect();
     fn root(parent: &mut [usize], mut x: usize) -> usize {
@@ -255,7 +255,7 @@ pub fn diagonal_blocks(a: &Mat<f64>) -> Vec<Vec<usize>> {
 }
 
 /// Frequency response through the [`HessenbergForm`] of each irreducible diagonal block
-/// of `A` ([`diagonal_blocks`]), summed: `G = Σ_b C_b (zI − A_b)⁻¹ B_b + D`. The same
+/// of `A` (`diagonal_blocks`), summed: `G = Σ_b C_b (zI − A_b)⁻¹ B_b + D`. The same
 /// backward-stable solves as one [`HessenbergForm`] of the whole model, at
 /// O(Σ n_b²·p) per line instead of O(n²·p): a model in real modal block form (the
 /// refinement's, with 2 × 2 blocks and integrator chains) costs O(n·p) per line.
@@ -336,7 +336,7 @@ pub(crate) fn frequency_response_with(
 /// All lines at once, as one complex matrix product `G = W P` with
 /// `W[k][m] = 1/(z_k − λ_m)` (lines × states) and `P[m][i·p+j] = (C φ_m)_i (ψ_m B)_j`
 /// (states × pairs), so that the work goes to `faer`'s blocked, parallel product.
-pub fn frequency_response_modal(
+pub(crate) fn frequency_response_modal(
     model: &StateSpace,
     form: &ModalForm,
     frequency_hz: &[f64],
@@ -370,7 +370,7 @@ pub fn frequency_response_modal(
 }
 
 /// Reference: a dense complex LU solve `(zI − A) X = B` at every line.
-pub fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
+pub(crate) fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
     let (n, q, p, lines) = (
         model.states(),
         model.outputs(),
@@ -483,7 +483,7 @@ fn level_db(a: Complex64, b: Complex64) -> Option<f64> {
 /// # Panics
 /// If `model` does not have the measured layout.
 #[track_caller]
-pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -> FitReport {
+pub(crate) fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -> FitReport {
     assert_eq!(
         model.len(),
         measured.values().len(),
@@ -548,7 +548,7 @@ pub fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: usize) -
 
 impl FitReport {
     /// Marks which pairs are collocated by `collocated(output, input)` (a channel table's
-    /// nodes and directions, where [`fit_metrics`] could only go by index) and takes the
+    /// nodes and directions, where `fit_metrics` could only go by index) and takes the
     /// two groups' means again, so that every output of a run agrees on them.
     pub fn set_collocation(&mut self, collocated: impl Fn(usize, usize) -> bool) {
         for pair in &mut self.pairs {

@@ -17,7 +17,7 @@
 //! needs `R q · C p`. `Hᵀ y` is the same with the roles of outputs and inputs swapped.
 //! Columns are processed in parallel with `rayon`.
 //!
-//! **Made once.** FFT plans come from one process-wide planner ([`crate::linalg::fft`]), so a
+//! **Made once.** FFT plans come from one process-wide planner (`crate::linalg::fft`), so a
 //! length planned once (every identification at the same `ndpts` and `lh`) is never
 //! planned again; the spectra `A_ij` live as long as the operator; each worker thread
 //! owns its buffers (time signal, input spectra, accumulator, FFT scratch, the operand

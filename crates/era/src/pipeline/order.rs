@@ -48,7 +48,7 @@ impl Stabilization {
 /// of a circular impulse response of `markov_samples` samples (`n·lh ≤ samples/2`, where
 /// the inverse FFT does not wrap around), capped at [`DEFAULT_MAX_ORDER`]: the `H0` a scan
 /// factors.
-pub fn supported_hankel_states(markov_samples: usize, hankel_factor: usize) -> usize {
+pub(crate) fn supported_hankel_states(markov_samples: usize, hankel_factor: usize) -> usize {
     (markov_samples / 2 / hankel_factor.max(1)).min(DEFAULT_MAX_ORDER)
 }
 
@@ -59,7 +59,7 @@ pub fn supported_hankel_states(markov_samples: usize, hankel_factor: usize) -> u
 /// # Errors
 /// [`EraError::InvalidParameter`] naming `states` when the data is too short for any
 /// scan.
-pub fn default_orders(
+pub(crate) fn default_orders(
     markov_samples: usize,
     hankel_factor: usize,
     outputs: usize,
@@ -210,11 +210,11 @@ fn orders_for_rank(rank: usize, default: &OrderRange) -> Option<OrderRange> {
 }
 
 /// The largest Hankel order of a default scan.
-pub const DEFAULT_MAX_ORDER: usize = 400;
+pub(crate) const DEFAULT_MAX_ORDER: usize = 400;
 
 /// How far past the supported Hankel order a default scan realizes (weak modes appear
 /// only at high orders).
-pub const DEFAULT_ORDER_STRETCH: f64 = 1.5;
+pub(crate) const DEFAULT_ORDER_STRETCH: f64 = 1.5;
 
 /// CMIF: singular values of the FRF matrix at each line, largest first.
 pub fn cmif(frf: &FrfData) -> Vec<Vec<f64>> {

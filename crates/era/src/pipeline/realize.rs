@@ -26,8 +26,7 @@ use faer::Mat;
 use std::time::Instant;
 
 pub use crate::pipeline::factor::{
-    numerical_rank, FactorOptions, Factorization, RealizeWarning, SvdPath,
-    AUTO_MATRIX_FREE_MIN_DIM, EXTRA_SINGULAR_VALUES,
+    FactorOptions, Factorization, RealizeWarning, SvdPath, EXTRA_SINGULAR_VALUES,
 };
 
 /// What the model's `D` is.

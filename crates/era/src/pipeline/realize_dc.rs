@@ -18,7 +18,7 @@
 //! `P_α` the first `αq` rows of `U Σ^(½)`, `C` its first `q` rows, and `B` the first `p`
 //! columns of `Q_β = P_α⁺ H(0)`.
 //!
-//! The default sizes ([`DcShape::new`]): `α = β` the block rows and columns of ERA's
+//! The default sizes (`DcShape::new`): `α = β` the block rows and columns of ERA's
 //! Hankel at the same order and Hankel factor (`n·lh/2 − 1`), `ξ = 0` (the correlation
 //! `R` itself), `τ = 1`, and the shift `s = 1`: the product of `H(0)` with itself would
 //! put the variance of white noise on the sequence on its diagonal, and with the shift
@@ -28,18 +28,16 @@
 //! The products and the SVD are faer's.
 
 use crate::error::{EraError, Result};
-use crate::pipeline::factor::{check_dense_svd, check_room, FactorParts, Factorization, SvdPath};
-use crate::pipeline::realize::{DirectTerm, HankelTails, Realization};
+use crate::pipeline::factor::{check_dense_svd, check_room, FactorParts, Factorization};
+use crate::pipeline::realize::{DirectTerm, Realization};
 use crate::sources::MarkovSequence;
-use crate::statespace::{StateSpace, TimeDomain};
-use faer::linalg::solvers::SolveLstsq;
 use faer::Mat;
 use std::time::Instant;
 
 /// The sizes of ERA/DC (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
-pub struct DcShape {
+pub(crate) struct DcShape {
     /// Block rows `α` of the Hankel blocks.
     pub alpha: usize,
     /// Block columns `β`.
@@ -116,7 +114,7 @@ fn hankel_at(markov: &MarkovSequence, k: usize, alpha: usize, beta: usize) -> Ma
 /// [`EraError::InvalidParameter`] for `ξ ≠ 0` ([`realize_dc_with`] takes any shape);
 /// as [`realize_dc`] otherwise, and [`EraError::HankelTooSmall`] when `R(0)` has fewer
 /// singular values than `max_states`.
-pub fn factor_dc(
+pub(crate) fn factor_dc(
     markov: &MarkovSequence,
     sample_time_s: f64,
     shape: &DcShape,
@@ -182,7 +180,7 @@ pub fn factor_dc(
 /// [`DcShape::reach`];
 /// [`EraError::RankDeficient`] when the correlations have rank below `states`;
 /// [`EraError::Numerical`] when the SVD fails.
-pub fn realize_dc(
+pub(crate) fn realize_dc(
     markov: &MarkovSequence,
     sample_time_s: f64,
     states: usize,
@@ -200,111 +198,115 @@ pub fn realize_dc(
     factor_dc(markov, sample_time_s, &shape, states, hankel_factor)?.realize(states, direct)
 }
 
-/// [`realize_dc`] with the sizes given, any of the paper's shapes: the correlations
-/// formed and factored as they are (the reference of [`factor_dc`]).
-///
-/// # Errors
-/// As [`realize_dc`].
-pub fn realize_dc_with(
-    markov: &MarkovSequence,
-    sample_time_s: f64,
-    states: usize,
-    hankel_factor: usize,
-    shape: &DcShape,
-    direct: DirectTerm,
-) -> Result<Realization> {
-    if states == 0 {
-        return Err(EraError::InvalidParameter {
-            name: "states",
-            value: "0".into(),
-            reason: "ERA/DC needs at least one state".into(),
-        });
-    }
-    shape.check(markov, states, hankel_factor)?;
-    let clock = Instant::now();
-    let (q, p) = (markov.outputs(), markov.inputs());
-    let DcShape {
-        alpha,
-        beta,
-        xi,
-        tau,
-        shift,
-    } = *shape;
-    check_dense_svd((xi + 1) * alpha * q, (xi + 1) * alpha * q)?;
-    let h0 = hankel_at(markov, 0, alpha, beta);
-    let h0t = h0.transpose();
-    // R(k) = H(s + k) H(0)ᵀ for the lags 𝓗(0) and 𝓗(1) read: k = τm and τm + 1.
-    let lag_of = |k: usize| hankel_at(markov, shift + k, alpha, beta) * h0t;
-    let lags: Vec<(Mat<f64>, Mat<f64>)> = (0..=2 * xi)
-        .map(|m| (lag_of(tau * m), lag_of(tau * m + 1)))
-        .collect();
-    let block = alpha * q;
-    let corr = |shifted: bool| {
-        Mat::from_fn((xi + 1) * block, (xi + 1) * block, |row, col| {
-            let (at, next) = &lags[row / block + col / block];
-            let r = if shifted { next } else { at };
-            r[(row % block, col % block)]
-        })
-    };
-    let (c0, c1) = (corr(false), corr(true));
-    let svd = c0
-        .svd()
-        .map_err(|e| EraError::Numerical(format!("SVD of the ERA/DC correlations: {e:?}")))?;
-    let size = c0.nrows();
-    let sv: Vec<f64> = (0..size).map(|i| svd.S()[i]).collect();
-    let top = sv.first().copied().unwrap_or(0.0);
-    let threshold = top * size as f64 * f64::EPSILON;
-    let rank = sv.iter().take_while(|&&v| v > threshold).count();
-    if rank < states {
-        return Err(EraError::RankDeficient {
-            rank,
-            states,
-            threshold,
-        });
-    }
-    let hankel_svd_seconds = clock.elapsed().as_secs_f64();
-    let products = Instant::now();
-    let un = svd.U().get(.., ..states);
-    let vn = svd.V().get(.., ..states);
-    let inv_root: Vec<f64> = sv[..states].iter().map(|s| 1.0 / s.sqrt()).collect();
-    let middle = un.transpose() * &c1 * vn;
-    let a = Mat::from_fn(states, states, |i, j| {
-        middle[(i, j)] * inv_root[i] * inv_root[j]
-    });
-    let p_alpha = Mat::from_fn(block, states, |i, j| un[(i, j)] / inv_root[j]);
-    let c = p_alpha.get(..q, ..).to_owned();
-    let q_beta = p_alpha.qr().solve_lstsq(&h0);
-    let b = q_beta.get(.., ..p).to_owned();
-    let d = match direct {
-        DirectTerm::Zero => Mat::zeros(q, p),
-        DirectTerm::FirstMarkov => Mat::from_fn(q, p, |i, j| markov.get(0, i, j)),
-    };
-    let model = StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s });
-    Ok(Realization {
-        model,
-        singular_values: sv,
-        hankel_size: (size, size),
-        warnings: Vec::new(),
-        hankel_svd_seconds,
-        products_seconds: products.elapsed().as_secs_f64(),
-        svd_path: SvdPath::Dense,
-        svd_iterations: None,
-        tails: HankelTails {
-            observability: p_alpha,
-            controllability: q_beta,
-            outputs: q,
-            inputs: p,
-        },
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::linalg::rng::Minstd;
+    use crate::pipeline::factor::SvdPath;
     use crate::pipeline::modes::modal_parameters;
+    use crate::pipeline::realize::HankelTails;
     use crate::sim::{ModalSpec, ModalStructure};
+    use crate::statespace::{StateSpace, TimeDomain};
     use era_testkit::{assert_matches_naive, Scale};
+    use faer::linalg::solvers::SolveLstsq;
+
+    /// [`realize_dc`] with the sizes given, any of the paper's shapes: the correlations
+    /// formed and factored as they are (the reference of [`factor_dc`]).
+    ///
+    /// # Errors
+    /// As [`realize_dc`].
+    fn realize_dc_with(
+        markov: &MarkovSequence,
+        sample_time_s: f64,
+        states: usize,
+        hankel_factor: usize,
+        shape: &DcShape,
+        direct: DirectTerm,
+    ) -> Result<Realization> {
+        if states == 0 {
+            return Err(EraError::InvalidParameter {
+                name: "states",
+                value: "0".into(),
+                reason: "ERA/DC needs at least one state".into(),
+            });
+        }
+        shape.check(markov, states, hankel_factor)?;
+        let clock = Instant::now();
+        let (q, p) = (markov.outputs(), markov.inputs());
+        let DcShape {
+            alpha,
+            beta,
+            xi,
+            tau,
+            shift,
+        } = *shape;
+        check_dense_svd((xi + 1) * alpha * q, (xi + 1) * alpha * q)?;
+        let h0 = hankel_at(markov, 0, alpha, beta);
+        let h0t = h0.transpose();
+        // R(k) = H(s + k) H(0)ᵀ for the lags 𝓗(0) and 𝓗(1) read: k = τm and τm + 1.
+        let lag_of = |k: usize| hankel_at(markov, shift + k, alpha, beta) * h0t;
+        let lags: Vec<(Mat<f64>, Mat<f64>)> = (0..=2 * xi)
+            .map(|m| (lag_of(tau * m), lag_of(tau * m + 1)))
+            .collect();
+        let block = alpha * q;
+        let corr = |shifted: bool| {
+            Mat::from_fn((xi + 1) * block, (xi + 1) * block, |row, col| {
+                let (at, next) = &lags[row / block + col / block];
+                let r = if shifted { next } else { at };
+                r[(row % block, col % block)]
+            })
+        };
+        let (c0, c1) = (corr(false), corr(true));
+        let svd = c0
+            .svd()
+            .map_err(|e| EraError::Numerical(format!("SVD of the ERA/DC correlations: {e:?}")))?;
+        let size = c0.nrows();
+        let sv: Vec<f64> = (0..size).map(|i| svd.S()[i]).collect();
+        let top = sv.first().copied().unwrap_or(0.0);
+        let threshold = top * size as f64 * f64::EPSILON;
+        let rank = sv.iter().take_while(|&&v| v > threshold).count();
+        if rank < states {
+            return Err(EraError::RankDeficient {
+                rank,
+                states,
+                threshold,
+            });
+        }
+        let hankel_svd_seconds = clock.elapsed().as_secs_f64();
+        let products = Instant::now();
+        let un = svd.U().get(.., ..states);
+        let vn = svd.V().get(.., ..states);
+        let inv_root: Vec<f64> = sv[..states].iter().map(|s| 1.0 / s.sqrt()).collect();
+        let middle = un.transpose() * &c1 * vn;
+        let a = Mat::from_fn(states, states, |i, j| {
+            middle[(i, j)] * inv_root[i] * inv_root[j]
+        });
+        let p_alpha = Mat::from_fn(block, states, |i, j| un[(i, j)] / inv_root[j]);
+        let c = p_alpha.get(..q, ..).to_owned();
+        let q_beta = p_alpha.qr().solve_lstsq(&h0);
+        let b = q_beta.get(.., ..p).to_owned();
+        let d = match direct {
+            DirectTerm::Zero => Mat::zeros(q, p),
+            DirectTerm::FirstMarkov => Mat::from_fn(q, p, |i, j| markov.get(0, i, j)),
+        };
+        let model = StateSpace::new(a, b, c, d, TimeDomain::Discrete { sample_time_s });
+        Ok(Realization {
+            model,
+            singular_values: sv,
+            hankel_size: (size, size),
+            warnings: Vec::new(),
+            hankel_svd_seconds,
+            products_seconds: products.elapsed().as_secs_f64(),
+            svd_path: SvdPath::Dense,
+            svd_iterations: None,
+            tails: HankelTails {
+                observability: p_alpha,
+                controllability: q_beta,
+                outputs: q,
+                inputs: p,
+            },
+        })
+    }
 
     fn markov_of(model: &StateSpace, samples: usize) -> MarkovSequence {
         let mut seq = MarkovSequence::zeros(model.outputs(), model.inputs(), samples);

@@ -45,7 +45,7 @@
 //! depends on the pole parameters `θ = (x_r, ω_r)` alone (Golub & Pereyra 1973, 2003),
 //! with `x_r = ln σ_r` when stability is enforced (so `σ_r > 0` always) or `x_r = σ_r`.
 //! Levenberg–Marquardt (Marquardt 1963, with his diagonal scaling) minimises it with
-//! Kaufman's (1975) simplified Jacobian `J = −P⊥ (∂Φ/∂θ) c`; [`varpro`] says how one QR
+//! Kaufman's (1975) simplified Jacobian `J = −P⊥ (∂Φ/∂θ) c`; `varpro` says how one QR
 //! per block and a few Gram matrices give `JᵀJ` and `Jᵀr` without forming `J`.
 //! [`refine_naive`] is the reference: the same driver with a central-difference Jacobian
 //! of the projected residual and a dense solve per pair.
@@ -184,7 +184,7 @@
 //!
 //! # Uncertainty
 //!
-//! See [`uncertainty`]: `σ² (JᵀJ)⁻¹` at the optimum, propagated to frequency and damping.
+//! See `uncertainty`: `σ² (JᵀJ)⁻¹` at the optimum, propagated to frequency and damping.
 //!
 //! # Why hand-written
 //!
@@ -207,11 +207,10 @@ mod model;
 mod naive;
 mod rank_one;
 mod scan;
-pub mod uncertainty;
-pub mod varpro;
+pub(crate) mod uncertainty;
+pub(crate) mod varpro;
 
 pub use fit::{COALESCED, MIN_CONTRIBUTION};
-pub use scan::F_MINIMUM;
 
 use crate::error::{EraError, Result};
 use crate::frf::{FrfData, Quantity};
@@ -415,7 +414,7 @@ pub fn refine(
 ///
 /// # Errors
 /// As [`refine`].
-pub fn refine_rounds(
+pub(crate) fn refine_rounds(
     frf: &FrfData,
     start_poles: &[Complex64],
     options: &RefineOptions,

@@ -48,7 +48,7 @@ use std::f64::consts::PI;
 /// higher: see `noise_quantile`). Noise alone stays below about 1.8 for the 64 pairs of
 /// an 8 × 8 set; a resonance the fit left out is far above it. The margin covers
 /// non-Gaussian noise and the fit's own small errors near its modes.
-pub const F_MINIMUM: f64 = 4.0;
+pub(crate) const F_MINIMUM: f64 = 4.0;
 
 /// Candidates returned at most per scan.
 pub(crate) const MAX_ADDED: usize = 8;

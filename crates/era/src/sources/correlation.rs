@@ -22,9 +22,9 @@
 //! end to end) whose sums are kept apart, so that the correlations without one block
 //! ([`Correlations::leave_out`]) are at hand for a jackknife of the modal parameters.
 //!
-//! faer has no correlation; `realfft` does the transforms ([`crate::linalg::fft`]).
+//! faer has no correlation; `realfft` does the transforms (`crate::linalg::fft`).
 
-pub mod spectrum;
+pub(crate) mod spectrum;
 
 use crate::error::{EraError, Result};
 use crate::linalg::fft::real_fft_plans;
@@ -498,7 +498,7 @@ pub const MIN_DEFAULT_LAGS: usize = 128;
 pub const DEFAULT_HANKEL_ROWS: usize = 2048;
 
 /// The default number of lags for `records` sampled at `sample_rate_hz`: two periods of
-/// the lowest spectral peak ([`lowest_peak_hz`]), so that the Hankel (half the lags)
+/// the lowest spectral peak (`lowest_peak_hz`), so that the Hankel (half the lags)
 /// spans one and has `fs/(2 f_min)` block rows, the usual lower bound for SSI-cov
 /// (more lags add the noise of the long lags: on simulated 600 s records, 256 lags
 /// found fewer modes with worse damping than 128), rounded up to an even number; no more than keeps the Hankel within
@@ -540,7 +540,7 @@ pub fn default_lags(
 /// stands 6 dB above the higher of the lowest points on either side before a higher
 /// value, within 50 dB of the highest line, above the third line. `None` when there is
 /// none or the records are shorter than a segment.
-pub fn lowest_peak_hz(records: &[&[&[f64]]], sample_rate_hz: f64) -> Option<f64> {
+pub(crate) fn lowest_peak_hz(records: &[&[&[f64]]], sample_rate_hz: f64) -> Option<f64> {
     let longest = records.iter().map(|r| r[0].len()).max()?;
     let seg = spectrum::default_segment(longest);
     if longest < seg {

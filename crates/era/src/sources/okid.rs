@@ -86,7 +86,7 @@ pub struct Record<'a> {
 pub enum ObserverOrder {
     /// This order.
     Fixed(usize),
-    /// The order below `max` (default [`default_max_observer_order`]) that minimises the
+    /// The order below `max` (default `default_max_observer_order`) that minimises the
     /// information criterion.
     Auto {
         /// The largest order tried.
@@ -206,7 +206,7 @@ struct Observer {
 
 /// The default largest observer order for `q` outputs: enough lags for `p q ≥ 200`
 /// states (at least 10), within [`MAX_REGRESSORS`].
-pub fn default_max_observer_order(inputs: usize, outputs: usize) -> usize {
+pub(crate) fn default_max_observer_order(inputs: usize, outputs: usize) -> usize {
     let p = 200usize.div_ceil(outputs.max(1)).max(10);
     p.min((MAX_REGRESSORS - inputs.min(MAX_REGRESSORS)) / (inputs + outputs).max(1))
         .max(1)
@@ -802,7 +802,8 @@ pub fn okid(records: &[Record], options: &OkidOptions) -> Result<Okid> {
 ///
 /// # Errors
 /// As [`okid`].
-pub fn okid_naive(records: &[Record], options: &OkidOptions) -> Result<Okid> {
+#[cfg(test)]
+fn okid_naive(records: &[Record], options: &OkidOptions) -> Result<Okid> {
     run(records, options, Blocks::Whole)
 }
 

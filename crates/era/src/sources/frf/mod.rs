@@ -5,7 +5,7 @@
 //! MATLAB's `h = real(ifft(mirror(G)))` of the thesis. Taking the real part there discards
 //! the imaginary parts of the DC and Nyquist lines (which a mirror cannot make
 //! Hermitian); here those are set to zero before a real inverse FFT (`realfft`), which
-//! is the same thing. The plan comes from [`crate::linalg::fft::real_fft_plans`], made once
+//! is the same thing. The plan comes from `crate::linalg::fft::real_fft_plans`, made once
 //! per length per process. Sample `h[k]` is the Markov block `Y_k`: `Y_0` is the direct
 //! term and `Y_k = C A^(k-1) B` for `k ≥ 1`.
 
@@ -173,7 +173,7 @@ impl MarkovSequence {
 /// # Errors
 /// [`EraError::TooFewLines`] for fewer than 2 lines (cannot happen for a valid
 /// [`FrfData`]).
-pub fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
+pub(crate) fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
     let lines = frf.lines();
     if lines < 2 {
         return Err(EraError::TooFewLines { lines });
@@ -199,7 +199,7 @@ pub fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
     Ok(out)
 }
 
-/// Naive O(n²) reference of [`impulse_responses`]: builds the mirrored spectrum
+/// Naive O(n²) reference of `impulse_responses`: builds the mirrored spectrum
 /// `X = [G_0 … G_(N-1), conj(G_(N-2)) … conj(G_1)]` and evaluates
 /// `h[t] = Re( (1/n) Σ_k X[k] e^(+2πi·kt/n) )` directly.
 pub(crate) fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
@@ -235,10 +235,10 @@ pub(crate) fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
 /// function `Y_0 + Σ_k Y_k e^(−jωk·Ts)` at the `K/2 + 1` lines `0 … 1/(2Ts)` spaced
 /// `1/(K·Ts)` (a real forward FFT of each pair's `K` samples, with no window: the
 /// sequence ends where its blocks end), tagged `quantity`. The inverse of
-/// [`impulse_responses`] for an even `K`.
+/// `impulse_responses` for an even `K`.
 ///
 /// # Errors
-/// [`EraError::TooFewLines`] for fewer than 2 samples, and [`FrfData::new`]'s.
+/// [`EraError::TooFewLines`] for fewer than 2 samples, and `FrfData::new`'s.
 pub(crate) fn frf_of_markov(
     markov: &MarkovSequence,
     sample_time_s: f64,
@@ -266,7 +266,7 @@ pub(crate) fn frf_of_markov(
     FrfData::new(frequency_hz, q, p, values, quantity)
 }
 
-/// Markov parameters of the FRFs: [`impulse_responses`] woven into a [`MarkovSequence`],
+/// Markov parameters of the FRFs: `impulse_responses` woven into a [`MarkovSequence`],
 /// at the sample time of the FRFs' lines ([`preprocess::sample_time_s`]).
 pub fn markov_from_frf(frf: &FrfData) -> Result<MarkovSequence> {
     let series = impulse_responses(frf)?;
@@ -388,7 +388,7 @@ impl LagWindow {
     /// (the lag window is H1's bias, an output-noise estimator's).
     ///
     /// # Errors
-    /// As [`LagWindow::new`].
+    /// As `LagWindow::new`.
     pub fn of_estimate(
         estimator: crate::frf::estimate::Estimator,
         window: crate::frf::estimate::Window,
@@ -462,7 +462,7 @@ impl LagWindow {
     /// in every pair (a late start) stay zero.
     ///
     /// # Errors
-    /// As [`impulse_responses`], and [`EraError::InvalidParameter`] when the lines do
+    /// As `impulse_responses`, and [`EraError::InvalidParameter`] when the lines do
     /// not start at 0 Hz.
     pub fn correct_frf(&self, frf: &FrfData) -> Result<FrfData> {
         let corrected = self.correct_lines(frf)?;
