@@ -3,6 +3,8 @@
 //! and `convert` read through here; time histories go through `frf`.
 
 use crate::args::{FrfReadArgs, UnitsArg};
+pub mod time;
+
 use era::Quantity;
 use era_io::format::{parse_frf_bytes, FrfFormat, ReadOptions};
 

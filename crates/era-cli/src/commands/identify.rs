@@ -1,6 +1,6 @@
 //! `era identify FILE`: the pipeline of docs/src/design.md §1 on an FRF file. Flags become
 //! options in [`crate::config`], the file is read by [`crate::input`] (or estimated
-//! from time histories by [`crate::commands::frf`]), and the outputs are written by
+//! from time histories by [`crate::input::time`]), and the outputs are written by
 //! [`crate::output`].
 
 use crate::config::{apply_route, era_options, Identify, Settings, WeightingGiven};
@@ -28,7 +28,7 @@ struct Source {
     estimate_s: Option<f64>,
     coherence: Option<InputCoherence>,
     time_format: Option<String>,
-    records: Option<crate::commands::frf::TimeRecords>,
+    records: Option<crate::input::time::TimeRecords>,
     /// Samples per frame of the estimate (with `--from-time`).
     frame: usize,
 }
@@ -298,7 +298,7 @@ fn read_source(
         return crate::error::usage("--from-time needs --outputs CHANNELS (e.g. --outputs 3-30)");
     };
     let quantity = a.quantity.unwrap_or(era::Quantity::Acceleration);
-    let mut found = crate::commands::frf::estimate_from_time(
+    let mut found = crate::input::time::estimate_from_time(
         &record_paths(a),
         inputs,
         outputs,
@@ -616,7 +616,7 @@ fn frame_check(
         welch.frame = Some(other);
         // Too few frames for the inputs is one way for these records to be too short
         // at that frame: the check then tries the other.
-        let Ok(estimate) = crate::commands::frf::estimate_from_time(
+        let Ok(estimate) = crate::input::time::estimate_from_time(
             &record_paths(a),
             a.inputs.as_deref().unwrap_or_default(),
             a.outputs.as_deref().unwrap_or_default(),
@@ -660,7 +660,7 @@ fn frame_check(
 /// window-corrected as the first, identified and refined on the same route.
 fn second_identification(
     a: &Identify,
-    second: crate::commands::frf::FromTime,
+    second: crate::input::time::FromTime,
     other: usize,
     check: &Check,
     quiet: &Settings,
@@ -791,7 +791,7 @@ fn channels(set: &[Vec<f64>]) -> Vec<&[f64]> {
 /// is named by its channel.
 fn observe(
     a: &Identify,
-    records: &crate::commands::frf::TimeRecords,
+    records: &crate::input::time::TimeRecords,
     settings: &Settings,
 ) -> anyhow::Result<Observed> {
     use era::sources::okid::{okid, OkidOptions, Record};

@@ -20,7 +20,7 @@ fn read_records(a: &Oma, spinner: &indicatif::ProgressBar) -> anyhow::Result<Rec
         spinner.set_message(format!("reading {}", path.display()));
         let history = read_time_file(path, &a.selection)
             .with_context(|| format!("reading {}", path.display()))?;
-        let (rate, rate_from) = crate::commands::frf::sample_rate(path, &history, a.sample_rate)?;
+        let (rate, rate_from) = crate::input::time::sample_rate(path, &history, a.sample_rate)?;
         let pick = |flag: &str, spec: &str| {
             parse_channels(spec, &history).map_err(|m| {
                 crate::error::UsageError(format!("{flag} {spec}: {m} ({})", path.display()))
