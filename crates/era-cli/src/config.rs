@@ -6,6 +6,8 @@
 //! anything is read. The core names option fields ([`Naming`]); this module adds the
 //! flag names, so other front ends (Python) can word the same checks their own way.
 
+pub mod identify;
+
 use crate::args::{
     CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, ExcitationArg, ExperimentArgs,
     FrfArgs, FrictionAction, FrictionArgs, IdentifyArgs, InfoArgs, ModalArgs, OnOff,
@@ -869,6 +871,13 @@ pub struct Identify<'a> {
 }
 
 impl<'a> Identify<'a> {
+    /// The time files: the first and any more records of the test.
+    pub fn record_paths(&self) -> Vec<PathBuf> {
+        std::iter::once(self.file.clone())
+            .chain(self.more.iter().cloned())
+            .collect()
+    }
+
     /// The settings of the flags, checked in the order the flags' errors are reported.
     pub fn new(a: &'a IdentifyArgs) -> anyhow::Result<Self> {
         use crate::args::{ObserverOrderArg, WeightingArg};

@@ -12,6 +12,7 @@ mod config;
 mod error;
 mod input;
 mod output;
+mod work;
 
 use clap::Parser;
 use error::UsageError;

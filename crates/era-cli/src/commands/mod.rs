@@ -16,12 +16,4 @@ pub mod refine;
 pub mod simulate;
 pub mod track;
 
-/// What an identifying verb (`identify`, `oma`) hands back besides its files: the JSON
-/// it prints with `--json` and the name of each output channel (the entries of a shape),
-/// for `era batch`'s tables.
-pub struct Done {
-    /// The model JSON.
-    pub json: serde_json::Value,
-    /// One name per output channel: the file's channel name, else its 1-based number.
-    pub channels: Vec<String>,
-}
+pub use crate::output::Done;

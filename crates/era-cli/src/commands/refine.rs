@@ -3,7 +3,6 @@
 //! [`era::refine::identification::refine_identification`]).
 
 use crate::config::Refine;
-use crate::config::Settings;
 use crate::input::{read_frf_with, shape_line};
 use crate::output::identification::{write_identification, Bundle};
 use crate::output::prepare_out_dir;
@@ -12,103 +11,7 @@ use anyhow::Context;
 use era::identification::Identification;
 use era::identify::{assess_model, EraOptions};
 use era::pipeline::realize::SvdPath;
-use era::refine::identification::refine_identification_in;
-use era::refine::RefineOptions;
 use era_io::model_json::{FitJson, ModelJson};
-use std::fmt::Write as _;
-
-/// `--reciprocal` needs a square set: said before the identification runs.
-pub fn check_shape(options: &RefineOptions, frf: &era::FrfData) -> anyhow::Result<()> {
-    if options.reciprocal && frf.outputs() != frf.inputs() {
-        return crate::error::usage(format!(
-            "--reciprocal: the set has {} outputs x {} inputs; reciprocity needs a square (collocated) set",
-            frf.outputs(),
-            frf.inputs()
-        ));
-    }
-    Ok(())
-}
-
-/// Runs the refinement of `found` with a spinner that counts the iterations.
-pub fn refine_found(
-    found: Identification,
-    frf: &era::FrfData,
-    options: &RefineOptions,
-    domain: Option<era::ModelDomain>,
-    settings: &Settings,
-) -> anyhow::Result<Identification> {
-    let spinner = crate::output::progress::spinner(settings);
-    spinner.set_message("refinement");
-    let mut on_stage = |_: era::Stage| {};
-    let mut on_step = |iteration: usize, cost: f64| {
-        spinner.set_message(format!(
-            "refinement: iteration {iteration}, cost {cost:.3e}"
-        ));
-    };
-    let refined =
-        refine_identification_in(found, frf, options, domain, &mut on_stage, &mut on_step)
-            .map_err(|e| match e {
-                era::EraError::InvalidParameter {
-                    name: "max-iterations",
-                    value,
-                    reason,
-                } => anyhow::Error::from(crate::error::UsageError(format!(
-                    "--max-iterations {value}: {}",
-                    reason.message(era::params::Naming::Flag)
-                ))),
-                other => anyhow::Error::from(other),
-            })
-            .context("refining the model");
-    spinner.finish_and_clear();
-    refined
-}
-
-/// How the refinement went, in lines for the human summary.
-pub fn summary(found: &Identification) -> String {
-    let Some(r) = &found.refinement else {
-        return String::new();
-    };
-    let f = &r.refinement;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "\nrefinement ({} model of the {} data, residuals {}): {} start modes, {} kept; {} iterations, {}; fit over the band {:.3e} -> {:.3e} (weighted cost: free residues at the start {:.3e}, the model {:.3e}), {:.2} s",
-        if f.sample_time_s.is_some() {
-            "z-domain"
-        } else {
-            "continuous"
-        },
-        f.quantity,
-        match (&f.lower, &f.upper) {
-            (Some(_), Some(_)) => "lower+upper",
-            (Some(_), None) => "lower",
-            (None, Some(_)) => "upper",
-            (None, None) => "none",
-        },
-        r.start_modes(),
-        f.modes.len(),
-        f.iterations,
-        if f.converged {
-            "converged"
-        } else {
-            "NOT converged (the iterations ran out: raise --max-iterations)"
-        },
-        f.fit_before,
-        f.fit_after,
-        f.cost_before,
-        f.cost_after,
-        found.timings.refine
-    );
-    let _ = writeln!(s, "  fitted domain: {}", r.fit_domain.reason);
-    for line in r.start_lines() {
-        let _ = writeln!(s, "  {line}");
-    }
-    let _ = writeln!(
-        s,
-        "  (± is one standard deviation from the Gauss-Newton covariance at the optimum, the noise taken from the residual)"
-    );
-    s
-}
 
 /// A JSON parameter of an older model.json as a count.
 fn count(model: &ModelJson, key: &str) -> usize {
@@ -137,7 +40,7 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
         crate::output::figures::check_pairs(&a.pairs, frf.outputs(), frf.inputs())?;
     }
     check_model_fits(a, &model, frf)?;
-    check_shape(&ropts, frf)?;
+    crate::config::identify::check_shape(&ropts, frf)?;
     human.print(&format!(
         "era refine {} {}\n  {}{}\n",
         a.model.display(),
@@ -147,7 +50,7 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
     ));
     let found = start(a, &model, frf, input.file.channels.as_ref())?;
     let before = found.fit.clone();
-    let found = refine_found(found, frf, &ropts, None, &settings)
+    let found = crate::work::refine(found, frf, &ropts, None, &settings)
         .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
     human.print(&format!(
         "  the model as given: fit collocated {}, non-collocated {}\n",
@@ -158,7 +61,7 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
             .noncollocated_mean_relative_error
             .map_or("-".into(), |v| format!("{v:.3e}"))
     ));
-    human.print(&summary(&found));
+    human.print(&crate::output::identify::refinement_summary(&found));
     let states = model
         .states
         .min(found.realization.singular_values.len())

@@ -7,6 +7,7 @@ pub mod estimate;
 pub mod figures;
 pub mod geometry;
 pub mod identification;
+pub mod identify;
 pub mod oma;
 pub mod progress;
 pub mod report;
@@ -376,4 +377,14 @@ pub fn pair_fit_table(fit: &era::pipeline::fit::FitReport, q: usize, p: usize) -
         s.push('\n');
     }
     s
+}
+
+/// What an identifying verb (`identify`, `oma`) hands back besides its files: the JSON
+/// it prints with `--json` and the name of each output channel (the entries of a shape),
+/// for `era batch`'s tables.
+pub struct Done {
+    /// The model JSON.
+    pub json: serde_json::Value,
+    /// One name per output channel: the file's channel name, else its 1-based number.
+    pub channels: Vec<String>,
 }
