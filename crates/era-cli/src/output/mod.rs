@@ -4,6 +4,7 @@
 //! ([`figures`], drawn by era-plot) and the terminal ([`report`], [`progress`]).
 
 pub mod estimate;
+pub mod experiment;
 pub mod figures;
 pub mod geometry;
 pub mod identification;

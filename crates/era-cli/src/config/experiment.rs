@@ -1,0 +1,160 @@
+//! `era simulate experiment`'s flags checked and turned into the core's
+//! [`ExperimentSpec`]: the structure, the actuators and the analyzer.
+
+use crate::config;
+use crate::error::usage;
+use era::sim::experiment::{
+    dta_like_structure, thesis_actuators, Compensation, Drive, ExperimentSpec, Structure, TABLE_5_1,
+};
+use era::sim::{ModalSpec, ModalStructure};
+
+fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
+    if !(v.is_finite() && v >= 0.0) {
+        return usage(format!("{flag} {v}: must be a number >= 0"));
+    }
+    Ok(())
+}
+
+/// The structure the flags describe.
+fn structure(a: &config::Experiment) -> anyhow::Result<Structure> {
+    if let Some(path) = &a.structure {
+        let model = era_io::model_json::ModelJson::read(path)?;
+        let ss = model.state_space().map_err(|e| {
+            crate::error::UsageError(format!("--structure {}: {e}", path.display()))
+        })?;
+        let quantity = a.structure_quantity;
+        return Structure::from_state_space(&ss, quantity).map_err(|e| {
+            crate::error::UsageError(format!(
+                "--structure {}: {} (the structure needs one output collocated with each input)",
+                path.display(),
+                e.message(era::params::Naming::Flag)
+            ))
+            .into()
+        });
+    }
+    if a.modes.is_none()
+        && a.dofs.is_none()
+        && a.fmin.is_none()
+        && a.fmax.is_none()
+        && a.damping.is_none()
+    {
+        return Ok(Structure::from_modal(&dta_like_structure()));
+    }
+    let d = ModalSpec::default();
+    let (damping_min, damping_max) = match &a.damping {
+        Some(text) => crate::config::parse_range(text)?,
+        None => (d.damping_min, d.damping_max),
+    };
+    let dofs = a.dofs.unwrap_or(d.outputs);
+    era::limits::CHANNELS.check("--dofs", dofs as u64)?;
+    let modes = a.modes.unwrap_or(d.modes);
+    era::limits::STATES.check_product("--modes (2 states each)", &[modes as u64, 2])?;
+    let spec = ModalSpec {
+        outputs: dofs,
+        inputs: dofs,
+        modes,
+        fmin_hz: a.fmin.unwrap_or(d.fmin_hz),
+        fmax_hz: a.fmax.unwrap_or(d.fmax_hz),
+        damping_min,
+        damping_max,
+        collocated: true,
+        seed: a.seed,
+    };
+    let s = ModalStructure::random(&spec)
+        .map_err(|e| crate::error::UsageError(e.message(era::params::Naming::Flag)))?;
+    Ok(Structure::from_modal(&s))
+}
+
+/// Validated flags → the experiment.
+pub fn spec(a: &config::Experiment) -> anyhow::Result<ExperimentSpec> {
+    check_nonnegative("--friction-scale", a.friction_scale)?;
+    check_nonnegative("--accel-noise", a.accel_noise)?;
+    check_nonnegative("--lvt-noise", a.lvt_noise)?;
+    if a.averages == 0 {
+        return usage("--averages 0: need at least one frame");
+    }
+    era::limits::SAMPLES.check_product("--averages x 2048 samples", &[a.averages as u64, 2048])?;
+    if a.actuators == 0 || a.actuators > TABLE_5_1.len() {
+        return usage(format!(
+            "--actuators {}: must be 1 to {} (the actuators of Table 5.1)",
+            a.actuators,
+            TABLE_5_1.len()
+        ));
+    }
+    let compensated = a.compensation;
+    let excitation = a.excitation.unwrap_or(if compensated {
+        ExperimentSpec::THESIS_COMPENSATED_EXCITATION_RMS_V
+    } else {
+        ExperimentSpec::THESIS_EXCITATION_RMS_V
+    });
+    if !(excitation.is_finite() && excitation > 0.0 && excitation <= 1000.0) {
+        return usage(format!(
+            "--excitation {excitation}: must be a positive RMS voltage up to 1000 V"
+        ));
+    }
+    let structure = structure(a)?;
+    if a.actuators > structure.mounts() {
+        return usage(format!(
+            "--actuators {}: the structure has only {} input DOF(s) to mount them on",
+            a.actuators,
+            structure.mounts()
+        ));
+    }
+    let mut actuators = thesis_actuators();
+    actuators.truncate(a.actuators);
+    for act in &mut actuators {
+        act.coulomb_force *= a.friction_scale;
+        if !act.coulomb_force.is_finite() {
+            return usage(format!(
+                "--friction-scale {}: the Coulomb forces overflow",
+                a.friction_scale
+            ));
+        }
+    }
+    let compensation = if compensated {
+        let mut c = Compensation::thesis();
+        c.coefficients.truncate(a.actuators);
+        // The default coefficients follow the friction they were tuned for.
+        c.coefficients
+            .iter_mut()
+            .for_each(|x| *x *= a.friction_scale);
+        if let Some(list) = &a.coefficients {
+            if list.len() != a.actuators {
+                return usage(format!(
+                    "--coefficients: {} value(s) for {} actuators",
+                    list.len(),
+                    a.actuators
+                ));
+            }
+            if let Some(bad) = list.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                return usage(format!("--coefficients: {bad} is not a force >= 0"));
+            }
+            c.coefficients = list.clone();
+        }
+        Some(c)
+    } else {
+        if a.coefficients.is_some() {
+            return usage("--coefficients needs --compensation on");
+        }
+        None
+    };
+    let mut spec = ExperimentSpec::thesis(compensated, a.averages, a.seed);
+    spec.structure = structure;
+    spec.actuators = actuators;
+    spec.compensation = compensation;
+    spec.excitation_rms_v = excitation;
+    spec.accel_noise_rms = a.accel_noise;
+    spec.lvt_noise_rms = a.lvt_noise;
+    spec.drive = if a.simultaneous {
+        Drive::Simultaneous
+    } else {
+        Drive::OneAtATime
+    };
+    spec.validate().map_err(|e| {
+        crate::error::UsageError(format!(
+            "era simulate experiment: {}",
+            e.message(era::params::Naming::Flag)
+        ))
+    })?;
+    Ok(spec)
+}
