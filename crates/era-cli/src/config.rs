@@ -6,6 +6,7 @@
 //! anything is read. The core names option fields ([`Naming`]); this module adds the
 //! flag names, so other front ends (Python) can word the same checks their own way.
 
+pub mod batch;
 pub mod experiment;
 pub mod identify;
 

@@ -3,6 +3,7 @@
 //! run ([`RunInput`]), the bundle of an identification ([`identification`]), the figures
 //! ([`figures`], drawn by era-plot) and the terminal ([`report`], [`progress`]).
 
+pub mod batch;
 pub mod estimate;
 pub mod experiment;
 pub mod figures;
