@@ -7,6 +7,7 @@
 //! flag names, so other front ends (Python) can word the same checks their own way.
 
 pub mod batch;
+pub mod compare;
 pub mod experiment;
 pub mod identify;
 
@@ -447,49 +448,6 @@ impl From<&CompareArgs> for Compare {
             settings: Settings::from(&a.common),
         }
     }
-}
-
-/// The options `era compare --identify FLAGS` realizes the set at `path` with: plain
-/// ERA at one order, on the route of an unrefined run. The flags are parsed when the
-/// set is read, so that the files' errors come first.
-pub fn compare_identify_options(
-    flags: &[String],
-    path: &std::path::Path,
-    frf: &era::FrfData,
-) -> anyhow::Result<EraOptions> {
-    use clap::Parser;
-    let mut argv = vec![path.display().to_string()];
-    argv.extend(flags.iter().cloned());
-    let parsed = crate::args::IdentifyFlags::try_parse_from(&argv)
-        .map_err(|e| crate::error::UsageError(format!("--identify: {e}")))?;
-    if parsed.args.refine || parsed.args.band.is_some() || parsed.args.from_time {
-        return crate::error::usage(
-            "--identify: compare realizes each set with plain ERA at one order; --refine, --band and --from-time do not apply (identify each set with era identify, then --model-a/--model-b)",
-        );
-    }
-    let a = &parsed.args;
-    if a.out.is_some()
-        || a.no_figures
-        || a.geometry.geometry.is_some()
-        || !matches!(a.pairs.pairs, era_plot::PairSelection::All)
-    {
-        return crate::error::usage(
-            "--identify: compare writes its own outputs; --out, --no-figures, --geometry and --pairs of identify do not apply (compare's --out holds compare.html and one PNG per pair)",
-        );
-    }
-    let mut opts = options(&parsed.args)?;
-    if opts.order.states().unwrap_or(0) == 0 {
-        return crate::error::usage(
-            "--identify needs --states N: compare realizes each set at one order",
-        );
-    }
-    // Compare realizes with ERA alone: the route's refinement does not apply, and its
-    // domain and direct term are those of an unrefined run.
-    let mut request = route_request(&parsed.args);
-    request.refine = Some(false);
-    let route = request.resolve(frf.quantity(), opts.integrations);
-    apply_route(&mut opts, &route);
-    Ok(opts)
 }
 
 /// What both FRF simulators write: the file, its noise and the seed.

@@ -3,6 +3,7 @@
 //! and `convert` read through here; time histories go through `frf`.
 
 use crate::args::{FrfReadArgs, UnitsArg};
+pub mod compare;
 pub mod manifest;
 pub mod source;
 pub mod time;

@@ -4,6 +4,7 @@
 //! ([`figures`], drawn by era-plot) and the terminal ([`report`], [`progress`]).
 
 pub mod batch;
+pub mod compare;
 pub mod estimate;
 pub mod experiment;
 pub mod figures;

@@ -2,9 +2,11 @@
 //! EMAC, CMI, contributions; [`indicators`]) and the scan across orders with its
 //! automatic choice ([`stabilization`]). The modes themselves come from
 //! [`crate::pipeline::modes`]. Over a fleet of records, [`track`] follows each mode
-//! from record to record.
+//! from record to record, and [`compare`] puts two FRF sets and their models side by
+//! side.
 
 pub(crate) mod change;
+pub mod compare;
 pub mod indicators;
 pub mod stabilization;
 pub mod track;
