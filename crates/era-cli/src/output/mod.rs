@@ -5,6 +5,7 @@
 
 pub mod batch;
 pub mod compare;
+pub mod demo;
 pub mod estimate;
 pub mod experiment;
 pub mod figures;
