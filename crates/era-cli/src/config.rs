@@ -10,6 +10,7 @@ pub mod batch;
 pub mod compare;
 pub mod experiment;
 pub mod identify;
+pub mod shaker;
 
 use crate::args::{
     CommonArgs, CompareArgs, ConvertArgs, DecayMethodArg, DemoArgs, ExcitationArg, ExperimentArgs,

@@ -13,6 +13,7 @@ pub mod identify;
 pub mod oma;
 pub mod plot;
 pub mod refine;
+pub mod shaker;
 pub mod simulate;
 pub mod track;
 

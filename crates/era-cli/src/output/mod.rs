@@ -16,6 +16,7 @@ pub mod oma;
 pub mod progress;
 pub mod report;
 pub mod shapes;
+pub mod simulate;
 pub mod track;
 
 use anyhow::Context;
