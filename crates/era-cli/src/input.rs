@@ -1,13 +1,16 @@
 //! Reading an FRF source: any FRF file format (told apart by content), with the
 //! quantity and layout notes the summaries print. `identify`, `plot`, `refine`, `info`
-//! and `convert` read through here; time histories go through `frf`.
+//! and `convert` read FRF files through here; time histories are read and estimated in
+//! [`time`], `identify`'s source in [`source`], `batch`'s manifest in [`manifest`],
+//! `compare`'s two sets in [`compare`] and `info`'s description of a file in [`info`].
 
-use crate::args::{FrfReadArgs, UnitsArg};
 pub mod compare;
+pub mod info;
 pub mod manifest;
 pub mod source;
 pub mod time;
 
+use crate::args::{FrfReadArgs, UnitsArg};
 use era::Quantity;
 use era_io::format::{parse_frf_bytes, FrfFormat, ReadOptions};
 

@@ -3,13 +3,14 @@
 
 pub mod batch;
 pub mod compare;
+pub mod convert;
 pub mod demo;
 pub mod experiment;
-pub mod files;
 pub mod fleet;
 pub mod frf;
 pub mod friction;
 pub mod identify;
+pub mod info;
 pub mod oma;
 pub mod plot;
 pub mod refine;

@@ -1,94 +1,24 @@
-//! `era info FILE` and `era convert IN OUT`: what an FRF file holds, and the same FRFs
-//! in another format.
+//! What an FRF file holds, for `era info`: per format, the lines to print and the
+//! summary JSON (a UFF file's datasets, a MAT file's variables, a CSV file's FRFs).
 
-use crate::config::{Convert, Info};
-use crate::input::{describe_input, read_frf_bytes, read_frf_with, shape_line, FrfFlags};
-use crate::output::report::{finish_output, Human};
-use anyhow::Context;
-use era_io::format::{write_frf_file, FrfFormat};
-use era_io::uff::{function_type_name, listed, quantity_of, FrfLayout, UffWriteOptions};
+use crate::config::Info;
+use crate::input::{describe_input, read_frf_bytes, shape_line, FrfFlags};
+use era_io::format::FrfFormat;
+use era_io::uff::{function_type_name, listed, quantity_of, FrfLayout};
 use serde_json::json;
 use std::collections::BTreeMap;
-use std::time::Instant;
 
-/// `era convert`.
-pub fn run_convert(a: &Convert) -> anyhow::Result<()> {
-    let settings = a.settings;
-    let human = Human::new(&settings);
-    let target = FrfFormat::from_extension(&a.output).ok_or_else(|| {
-        crate::error::UsageError(format!(
-            "{}: cannot tell the output format from the extension: use .csv, .uff (or .unv) or .mat",
-            a.output.display()
-        ))
-    })?;
-    if (a.binary || a.single) && target != FrfFormat::Uff {
-        return crate::error::usage(format!(
-            "--binary and --single apply to UFF output, not to {}",
-            a.output.display()
-        ));
+/// The lines and the summary of the file `bytes` (read from `a.file`) in `format`.
+pub fn describe(
+    a: &Info,
+    bytes: &[u8],
+    format: FrfFormat,
+) -> anyhow::Result<(String, serde_json::Value)> {
+    match format {
+        FrfFormat::Uff => uff_info(a, bytes),
+        FrfFormat::Mat => mat_info(a, bytes),
+        FrfFormat::Csv => csv_info(a, bytes),
     }
-    let clock = Instant::now();
-    let input = read_frf_with(&a.input, &a.read)?;
-    let read_s = clock.elapsed().as_secs_f64();
-    let frf = &input.file.frf;
-    let clock = Instant::now();
-    let opts = UffWriteOptions {
-        binary: a.binary,
-        single: a.single,
-    };
-    write_frf_file(&a.output, &input.file, opts)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    let write_s = clock.elapsed().as_secs_f64();
-    let kind = match (target, a.binary, a.single) {
-        (FrfFormat::Uff, true, true) => "UFF 58b, single",
-        (FrfFormat::Uff, true, false) => "UFF 58b, double",
-        (FrfFormat::Uff, false, true) => "UFF 58 ASCII, single",
-        (FrfFormat::Uff, false, false) => "UFF 58 ASCII, double",
-        (f, _, _) => f.name(),
-    };
-    human.print(&format!(
-        "era convert {} ({}) -> {} ({kind})\n  {}{}\n{}",
-        a.input.display(),
-        input.format.name(),
-        a.output.display(),
-        shape_line(frf),
-        input.note,
-        describe_input(&input),
-    ));
-    finish_output(
-        &human,
-        &settings,
-        json!({
-            "input": a.input, "input_format": input.format.name(),
-            "output": a.output, "output_format": kind,
-            "outputs": frf.outputs(), "inputs": frf.inputs(), "lines": frf.lines(),
-            "spacing_hz": frf.spacing_hz(), "quantity": frf.quantity().name(),
-        }),
-        &[("read", read_s), ("write", write_s)],
-    )
-}
-
-/// `era info`.
-pub fn run_info(a: &Info) -> anyhow::Result<()> {
-    let settings = a.settings;
-    let human = Human::new(&settings);
-    let clock = Instant::now();
-    // Read once: a pipe or `/dev/stdin` cannot be read a second time.
-    // The file's errors name it: no "reading FILE" context to say it twice.
-    let bytes = era_io::input::read_input(&a.file)?;
-    let format = FrfFormat::detect_bytes(&bytes, &a.file)?;
-    let (text, summary) = match format {
-        FrfFormat::Uff => uff_info(a, &bytes)?,
-        FrfFormat::Mat => mat_info(a, &bytes)?,
-        FrfFormat::Csv => csv_info(a, &bytes)?,
-    };
-    human.print(&text);
-    finish_output(
-        &human,
-        &settings,
-        summary,
-        &[("info", clock.elapsed().as_secs_f64())],
-    )
 }
 
 fn uff_info(a: &Info, bytes: &[u8]) -> anyhow::Result<(String, serde_json::Value)> {
