@@ -7,6 +7,7 @@
 pub mod compare;
 pub mod info;
 pub mod manifest;
+pub mod oma;
 pub mod source;
 pub mod time;
 

@@ -1,9 +1,9 @@
 //! The core's long calls as the verbs make them: a spinner on stderr while each runs,
 //! and its errors worded with the flags' names. ERA ([`identify`]), OKID
-//! ([`observe`]) and the refinement ([`refine`]).
+//! ([`observe`]), the refinement ([`refine`]) and operational modal analysis ([`oma`]).
 
-use crate::config::{Identify, Settings};
-use crate::input::time::TimeRecords;
+use crate::config::{Identify, Oma, Settings};
+use crate::input::time::{joined, TimeRecords};
 use anyhow::Context;
 use era::identification::Identification;
 use era::identify::{identify_observed, identify_supplied, Order, ScanOptions};
@@ -186,4 +186,73 @@ pub fn observe(
 /// The channels of a record as slices.
 fn channels(set: &[Vec<f64>]) -> Vec<&[f64]> {
     set.iter().map(Vec::as_slice).collect()
+}
+
+/// A core error with the flag the user knows: the lags, blocks and references are
+/// `--time-lags`, `--blocks` and `--references` here.
+fn flagged(e: era::EraError, a: &Oma) -> anyhow::Error {
+    if let era::EraError::InvalidParameter {
+        name,
+        value,
+        reason,
+    } = &e
+    {
+        let flag = match *name {
+            "lags" => Some((
+                "--time-lags",
+                if a.options.lags.is_none() {
+                    " (the default from the record)"
+                } else {
+                    ""
+                },
+            )),
+            "blocks" => Some(("--blocks", "")),
+            "references" => Some(("--references", "")),
+            "orders" | "states" => Some((
+                if *name == "orders" {
+                    "--orders"
+                } else {
+                    "--states"
+                },
+                "",
+            )),
+            _ => None,
+        };
+        if let Some((flag, note)) = flag {
+            return crate::error::UsageError(format!(
+                "{flag} {value}{note}: {}",
+                reason.message(era::params::Naming::Flag)
+            ))
+            .into();
+        }
+    }
+    anyhow::Error::from(e)
+}
+
+/// Operational modal analysis of `records` with `options`, `spinner` saying the stage
+/// (and cleared); the core's errors name `era oma`'s flags.
+pub fn oma(
+    a: &Oma,
+    records: &crate::input::oma::Records,
+    options: &era::OmaOptions,
+    spinner: indicatif::ProgressBar,
+) -> anyhow::Result<era::Oma> {
+    let slices: Vec<Vec<&[f64]>> = records
+        .channels
+        .iter()
+        .map(|r| r.iter().map(Vec::as_slice).collect())
+        .collect();
+    let views: Vec<&[&[f64]]> = slices.iter().map(Vec::as_slice).collect();
+    spinner.set_message("output correlations");
+    let found = {
+        let mut on_stage = |stage: era::Stage| spinner.set_message(stage.name());
+        let mut on_order = |done: usize, total: usize| {
+            spinner.set_message(format!("stabilization: order {done} of {total}"));
+        };
+        era::identify::oma::oma_observed(&views, options, &mut on_stage, &mut on_order)
+    };
+    spinner.finish_and_clear();
+    found
+        .map_err(|e| flagged(e, a))
+        .with_context(|| format!("output-only identification of {}", joined(&a.files, " ")))
 }

@@ -361,7 +361,7 @@ fn estimate_metadata(
 }
 
 /// The paths, `separator`-joined.
-fn joined(paths: &[PathBuf], separator: &str) -> String {
+pub fn joined(paths: &[PathBuf], separator: &str) -> String {
     paths
         .iter()
         .map(|p| p.display().to_string())

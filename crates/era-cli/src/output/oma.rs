@@ -7,6 +7,7 @@
 use super::figures::{write_figure, write_png_with, write_shape_figures, write_stabilization};
 use super::identification::{write_bundle, Bundle};
 use super::{stamped, write_output, RunInput};
+use crate::input::oma::Records;
 use era::identify::oma::Oma;
 use era_io::atomic::{write_atomic, OutputSet};
 use era_io::model_json::{FitJson, ModelJson, ModelParameters};
@@ -16,27 +17,6 @@ use era_plot::{singular_value_figure, FrfUnits, FrfView, PhaseView};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-/// The records of one test as read: the output channels of each, the sample rate and
-/// the labels.
-pub struct Records {
-    /// Per record, its output channels.
-    pub channels: Vec<Vec<Vec<f64>>>,
-    /// Samples per second, and where it came from.
-    pub rate: f64,
-    /// Where the rate came from.
-    pub rate_from: String,
-    /// The first file's format.
-    pub format: String,
-    /// The output columns (0-based, in the file).
-    pub columns: Vec<usize>,
-    /// Each output's label, `3 (y1)`.
-    pub labels: Vec<String>,
-    /// Each output's name in the file (`y1`), or its 1-based column number.
-    pub names: Vec<String>,
-    /// The references, 0-based among the outputs, when given.
-    pub references: Option<Vec<usize>>,
-}
 
 /// One `era oma` run: the files, the records as read, the result and whether the order
 /// was automatic.
@@ -444,4 +424,65 @@ pub fn written_list(dir: &Path, figures: bool, shapes: bool) -> String {
     } else {
         format!("{files} (no figures)")
     }
+}
+
+/// The terminal's summary, the JSON (on stdout too with `--json`) and, with `--out`, the
+/// run's files, which take their place together; the verb's result for `era batch`.
+pub fn hand_on(
+    a: &crate::config::Oma,
+    mut outputs: Option<OutputSet>,
+    run: &OmaRun,
+    read_s: f64,
+    human: &super::report::Human,
+) -> anyhow::Result<super::Done> {
+    use super::report::{print_json, stabilization_summary, timings_table, PART, WALL};
+    let found = run.oma;
+    let settings = &a.settings;
+    human.print(&format!(
+        "era oma {}\n",
+        crate::input::time::joined(&a.files, " ")
+    ));
+    human.print(&run.summary());
+    human.print(&oma_table(found));
+    if let Some(st) = &found.identification.stabilization {
+        human.print(&stabilization_summary(st));
+    }
+    let mut timings = era_io::model_json::timings_map(&found.identification.timings);
+    timings.insert("read".into(), read_s);
+    // The correlations are the Markov stage's work: a part of it, not added again.
+    timings.insert(
+        format!("markov{PART}correlations"),
+        found.correlation_seconds,
+    );
+    timings.insert("uncertainty".into(), found.uncertainty_seconds);
+    let mut json = oma_json(run);
+    if let Some(set) = outputs.as_mut() {
+        let clock = std::time::Instant::now();
+        write_oma(set, run, !a.no_figures, settings)?;
+        timings.insert("write".into(), clock.elapsed().as_secs_f64());
+    }
+    if settings.timings {
+        if let Some(wall) = super::report::process_seconds() {
+            timings.insert(WALL.into(), wall);
+        }
+        human.print(&timings_table(&timings));
+        json["timings_s"] = json!(timings);
+    }
+    if let Some(set) = outputs.as_mut() {
+        write_model_json(set, &json)?;
+    }
+    if let (Some(dir), Some(set)) = (&a.out, outputs) {
+        set.commit()?;
+        human.print(&format!(
+            "\nwrote {}\n",
+            written_list(dir, !a.no_figures, a.geometry.is_some())
+        ));
+    }
+    if settings.json {
+        print_json(&json)?;
+    }
+    Ok(super::Done {
+        json,
+        channels: run.records.names.clone(),
+    })
 }
