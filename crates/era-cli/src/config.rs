@@ -9,6 +9,7 @@
 pub mod batch;
 pub mod compare;
 pub mod experiment;
+pub mod fleet;
 pub mod friction;
 pub mod identify;
 pub mod shaker;

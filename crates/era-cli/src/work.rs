@@ -1,6 +1,7 @@
 //! The core's long calls as the verbs make them: a spinner on stderr while each runs,
 //! and its errors worded with the flags' names. ERA ([`identify`]), OKID
-//! ([`observe`]), the refinement ([`refine`]) and operational modal analysis ([`oma`]).
+//! ([`observe`]), the refinement ([`refine`]), operational modal analysis ([`oma`]) and
+//! a fleet's records ([`fleet_record`]).
 
 use crate::config::{Identify, Oma, Settings};
 use crate::input::time::{joined, TimeRecords};
@@ -255,4 +256,36 @@ pub fn oma(
     found
         .map_err(|e| flagged(e, a))
         .with_context(|| format!("output-only identification of {}", joined(&a.files, " ")))
+}
+
+/// A core error on a parameter of `era simulate fleet`, under its flag's name.
+fn fleet_flagged(e: era::EraError) -> anyhow::Error {
+    match e {
+        era::EraError::InvalidParameter {
+            name,
+            value,
+            reason,
+        } => {
+            let flag = match name {
+                "index" => "records".to_string(),
+                "inputs" => "forces".to_string(),
+                _ => name.replace('_', "-"),
+            };
+            crate::error::UsageError(format!(
+                "--{flag} {value}: {}",
+                reason.message(era::params::Naming::Flag)
+            ))
+            .into()
+        }
+        other => other.into(),
+    }
+}
+
+/// Record `index` of the fleet `spec`; the core's errors name `era simulate fleet`'s
+/// flags.
+pub fn fleet_record(
+    spec: &era::sim::fleet::FleetSpec,
+    index: usize,
+) -> anyhow::Result<era::sim::fleet::FleetRecord> {
+    era::sim::fleet::fleet_record(spec, index).map_err(fleet_flagged)
 }

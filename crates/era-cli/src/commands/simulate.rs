@@ -93,6 +93,6 @@ pub fn run(a: &Simulate) -> anyhow::Result<()> {
         Simulate::Modal(m) => modal(m),
         Simulate::Experiment(e) => super::experiment::run(e),
         Simulate::Shaker(s) => super::shaker::run(s),
-        Simulate::Fleet(f) => super::fleet::run(f),
+        Simulate::Fleet(f) => super::fleet::run(&crate::config::fleet::Fleet::new(f)?),
     }
 }

@@ -9,6 +9,7 @@ pub mod demo;
 pub mod estimate;
 pub mod experiment;
 pub mod figures;
+pub mod fleet;
 pub mod friction;
 pub mod geometry;
 pub mod identification;
