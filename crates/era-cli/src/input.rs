@@ -8,6 +8,7 @@ pub mod compare;
 pub mod friction;
 pub mod info;
 pub mod manifest;
+pub mod model;
 pub mod oma;
 pub mod source;
 pub mod time;

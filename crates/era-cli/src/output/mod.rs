@@ -16,6 +16,7 @@ pub mod identification;
 pub mod identify;
 pub mod oma;
 pub mod progress;
+pub mod refine;
 pub mod report;
 pub mod shapes;
 pub mod simulate;
