@@ -5,6 +5,7 @@
 //! `compare`'s two sets in [`compare`] and `info`'s description of a file in [`info`].
 
 pub mod compare;
+pub mod fleet;
 pub mod friction;
 pub mod info;
 pub mod manifest;

@@ -5,30 +5,16 @@
 
 use super::figures::write_png_with;
 use super::write_output;
-use era::modal::track::{trend, Track, TrackOptions, TrackRecord, Tracking, TrendUnit};
+use crate::input::fleet::Fleet;
+use era::modal::track::{trend, Track, TrackOptions, Tracking, TrendUnit};
 use era_io::atomic::{write_atomic, OutputSet};
 use era_io::tracks::{write_tracks, TrackRow};
 use era_plot::track::{
     track_html, track_png, track_svg, trend_text, TrackPage, TrackPanel, TrackPlot,
 };
 use serde_json::json;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-
-/// The fleet as read: each record with the shard it came from and its rows.
-pub struct Fleet {
-    /// The records, as the core takes them.
-    pub records: Vec<TrackRecord>,
-    /// Per record, the mode number (the `mode` column) of each of its modes.
-    pub mode_numbers: Vec<Vec<u32>>,
-    /// Per record, its time in µs since 1970 as read.
-    pub times_us: Vec<Option<i64>>,
-    /// Per shard: its modes.parquet, and the rows and records it gave.
-    pub shards: Vec<(PathBuf, usize, usize)>,
-    /// What records.jsonl said, per shard that has one: `ok`, `error`, `skipped`.
-    pub statuses: BTreeMap<String, usize>,
-}
 
 /// One `era track` run: the folders, the fleet as read, the tracks and the options.
 pub struct TrackRun<'a> {
