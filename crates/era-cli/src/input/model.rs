@@ -1,7 +1,9 @@
-//! A `model.json` read back for `era refine`: checked against the FRFs it is refined on,
-//! and assessed on them as an identification would have it.
+//! A `model.json` read back: for `era refine`, checked against the FRFs it is refined on
+//! and assessed on them as an identification would have it; for `era plot`, the model
+//! to overlay.
 
-use crate::config::Refine;
+use crate::config::{Plot, Refine};
+use crate::error::usage;
 use anyhow::Context;
 use era::identification::Identification;
 use era::identify::{assess_model, EraOptions};
@@ -113,4 +115,47 @@ pub fn start(
     // Collocation from the channel table; the refinement keeps it.
     crate::output::figures::collocate_fit(&mut found.fit, channels, frf.outputs(), frf.inputs());
     Ok(found)
+}
+
+/// The model to overlay (`--model`), refused when its shape is not the FRFs', and the
+/// integrations and zeroed lines to plot with: the flags', else the model's, else none.
+pub fn overlay_model(
+    a: &Plot,
+    frf: &era::FrfData,
+) -> anyhow::Result<(Option<ModelJson>, usize, usize)> {
+    let model = match &a.model {
+        Some(path) => {
+            Some(ModelJson::read(path).with_context(|| format!("reading {}", path.display()))?)
+        }
+        None => None,
+    };
+    let from_model = |key: &str| {
+        model
+            .as_ref()
+            .and_then(|m| m.parameters.get(key))
+            .and_then(|v| v.as_u64())
+            .map(|v| v as usize)
+    };
+    let integrations = a
+        .integrations
+        .or_else(|| from_model("integrations"))
+        .unwrap_or(0);
+    let zero_lines = a
+        .zero_lines
+        .or_else(|| from_model("zero_lines"))
+        .unwrap_or(0);
+    if let Some(m) = &model {
+        if (m.outputs, m.inputs) != (frf.outputs(), frf.inputs()) {
+            return usage(format!(
+                "--model {}: the model has {} outputs x {} inputs, {} has {} x {}",
+                a.model.as_ref().unwrap().display(),
+                m.outputs,
+                m.inputs,
+                a.file.display(),
+                frf.outputs(),
+                frf.inputs()
+            ));
+        }
+    }
+    Ok((model, integrations, zero_lines))
 }

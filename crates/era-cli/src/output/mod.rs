@@ -15,6 +15,7 @@ pub mod geometry;
 pub mod identification;
 pub mod identify;
 pub mod oma;
+pub mod plot;
 pub mod progress;
 pub mod refine;
 pub mod report;
