@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Golden values for era's FRF estimation (crates/era/src/frf/estimate.rs).
+"""Golden values for era's FRF estimation (crates/era/src/estimate.rs).
 
 Writes crates/era/tests/golden/welch_scipy.json: deterministic test signals (2 inputs,
 3 outputs, 1500 samples at 1000 Hz) and, for a few Welch settings, scipy's `csd` of

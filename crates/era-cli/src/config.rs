@@ -21,7 +21,7 @@ use crate::args::{
     SimulateModel, StatesArg, StructureQuantity, WelchArgs,
 };
 use crate::input::FrfFlags;
-use era::frf::estimate::WelchOptions;
+use era::estimate::WelchOptions;
 use era::identify::route::{Route, RouteRequest};
 use era::identify::{EraOptions, ModelDomain};
 use era::modal::stabilization::OrderRange;
@@ -332,13 +332,13 @@ pub struct Welch {
     /// judging frame when OKID keeps the records).
     pub frame: Option<usize>,
     /// Window of each frame.
-    pub window: era::frf::estimate::Window,
+    pub window: era::estimate::Window,
     /// Overlap of consecutive frames, as a fraction of the frame.
     pub overlap: f64,
     /// The FRF estimator.
-    pub estimator: era::frf::estimate::Estimator,
+    pub estimator: era::estimate::Estimator,
     /// Trend removed from each frame.
-    pub detrend: era::frf::estimate::Detrend,
+    pub detrend: era::estimate::Detrend,
     /// Lines kept up to this frequency, Hz.
     pub max_hz: Option<f64>,
     /// Sample rate given, Hz (else the file's).
@@ -349,7 +349,7 @@ pub struct Welch {
     pub dataset: Vec<String>,
 }
 
-pub use era::frf::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
+pub use era::estimate::{DEFAULT_FRAME, JUDGING_AVERAGES};
 
 impl Welch {
     /// The frame given, or [`DEFAULT_FRAME`].
@@ -972,7 +972,7 @@ fn check_time_flags(a: &IdentifyArgs) -> anyhow::Result<()> {
                 "--markov-samples {n}: OKID returns at least 2 Markov blocks (the direct term and one more)"
             ));
         }
-        era::limits::SAMPLES.check("--markov-samples", n as u64)?;
+        era::params::limits::SAMPLES.check("--markov-samples", n as u64)?;
     }
     Ok(())
 }
@@ -1029,7 +1029,7 @@ pub fn options(a: &IdentifyArgs) -> anyhow::Result<EraOptions> {
         o
     };
     checked.check(Naming::Flag)?;
-    use era::limits::SAMPLES;
+    use era::params::limits::SAMPLES;
     if let Some(range) = scan_orders(a)? {
         SAMPLES.check_product(
             format!("--orders {} x --hankel-factor (Markov samples)", range.max),
@@ -1078,7 +1078,7 @@ pub fn window_corrected(
 pub fn lag_window(
     metadata: &std::collections::BTreeMap<String, String>,
 ) -> Option<(era::sources::frf::LagWindow, String)> {
-    use era::frf::estimate::{Estimator, Window};
+    use era::estimate::{Estimator, Window};
     // The words `era frf` writes; a file that says anything else is not corrected.
     let estimator = match metadata.get("estimator")?.trim() {
         "h1" => Estimator::H1,
@@ -1102,7 +1102,7 @@ pub fn lag_window(
 }
 
 /// The refinement options of the flags, checked before anything is read: at least one
-/// iteration, and no more than [`era::limits::ITERATIONS`].
+/// iteration, and no more than [`era::params::limits::ITERATIONS`].
 pub fn refine_options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
     let mut o = RefineOptions::default();
     if let Some(r) = fit.residuals {
@@ -1121,7 +1121,7 @@ pub fn refine_options(fit: &RefineFitArgs) -> anyhow::Result<RefineOptions> {
                 "--max-iterations 0: the refinement needs at least one iteration",
             );
         }
-        era::limits::ITERATIONS.check("--max-iterations", n as u64)?;
+        era::params::limits::ITERATIONS.check("--max-iterations", n as u64)?;
         o.max_iterations = n;
     }
     Ok(o)
@@ -1365,10 +1365,10 @@ mod tests {
         );
         assert_eq!(a.preset, era::identify::route::Preset::default());
         assert_eq!(a.markov, era::sources::MarkovSource::default());
-        assert_eq!(a.welch.estimator, era::frf::estimate::Estimator::default());
+        assert_eq!(a.welch.estimator, era::estimate::Estimator::default());
         assert_eq!(
             welch_options(&Welch::from(&a.welch), 100.0),
-            WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
+            WelchOptions::new(100.0, era::estimate::DEFAULT_FRAME)
         );
         let crate::args::Command::Frf(f) = parsed(&[
             "frf",
@@ -1382,10 +1382,10 @@ mod tests {
         ]) else {
             unreachable!()
         };
-        assert_eq!(f.welch.estimator, era::frf::estimate::Estimator::default());
+        assert_eq!(f.welch.estimator, era::estimate::Estimator::default());
         assert_eq!(
             welch_options(&Welch::from(&f.welch), 100.0),
-            WelchOptions::new(100.0, era::frf::estimate::DEFAULT_FRAME)
+            WelchOptions::new(100.0, era::estimate::DEFAULT_FRAME)
         );
         assert_eq!(f.quantity, era::Quantity::default());
     }

@@ -37,7 +37,7 @@ fn input_error(cause: &(dyn std::error::Error + 'static)) -> Option<bool> {
     ask::<era::EraError>(cause)
         .or_else(|| ask::<era_io::IoError>(cause))
         .or_else(|| ask::<UsageError>(cause))
-        .or_else(|| ask::<era::limits::LimitError>(cause))
+        .or_else(|| ask::<era::params::limits::LimitError>(cause))
         .or_else(|| ask::<era::friction::FrictionError>(cause))
         .or_else(|| ask::<era_plot::PlotError>(cause))
 }
@@ -54,7 +54,7 @@ fn message(err: &anyhow::Error) -> String {
             e.message(era::params::Naming::Flag)
         } else if let Some(e) = cause.downcast_ref::<era::friction::FrictionError>() {
             e.message(era::params::Naming::Flag)
-        } else if let Some(e) = cause.downcast_ref::<era::limits::LimitError>() {
+        } else if let Some(e) = cause.downcast_ref::<era::params::limits::LimitError>() {
             e.message(era::params::Naming::Flag)
         } else {
             cause.to_string()

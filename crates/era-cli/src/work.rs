@@ -6,7 +6,7 @@
 use crate::config::{Identify, Oma, Settings};
 use crate::input::time::{joined, TimeRecords};
 use anyhow::Context;
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{identify_observed, identify_supplied, Order, ScanOptions};
 use era::refine::identification::refine_identification_in;
 use era::refine::RefineOptions;

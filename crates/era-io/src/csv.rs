@@ -260,7 +260,7 @@ struct ColumnMap {
 }
 
 /// The column map of the header, refusing unknown, duplicate or missing columns and a
-/// channel count over [`era::limits::CHANNELS`].
+/// channel count over [`era::params::limits::CHANNELS`].
 fn column_map(path: &Path, header_line: usize, names: &[String]) -> Result<ColumnMap, IoError> {
     let fail =
         |line: usize, column: &str, message: String| IoError::at(path, line, column, message);
@@ -332,7 +332,7 @@ fn column_map(path: &Path, header_line: usize, names: &[String]) -> Result<Colum
         ));
     }
     for (count, side) in [(q, "outputs"), (p, "inputs")] {
-        era::limits::CHANNELS
+        era::params::limits::CHANNELS
             .check(format!("the header names {count} {side}"), count as u64)
             .map_err(|e| IoError::limit(path, e))?;
     }
@@ -436,7 +436,7 @@ pub fn write_frf_csv(path: &Path, frf: &FrfData, extra: &[(&str, &str)]) -> Resu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use era::frf::uniform_lines;
+    use era::data::frf::uniform_lines;
 
     fn sample() -> FrfData {
         FrfData::from_fn(

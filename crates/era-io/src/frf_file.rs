@@ -288,7 +288,7 @@ impl ZeroStart {
 /// (see [`ZeroStart`]), judging by the first line and the step to the second; `None`
 /// when they already start at 0 Hz or there is no step to judge by (the frequency checks
 /// of [`era::FrfData`] then speak, and they also check every later line). `pairs` sizes
-/// the padded set, checked against [`era::limits`] before anything is allocated (a file
+/// the padded set, checked against [`era::params::limits`] before anything is allocated (a file
 /// starting at 10⁷ Hz would ask for millions of lines).
 ///
 /// # Errors
@@ -321,13 +321,13 @@ pub fn zero_start(
     // At most 2^53: beyond, the count is not exact in f64 (and far past any limit).
     let added = whole.min(9.0e15) as u64;
     let padded = added.saturating_add(frequency_hz.len() as u64);
-    era::limits::LINES
+    era::params::limits::LINES
         .check(
             format!("the lines start at {first_hz} Hz (line {added} at {spacing_hz} Hz spacing); padding to 0 Hz"),
             padded,
         )
         .map_err(|e| crate::IoError::limit(path, e))?;
-    era::limits::VALUES
+    era::params::limits::VALUES
         .check_product("FRF values after padding to 0 Hz", &[padded, pairs as u64])
         .map_err(|e| crate::IoError::limit(path, e))?;
     let added = added as usize;

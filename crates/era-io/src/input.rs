@@ -4,7 +4,7 @@
 //! - a folder is refused;
 //! - a regular file is memory-mapped (its real size is known, nothing is copied);
 //! - anything else (a pipe, `/dev/stdin`, `<(…)`, a FIFO, a character device such as
-//!   `/dev/zero`) is read as a stream, up to [`era::limits::INPUT_BYTES`] (1 GiB;
+//!   `/dev/zero`) is read as a stream, up to [`era::params::limits::INPUT_BYTES`] (1 GiB;
 //!   `ERA_MAX_INPUT_BYTES` raises it), and refused past it.
 //!
 //! A FIFO is opened with `O_NONBLOCK` so that `open` itself cannot wait for a writer
@@ -12,7 +12,7 @@
 //! at once (an empty file), with one it reads what the writer sends.
 
 use crate::IoError;
-use era::limits::{Limit, Saturated, INPUT_BYTES};
+use era::params::limits::{Limit, Saturated, INPUT_BYTES};
 use std::io::Read;
 use std::path::Path;
 
@@ -168,7 +168,7 @@ fn read_stream(
     if buf.len() as u64 > allowed {
         return Err(IoError::limit(
             path,
-            era::limits::LimitError {
+            era::params::limits::LimitError {
                 context: "input read as a stream (a pipe, FIFO or device)".into(),
                 asked: buf.len() as u64,
                 allowed,

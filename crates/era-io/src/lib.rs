@@ -51,13 +51,13 @@ pub enum IoError {
         /// The OS error.
         error: std::io::Error,
     },
-    /// A size in the file, or the file itself, is above one of `era::limits`.
+    /// A size in the file, or the file itself, is above one of `era::params::limits`.
     #[error("{path}: {limit}")]
     Limit {
         /// The file.
         path: PathBuf,
         /// What was asked and what is allowed.
-        limit: era::limits::LimitError,
+        limit: era::params::limits::LimitError,
     },
     /// The content is malformed.
     #[error("{path}: {location}{message}")]
@@ -86,7 +86,7 @@ impl IoError {
             message: text::escaped_message(&message.into()),
         }
     }
-    pub(crate) fn limit(path: impl Into<PathBuf>, limit: era::limits::LimitError) -> Self {
+    pub(crate) fn limit(path: impl Into<PathBuf>, limit: era::params::limits::LimitError) -> Self {
         IoError::Limit {
             path: path.into(),
             limit,

@@ -16,7 +16,7 @@
 
 use crate::atomic::write_atomic;
 use crate::IoError;
-use era::identification::{Identification, StageTimings};
+use era::data::identification::{Identification, StageTimings};
 use era::identify::EraOptions;
 use era::pipeline::fit::FitReport;
 use era::pipeline::modes::{ModalParameters, Mode};
@@ -114,7 +114,7 @@ impl ModeJson {
     }
 
     /// From a library mode and its quality.
-    pub fn from_mode_quality(m: &Mode, q: &era::identification::ModeQuality) -> Self {
+    pub fn from_mode_quality(m: &Mode, q: &era::data::identification::ModeQuality) -> Self {
         let i = &q.indicators;
         ModeJson {
             physical: Some(q.physical),
@@ -299,7 +299,7 @@ pub struct RefinementJson {
 
 impl RefinementJson {
     /// From the pipeline's record.
-    pub fn of(r: &era::identification::Refined) -> Self {
+    pub fn of(r: &era::data::identification::Refined) -> Self {
         let f = &r.refinement;
         RefinementJson {
             iterations: f.iterations,
@@ -739,7 +739,7 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), IoError> {
 
 /// The scan as stored: the range, the rule, the clusters and every pole (the diagram's
 /// data), the factored singular values and the CMIF.
-pub fn stabilization_json(st: &era::identification::Stabilization) -> serde_json::Value {
+pub fn stabilization_json(st: &era::data::identification::Stabilization) -> serde_json::Value {
     use serde_json::json;
     let poles: Vec<serde_json::Value> = st
         .scan

@@ -26,7 +26,7 @@
 
 use crate::mat::{contain, parse_mat_matrix};
 use crate::IoError;
-use era::limits::Saturated;
+use era::params::limits::Saturated;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -209,7 +209,7 @@ pub fn parse_time_csv(text: &str, path: &Path) -> Result<TimeHistory, IoError> {
             ),
         ));
     }
-    era::limits::CHANNELS
+    era::params::limits::CHANNELS
         .check(
             format!(
                 "the header names {} channels",
@@ -552,13 +552,13 @@ fn is_float(file: &hdf5_reader::Hdf5File, path: &str) -> bool {
 const MAX_COMPRESSION: u64 = 1032;
 
 /// Checks the shape an HDF5 dataset declares before its values are read: each side
-/// against [`era::limits::SAMPLES`], and the element count against what the file can
+/// against [`era::params::limits::SAMPLES`], and the element count against what the file can
 /// hold (its length times the best compression ratio, at one byte per element). A
 /// 1.4 kB file declaring an unwritten 1e8×2 dataset would otherwise read gigabytes of
 /// fill values.
 fn check_declared_shape(name: &str, shape: &[u64], file_len: u64) -> Result<(), String> {
     for &side in shape {
-        era::limits::SAMPLES
+        era::params::limits::SAMPLES
             .check(format!("dataset {name} declares shape {shape:?}"), side)
             .map_err(|e| e.to_string())?;
     }

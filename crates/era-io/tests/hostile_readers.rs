@@ -136,7 +136,7 @@ const DECAY_CSV: &str =
 
 fn uff_bytes(binary: bool) -> Vec<u8> {
     let frf = era::FrfData::from_fn(
-        era::frf::uniform_lines(6, 0.5),
+        era::data::frf::uniform_lines(6, 0.5),
         2,
         1,
         Quantity::Acceleration,
@@ -430,7 +430,7 @@ fn a_folder_and_an_endless_device_are_refused_as_input() {
     assert!(e.contains("folder"), "{e}");
     #[cfg(target_os = "linux")]
     {
-        let limit = era::limits::Limit {
+        let limit = era::params::limits::Limit {
             what: "bytes",
             default: 1 << 20,
             env: "ERA_HOSTILE_READERS_NEVER_SET",

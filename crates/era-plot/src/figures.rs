@@ -875,7 +875,7 @@ pub fn singular_value_figure(singular_values: &[f64], order: usize) -> Figure {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use era::frf::uniform_lines;
+    use era::data::frf::uniform_lines;
     use era::Quantity;
 
     fn sample() -> FrfData {

@@ -743,7 +743,7 @@ mod tests {
     use crate::figures::singular_value_figure;
 
     use crate::figures::{frf_grid, frf_overlay};
-    use era::frf::uniform_lines;
+    use era::data::frf::uniform_lines;
     use era::{Complex64, FrfData, Quantity};
 
     #[test]

@@ -13,7 +13,7 @@
 //! lines stays well under 2 MB.
 
 use crate::figures::{typeset_units, FrfView};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use std::fmt::Write as _;
 
 /// One row of the channel table: which DOF an output or input is.
@@ -344,7 +344,7 @@ fn plus_minus(std: Option<f64>) -> String {
 
 /// The paragraph on the refinement of a refined model: how the fit went, which modes
 /// were dropped, and how to read `±`.
-fn refinement_html(f: &era::identification::Identification) -> String {
+fn refinement_html(f: &era::data::identification::Identification) -> String {
     let Some(r) = &f.refinement else {
         return String::new();
     };
@@ -412,7 +412,7 @@ pub fn report_html(input: &ReportInput<'_>) -> String {
         shapes,
     ));
     sections.extend(others.into_iter().map(own));
-    // Results to treat with care (era::suspect): counted and named in the summary at
+    // Results to treat with care (era::identify::suspect): counted and named in the summary at
     // the top, listed in full here. The report is the CLI's: flags are named.
     if !warnings.is_empty() {
         let mut w = String::from(

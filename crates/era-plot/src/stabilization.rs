@@ -5,7 +5,7 @@
 //! dashed lines.
 
 use crate::render::{safe_range, PlotError};
-use era::identification::Stabilization;
+use era::data::identification::Stabilization;
 use era::modal::stabilization::PoleStatus;
 use plotters::chart::DualCoordChartContext;
 use plotters::coord::types::RangedCoordf64;

@@ -19,7 +19,7 @@
 //! nothing is interpolated or guessed. Channels that cannot be drawn are listed below
 //! the viewer.
 
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::Complex64;
 use std::fmt::Write as _;
 

@@ -7,7 +7,7 @@
 //! be: lines from 0 Hz and uniform, every value finite, the shapes agreeing.
 
 use crate::{contiguous, era_error, guarded, io_error, read_only, value_error, vector, Int};
-use era::frf::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
+use era::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
 use era::params::Naming;
 use era::{Complex64, FrfData, Quantity};
 use era_io::format::{read_frf_file, write_frf_file, FrfFormat, ReadOptions};
@@ -67,11 +67,11 @@ impl PyFrfData {
             values,
             "complex128",
             &[
-                &era::limits::CHANNELS,
-                &era::limits::CHANNELS,
-                &era::limits::LINES,
+                &era::params::limits::CHANNELS,
+                &era::params::limits::CHANNELS,
+                &era::params::limits::LINES,
             ],
-            Some(&era::limits::VALUES),
+            Some(&era::params::limits::VALUES),
             "values",
             "(outputs, inputs, lines)",
         )?;

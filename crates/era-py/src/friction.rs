@@ -19,7 +19,7 @@ pub fn friction_estimate<'py>(
     stiffness: f64,
 ) -> PyResult<Bound<'py, PyAny>> {
     era::friction::check_stiffness(Naming::Keyword, stiffness).map_err(crate::era_error)?;
-    let samples = [&era::limits::SAMPLES];
+    let samples = [&era::params::limits::SAMPLES];
     let t = contiguous::<f64, Ix1>(time_s, "float64", &samples, None, "time_s", "(samples,)")?;
     let v = contiguous::<f64, Ix1>(
         velocity,

@@ -4,7 +4,7 @@
 //! displacement at the nodes of a geometry.
 
 use crate::{guarded, io_error, value_error, vector};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::Complex64;
 use era_io::frf_file::{parse_direction, Channel, ChannelTable, Dof};
 use era_io::geometry::{

@@ -84,11 +84,11 @@ pub(crate) fn io_error(e: era_io::IoError) -> PyErr {
 
 /// `ValueError(message)`.
 /// The value of the core's enum that `text` names, for the keyword `keyword`: the core's
-/// names and `FromStr` ([`era::names`]), as the CLI reads its flags; a `ValueError`
+/// names and `FromStr` ([`era::params::names`]), as the CLI reads its flags; a `ValueError`
 /// naming the keyword and the names expected otherwise.
 pub(crate) fn named<T>(keyword: &str, text: &str) -> PyResult<T>
 where
-    T: std::str::FromStr<Err = era::names::UnknownName>,
+    T: std::str::FromStr<Err = era::params::names::UnknownName>,
 {
     text.parse::<T>()
         .or_else(|e| value_error(format!("{keyword} {e}")))
@@ -98,7 +98,7 @@ where
 /// `None`.
 pub(crate) fn named_or_default<T>(keyword: &str, text: Option<&str>) -> PyResult<T>
 where
-    T: std::str::FromStr<Err = era::names::UnknownName> + Default,
+    T: std::str::FromStr<Err = era::params::names::UnknownName> + Default,
 {
     text.map_or_else(|| Ok(T::default()), |t| named(keyword, t))
 }
@@ -287,8 +287,8 @@ const COPY_WARNING_BYTES: u64 = 256 << 20;
 pub(crate) fn contiguous<'py, T: Element, D: numpy::ndarray::Dimension>(
     obj: &Bound<'py, PyAny>,
     dtype: &str,
-    axes: &[&era::limits::Limit],
-    total: Option<&era::limits::Limit>,
+    axes: &[&era::params::limits::Limit],
+    total: Option<&era::params::limits::Limit>,
     what: &str,
     shape_words: &str,
 ) -> PyResult<Bound<'py, PyArray<T, D>>> {
@@ -321,7 +321,7 @@ pub(crate) fn contiguous<'py, T: Element, D: numpy::ndarray::Dimension>(
             array.getattr("shape")?.str()?
         ));
     }
-    let limit_error = |e: era::limits::LimitError| PyValueError::new_err(e.to_string());
+    let limit_error = |e: era::params::limits::LimitError| PyValueError::new_err(e.to_string());
     for (k, (limit, &n)) in axes.iter().zip(&shape).enumerate() {
         limit
             .check(format!("{what} axis {k} {shape_words}"), n as u64)
@@ -371,7 +371,7 @@ pub(crate) fn frequency_lines<'py>(
     contiguous(
         frequency_hz,
         "float64",
-        &[&era::limits::LINES],
+        &[&era::params::limits::LINES],
         None,
         "frequency_hz",
         "(lines,)",
@@ -386,7 +386,10 @@ pub(crate) fn time_block<'py>(
     contiguous(
         data,
         "float64",
-        &[&era::limits::CHANNELS, &era::limits::SAMPLES],
+        &[
+            &era::params::limits::CHANNELS,
+            &era::params::limits::SAMPLES,
+        ],
         None,
         "data",
         "(channels, samples)",

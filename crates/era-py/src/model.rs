@@ -11,7 +11,7 @@
 
 use crate::frf::PyFrfData;
 use crate::{era_error, guarded, guarded_in, thread_count, value_error, vector, Int};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{
     identify as run_identify, identify_supplied, EraOptions, ModelDomain, Order, ScanOptions,
 };
@@ -559,7 +559,7 @@ pub fn identify(
     let data = frf.get().inner.clone();
     // The refinement fits measured lines only (never leading zero lines: a padded
     // start, or zero_lines), inside the band when one is given: as the CLI does.
-    let fit = era::frf::fit_lines(&data, options.zero_lines, band).or_else(|why| {
+    let fit = era::data::frf::fit_lines(&data, options.zero_lines, band).or_else(|why| {
         let (lo, hi) = band.unwrap_or_default();
         value_error(format!("band ({lo}, {hi}): {why}"))
     })?;
@@ -674,7 +674,7 @@ pub(crate) fn refine_options_of(
         if iterations == 0 {
             return value_error("max_iterations 0: the refinement needs at least one iteration");
         }
-        era::limits::ITERATIONS
+        era::params::limits::ITERATIONS
             .check("max_iterations", iterations as u64)
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
         refine_options.max_iterations = iterations;
@@ -760,7 +760,7 @@ impl Run<'_> {
             None => found,
         };
         found.suspects.extend(zero_start);
-        let edges = era::suspect::band_edges(&found, self.fitted_hz);
+        let edges = era::identify::suspect::band_edges(&found, self.fitted_hz);
         found.suspects.extend(edges);
         Ok(found)
     }

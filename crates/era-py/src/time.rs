@@ -7,7 +7,7 @@ use crate::model::{
     era_options, refine_options_of, route_request, states_of, PyIdentification, Run,
 };
 use crate::{era_error, guarded_in, thread_count, value_error, Int};
-use era::frf::estimate::estimate;
+use era::estimate::estimate;
 use era::identify::{EraOptions, ScanOptions};
 use era::params::Naming;
 use era::sources::okid::{okid, ObserverOrder, OkidOptions, Record};
@@ -109,9 +109,9 @@ pub fn identify_time(
     let outputs = crate::frf::channels("outputs", &outputs, n_channels)?;
     let frame = frame.unwrap_or_else(|| {
         if okid_route {
-            era::frf::estimate::judging_frame(samples, 1, welch_keywords.overlap)
+            era::estimate::judging_frame(samples, 1, welch_keywords.overlap)
         } else {
-            era::frf::estimate::DEFAULT_FRAME
+            era::estimate::DEFAULT_FRAME
         }
     });
     let view = array.readonly();
@@ -190,7 +190,7 @@ fn observer_of(
                 "markov_samples {n}: OKID returns at least 2 Markov blocks (the direct term and one more)"
             ));
         }
-        era::limits::SAMPLES
+        era::params::limits::SAMPLES
             .check("markov_samples", n as u64)
             .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
     }
@@ -253,10 +253,10 @@ impl Job<'_> {
         let band = self.band.or_else(|| {
             route
                 .coherence_band
-                .then(|| era::frf::coherence_band(frf.frequency_hz(), &coherence))
+                .then(|| era::data::frf::coherence_band(frf.frequency_hz(), &coherence))
                 .flatten()
         });
-        let fit = era::frf::fit_lines(&frf, 0, band).map_err(|why| {
+        let fit = era::data::frf::fit_lines(&frf, 0, band).map_err(|why| {
             let (lo, hi) = band.unwrap_or_default();
             era::EraError::InvalidParameter {
                 name: "band",

@@ -21,7 +21,7 @@ use era::identify::{identify, EraOptions, ModelDomain, Order};
 
 use era::refine::identification::refine_identification;
 
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::refine::RefineOptions;
 use era::sim::{add_noise, truth_model, truth_model_frf, ModalSpec, ModalStructure};
 use era::sources::frf::preprocess::integrate;

@@ -1,5 +1,5 @@
 //! How the length of the Hankel window sets the damping ERA finds for a lightly damped
-//! mode, and when `era::suspect` warns (docs/src/design.md §1.8).
+//! mode, and when `era::identify::suspect` warns (docs/src/design.md §1.8).
 //!
 //! `cargo run --release -p era --example short_hankel -- FN_HZ ZETA FMAX_HZ LINES PAD_TO`
 //! e.g. `-- 0.3 0.02 12.5 513 0`: a clean receptance of one mode on `LINES` lines from 0

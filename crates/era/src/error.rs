@@ -11,7 +11,7 @@
 
 use thiserror::Error;
 
-pub use crate::names::{Param, Prose};
+pub use crate::params::names::{Param, Prose};
 
 /// Everything that can go wrong in the numeric core.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -166,9 +166,9 @@ pub enum EraError {
         reason: Prose,
     },
     /// A size asked for by the data or a parameter is above a resource limit
-    /// ([`crate::limits`]).
+    /// ([`crate::params::limits`]).
     #[error(transparent)]
-    Limit(#[from] crate::limits::LimitError),
+    Limit(#[from] crate::params::limits::LimitError),
     /// A parameter a front end passed is refused; the message names it as that front
     /// end does (a flag, a keyword) with its value ([`crate::params`]).
     #[error("{0}")]
@@ -289,7 +289,7 @@ impl InputError for EraError {
 }
 
 /// A size above a limit is the caller's to lower (or to raise the limit).
-impl InputError for crate::limits::LimitError {
+impl InputError for crate::params::limits::LimitError {
     fn is_input_error(&self) -> bool {
         true
     }
@@ -340,17 +340,17 @@ mod tests {
     /// outputs or inputs to name.
     #[test]
     fn frequency_messages_read_right_in_every_case() {
-        let decreasing = crate::frf::validate_frequencies(&[0.0, -12.5, -25.0]).unwrap_err();
+        let decreasing = crate::data::frf::validate_frequencies(&[0.0, -12.5, -25.0]).unwrap_err();
         assert_eq!(
             decreasing.to_string(),
             "frequencies must increase from 0 Hz: line 1 is -12.5 Hz"
         );
-        let uneven = crate::frf::validate_frequencies(&[0.0, 2.0, 5.0]).unwrap_err();
+        let uneven = crate::data::frf::validate_frequencies(&[0.0, 2.0, 5.0]).unwrap_err();
         assert_eq!(
             uneven.to_string(),
             "frequencies are not uniformly spaced: line 2 is 5 Hz, expected 4 Hz (spacing 2 Hz)"
         );
-        let nan = crate::frf::validate_frequencies(&[0.0, 1.0, f64::NAN]).unwrap_err();
+        let nan = crate::data::frf::validate_frequencies(&[0.0, 1.0, f64::NAN]).unwrap_err();
         assert_eq!(nan.to_string(), "non-finite value in frequency at line 2");
     }
 }

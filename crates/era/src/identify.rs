@@ -5,19 +5,20 @@
 //! FRFs' own Markov sequence (their inverse transform), [`identify_supplied`] one from
 //! elsewhere (OKID's).
 
+use crate::data::frf::FrfData;
+use crate::data::identification::{Identification, Stage, StageTimings};
+use crate::data::statespace::StateSpace;
 use crate::error::Result;
-use crate::frf::FrfData;
-use crate::identification::{Identification, Stage, StageTimings};
 use crate::pipeline::factor::SvdPath;
 use crate::pipeline::order::{auto, with_scan};
 use crate::pipeline::realize::Realization;
 use crate::pipeline::run::{assess, run, Path};
 use crate::sources::frf::MarkovSequence;
-use crate::statespace::StateSpace;
 
 pub mod oma;
 pub(crate) mod options;
 pub mod route;
+pub mod suspect;
 
 mod zero_start;
 

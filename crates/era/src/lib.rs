@@ -20,16 +20,18 @@
 //!    ([`pipeline::hankel_op`] applies them without forming them).
 //! 4. [`pipeline::factor`]: `H0 = U S Vᵀ`, dense or truncated; [`pipeline::realize`]:
 //!    `A = S^(−½) Uᵀ H1 V S^(−½)`, `B = S^(½) Vᵀ E_p`, `C = E_qᵀ U S^(½)` at any order.
-//! 5. [`statespace`]: `d2c` (zero-order-hold inverse, `log`) and `c2d` (`exp`).
+//! 5. [`data::statespace`]: `d2c` (zero-order-hold inverse, `log`) and `c2d` (`exp`).
 //! 6. [`pipeline::modes`]: `s = ln(z)/Ts`; frequency `|s|/2π`, damping `−Re s/|s|`,
 //!    shapes `Cφ`, participations `ψB`.
 //! 7. [`pipeline::fit`]: the model's FRF through its modal form, and the per-pair fit.
 //!
 //! The order ([`Order`]) is fixed, or chosen by [`pipeline::order`] from a scan across
 //! orders. After the pipeline: [`modal`] (indicators, the stabilization clustering),
-//! [`refine`] (maximum likelihood) and [`suspect`] (results to treat with care); the
-//! result is plain data ([`identification`]). [`linalg`] holds the truncated SVD, the
-//! FFT plan cache and the random generator.
+//! [`refine`] (maximum likelihood) and [`identify::suspect`] (results to treat with care);
+//! the result is plain data ([`data::identification`]), as are the FRFs and models
+//! ([`data`]). [`linalg`] holds the truncated SVD, the FFT plan cache and the random
+//! generator; [`estimate`] the Welch estimate of FRFs from time histories; [`params`]
+//! the options' names, checks and limits.
 //!
 //! [`identify::identify`] runs them all; [`identify::identify_supplied`] runs them from
 //! another source's sequence; [`identify::identify_naive`] runs the naive reference of
@@ -48,33 +50,29 @@
 #![warn(missing_docs)]
 
 pub mod cancel;
+pub mod data;
 pub mod error;
-pub mod frf;
+pub mod estimate;
 pub mod friction;
-pub mod identification;
 pub mod identify;
-pub mod limits;
 pub mod linalg;
 pub mod modal;
-pub mod names;
 pub mod parallel;
 pub mod params;
 pub mod pipeline;
 pub mod refine;
 pub mod sim;
 pub mod sources;
-pub mod statespace;
-pub mod suspect;
 
 #[cfg(test)]
 mod test_support;
 
+pub use data::frf::{FrfData, Quantity};
+pub use data::identification::{Identification, Stage};
+pub use data::statespace::{StateSpace, TimeDomain};
 pub use error::{EraError, Result};
-pub use frf::{FrfData, Quantity};
-pub use identification::{Identification, Stage};
 pub use identify::oma::{oma, Oma, OmaMethod, OmaOptions};
 pub use identify::{
     identify, identify_observed, identify_supplied, EraOptions, ModelDomain, Order,
 };
 pub use num_complex::Complex64;
-pub use statespace::{StateSpace, TimeDomain};

@@ -4,14 +4,14 @@
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
-use era::frf::estimate::{Detrend, Estimator, Window};
-use era::names::{Named, UnknownName};
+use era::estimate::{Detrend, Estimator, Window};
+use era::params::names::{Named, UnknownName};
 use era::refine::{Residuals, Weighting};
 use era::Quantity;
 use std::str::FromStr;
 
 /// The parser of a core enum's words: clap offers the core's names
-/// ([`era::names::Named`]) and reads them with the core's `FromStr`, so the CLI and
+/// ([`era::params::names::Named`]) and reads them with the core's `FromStr`, so the CLI and
 /// Python spell every value alike.
 pub fn named<T>() -> impl TypedValueParser<Value = T>
 where
@@ -132,7 +132,7 @@ pub struct WelchArgs {
     #[arg(long, value_parser = named::<Window>(), default_value_t = Window::default())]
     pub window: Window,
     /// Overlap of consecutive frames, as a fraction of the frame (0 ≤ overlap < 1).
-    #[arg(long, default_value_t = era::frf::estimate::WelchOptions::DEFAULT_OVERLAP, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = era::estimate::WelchOptions::DEFAULT_OVERLAP, allow_negative_numbers = true)]
     pub overlap: f64,
     /// FRF estimator: h1 (noise on the outputs), h2 (noise on the inputs), hv (total
     /// least squares).

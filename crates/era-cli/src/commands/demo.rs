@@ -6,7 +6,7 @@ use crate::output::demo::{demo_json, max_errors, table, write_files, Runs};
 use crate::output::prepare_out_dir;
 use crate::output::report::{parameter_echo, print_json, timings_table, Human};
 use anyhow::Context;
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{identify, EraOptions};
 use era::pipeline::modes::modal_parameters;
 use era::sim::{truth_model, truth_model_frf};

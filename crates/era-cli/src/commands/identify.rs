@@ -103,9 +103,10 @@ fn identified(
         found = refine_route(a, found, frf, &check, human, &a.settings)?;
     }
     found.suspects.extend(zero_start);
-    found
-        .suspects
-        .extend(era::suspect::band_edges(&found, plan.fit.fitted_hz));
+    found.suspects.extend(era::identify::suspect::band_edges(
+        &found,
+        plan.fit.fitted_hz,
+    ));
     Ok((found, states, zero_start_s))
 }
 

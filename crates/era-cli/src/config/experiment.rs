@@ -46,9 +46,9 @@ fn structure(a: &config::Experiment) -> anyhow::Result<Structure> {
         None => (d.damping_min, d.damping_max),
     };
     let dofs = a.dofs.unwrap_or(d.outputs);
-    era::limits::CHANNELS.check("--dofs", dofs as u64)?;
+    era::params::limits::CHANNELS.check("--dofs", dofs as u64)?;
     let modes = a.modes.unwrap_or(d.modes);
-    era::limits::STATES.check_product("--modes (2 states each)", &[modes as u64, 2])?;
+    era::params::limits::STATES.check_product("--modes (2 states each)", &[modes as u64, 2])?;
     let spec = ModalSpec {
         outputs: dofs,
         inputs: dofs,
@@ -73,7 +73,8 @@ pub fn spec(a: &config::Experiment) -> anyhow::Result<ExperimentSpec> {
     if a.averages == 0 {
         return usage("--averages 0: need at least one frame");
     }
-    era::limits::SAMPLES.check_product("--averages x 2048 samples", &[a.averages as u64, 2048])?;
+    era::params::limits::SAMPLES
+        .check_product("--averages x 2048 samples", &[a.averages as u64, 2048])?;
     if a.actuators == 0 || a.actuators > TABLE_5_1.len() {
         return usage(format!(
             "--actuators {}: must be 1 to {} (the actuators of Table 5.1)",

@@ -26,7 +26,7 @@ pub struct Plan {
     /// The refinement's options: the lines it fits and its weighting.
     pub refine: RefineOptions,
     /// The lines fitted and the band, Hz.
-    pub fit: era::frf::FitLines,
+    pub fit: era::data::frf::FitLines,
 }
 
 impl Plan {
@@ -119,9 +119,9 @@ pub fn fit_lines(
     coherence: Option<&InputCoherence>,
     route: &Route,
     human: &Human,
-) -> anyhow::Result<era::frf::FitLines> {
+) -> anyhow::Result<era::data::frf::FitLines> {
     let band = identify_band(a, frf, coherence, route.coherence_band)?;
-    let fit = era::frf::fit_lines(
+    let fit = era::data::frf::fit_lines(
         frf,
         a.options.zero_lines,
         band.as_ref().ok().map(|b| (b.0, b.1)),
@@ -143,8 +143,8 @@ pub fn fit_lines(
 }
 
 /// The band to identify over: `--band LO..HI`, or (when the route takes the band from
-/// the coherence) where the coherence is at least [`era::frf::BAND_COHERENCE`]
-/// (`era::frf::coherence_band`), with the reason to echo; `Err(why)` inside the `Ok`
+/// the coherence) where the coherence is at least [`era::data::frf::BAND_COHERENCE`]
+/// (`era::data::frf::coherence_band`), with the reason to echo; `Err(why)` inside the `Ok`
 /// for every line, with the reason.
 pub fn identify_band(
     a: &Identify,
@@ -157,7 +157,7 @@ pub fn identify_band(
         .as_ref()
         .filter(|t| !t.trim().eq_ignore_ascii_case("all"))
     {
-        // Checked against the data by era::frf::fit_lines.
+        // Checked against the data by era::data::frf::fit_lines.
         let Some((lo, hi)) = crate::config::parse_band(text) else {
             return crate::error::usage(format!(
                 "--band {text}: expected LO..HI in Hz, e.g. 60..500, or all"
@@ -189,18 +189,18 @@ pub fn identify_band(
     };
     let values: Vec<Vec<f64>> = curves.curves.iter().map(|(_, v)| v.clone()).collect();
     Ok(
-        match era::frf::coherence_band(&curves.frequency_hz, &values) {
+        match era::data::frf::coherence_band(&curves.frequency_hz, &values) {
             Some((lo, hi)) => Ok((
                 lo,
                 hi,
                 format!(
                     "where the coherence ({source}) is at least {} (--band LO..HI to set it)",
-                    era::frf::BAND_COHERENCE
+                    era::data::frf::BAND_COHERENCE
                 ),
             )),
             None => Err(format!(
                 "every line: the coherence ({source}) marks no narrower band where it is at least {} (--band LO..HI to set it)",
-                era::frf::BAND_COHERENCE
+                era::data::frf::BAND_COHERENCE
             )),
         },
     )

@@ -16,7 +16,7 @@ pub const VERBS: [&str; 2] = ["identify", "oma"];
 pub const MAX_RECORDS: usize = 1_000_000;
 
 /// The largest manifest read: about a million records.
-pub const MANIFEST_BYTES: era::limits::Limit = era::limits::Limit {
+pub const MANIFEST_BYTES: era::params::limits::Limit = era::params::limits::Limit {
     what: "bytes of a batch manifest",
     default: 64 << 20,
     env: "ERA_MAX_MANIFEST_BYTES",

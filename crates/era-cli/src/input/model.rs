@@ -5,7 +5,7 @@
 use crate::config::{Plot, Refine};
 use crate::error::usage;
 use anyhow::Context;
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{assess_model, EraOptions};
 use era::pipeline::realize::SvdPath;
 use era_io::model_json::ModelJson;

@@ -7,7 +7,7 @@
 use crate::config::{Settings, Welch};
 use crate::input::InputFrf;
 use anyhow::Context as _;
-use era::frf::estimate::{self, Estimator, FrfEstimate, WelchOptions};
+use era::estimate::{self, Estimator, FrfEstimate, WelchOptions};
 use era_io::csv::FrfFile;
 use era_io::format::FrfFormat;
 use era_io::time::{parse_channels, read_time_file, TimeHistory, TimeSelection};
@@ -164,7 +164,7 @@ fn read_records(
             // Kept for OKID, the FRFs only judge the model: enough averages to judge
             // it (a frame of 256 samples or more).
             records.welch.frame = Some(if keep {
-                era::frf::estimate::judging_frame(history.samples(), paths.len(), welch.overlap)
+                era::estimate::judging_frame(history.samples(), paths.len(), welch.overlap)
             } else {
                 crate::config::DEFAULT_FRAME
             });

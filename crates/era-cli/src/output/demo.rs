@@ -5,7 +5,7 @@ use crate::config::{Demo, Settings};
 use crate::output::identification::{write_identification, Bundle};
 use crate::output::report::parameter_echo;
 use crate::output::{write_output, RunInput};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::EraOptions;
 use era::pipeline::modes::Mode;
 use era::sim::TABLE_5_2_ERA_NOISY;

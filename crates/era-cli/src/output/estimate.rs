@@ -2,7 +2,7 @@
 //! (`era frf`, `era identify --from-time --save-frf`).
 
 use super::{coherence_path, output_name, write_output};
-use era::frf::estimate::FrfEstimate;
+use era::estimate::FrfEstimate;
 use era_io::atomic::OutputSet;
 use era_io::csv::FrfFile;
 use era_io::format::FrfFormat;

@@ -1,7 +1,7 @@
 //! Writing the figures and `report.html` of one identification into an [`OutputSet`].
 
 use crate::output::{write_output, RunInput};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::{FrfData, Quantity};
 use era_io::atomic::{write_atomic, write_via, OutputSet};
 use era_io::uff::ChannelTable;

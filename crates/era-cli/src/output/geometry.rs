@@ -4,7 +4,7 @@
 //! the report's mode-shape viewer ([`shape_view`]). And the geometry the simulators
 //! write beside their FRFs ([`write_dta_like`]).
 
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era_io::frf_file::ChannelTable;
 use era_io::geometry::{map_channels, read_geometry, Geometry};
 use era_plot::viewer::{Placement, ShapeView};

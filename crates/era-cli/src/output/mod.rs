@@ -46,7 +46,7 @@ pub struct InputCoherence {
 impl InputCoherence {
     /// The multiple coherence of each output of an estimate (with one input, its
     /// ordinary coherence): the share of the output's power the inputs explain.
-    pub fn multiple(estimate: &era::frf::estimate::FrfEstimate) -> Self {
+    pub fn multiple(estimate: &era::estimate::FrfEstimate) -> Self {
         let q = estimate.frf.outputs();
         InputCoherence {
             frequency_hz: estimate.frf.frequency_hz().to_vec(),

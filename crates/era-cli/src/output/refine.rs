@@ -5,7 +5,7 @@ use crate::config::Refine;
 use crate::input::InputFrf;
 use crate::output::identification::{write_identification, Bundle};
 use crate::output::report::{identification_summary, print_json, Human};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era_io::atomic::OutputSet;
 use era_io::geometry::Geometry;
 use era_io::model_json::{FitJson, ModelJson};

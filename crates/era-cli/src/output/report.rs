@@ -3,7 +3,7 @@
 //! `--quiet` silences it.
 
 use crate::config::{Settings, Verbosity};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{EraOptions, ModelDomain};
 use era::pipeline::realize::DirectTerm;
 use std::collections::BTreeMap;
@@ -143,7 +143,7 @@ pub fn mode_table(found: &Identification) -> String {
 }
 
 /// The scan's summary: the diagram's extent, the rule and how many modes it kept.
-pub fn stabilization_summary(st: &era::identification::Stabilization) -> String {
+pub fn stabilization_summary(st: &era::data::identification::Stabilization) -> String {
     let mut s = String::new();
     let physical = st.selection.physical().count();
     let candidates = st
@@ -430,7 +430,7 @@ pub fn svd_path_line(r: &era::pipeline::realize::Realization) -> String {
 pub(crate) fn verdict(
     k: usize,
     m: &era::pipeline::modes::Mode,
-    q: Option<&era::identification::ModeQuality>,
+    q: Option<&era::data::identification::ModeQuality>,
     reasons: &mut Vec<String>,
     marks: (&'static str, &'static str, &'static str),
 ) -> &'static str {

@@ -4,7 +4,7 @@
 //! with a geometry each mode in three views (`shapes/mode_NN.svg/png`, not inlined in
 //! the report: its viewer draws the same three views from its own data).
 
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::Complex64;
 use era_plot::oma::MacPlot;
 use era_plot::shapes::{ComplexityPanel, ComplexityPlot};

@@ -1,7 +1,7 @@
 use super::parse::*;
 use super::write58::*;
 use super::*;
-use era::frf::uniform_lines;
+use era::data::frf::uniform_lines;
 use era::{Complex64, FrfData, Quantity};
 
 fn sample(q: usize, p: usize, lines: usize) -> FrfData {

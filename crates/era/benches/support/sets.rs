@@ -4,7 +4,7 @@
 
 #![allow(dead_code)]
 
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{EraOptions, ModelDomain, Order};
 use era::pipeline::realize::DirectTerm;
 

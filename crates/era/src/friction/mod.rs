@@ -86,7 +86,7 @@ pub enum FrictionError {
     },
     /// A size or amount of work asked for is above a resource limit.
     #[error(transparent)]
-    Limit(#[from] crate::limits::LimitError),
+    Limit(#[from] crate::params::limits::LimitError),
     /// A simulation produced NaN or infinite values: the parameters are beyond what
     /// double precision can represent.
     #[error("{what} is not finite for {parameters}: the parameters are beyond what double precision can simulate")]

@@ -151,16 +151,16 @@ fn advance(osc: &Oscillator, mass: f64, c: f64, force: f64, mut state: State, mu
 ///
 /// # Errors
 /// [`FrictionError::Limit`] when one sample period would need more steps than
-/// [`crate::limits::STEPS`] allows (a natural frequency far above the sample rate).
+/// [`crate::params::limits::STEPS`] allows (a natural frequency far above the sample rate).
 pub(crate) fn substeps_per_sample(osc: &Oscillator, sample_rate_hz: f64) -> Result<usize> {
     let ratio = 2000.0 * osc.natural_frequency_hz / sample_rate_hz;
-    let n = crate::limits::STEPS.check(
+    let n = crate::params::limits::STEPS.check(
         format!(
             "steps per sample: 2000 x natural-frequency-hz {} / sample-rate {}",
             super::show(osc.natural_frequency_hz),
             super::show(sample_rate_hz)
         ),
-        crate::limits::saturating_count(ratio).max(1),
+        crate::params::limits::saturating_count(ratio).max(1),
     )?;
     Ok(usize::try_from(n).unwrap_or(usize::MAX))
 }
@@ -172,8 +172,8 @@ pub(crate) fn substeps_per_sample(osc: &Oscillator, sample_rate_hz: f64) -> Resu
 ///
 /// # Errors
 /// [`FrictionError::InvalidParameter`] for invalid parameters or a non-positive sample
-/// rate; [`FrictionError::Limit`] when `samples` exceeds [`crate::limits::SAMPLES`] or
-/// the steps exceed [`crate::limits::STEPS`] (checked before anything is allocated).
+/// rate; [`FrictionError::Limit`] when `samples` exceeds [`crate::params::limits::SAMPLES`] or
+/// the steps exceed [`crate::params::limits::STEPS`] (checked before anything is allocated).
 pub fn integrate(
     osc: &Oscillator,
     x0: f64,
@@ -193,8 +193,8 @@ pub fn integrate(
     let (mass, c) = (osc.mass(), osc.viscous_coefficient());
     let period = 1.0 / sample_rate_hz;
     let substeps = substeps_per_sample(osc, sample_rate_hz)?;
-    crate::limits::SAMPLES.check("samples", samples as u64)?;
-    crate::limits::STEPS.check_product(
+    crate::params::limits::SAMPLES.check("samples", samples as u64)?;
+    crate::params::limits::STEPS.check_product(
         "integration (samples x steps per sample)",
         &[samples as u64, substeps as u64],
     )?;
@@ -259,8 +259,8 @@ pub struct DecayRecord {
 ///
 /// # Errors
 /// [`FrictionError::InvalidParameter`] for invalid parameters,
-/// [`FrictionError::Limit`] when the record would exceed [`crate::limits::SAMPLES`] or
-/// the integration [`crate::limits::STEPS`], [`FrictionError::NonFiniteResult`] when the
+/// [`FrictionError::Limit`] when the record would exceed [`crate::params::limits::SAMPLES`] or
+/// the integration [`crate::params::limits::STEPS`], [`FrictionError::NonFiniteResult`] when the
 /// parameters are beyond double precision (the record is never returned with NaN or
 /// infinite samples).
 pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
@@ -308,14 +308,14 @@ pub fn free_decay_record(spec: &DecaySpec) -> Result<DecayRecord> {
             super::show(osc.natural_frequency_hz)
         ),
     };
-    let samples = crate::limits::SAMPLES.check_product(
+    let samples = crate::params::limits::SAMPLES.check_product(
         format!(
             "samples: sample-rate {} x (hold {} + duration {} s, {duration_from}) + 1",
             super::show(spec.sample_rate_hz),
             super::show(spec.hold_s),
             super::show(duration)
         ),
-        &[crate::limits::saturating_count(
+        &[crate::params::limits::saturating_count(
             ((spec.hold_s + duration) * spec.sample_rate_hz).round() + 1.0,
         )],
     )?;

@@ -90,7 +90,7 @@ pub(crate) fn amplitude_trend(spec: &TuneSpec, coefficient: f64) -> Result<f64> 
 ///
 /// # Errors
 /// [`FrictionError::InvalidParameter`] for invalid settings; [`FrictionError::Limit`]
-/// when the trials together would take more than [`crate::limits::STEPS`] integrator
+/// when the trials together would take more than [`crate::params::limits::STEPS`] integrator
 /// steps (checked before the first trial); [`FrictionError::NonFiniteResult`] when the
 /// neutral coefficient is not a positive finite number.
 pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
@@ -144,10 +144,10 @@ pub fn tune(spec: &TuneSpec) -> Result<TuneResult> {
     // Bound the work before any trial runs: every trial integrates
     // cycles x sample-rate / f_n samples of `substeps` steps each.
     let substeps = super::simulate::substeps_per_sample(o, spec.sample_rate_hz)?;
-    let samples = crate::limits::saturating_count(
+    let samples = crate::params::limits::saturating_count(
         spec.cycles as f64 * spec.sample_rate_hz / o.natural_frequency_hz,
     );
-    crate::limits::STEPS.check_product(
+    crate::params::limits::STEPS.check_product(
         format!(
             "--cycles {} at sample-rate {} and natural-frequency-hz {} ({MAX_TRIALS} bisection trials x samples x steps per sample)",
             spec.cycles,

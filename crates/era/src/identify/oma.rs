@@ -24,9 +24,9 @@
 //! Mode shapes are unscaled: with no measured input there is no modal mass, and the
 //! "participations" are the references' (`ψ G`), not forces'.
 
+use crate::data::frf::Quantity;
+use crate::data::identification::{Identification, Stage};
 use crate::error::{EraError, Result};
-use crate::frf::Quantity;
-use crate::identification::{Identification, Stage};
 use crate::identify::{EraOptions, Order, Realizer};
 use crate::modal::indicators::mac;
 use crate::pipeline::factor::{FactorOptions, Factorization};
@@ -50,7 +50,7 @@ pub enum OmaMethod {
     NextEra,
 }
 
-crate::names::named!(display OmaMethod, "method", [
+crate::params::names::named!(display OmaMethod, "method", [
     OmaMethod::SsiCov => "ssi-cov",
     OmaMethod::NextEra => "next-era",
 ]);
@@ -312,7 +312,7 @@ fn judge_spread(found: &mut Identification, spread: &[Option<ModeSpread>], block
         }
     }
     judge_doubles(found);
-    found.suspects = crate::suspect::check_identification(found);
+    found.suspects = crate::identify::suspect::check_identification(found);
 }
 
 /// Two physical modes closer in frequency than [`DOUBLE_SIGMAS`] of their combined

@@ -164,7 +164,7 @@ impl EraOptions {
 impl EraOptions {
     /// Checks what a front end asked for before anything is read or allocated: at least
     /// one state (an automatic order is checked as one state), a Hankel factor of at least 1, the states, Markov samples
-    /// (`states × hankel_factor`) and padded lines within [`crate::limits`], and a
+    /// (`states × hankel_factor`) and padded lines within [`crate::params::limits`], and a
     /// Butterworth low-pass of order 1 to 20 at a positive cut-off. Messages name each
     /// parameter as `naming` does (the CLI's `--states`, Python's `states`).
     ///
@@ -174,8 +174,8 @@ impl EraOptions {
     /// # Errors
     /// [`EraError::Invalid`](crate::EraError::Invalid) or [`EraError::Limit`](crate::EraError::Limit).
     pub fn check(&self, naming: crate::params::Naming) -> Result<()> {
-        use crate::limits::{LINES, SAMPLES, STATES};
         use crate::params::invalid;
+        use crate::params::limits::{LINES, SAMPLES, STATES};
         let name = |key: &str| naming.name(key);
         let states = self.order.states().unwrap_or(1);
         if states == 0 {
@@ -268,13 +268,13 @@ impl Default for ScanOptions {
     }
 }
 
-crate::names::named!(display Realizer, "realizer", [
+crate::params::names::named!(display Realizer, "realizer", [
     Realizer::Era => "era",
     Realizer::EraDc => "era-dc",
     Realizer::Shift => "shift",
 ]);
 
-crate::names::named!(display ModelDomain, "time domain", [
+crate::params::names::named!(display ModelDomain, "time domain", [
     ModelDomain::Discrete => "discrete",
     ModelDomain::Continuous => "continuous",
 ]);

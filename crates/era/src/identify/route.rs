@@ -13,7 +13,7 @@
 //! [`Choice`] with the reason it was made, so a front end can echo the route it took.
 //! The texts name options in words, not in any front end's spelling.
 
-use crate::frf::Quantity;
+use crate::data::frf::Quantity;
 use crate::identify::ModelDomain;
 use crate::pipeline::realize::DirectTerm;
 
@@ -30,12 +30,12 @@ pub enum Preset {
 impl Preset {
     /// `measured` or `thesis`.
     pub fn name(self) -> &'static str {
-        crate::names::Named::name_of(&self)
+        crate::params::names::Named::name_of(&self)
     }
 
     /// Parses `measured` or `thesis` (case-insensitive).
     pub fn parse(text: &str) -> Option<Preset> {
-        crate::names::parse(text).ok()
+        crate::params::names::parse(text).ok()
     }
 }
 
@@ -264,7 +264,7 @@ impl Route {
     }
 }
 
-crate::names::named!(display Preset, "preset", [
+crate::params::names::named!(display Preset, "preset", [
     Preset::Measured => "measured",
     Preset::Thesis => "thesis",
 ]);

@@ -1,9 +1,9 @@
 //! The zero-start check: how much the zeroed (or padded) leading lines of an FRF shift
 //! ERA's modes, found by identifying the model's own FRF twice, whole and with the same
-//! lines zeroed ([`crate::suspect`] words the result).
+//! lines zeroed ([`crate::identify::suspect`] words the result).
 
-use crate::frf::leading_zero_lines;
-use crate::identification::{Identification, SuspectResult};
+use crate::data::frf::leading_zero_lines;
+use crate::data::identification::{Identification, SuspectResult};
 
 /// Relative shifts below which zeroed lines are not worth a warning: 5 % in damping,
 /// 0.1 % in frequency.

@@ -49,9 +49,9 @@
 //! Everything here is a few lines of complex arithmetic per mode; no crate provides these
 //! modal-analysis indicators, so they are written here.
 
+use crate::data::statespace::TimeDomain;
 use crate::pipeline::modes::ModalForm;
 use crate::pipeline::realize::HankelTails;
-use crate::statespace::TimeDomain;
 use num_complex::Complex64;
 
 /// Modal phase collinearity of a shape, in [0, 1] (0 for a zero shape).
@@ -255,9 +255,9 @@ pub fn mac(a: &[Complex64], b: &[Complex64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::statespace::StateSpace;
     use crate::pipeline::realize::{realize, RealizeOptions};
     use crate::sources::frf::MarkovSequence;
-    use crate::statespace::StateSpace;
     use faer::Mat;
 
     #[test]

@@ -94,7 +94,7 @@ impl OrderRange {
                 if n == 0 {
                     return Err(bad("an order of 0 states is not a model"));
                 }
-                crate::limits::STATES.check("orders", n as u64)?;
+                crate::params::limits::STATES.check("orders", n as u64)?;
                 list.push(n);
             }
             list.sort_unstable();
@@ -154,7 +154,7 @@ impl OrderRange {
         if min > max {
             return Err(bad(format!("MIN {min} is above MAX {max}")));
         }
-        crate::limits::STATES.check("orders", max as u64)?;
+        crate::params::limits::STATES.check("orders", max as u64)?;
         if (max - min) / step + 1 > MAX_SCAN_ORDERS {
             return Err(bad(format!(
                 "{} orders; at most {MAX_SCAN_ORDERS} per scan (raise the step)",

@@ -35,7 +35,7 @@ pub enum SvdPath {
 impl SvdPath {
     /// `"dense"`, `"matrix-free"` or `"auto"`.
     pub fn name(self) -> &'static str {
-        crate::names::Named::name_of(&self)
+        crate::params::names::Named::name_of(&self)
     }
 
     /// Whether this path goes matrix-free for an `H0` whose short side is `short_side`.
@@ -178,7 +178,7 @@ pub(crate) fn check_room(rows: usize, cols: usize, states: usize) -> Result<()> 
 }
 
 /// Checks what a dense thin SVD of a `rows × cols` Hankel holds at once against
-/// [`crate::limits::DENSE`], before anything is allocated: the matrix, its `H1` partner's
+/// [`crate::params::limits::DENSE`], before anything is allocated: the matrix, its `H1` partner's
 /// product and faer's workspace (about three copies) and the factors `U` and `V`.
 ///
 /// # Errors
@@ -189,11 +189,11 @@ pub(crate) fn check_dense_svd(rows: usize, cols: usize) -> Result<()> {
         .saturating_mul(c)
         .saturating_mul(3)
         .saturating_add(r.saturating_add(c).saturating_mul(r.min(c)));
-    crate::limits::DENSE.check(
-        crate::names::Prose::from(format!(
+    crate::params::limits::DENSE.check(
+        crate::params::names::Prose::from(format!(
             "a dense SVD of the {rows} x {cols} Hankel matrix ("
         ))
-        .param(crate::names::Param::Svd)
+        .param(crate::params::names::Param::Svd)
         .text(" matrix-free holds a few of its columns instead)"),
         values,
     )?;
@@ -544,7 +544,7 @@ impl Factorization {
     }
 }
 
-crate::names::named!(display SvdPath, "svd", [
+crate::params::names::named!(display SvdPath, "svd", [
     SvdPath::Auto => "auto",
     SvdPath::Dense => "dense",
     SvdPath::MatrixFree => "matrix-free",

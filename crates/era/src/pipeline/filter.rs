@@ -93,8 +93,8 @@ impl LowPass {
             return Err(EraError::InvalidParameter {
                 name: "lowpass_hz",
                 value: cutoff_hz.to_string(),
-                reason: crate::names::Prose::from(format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower "))
-                    .param(crate::names::Param::LowpassOrder),
+                reason: crate::params::names::Prose::from(format!("the order-{order} Butterworth design at this cut-off is not finite: raise the cut-off or lower "))
+                    .param(crate::params::names::Param::LowpassOrder),
             });
         }
         Ok(LowPass {
@@ -143,11 +143,11 @@ impl LowPass {
             return Err(EraError::InvalidParameter {
                 name: "lowpass_hz",
                 value: self.cutoff_hz.to_string(),
-                reason: crate::names::Prose::from(format!(
+                reason: crate::params::names::Prose::from(format!(
                     "the order-{} filter turned the impulse response into non-finite values: raise the cut-off or lower ",
                     self.order
                 ))
-                .param(crate::names::Param::LowpassOrder),
+                .param(crate::params::names::Param::LowpassOrder),
             });
         }
         Ok(out)

@@ -22,11 +22,11 @@
 //! The solves are written here because `faer` has no shifted Hessenberg solver, and a
 //! general complex LU per line (`frequency_response_naive`) costs O(n³).
 
+use crate::data::frf::FrfData;
+use crate::data::statespace::{StateSpace, TimeDomain};
 use crate::error::{EraError, Result};
-use crate::frf::FrfData;
 use crate::linalg::eigen::balancing_scale;
 use crate::pipeline::modes::ModalForm;
-use crate::statespace::{StateSpace, TimeDomain};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::hessenberg;
 use faer::linalg::householder;
@@ -506,9 +506,9 @@ pub(crate) fn fit_metrics(measured: &FrfData, model: &[Complex64], first_line: u
                 // Squares of magnitudes beyond about 1e154 overflow, below 1e-154 they
                 // underflow: sum them at an exact power-of-two scale instead (the ratio
                 // is the same). Ordinary data never takes this path.
-                let top = crate::frf::largest_component(g.iter().chain(h));
+                let top = crate::data::frf::largest_component(g.iter().chain(h));
                 if top > 0.0 {
-                    let k = 2f64.powi(crate::frf::exponent_toward_one(top));
+                    let k = 2f64.powi(crate::data::frf::exponent_toward_one(top));
                     num = g
                         .iter()
                         .zip(h)
@@ -698,7 +698,7 @@ mod tests {
         );
         // Well-conditioned modal coordinates: the modal form agrees too.
         let structure = ModalStructure::random(&ModalSpec::new(3, 2, 6)).unwrap();
-        let model = structure.state_space(crate::frf::Quantity::Velocity);
+        let model = structure.state_space(crate::data::frf::Quantity::Velocity);
         let freq: Vec<f64> = (0..300).map(|k| 0.05 * k as f64).collect();
         let dense = frequency_response_naive(&model, &freq);
         let fast = frequency_response(&model, &freq).unwrap();
@@ -726,7 +726,7 @@ mod tests {
         use crate::pipeline::realize::SvdPath;
         let structure = ModalStructure::random(&ModalSpec::default()).unwrap();
         let frf = structure
-            .frf(801, 0.025, crate::frf::Quantity::Acceleration)
+            .frf(801, 0.025, crate::data::frf::Quantity::Acceleration)
             .unwrap();
         let found = identify(
             &frf,

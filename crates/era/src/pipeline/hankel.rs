@@ -116,11 +116,11 @@ impl ThesisHankel {
     /// # Errors
     /// [`EraError::InvalidParameter`] when `ns·lh < 8` (no room for a 1-block `H0`).
     pub fn new(states: usize, hankel_factor: usize) -> Result<Self> {
-        crate::limits::STATES.check("states", states as u64)?;
+        crate::params::limits::STATES.check("states", states as u64)?;
         // The Markov samples are samples of the impulse responses: a product above the
         // sample limit cannot be filled from any data a limit lets through. Refusing it
         // here also keeps the product (and every message that prints it) from wrapping.
-        let product = crate::limits::SAMPLES.check_product(
+        let product = crate::params::limits::SAMPLES.check_product(
             "Markov samples (states x hankel factor)",
             &[states as u64, hankel_factor as u64],
         )?;

@@ -7,9 +7,9 @@
 //! of `V⁻¹`; their product is the residue `C φ ψ B` of the pole, which does not depend on
 //! how `φ` is scaled. Shapes are scaled so their largest entry is `1 + 0i`.
 
+use crate::data::statespace::{StateSpace, TimeDomain};
 use crate::error::Result;
 use crate::linalg::eigen::balanced_eigen;
-use crate::statespace::{StateSpace, TimeDomain};
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Mat;
 use num_complex::Complex64;

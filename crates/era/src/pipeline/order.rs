@@ -3,9 +3,10 @@
 //! ([`crate::modal::stabilization`]), and from them either a fixed order's modes judged
 //! against the scan, or the automatic order: a modal model of the modes that stay.
 
+use crate::data::frf::FrfData;
+use crate::data::identification::{Identification, Stabilization, Stage, StageTimings};
+use crate::data::statespace::StateSpace;
 use crate::error::{EraError, Result};
-use crate::frf::FrfData;
-use crate::identification::{Identification, Stabilization, Stage, StageTimings};
 use crate::identify::options::{EraOptions, Realizer, ScanOptions};
 use crate::modal::stabilization::{scan, select, OrderRange, Scan, Selection, SelectionCriteria};
 use crate::pipeline::factor::{FactorOptions, Factorization};
@@ -13,7 +14,6 @@ use crate::pipeline::hankel::HankelShape;
 use crate::pipeline::run::{back, fit_band, front, not_circular, run, Front, MagnitudeScale, Path};
 use crate::sources::frf::preprocess::integrate;
 use crate::sources::frf::MarkovSequence;
-use crate::statespace::StateSpace;
 use std::time::Instant;
 
 impl Stabilization {
@@ -75,16 +75,16 @@ pub(crate) fn default_orders(
         return Err(EraError::InvalidParameter {
             name: "states",
             value: "auto".into(),
-            reason: crate::names::Prose::from(format!("{markov_samples} Markov samples at "))
-                .param(crate::names::Param::HankelFactor)
+            reason: crate::params::names::Prose::from(format!("{markov_samples} Markov samples at "))
+                .param(crate::params::names::Param::HankelFactor)
                 .text(format!(
                     " {hankel_factor} support a Hankel of {base} states; a scan needs at least 8: pad with "
                 ))
-            .param(crate::names::Param::PadTo)
+            .param(crate::params::names::Param::PadTo)
             .text(", lower ")
-            .param(crate::names::Param::HankelFactor)
+            .param(crate::params::names::Param::HankelFactor)
             .text(", or give ")
-            .param(crate::names::Param::States)
+            .param(crate::params::names::Param::States)
             .text(" N"),
         });
     }
@@ -317,17 +317,17 @@ fn scan_front(
         EraError::NotEnoughMarkovSamples { needed, available, .. } => EraError::InvalidParameter {
             name: "orders",
             value: range.to_string(),
-            reason: crate::names::Prose::from(format!(
+            reason: crate::params::names::Prose::from(format!(
                 "the largest order needs {needed} Markov samples at "
             ))
-            .param(crate::names::Param::HankelFactor)
+            .param(crate::params::names::Param::HankelFactor)
             .text(format!(
                 " {}, the data has {available}: lower the orders or ",
                 options.hankel_factor
             ))
-            .param(crate::names::Param::HankelFactor)
+            .param(crate::params::names::Param::HankelFactor)
             .text(", or pad with ")
-            .param(crate::names::Param::PadTo),
+            .param(crate::params::names::Param::PadTo),
         },
         EraError::HankelTooSmall { available, .. } => EraError::InvalidParameter {
             name: "orders",
@@ -417,7 +417,7 @@ pub(crate) fn with_scan(
             None => {}
         }
     }
-    found.suspects = crate::suspect::check_identification(&found);
+    found.suspects = crate::identify::suspect::check_identification(&found);
     found.stabilization = Some(Stabilization::new(
         range,
         s,
@@ -513,13 +513,13 @@ pub(crate) fn auto(
         return Err(EraError::InvalidParameter {
             name: "states",
             value: "auto".into(),
-            reason: crate::names::Prose::from(format!(
+            reason: crate::params::names::Prose::from(format!(
                 "no mode is stable across orders {range} (rule: {}): give ",
                 selection.rule()
             ))
-            .param(crate::names::Param::States)
+            .param(crate::params::names::Param::States)
             .text(" N, or a wider ")
-            .param(crate::names::Param::Orders)
+            .param(crate::params::names::Param::Orders)
             .text(" range"),
         });
     }
@@ -579,7 +579,7 @@ pub(crate) fn auto(
             q.reason = None;
         }
     }
-    found.suspects = crate::suspect::check_identification(&found);
+    found.suspects = crate::identify::suspect::check_identification(&found);
     found.stabilization = Some(Stabilization::new(
         range,
         s,
@@ -618,7 +618,7 @@ fn judge_significance(
     let processed = integrate(frf, options.integrations)?;
     let freq = processed.frequency_hz();
     let (first_line, _) = fit_band(freq, options);
-    let (first, end) = crate::frf::band_lines(freq, band_hz, first_line);
+    let (first, end) = crate::data::frf::band_lines(freq, band_hz, first_line);
     if end <= first + 2 {
         return Ok(());
     }
@@ -715,7 +715,7 @@ fn drop_negligible(
 ) {
     use crate::modal::stabilization::Rejection;
     let freq = frf.frequency_hz();
-    let (first, end) = crate::frf::band_lines(freq, band_hz, 0);
+    let (first, end) = crate::data::frf::band_lines(freq, band_hz, 0);
     if end <= first {
         return;
     }

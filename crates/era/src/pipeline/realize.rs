@@ -17,11 +17,11 @@
 //! full SVD and multiplies with plain loops. It is the reference every faster path is
 //! tested against.
 
+use crate::data::statespace::{StateSpace, TimeDomain};
 use crate::error::{EraError, Result};
 use crate::pipeline::factor::{check_dense_svd, check_rank, general_h1, plan, Keep};
 use crate::pipeline::hankel::{self, HankelShape};
 use crate::sources::frf::MarkovSequence;
-use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
 use std::time::Instant;
 
@@ -439,7 +439,7 @@ impl Factorization {
     }
 }
 
-crate::names::named!(display DirectTerm, "direct term", [
+crate::params::names::named!(display DirectTerm, "direct term", [
     DirectTerm::Zero => "zero",
     DirectTerm::FirstMarkov => "markov0",
 ]);

@@ -201,12 +201,12 @@ pub(crate) fn realize_dc(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::statespace::{StateSpace, TimeDomain};
     use crate::linalg::rng::Minstd;
     use crate::pipeline::factor::SvdPath;
     use crate::pipeline::modes::modal_parameters;
     use crate::pipeline::realize::HankelTails;
     use crate::sim::{ModalSpec, ModalStructure};
-    use crate::statespace::{StateSpace, TimeDomain};
     use era_testkit::{assert_matches_naive, Scale};
     use faer::linalg::solvers::SolveLstsq;
 
@@ -333,7 +333,7 @@ mod tests {
         };
         let s = ModalStructure::random(&spec).unwrap();
         let m = s
-            .state_space(crate::frf::Quantity::Displacement)
+            .state_space(crate::data::frf::Quantity::Displacement)
             .c2d(1.0 / 64.0)
             .unwrap();
         (s, m)

@@ -2,9 +2,10 @@
 //! Markov sequence (the FRFs' inverse transform, or one supplied), the realization, then
 //! the model's modes, indicators and fit against the measured FRFs.
 
+use crate::data::frf::FrfData;
+use crate::data::identification::{Identification, ModeQuality, Stage, StageTimings};
+use crate::data::statespace::StateSpace;
 use crate::error::{EraError, Result};
-use crate::frf::FrfData;
-use crate::identification::{Identification, ModeQuality, Stage, StageTimings};
 use crate::identify::options::{EraOptions, ModelDomain, Realizer};
 use crate::modal::indicators::{contributions, emac, mpc, ModeIndicators};
 use crate::modal::stabilization::{hard_rejection, SelectionCriteria};
@@ -14,7 +15,6 @@ use crate::pipeline::modes::{continuous_pole, modal_parameters_of, ModalForm, Mo
 use crate::pipeline::realize::{realize, realize_naive, Realization, RealizeOptions};
 use crate::sources::frf::preprocess::{integrate, preprocess, zero_leading_lines};
 use crate::sources::frf::{impulse_responses, impulse_responses_naive, MarkovSequence};
-use crate::statespace::StateSpace;
 use std::time::Instant;
 
 /// The largest FRF magnitude identified as given: `2^300` (about 2e90). Above it the
@@ -36,13 +36,13 @@ pub(crate) struct MagnitudeScale {
 
 impl MagnitudeScale {
     fn of(frf: &FrfData) -> Option<Self> {
-        let max = crate::frf::largest_component(frf.values());
+        let max = crate::data::frf::largest_component(frf.values());
         if max == 0.0 || (SAFE_MAGNITUDE_MIN..=SAFE_MAGNITUDE_MAX).contains(&max) {
             return None;
         }
         // Bring the largest magnitude near 1, with an even exponent so √s is exact (±1000
         // are even, so the bound holds).
-        let e = crate::frf::exponent_toward_one(max);
+        let e = crate::data::frf::exponent_toward_one(max);
         let e = e - e.rem_euclid(2);
         Some(MagnitudeScale { exponent: e })
     }

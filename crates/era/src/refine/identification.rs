@@ -2,9 +2,9 @@
 //! out, with its modes judged again ([`refine_identification`]), and the check of its
 //! modes against a second estimate of the same test ([`confirm_modes`]).
 
+use crate::data::frf::FrfData;
+use crate::data::identification::{FitDomain, Identification, ModeQuality, Refined, Stage};
 use crate::error::{EraError, Result};
-use crate::frf::FrfData;
-use crate::identification::{FitDomain, Identification, ModeQuality, Refined, Stage};
 use crate::identify::ModelDomain;
 use crate::modal::indicators::{mpc, ModeIndicators};
 use crate::modal::stabilization::{hard_rejection, SelectionCriteria};
@@ -264,7 +264,7 @@ pub fn refine_identification_in(
     found.model = model;
     found.modal = ModalParameters { modes, real_poles };
     found.quality = quality;
-    found.suspects = crate::suspect::check_identification(&found);
+    found.suspects = crate::identify::suspect::check_identification(&found);
     found.timings.refine = clock.elapsed().as_secs_f64();
     found.refinement = Some(Refined {
         start_frequency_hz: start

@@ -212,9 +212,9 @@ pub(crate) mod varpro;
 
 pub use fit::{COALESCED, MIN_CONTRIBUTION};
 
+use crate::data::frf::{FrfData, Quantity};
+use crate::data::statespace::{StateSpace, TimeDomain};
 use crate::error::{EraError, Result};
-use crate::frf::{FrfData, Quantity};
-use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
 use model::{order, partial_fraction, power, residual_factor};
 use num_complex::Complex64;
@@ -892,7 +892,7 @@ impl Refinement {
             }
         }
         let n = 2 * terms.len() + chains.iter().map(|(m, _)| m * p).sum::<usize>();
-        crate::limits::STATES.check("refined model states", n as u64)?;
+        crate::params::limits::STATES.check("refined model states", n as u64)?;
         let mut a = Mat::<f64>::zeros(n, n);
         let mut b = Mat::<f64>::zeros(n, p);
         let mut c = Mat::<f64>::zeros(q, n);
@@ -932,7 +932,7 @@ impl Refinement {
     }
 }
 
-crate::names::named!(display Residuals, "residuals", [
+crate::params::names::named!(display Residuals, "residuals", [
     Residuals::None => "none",
     Residuals::Lower => "lower",
     Residuals::Upper => "upper",
@@ -961,7 +961,7 @@ impl Weighting {
     }
 }
 
-crate::names::named!(display Weighting, "weighting", [
+crate::params::names::named!(display Weighting, "weighting", [
     Weighting::PairNoise => "pair-noise",
     Weighting::Uniform => "uniform",
 ]);

@@ -3,8 +3,8 @@
 //! the fit arranged in blocks that share one basis.
 
 use super::{RefineOptions, Residuals, Weighting};
+use crate::data::frf::{FrfData, Quantity};
 use crate::error::{EraError, Result};
-use crate::frf::{FrfData, Quantity};
 use faer::Mat;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -385,7 +385,7 @@ fn check_options(options: &RefineOptions, q: usize, p: usize) -> Result<()> {
             "must be a finite number >= 0",
         ));
     }
-    crate::limits::ITERATIONS.check("max_iterations", options.max_iterations as u64)?;
+    crate::params::limits::ITERATIONS.check("max_iterations", options.max_iterations as u64)?;
     Ok(())
 }
 
@@ -561,8 +561,9 @@ impl Problem {
                 ),
             ));
         }
-        crate::limits::STATES.check_product("refined modes (2 states each)", &[modes as u64, 2])?;
-        crate::limits::VALUES.check_product(
+        crate::params::limits::STATES
+            .check_product("refined modes (2 states each)", &[modes as u64, 2])?;
+        crate::params::limits::VALUES.check_product(
             "refinement basis (2 x lines x columns)",
             &[rows as u64, (3 * cols) as u64],
         )?;

@@ -40,7 +40,7 @@
 
 use super::model::{mode_columns, order};
 use super::Refinement;
-use crate::frf::FrfData;
+use crate::data::frf::FrfData;
 use num_complex::Complex64;
 use std::f64::consts::PI;
 

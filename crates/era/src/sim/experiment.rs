@@ -63,7 +63,7 @@
 //! The excitation is Gaussian noise at 4× the analyzer rate (204.8 Hz), low-passed to the
 //! band by a windowed-sinc FIR filter and scaled to its RMS; between samples the voltage is
 //! linear. The analyzer samples the excitation voltage and the accelerations (plus seeded
-//! noise) at 51.2 Hz, and [`crate::frf::estimate`] forms H1 per excited actuator from
+//! noise) at 51.2 Hz, and [`crate::estimate`] forms H1 per excited actuator from
 //! Hann-windowed frames of 2048 samples without overlap; the 8 columns make the 8×8 set,
 //! cut to 801 lines (0–20 Hz).
 //!
@@ -75,11 +75,11 @@ mod events;
 mod stepper;
 
 use super::{ModalSpec, ModalStructure};
+use crate::data::frf::{FrfData, Quantity};
+use crate::data::statespace::{StateSpace, TimeDomain};
 use crate::error::{EraError, Result};
-use crate::frf::estimate::{self, Detrend, Estimator, WelchOptions, Window};
-use crate::frf::{FrfData, Quantity};
+use crate::estimate::{self, Detrend, Estimator, WelchOptions, Window};
 use crate::linalg::eigen::balanced_eigen;
-use crate::statespace::{StateSpace, TimeDomain};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use num_complex::Complex64;
@@ -287,8 +287,8 @@ impl Structure {
                     return Err(EraError::InvalidParameter {
                         name: "structure",
                         value: "velocity model with D != 0".into(),
-                        reason: crate::names::Prose::from("a velocity direct term would need an impulsive acceleration: identify with ")
-                            .param(crate::names::Param::DirectTerm)
+                        reason: crate::params::names::Prose::from("a velocity direct term would need an impulsive acceleration: identify with ")
+                            .param(crate::params::names::Param::DirectTerm)
                             .text(" zero"),
                     });
                 }
@@ -558,17 +558,17 @@ impl ExperimentSpec {
         } else {
             1
         };
-        crate::limits::SAMPLES.check_product(
+        crate::params::limits::SAMPLES.check_product(
             "analyzer samples (averages x frame)",
             &[self.averages as u64, self.frame as u64],
         )?;
         // Grid steps: about (excitation rate + LVT rate) per simulated second, per run.
         let seconds = self.settle_s + (self.averages * self.frame) as f64 / self.analyzer_rate_hz;
-        crate::limits::STEPS.check_product(
+        crate::params::limits::STEPS.check_product(
             "simulation steps (runs x seconds x grid rate)",
             &[
                 runs as u64,
-                crate::limits::saturating_count(
+                crate::params::limits::saturating_count(
                     seconds * (KNOTS_PER_SAMPLE as f64 * self.analyzer_rate_hz + self.lvt_rate()),
                 ),
             ],

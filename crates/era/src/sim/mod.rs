@@ -11,10 +11,10 @@ pub mod experiment;
 pub mod fleet;
 pub mod shaker;
 
+use crate::data::frf::{uniform_lines, FrfData, Quantity};
+use crate::data::statespace::{StateSpace, TimeDomain};
 use crate::error::{EraError, Result};
-use crate::frf::{uniform_lines, FrfData, Quantity};
 use crate::pipeline::fit::frequency_response;
-use crate::statespace::{StateSpace, TimeDomain};
 use faer::Mat;
 use num_complex::Complex64;
 use std::f64::consts::PI;
@@ -61,15 +61,15 @@ impl ModalRequest {
         ModalRequest { spec, lines, df_hz }
     }
 
-    /// Checks sizes against [`crate::limits`] before anything is allocated, and the
+    /// Checks sizes against [`crate::params::limits`] before anything is allocated, and the
     /// frequencies: positive spacing and band, `fmax` below the last line, a
     /// collocated set square. Messages name each parameter as `naming` does.
     ///
     /// # Errors
     /// [`EraError::Invalid`] or [`EraError::Limit`].
     pub fn check(&self, naming: crate::params::Naming) -> Result<()> {
-        use crate::limits::{CHANNELS, LINES, STATES, VALUES};
         use crate::params::check_positive;
+        use crate::params::limits::{CHANNELS, LINES, STATES, VALUES};
         let name = |key: &str| naming.name(key);
         let s = &self.spec;
         CHANNELS.check(name("outputs"), s.outputs as u64)?;
@@ -345,10 +345,11 @@ impl ModalStructure {
         if spec.modes == 0 {
             return bad("modes", "0".into(), "need at least one mode");
         }
-        crate::limits::CHANNELS.check("outputs", spec.outputs as u64)?;
-        crate::limits::CHANNELS.check("inputs", spec.inputs as u64)?;
-        crate::limits::STATES.check_product("modes (2 states each)", &[spec.modes as u64, 2])?;
-        crate::limits::VALUES.check_product(
+        crate::params::limits::CHANNELS.check("outputs", spec.outputs as u64)?;
+        crate::params::limits::CHANNELS.check("inputs", spec.inputs as u64)?;
+        crate::params::limits::STATES
+            .check_product("modes (2 states each)", &[spec.modes as u64, 2])?;
+        crate::params::limits::VALUES.check_product(
             "mode shapes ((outputs + inputs) x modes)",
             &[
                 (spec.outputs as u64).saturating_add(spec.inputs as u64),
@@ -433,7 +434,7 @@ impl ModalStructure {
     /// # Errors
     /// [`EraError::InvalidParameter`] for fewer than 2 lines or a non-positive spacing;
     /// [`EraError::Limit`] when the lines, the values or the terms (values × modes) are
-    /// above [`crate::limits::LINES`] or [`crate::limits::VALUES`].
+    /// above [`crate::params::limits::LINES`] or [`crate::params::limits::VALUES`].
     pub fn frf(&self, lines: usize, spacing_hz: f64, quantity: Quantity) -> Result<FrfData> {
         if lines < 2 || !(spacing_hz > 0.0 && spacing_hz.is_finite()) {
             return Err(EraError::InvalidParameter {
@@ -442,14 +443,14 @@ impl ModalStructure {
                 reason: "need at least 2 lines and a positive spacing".into(),
             });
         }
-        crate::limits::LINES.check("lines", lines as u64)?;
+        crate::params::limits::LINES.check("lines", lines as u64)?;
         let (q, p) = (self.outputs(), self.inputs());
-        crate::limits::VALUES.check_product(
+        crate::params::limits::VALUES.check_product(
             "FRF values (outputs x inputs x lines)",
             &[q as u64, p as u64, lines as u64],
         )?;
         // The work: one term per mode and value.
-        crate::limits::VALUES.check_product(
+        crate::params::limits::VALUES.check_product(
             "modal FRF terms (outputs x inputs x lines x modes)",
             &[
                 q as u64,
@@ -490,13 +491,13 @@ impl ModalStructure {
             return Err(EraError::InvalidParameter {
                 name: "lines/df",
                 value: format!("{lines} lines at {spacing_hz} Hz"),
-                reason: crate::names::Prose::from(format!(
+                reason: crate::params::names::Prose::from(format!(
                     "the {quantity} FRFs overflow at these frequencies (up to {} Hz): lower ",
                     spacing_hz * (lines - 1) as f64
                 ))
-                .param(crate::names::Param::Df)
+                .param(crate::params::names::Param::Df)
                 .text(" or ")
-                .param(crate::names::Param::Lines),
+                .param(crate::params::names::Param::Lines),
             });
         }
         FrfData::new(freq, q, p, values, quantity)

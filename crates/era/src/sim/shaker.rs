@@ -20,8 +20,8 @@
 //! same record everywhere.
 
 use super::{Minstd, ModalSpec, ModalStructure};
+use crate::data::frf::Quantity;
 use crate::error::{EraError, Result};
-use crate::frf::Quantity;
 use std::f64::consts::PI;
 
 /// How a shaker drives its input.
@@ -237,7 +237,7 @@ pub(crate) fn drive(
 ) -> Result<ShakerRecord> {
     let fs = test.sample_rate_hz;
     let p = truth.inputs();
-    crate::limits::VALUES.check_product(
+    crate::params::limits::VALUES.check_product(
         "samples x channels",
         &[n as u64, (p + truth.outputs()) as u64],
     )?;

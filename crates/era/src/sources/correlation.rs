@@ -547,7 +547,7 @@ pub(crate) fn lowest_peak_hz(records: &[&[&[f64]]], sample_rate_hz: f64) -> Opti
         return None;
     }
     let (r2c, _) = real_fft_plans(seg);
-    let window = crate::frf::estimate::Window::Hann.values(seg);
+    let window = crate::estimate::Window::Hann.values(seg);
     let lines = seg / 2 + 1;
     let mut total = vec![0.0; lines];
     for record in records {

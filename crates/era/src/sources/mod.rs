@@ -23,7 +23,7 @@ pub enum MarkovSource {
     Okid,
 }
 
-crate::names::named!(display MarkovSource, "Markov source", [
+crate::params::names::named!(display MarkovSource, "Markov source", [
     MarkovSource::Frf => "frf",
     MarkovSource::Okid => "okid",
 ]);

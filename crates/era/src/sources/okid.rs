@@ -61,10 +61,10 @@
 //! regression that is never held whole is written here because a one-shot `qr()` needs
 //! the whole data matrix.
 
+use crate::data::statespace::StateSpace;
 use crate::error::{EraError, Result};
 use crate::linalg::fft::real_fft_plans;
 use crate::sources::MarkovSequence;
-use crate::statespace::StateSpace;
 use faer::linalg::solvers::{Solve, SolveLstsq};
 use faer::Mat;
 use num_complex::Complex64;
@@ -130,10 +130,10 @@ impl Default for OkidOptions {
 pub(crate) const DEFAULT_MARKOV_SAMPLES: usize = 1024;
 
 /// The front ends' default number of Markov blocks for records whose longest has
-/// `longest` samples: the judging frame ([`crate::frf::estimate::DEFAULT_FRAME`]), or
+/// `longest` samples: the judging frame ([`crate::estimate::DEFAULT_FRAME`]), or
 /// the record when it is shorter (blocks past the record are not in the data).
 pub fn default_markov_samples(longest: usize) -> usize {
-    crate::frf::estimate::DEFAULT_FRAME.min(longest)
+    crate::estimate::DEFAULT_FRAME.min(longest)
 }
 
 /// Points on the unit circle at which the observer's transfer function is evaluated for
@@ -826,8 +826,8 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
             ).into(),
         });
     }
-    crate::limits::VALUES.check_product(
-        crate::names::Prose::default().param(crate::names::Param::MarkovSamples),
+    crate::params::limits::VALUES.check_product(
+        crate::params::names::Prose::default().param(crate::params::names::Param::MarkovSamples),
         &[options.markov_samples as u64, r as u64, q as u64],
     )?;
     let equations = |p: usize| -> usize { lengths.iter().map(|&l| l.saturating_sub(p)).sum() };
@@ -876,9 +876,9 @@ fn run(records: &[Record], options: &OkidOptions, blocks: Blocks) -> Result<Okid
     };
     // The unit circle's transfer function (the route an unstable observer takes) holds
     // `points` values per input-output pair: checked before anything is built.
-    crate::limits::VALUES.check_product(
-        crate::names::Prose::default()
-            .param(crate::names::Param::MarkovSamples)
+    crate::params::limits::VALUES.check_product(
+        crate::params::names::Prose::default()
+            .param(crate::params::names::Param::MarkovSamples)
             .text(" (the observer's transfer function on the unit circle)"),
         &[
             unit_circle_points(options.markov_samples, p_max) as u64,
@@ -1041,7 +1041,7 @@ pub fn kalman_gain(model: &StateSpace, gain_markov: &MarkovSequence) -> Result<M
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frf::Quantity;
+    use crate::data::frf::Quantity;
     use crate::linalg::rng::Minstd;
     use crate::sim::{time_response, ModalSpec, ModalStructure};
     use era_testkit::{assert_matches_naive, Scale};

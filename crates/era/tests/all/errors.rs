@@ -69,7 +69,7 @@ fn hankel_smaller_than_the_order() {
 #[test]
 fn all_zero_frf() {
     let frf = FrfData::from_fn(
-        era::frf::uniform_lines(64, 1.0),
+        era::data::frf::uniform_lines(64, 1.0),
         2,
         2,
         Quantity::Velocity,

@@ -2,7 +2,7 @@
 //! discrete model (`sim::time_response`), then `frf::estimate`, compared with the model's
 //! exact discrete FRF.
 
-use era::frf::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
+use era::estimate::{estimate, Detrend, Estimator, WelchOptions, Window};
 use era::linalg::rng::Minstd;
 use era::pipeline::fit::frequency_response;
 use era::sim::{time_response, truth_model, ModalSpec, ModalStructure};
@@ -67,7 +67,7 @@ fn slices(v: &[Vec<f64>]) -> Vec<&[f64]> {
 const SHARE: f64 = 0.1;
 
 fn h1_error(
-    est: &era::frf::estimate::FrfEstimate,
+    est: &era::estimate::FrfEstimate,
     exact: &[Complex64],
     modes: &[(f64, f64)],
     bands: f64,
@@ -182,7 +182,7 @@ fn h1_of_a_lightly_damped_mimo_structure_is_within_one_percent_away_from_resonan
 }
 
 /// Median of |estimate / exact| over the lines from 2 % to 45 % of the sample rate.
-fn median_gain(est: &era::frf::estimate::FrfEstimate, exact: &[Complex64]) -> f64 {
+fn median_gain(est: &era::estimate::FrfEstimate, exact: &[Complex64]) -> f64 {
     let l = est.frf.lines();
     let got = est.frf.pair(0, 0);
     let mut r: Vec<f64> = (l / 25..l * 9 / 10)
@@ -333,24 +333,23 @@ fn pooling_records_equals_welch_over_all_their_frames() {
         .collect();
     let mut opts = hann(1024, 500.0);
     opts.overlap = 0.0;
-    let whole = era::frf::estimate::spectra(&[&x], &[&y], &opts, true).unwrap();
-    let a = era::frf::estimate::spectra(&[&x[..3072]], &[&y[..3072]], &opts, true).unwrap();
-    let b = era::frf::estimate::spectra(&[&x[3072..]], &[&y[3072..]], &opts, true).unwrap();
-    let pooled = era::frf::estimate::Spectra::pool(&[a, b]).unwrap();
+    let whole = era::estimate::spectra(&[&x], &[&y], &opts, true).unwrap();
+    let a = era::estimate::spectra(&[&x[..3072]], &[&y[..3072]], &opts, true).unwrap();
+    let b = era::estimate::spectra(&[&x[3072..]], &[&y[3072..]], &opts, true).unwrap();
+    let pooled = era::estimate::Spectra::pool(&[a, b]).unwrap();
     assert_eq!(pooled.frames(), whole.frames());
     for (u, v) in pooled.gyx(0, 0).iter().zip(whole.gyx(0, 0)) {
         assert!((u - v).norm() <= 1e-12 * v.norm().max(1e-300), "{u} vs {v}");
     }
-    let e =
-        era::frf::estimate::estimate_from_spectra(pooled, Estimator::H2, Quantity::Acceleration)
-            .unwrap();
-    let w = era::frf::estimate::estimate_from_spectra(whole, Estimator::H2, Quantity::Acceleration)
+    let e = era::estimate::estimate_from_spectra(pooled, Estimator::H2, Quantity::Acceleration)
         .unwrap();
+    let w =
+        era::estimate::estimate_from_spectra(whole, Estimator::H2, Quantity::Acceleration).unwrap();
     for (u, v) in e.frf.values().iter().zip(w.frf.values()) {
         assert!((u - v).norm() <= 1e-10 * v.norm(), "{u} vs {v}");
     }
     // Records of different settings are refused.
-    let c = era::frf::estimate::spectra(&[&x], &[&y], &hann(512, 500.0), true).unwrap();
-    let d = era::frf::estimate::spectra(&[&x], &[&y], &hann(1024, 500.0), true).unwrap();
-    assert!(era::frf::estimate::Spectra::pool(&[d, c]).is_err());
+    let c = era::estimate::spectra(&[&x], &[&y], &hann(512, 500.0), true).unwrap();
+    let d = era::estimate::spectra(&[&x], &[&y], &hann(1024, 500.0), true).unwrap();
+    assert!(era::estimate::Spectra::pool(&[d, c]).is_err());
 }

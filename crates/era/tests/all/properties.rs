@@ -4,10 +4,10 @@
 use crate::common;
 
 use common::worst_match;
+use era::data::statespace::{relative_difference, StateSpace, TimeDomain};
 use era::pipeline::hankel::{build, build_naive, HankelShape};
 use era::pipeline::realize::{realize, RealizeOptions};
 use era::sources::frf::MarkovSequence;
-use era::statespace::{relative_difference, StateSpace, TimeDomain};
 use era::Complex64;
 use era_testkit::{difference, Scale};
 use faer::Mat;

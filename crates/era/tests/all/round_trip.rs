@@ -7,7 +7,7 @@
 use crate::common;
 
 use common::worst_match;
-use era::frf::uniform_lines;
+use era::data::frf::uniform_lines;
 use era::identify::{identify, EraOptions, ModelDomain};
 use era::pipeline::fit::frequency_response;
 use era::sim::{ModalSpec, ModalStructure};

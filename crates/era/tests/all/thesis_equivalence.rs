@@ -4,7 +4,7 @@
 use crate::common;
 
 use common::{assert_eigenvalues_match, read_csv, worst_match};
-use era::identification::Identification;
+use era::data::identification::Identification;
 use era::identify::{identify, identify_naive, EraOptions};
 use era::pipeline::realize::SvdPath;
 use era::sim::{ModalSpec, ModalStructure};

@@ -6,7 +6,7 @@
 //! with a floor of 1e-13 of the array's largest magnitude for values that are zero in
 //! exact arithmetic (a cross-spectrum that cancels).
 
-use era::frf::estimate::{self, Detrend, Estimator, WelchOptions, Window};
+use era::estimate::{self, Detrend, Estimator, WelchOptions, Window};
 use era::{Complex64, Quantity};
 use serde_json::Value;
 

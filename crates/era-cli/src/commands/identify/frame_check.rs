@@ -106,7 +106,7 @@ fn second_identification(
     }
     let mut refine_options = check.plan.refine.clone();
     refine_options.band = check.plan.fit.band_hz.and_then(|b| {
-        let (first, end) = era::frf::band_lines(frf.frequency_hz(), b, 0);
+        let (first, end) = era::data::frf::band_lines(frf.frequency_hz(), b, 0);
         (end > first).then_some((first, end))
     });
     // Zeroed lines are a count of lines: the same Hz at the other frame.

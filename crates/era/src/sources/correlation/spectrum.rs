@@ -87,7 +87,7 @@ pub(crate) fn output_spectrum(
         });
     }
     let (r2c, _) = real_fft_plans(seg);
-    let window = crate::frf::estimate::Window::Hann.values(seg);
+    let window = crate::estimate::Window::Hann.values(seg);
     // g[i][j][line], i ≥ j (the lower triangle; the matrix is Hermitian).
     let mut g = vec![vec![vec![Complex64::new(0.0, 0.0); lines]; q]; q];
     let mut averages = 0;

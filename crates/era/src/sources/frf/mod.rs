@@ -11,8 +11,8 @@
 
 pub mod preprocess;
 
+use crate::data::frf::FrfData;
 use crate::error::{EraError, Result};
-use crate::frf::FrfData;
 use num_complex::Complex64;
 
 /// What the blocks of a [`MarkovSequence`] are.
@@ -242,7 +242,7 @@ pub(crate) fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
 pub(crate) fn frf_of_markov(
     markov: &MarkovSequence,
     sample_time_s: f64,
-    quantity: crate::frf::Quantity,
+    quantity: crate::data::frf::Quantity,
 ) -> Result<FrfData> {
     let n = markov.samples();
     if n < 2 {
@@ -279,7 +279,7 @@ pub fn markov_from_frf(frf: &FrfData) -> Result<MarkovSequence> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frf::{uniform_lines, Quantity};
+    use crate::data::frf::{uniform_lines, Quantity};
 
     #[test]
     fn fft_path_equals_naive_mirror_ifft() {
@@ -390,12 +390,12 @@ impl LagWindow {
     /// # Errors
     /// As `LagWindow::new`.
     pub fn of_estimate(
-        estimator: crate::frf::estimate::Estimator,
-        window: crate::frf::estimate::Window,
+        estimator: crate::estimate::Estimator,
+        window: crate::estimate::Window,
         frame: usize,
         sample_rate_hz: f64,
     ) -> Result<Option<Self>> {
-        use crate::frf::estimate::{Estimator, Window};
+        use crate::estimate::{Estimator, Window};
         if estimator != Estimator::H1 || window == Window::Rectangular {
             return Ok(None);
         }
@@ -407,11 +407,7 @@ impl LagWindow {
     ///
     /// # Errors
     /// [`EraError::InvalidParameter`] for a frame below 2 samples or a bad rate.
-    pub fn new(
-        window: crate::frf::estimate::Window,
-        frame: usize,
-        sample_rate_hz: f64,
-    ) -> Result<Self> {
+    pub fn new(window: crate::estimate::Window, frame: usize, sample_rate_hz: f64) -> Result<Self> {
         if frame < 2 || !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return Err(EraError::InvalidParameter {
                 name: "frame",
@@ -420,7 +416,7 @@ impl LagWindow {
                     .into(),
             });
         }
-        crate::limits::SAMPLES.check("frame", frame as u64)?;
+        crate::params::limits::SAMPLES.check("frame", frame as u64)?;
         let w = window.values(frame);
         let n2 = 2 * frame;
         let (r2c, c2r) = crate::linalg::fft::real_fft_plans(n2);
@@ -467,7 +463,7 @@ impl LagWindow {
     pub fn correct_frf(&self, frf: &FrfData) -> Result<FrfData> {
         let corrected = self.correct_lines(frf)?;
         // A late start stays zero (its lines were never measured).
-        let padded = crate::frf::leading_zero_lines(frf);
+        let padded = crate::data::frf::leading_zero_lines(frf);
         Ok(preprocess::zero_leading_lines(&corrected, padded))
     }
 
@@ -507,7 +503,7 @@ impl LagWindow {
 #[cfg(test)]
 mod lag_window_tests {
     use super::*;
-    use crate::frf::estimate::Window;
+    use crate::estimate::Window;
 
     /// Against the definition, summed directly.
     #[test]

@@ -1,8 +1,8 @@
 //! FRF preprocessing before the inverse FFT: docs/src/design.md §1 steps 1–4 (the thesis's
 //! `frffilt`, Appendix J.1.1, and `frfinter`, J.1.4).
 
+use crate::data::frf::{uniform_lines, FrfData};
 use crate::error::{EraError, Result};
-use crate::frf::{uniform_lines, FrfData};
 use num_complex::Complex64;
 
 /// Integrates every FRF `times` times: `G(f_k) ← G(f_k) / (j·2πf_k)` for `k ≥ 1` and
@@ -103,7 +103,7 @@ pub struct Preprocessed {
 /// # Errors
 /// From [`integrate`]; [`EraError::InvalidParameter`] when `zero_lines` removes every
 /// measured line; [`EraError::Limit`] when `pad_to + 1` lines exceed
-/// [`crate::limits::LINES`] or the padded set exceeds [`crate::limits::VALUES`] (checked
+/// [`crate::params::limits::LINES`] or the padded set exceeds [`crate::params::limits::VALUES`] (checked
 /// before anything is allocated).
 pub fn preprocess(
     frf: &FrfData,
@@ -133,8 +133,8 @@ pub fn preprocess(
     if pad_to != 0 {
         // pad_to + 1 lines per pair, without wrapping at usize::MAX.
         let lines = (pad_to as u64).saturating_add(1);
-        crate::limits::LINES.check("pad_to", lines)?;
-        crate::limits::VALUES.check_product(
+        crate::params::limits::LINES.check("pad_to", lines)?;
+        crate::params::limits::VALUES.check_product(
             "pad-to (outputs x inputs x lines)",
             &[frf.outputs() as u64, frf.inputs() as u64, lines],
         )?;
@@ -153,7 +153,7 @@ pub fn preprocess(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frf::Quantity;
+    use crate::data::frf::Quantity;
 
     #[test]
     fn integration_divides_by_j_omega_and_zeros_dc() {

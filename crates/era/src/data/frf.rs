@@ -3,8 +3,6 @@
 use crate::error::{EraError, Result};
 use num_complex::Complex64;
 
-pub mod estimate;
-
 /// What an FRF measures per unit force.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Quantity {
@@ -30,12 +28,12 @@ impl Quantity {
 
     /// Lower-case name as used in files and on the command line.
     pub fn name(self) -> &'static str {
-        crate::names::Named::name_of(&self)
+        crate::params::names::Named::name_of(&self)
     }
 
     /// Parses `acceleration`, `velocity` or `displacement` (case-insensitive).
     pub fn parse(text: &str) -> Option<Quantity> {
-        crate::names::parse(text).ok()
+        crate::params::names::parse(text).ok()
     }
 }
 
@@ -402,7 +400,7 @@ pub(crate) fn leading_zero_lines(frf: &FrfData) -> usize {
         .count()
 }
 
-crate::names::named!(Quantity, "quantity", [
+crate::params::names::named!(Quantity, "quantity", [
     Quantity::Acceleration => "acceleration" | "accel",
     Quantity::Velocity => "velocity" | "vel",
     Quantity::Displacement => "displacement" | "disp",

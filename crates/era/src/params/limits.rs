@@ -121,7 +121,7 @@ pub struct LimitError {
     /// What asked: a flag, a file field ("--pad-to", "UFF record 3: number of lines"),
     /// or the core's words naming a parameter, which a front end spells
     /// ([`LimitError::spelled`]).
-    pub context: crate::names::Prose,
+    pub context: crate::params::names::Prose,
     /// The amount asked for (saturated at `u64::MAX`).
     pub asked: u64,
     /// The limit in force.
@@ -135,7 +135,7 @@ pub struct LimitError {
 impl LimitError {
     /// The message with the parameters its context names spelled by `spell` (a front
     /// end's flag or keyword); `Display` writes their field names.
-    pub fn spelled(&self, spell: &dyn Fn(crate::names::Param) -> String) -> String {
+    pub fn spelled(&self, spell: &dyn Fn(crate::params::names::Param) -> String) -> String {
         format!(
             "{}: {} {} asked for, the limit is {} (set {} to raise it)",
             self.context.spelled(spell),
@@ -165,7 +165,7 @@ impl Limit {
     /// [`LimitError`] when `asked` exceeds [`Limit::allowed`].
     pub fn check(
         &self,
-        context: impl Into<crate::names::Prose>,
+        context: impl Into<crate::params::names::Prose>,
         asked: u64,
     ) -> Result<u64, LimitError> {
         let allowed = self.allowed();
@@ -188,7 +188,7 @@ impl Limit {
     /// [`LimitError`] when the (saturated) product exceeds [`Limit::allowed`].
     pub fn check_product(
         &self,
-        context: impl Into<crate::names::Prose>,
+        context: impl Into<crate::params::names::Prose>,
         factors: &[u64],
     ) -> Result<usize, LimitError> {
         let asked = factors.iter().fold(1u64, |acc, &f| acc.saturating_mul(f));

@@ -43,8 +43,8 @@
 //! whatever the record length. Channels are transformed and pairs accumulated in parallel
 //! (`rayon`).
 
+use crate::data::frf::{FrfData, Quantity};
 use crate::error::{EraError, Result};
-use crate::frf::{FrfData, Quantity};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use num_complex::Complex64;
@@ -110,7 +110,7 @@ impl Window {
 
     /// Name as the CLI spells it.
     pub fn name(self) -> &'static str {
-        crate::names::Named::name_of(&self)
+        crate::params::names::Named::name_of(&self)
     }
 }
 
@@ -129,7 +129,7 @@ pub enum Detrend {
 impl Detrend {
     /// Name as the CLI spells it.
     pub fn name(self) -> &'static str {
-        crate::names::Named::name_of(&self)
+        crate::params::names::Named::name_of(&self)
     }
 
     fn apply(self, frame: &mut [f64]) {
@@ -173,7 +173,7 @@ pub enum Estimator {
 impl Estimator {
     /// Name as the CLI spells it.
     pub fn name(self) -> &'static str {
-        crate::names::Named::name_of(&self)
+        crate::params::names::Named::name_of(&self)
     }
 }
 
@@ -292,10 +292,10 @@ impl WelchOptions {
             return Err(EraError::InvalidParameter {
                 name: "frame",
                 value: self.frame.to_string(),
-                reason: crate::names::Prose::from(format!(
+                reason: crate::params::names::Prose::from(format!(
                     "the time histories have only {samples} samples, fewer than one frame: use a shorter "
                 ))
-                .param(crate::names::Param::Frame),
+                .param(crate::params::names::Param::Frame),
             });
         }
         Ok(())
@@ -879,13 +879,13 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
         return Ok(unexcited);
     };
     let reason = if s.frames < p {
-        crate::names::Prose::from(format!(
+        crate::params::names::Prose::from(format!(
             "{} frames were averaged, fewer than the {p} inputs: the matrix has rank {} at most; use a shorter ",
             s.frames, s.frames
         ))
-        .param(crate::names::Param::Frame)
+        .param(crate::params::names::Param::Frame)
         .text(" or more ")
-        .param(crate::names::Param::Overlap)
+        .param(crate::params::names::Param::Overlap)
     } else {
         let mut worst = (0, 1, -1.0);
         for a in 0..p {
@@ -897,7 +897,7 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
                 }
             }
         }
-        crate::names::Prose::from(format!(
+        crate::params::names::Prose::from(format!(
             "inputs {} and {} are fully coherent (coherence {:.9}): two identical or proportional inputs cannot be told apart, drop one",
             worst.0 + 1,
             worst.1 + 1,
@@ -913,19 +913,19 @@ fn check_input_matrix(s: &Spectra) -> Result<Vec<usize>> {
     })
 }
 
-crate::names::named!(display Window, "window", [
+crate::params::names::named!(display Window, "window", [
     Window::Hann => "hann" | "hanning",
     Window::Rectangular => "rectangular" | "boxcar",
     Window::FlatTop => "flat-top" | "flattop",
 ]);
 
-crate::names::named!(display Estimator, "estimator", [
+crate::params::names::named!(display Estimator, "estimator", [
     Estimator::H1 => "h1",
     Estimator::H2 => "h2",
     Estimator::Hv => "hv",
 ]);
 
-crate::names::named!(display Detrend, "detrend", [
+crate::params::names::named!(display Detrend, "detrend", [
     Detrend::None => "none",
     Detrend::Mean => "mean",
     Detrend::Linear => "linear",

@@ -8,13 +8,16 @@
 //! `states 0: the model needs at least one state` from Python.
 //!
 //! Messages built deeper in the core (an [`EraError`] raised while realizing, a
-//! warning) name a parameter as a [`crate::names::Param`] inside a
-//! [`crate::names::Prose`], and a front end spells it with [`EraError::message`]
+//! warning) name a parameter as a [`crate::params::names::Param`] inside a
+//! [`crate::params::names::Prose`], and a front end spells it with [`EraError::message`]
 //! (`--hankel-factor`, or `hankel_factor`): no text is rewritten after the fact.
 //!
 //! A refused value is [`EraError::Invalid`] (an input error: exit code 2 in the CLI,
 //! `ValueError` in Python), or [`EraError::Limit`] when a size is above one of
-//! [`crate::limits`].
+//! [`crate::params::limits`].
+
+pub mod limits;
+pub mod names;
 
 use crate::error::{EraError, Param, Result};
 
@@ -57,7 +60,7 @@ impl EraError {
     }
 }
 
-impl crate::names::Prose {
+impl crate::params::names::Prose {
     /// The text with the parameters it names spelled as `naming`'s front end spells
     /// them.
     pub fn message(&self, naming: Naming) -> String {
@@ -65,7 +68,7 @@ impl crate::names::Prose {
     }
 }
 
-impl crate::limits::LimitError {
+impl crate::params::limits::LimitError {
     /// The message with the parameters its context names spelled as `naming`'s front
     /// end spells them.
     pub fn message(&self, naming: Naming) -> String {
@@ -112,11 +115,11 @@ mod tests {
         assert!(check_positive(Naming::Flag, "df", 0.5, "x").is_ok());
     }
 
-    /// A message naming parameters ([`crate::names::Prose`]) spells them per front
+    /// A message naming parameters ([`crate::params::names::Prose`]) spells them per front
     /// end, and `Display` writes their field names.
     #[test]
     fn prose_spells_its_parameters_per_front_end() {
-        use crate::names::{Param, Prose};
+        use crate::params::names::{Param, Prose};
         let m = Prose::from("lower ")
             .param(Param::HankelFactor)
             .text(" or give ")

@@ -63,7 +63,7 @@ pub fn parse<T: Named>(text: &str) -> Result<T, UnknownName> {
 /// `Type, "what", [Variant => "name" | "alias", ...]`.
 macro_rules! named {
     (@impl $ty:ty, $what:literal, [$($var:path => $name:literal $(| $alias:literal)*),+ $(,)?]) => {
-        impl $crate::names::Named for $ty {
+        impl $crate::params::names::Named for $ty {
             const WHAT: &'static str = $what;
             const NAMES: &'static [&'static str] = &[$($name),+];
             fn from_name(name: &str) -> Option<Self> {
@@ -81,22 +81,22 @@ macro_rules! named {
             }
         }
         impl std::str::FromStr for $ty {
-            type Err = $crate::names::UnknownName;
-            fn from_str(text: &str) -> std::result::Result<Self, $crate::names::UnknownName> {
-                $crate::names::parse(text)
+            type Err = $crate::params::names::UnknownName;
+            fn from_str(text: &str) -> std::result::Result<Self, $crate::params::names::UnknownName> {
+                $crate::params::names::parse(text)
             }
         }
     };
     (display $ty:ty, $what:literal, [$($table:tt)+]) => {
-        $crate::names::named!(@impl $ty, $what, [$($table)+]);
+        $crate::params::names::named!(@impl $ty, $what, [$($table)+]);
         impl std::fmt::Display for $ty {
             fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str($crate::names::Named::name_of(self))
+                f.write_str($crate::params::names::Named::name_of(self))
             }
         }
     };
     ($ty:ty, $what:literal, [$($table:tt)+]) => {
-        $crate::names::named!(@impl $ty, $what, [$($table)+]);
+        $crate::params::names::named!(@impl $ty, $what, [$($table)+]);
     };
 }
 pub(crate) use named;
@@ -421,8 +421,8 @@ impl std::fmt::Display for Prose {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frf::estimate::{Detrend, Estimator, Window};
-    use crate::frf::Quantity;
+    use crate::data::frf::Quantity;
+    use crate::estimate::{Detrend, Estimator, Window};
     use crate::identify::route::Preset;
     use crate::identify::ModelDomain;
     use crate::pipeline::realize::{DirectTerm, SvdPath};

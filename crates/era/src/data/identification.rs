@@ -1,14 +1,14 @@
 //! What an identification found: plain data, filled by the pipeline ([`mod@crate::identify`])
-//! and checked by [`crate::suspect`]. Nothing here runs a stage.
+//! and checked by [`crate::identify::suspect`]. Nothing here runs a stage.
 
+use crate::data::frf::FrfData;
+use crate::data::statespace::StateSpace;
 use crate::error::Result;
-use crate::frf::FrfData;
 use crate::modal::indicators::ModeIndicators;
 use crate::modal::stabilization::{OrderRange, Scan, Selection};
 use crate::pipeline::fit::FitReport;
 use crate::pipeline::modes::ModalParameters;
 use crate::pipeline::realize::Realization;
-use crate::statespace::StateSpace;
 
 /// A stage of the pipeline, reported to an observer as it starts
 /// ([`crate::identify::identify_observed`]); front ends turn these into progress displays.
@@ -117,7 +117,7 @@ pub struct Identification {
     pub stabilization: Option<Stabilization>,
     /// The refinement that gave `model`, when one ran ([`crate::refine::identification::refine_identification`]).
     pub refinement: Option<Refined>,
-    /// Results to treat with care ([`crate::suspect`]): a Hankel too short for the
+    /// Results to treat with care ([`crate::identify::suspect`]): a Hankel too short for the
     /// lowest mode, negative damping, poles outside the unit circle.
     pub suspects: Vec<SuspectResult>,
 }

@@ -43,7 +43,7 @@
 //! Each warning is worded for the calling front end ([`Naming`]): the CLI names flags,
 //! Python keywords.
 
-use crate::identification::{Identification, ModeQuality, SuspectResult};
+use crate::data::identification::{Identification, ModeQuality, SuspectResult};
 use crate::params::Naming;
 use crate::pipeline::modes::ModalParameters;
 
@@ -255,7 +255,7 @@ impl Identification {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frf::leading_zero_lines;
+    use crate::data::frf::leading_zero_lines;
     use crate::identify::{identify, zero_start, EraOptions};
     use crate::{Complex64, FrfData, Quantity};
 
