@@ -85,14 +85,10 @@ pub fn refine(
     let refined =
         refine_identification_in(found, frf, options, domain, &mut on_stage, &mut on_step)
             .map_err(|e| match e {
-                era::EraError::InvalidParameter {
+                e @ era::EraError::InvalidParameter {
                     name: "max-iterations",
-                    value,
-                    reason,
-                } => anyhow::Error::from(crate::error::UsageError(format!(
-                    "--max-iterations {value}: {}",
-                    reason.message(era::params::Naming::Flag)
-                ))),
+                    ..
+                } => flag_error(e, |name| Some((format!("--{name}"), ""))),
                 other => anyhow::Error::from(other),
             })
             .context("refining the model");
@@ -192,42 +188,14 @@ fn channels(set: &[Vec<f64>]) -> Vec<&[f64]> {
 /// A core error with the flag the user knows: the lags, blocks and references are
 /// `--time-lags`, `--blocks` and `--references` here.
 fn flagged(e: era::EraError, a: &Oma) -> anyhow::Error {
-    if let era::EraError::InvalidParameter {
-        name,
-        value,
-        reason,
-    } = &e
-    {
-        let flag = match *name {
-            "lags" => Some((
-                "--time-lags",
-                if a.options.lags.is_none() {
-                    " (the default from the record)"
-                } else {
-                    ""
-                },
-            )),
-            "blocks" => Some(("--blocks", "")),
-            "references" => Some(("--references", "")),
-            "orders" | "states" => Some((
-                if *name == "orders" {
-                    "--orders"
-                } else {
-                    "--states"
-                },
-                "",
-            )),
-            _ => None,
-        };
-        if let Some((flag, note)) = flag {
-            return crate::error::UsageError(format!(
-                "{flag} {value}{note}: {}",
-                reason.message(era::params::Naming::Flag)
-            ))
-            .into();
+    flag_error(e, |name| match name {
+        "lags" if a.options.lags.is_none() => {
+            Some(("--time-lags".into(), " (the default from the record)"))
         }
-    }
-    anyhow::Error::from(e)
+        "lags" => Some(("--time-lags".into(), "")),
+        "blocks" | "references" | "orders" | "states" => Some((format!("--{name}"), "")),
+        _ => None,
+    })
 }
 
 /// Operational modal analysis of `records` with `options`, `spinner` saying the stage
@@ -260,25 +228,14 @@ pub fn oma(
 
 /// A core error on a parameter of `era simulate fleet`, under its flag's name.
 fn fleet_flagged(e: era::EraError) -> anyhow::Error {
-    match e {
-        era::EraError::InvalidParameter {
-            name,
-            value,
-            reason,
-        } => {
-            let flag = match name {
-                "index" => "records".to_string(),
-                "inputs" => "forces".to_string(),
-                _ => name.replace('_', "-"),
-            };
-            crate::error::UsageError(format!(
-                "--{flag} {value}: {}",
-                reason.message(era::params::Naming::Flag)
-            ))
-            .into()
-        }
-        other => other.into(),
-    }
+    flag_error(e, |name| {
+        let flag = match name {
+            "index" => "records".to_string(),
+            "inputs" => "forces".to_string(),
+            _ => name.replace('_', "-"),
+        };
+        Some((format!("--{flag}"), ""))
+    })
 }
 
 /// Record `index` of the fleet `spec`; the core's errors name `era simulate fleet`'s
@@ -288,4 +245,28 @@ pub fn fleet_record(
     index: usize,
 ) -> anyhow::Result<era::sim::fleet::FleetRecord> {
     era::sim::fleet::fleet_record(spec, index).map_err(fleet_flagged)
+}
+
+/// `e` as a usage error worded `FLAG VALUE NOTE: reason` when it is an invalid parameter
+/// that `flag` names (the flag and a note for the core's parameter name, `None` to keep
+/// `e` as it is); any other error as it is.
+pub fn flag_error(
+    e: era::EraError,
+    flag: impl FnOnce(&str) -> Option<(String, &'static str)>,
+) -> anyhow::Error {
+    if let era::EraError::InvalidParameter {
+        name,
+        value,
+        reason,
+    } = &e
+    {
+        if let Some((flag, note)) = flag(name) {
+            return crate::error::UsageError(format!(
+                "{flag} {value}{note}: {}",
+                reason.message(era::params::Naming::Flag)
+            ))
+            .into();
+        }
+    }
+    anyhow::Error::from(e)
 }

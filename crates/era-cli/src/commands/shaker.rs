@@ -11,16 +11,10 @@ pub fn run(a: &Shaker) -> anyhow::Result<()> {
     let human = Human::new(&settings);
     let test = crate::config::shaker::test(a)?;
     let clock = Instant::now();
-    let record = era::sim::shaker::simulate_shaker_test(&test).map_err(|e| match e {
-        era::EraError::InvalidParameter {
-            name,
-            value,
-            reason,
-        } => anyhow::Error::from(crate::error::UsageError(format!(
-            "--{name} {value}: {}",
-            reason.message(era::params::Naming::Flag)
-        ))),
-        other => anyhow::Error::from(other),
+    let record = era::sim::shaker::simulate_shaker_test(&test).map_err(|e| {
+        crate::work::flag_error(e, |name| {
+            Some((format!("--{}", name.replace('_', "-")), ""))
+        })
     })?;
     let simulate_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();

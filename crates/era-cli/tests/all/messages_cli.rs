@@ -219,3 +219,43 @@ fn the_cores_remedies_reach_the_cli_as_flags() {
     .says("Markov samples (states 2 x hankel factor 300")
     .says("lower --hankel-factor or --states, or pad with --pad-to");
 }
+
+#[test]
+fn a_simulator_names_its_flags_as_they_are_typed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.csv");
+    let shaker = [
+        "simulate",
+        "shaker",
+        "--modes",
+        "4",
+        "--outputs",
+        "3",
+        "--inputs",
+        "1",
+        "--duration",
+        "30",
+        "--sample-rate",
+        "-5",
+        "--out",
+        s(&out),
+    ];
+    let stderr = expect_input_error(&shaker, "--sample-rate -5");
+    assert!(!stderr.contains("--sample_rate"), "{stderr}");
+    assert!(!out.exists());
+    let fleet = dir.path().join("fleet");
+    let stderr = expect_input_error(
+        &[
+            "simulate",
+            "fleet",
+            "--records",
+            "2",
+            "--modes",
+            "0",
+            "--out",
+            s(&fleet),
+        ],
+        "--modes 0",
+    );
+    assert!(stderr.contains("mode"), "{stderr}");
+}
