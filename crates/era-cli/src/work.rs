@@ -1,7 +1,7 @@
 //! The core's long calls as the verbs make them: a spinner on stderr while each runs,
 //! and its errors worded with the flags' names. ERA ([`identify`]), OKID
-//! ([`observe`]), the refinement ([`refine`]), operational modal analysis ([`oma`]) and
-//! a fleet's records ([`fleet_record`]).
+//! ([`observe`]), the refinement ([`refine`]), operational modal analysis ([`oma`])
+//! and a fleet's records ([`fleet_record`]).
 
 use crate::config::{Identify, Oma, Settings};
 use crate::input::time::{joined, TimeRecords};
