@@ -2,10 +2,46 @@
 //! each distinct list of flags parsed as its verb's, and the fingerprint that says
 //! whether an earlier run's result still holds.
 
-use crate::config::Batch;
+use crate::config::Settings;
 use crate::error::UsageError;
 use crate::input::manifest::{Manifest, Record};
 use std::path::PathBuf;
+
+/// `era batch`'s settings.
+#[derive(Debug, Clone)]
+pub struct Batch {
+    /// The manifest.
+    pub manifest: PathBuf,
+    /// The tables' folder.
+    pub out: PathBuf,
+    /// `(I, N)`: every N-th record from the I-th (1-based).
+    pub shard: Option<(usize, usize)>,
+    /// Skip the records an earlier run finished.
+    pub resume: bool,
+    /// Records side by side.
+    pub jobs: usize,
+    /// Each record's model files in `out/records/<id>/`.
+    pub keep_models: bool,
+    /// Accept record files outside the manifest's folder.
+    pub allow_outside: bool,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&crate::args::BatchArgs> for Batch {
+    fn from(a: &crate::args::BatchArgs) -> Self {
+        Batch {
+            manifest: a.manifest.clone(),
+            out: a.out.clone(),
+            shard: a.shard,
+            resume: a.resume,
+            jobs: a.jobs,
+            keep_models: a.keep_models,
+            allow_outside: a.allow_outside,
+            settings: (&a.common).into(),
+        }
+    }
+}
 
 /// A record to run.
 pub struct Planned {

@@ -1,12 +1,93 @@
 //! `era simulate experiment`'s flags checked and turned into the core's
 //! [`ExperimentSpec`]: the structure, the actuators and the analyzer.
 
+use crate::args::{ExperimentArgs, OnOff, StructureQuantity};
 use crate::config;
+use crate::config::Settings;
 use crate::error::usage;
 use era::sim::experiment::{
     dta_like_structure, thesis_actuators, Compensation, Drive, ExperimentSpec, Structure, TABLE_5_1,
 };
 use era::sim::{ModalSpec, ModalStructure};
+use std::path::PathBuf;
+
+/// `era simulate experiment`: the thesis's FRF test in the time domain.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// Friction compensation in the actuators.
+    pub compensation: bool,
+    /// Frames averaged per excited actuator.
+    pub averages: usize,
+    /// Seed of the excitation and the sensor noise.
+    pub seed: u64,
+    /// Multiplies every actuator's true Coulomb force.
+    pub friction_scale: f64,
+    /// Compensator coefficients, lbf, one per actuator.
+    pub coefficients: Option<Vec<f64>>,
+    /// Excitation RMS voltage, V (by the compensation, when `None`).
+    pub excitation: Option<f64>,
+    /// Every actuator at once.
+    pub simultaneous: bool,
+    /// Number of actuators.
+    pub actuators: usize,
+    /// Accelerometer noise RMS, in/s².
+    pub accel_noise: f64,
+    /// LVT noise RMS, in/s.
+    pub lvt_noise: f64,
+    /// Structure from a model.json.
+    pub structure: Option<PathBuf>,
+    /// What the structure model's outputs measure.
+    pub structure_quantity: era::Quantity,
+    /// A seeded modal structure: number of modes.
+    pub modes: Option<usize>,
+    /// Its DOFs.
+    pub dofs: Option<usize>,
+    /// Its lowest natural frequency, Hz.
+    pub fmin: Option<f64>,
+    /// Its highest natural frequency, Hz.
+    pub fmax: Option<f64>,
+    /// Its damping ratio range `MIN..MAX`, as given.
+    pub damping: Option<String>,
+    /// FRF file to write.
+    pub out: PathBuf,
+    /// File for the exact FRFs of the linear system.
+    pub exact_out: Option<PathBuf>,
+    /// Folder for the analyzer's time histories.
+    pub time_histories: Option<PathBuf>,
+    /// The output switches.
+    pub settings: Settings,
+}
+
+impl From<&ExperimentArgs> for Experiment {
+    fn from(a: &ExperimentArgs) -> Self {
+        Experiment {
+            compensation: a.compensation == OnOff::On,
+            averages: a.averages,
+            seed: a.seed,
+            friction_scale: a.friction_scale,
+            coefficients: a.coefficients.clone(),
+            excitation: a.excitation,
+            simultaneous: a.simultaneous,
+            actuators: a.actuators,
+            accel_noise: a.accel_noise,
+            lvt_noise: a.lvt_noise,
+            structure: a.structure.clone(),
+            structure_quantity: match a.structure_quantity {
+                StructureQuantity::Velocity => era::Quantity::Velocity,
+                StructureQuantity::Acceleration => era::Quantity::Acceleration,
+            },
+            modes: a.modes,
+            dofs: a.dofs,
+            fmin: a.fmin,
+            fmax: a.fmax,
+            damping: a.damping.clone(),
+            out: a.out.clone(),
+            exact_out: a.exact_out.clone(),
+            time_histories: a.time_histories.clone(),
+            settings: Settings::from(&a.common),
+        }
+    }
+}
 
 fn check_nonnegative(flag: &str, v: f64) -> anyhow::Result<()> {
     if !(v.is_finite() && v >= 0.0) {
