@@ -547,8 +547,8 @@ pub fn check_noise(noise: f64) -> anyhow::Result<()> {
 mod tests {
     use super::*;
     use crate::args::IdentifyArgs;
-    use era::identify::EraOptions;
     use clap::Parser;
+    use era::identify::EraOptions;
 
     fn parsed(args: &[&str]) -> crate::args::Command {
         let argv = ["era"].iter().chain(args);

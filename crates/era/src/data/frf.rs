@@ -272,7 +272,7 @@ impl FrfData {
         &self.values[start..start + lines]
     }
     /// True when every value is exactly zero.
-    pub fn is_all_zero(&self) -> bool {
+    pub(crate) fn is_all_zero(&self) -> bool {
         self.values.iter().all(|v| v.re == 0.0 && v.im == 0.0)
     }
     /// Returns the same data with another quantity tag (no conversion).

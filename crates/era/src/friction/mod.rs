@@ -284,7 +284,7 @@ impl Oscillator {
         self.stiffness / (self.omega() * self.omega())
     }
     /// Viscous coefficient `c = 2ζ√(k m)`.
-    pub fn viscous_coefficient(&self) -> f64 {
+    pub(crate) fn viscous_coefficient(&self) -> f64 {
         2.0 * self.viscous_damping_ratio * (self.stiffness * self.mass()).sqrt()
     }
     /// Velocity drop per cycle of a Coulomb free decay, `4 F_C ω_n / k` (Eq. 3.10).

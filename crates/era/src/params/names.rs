@@ -350,7 +350,7 @@ impl Param {
     }
 
     /// The parameter whose field name is `field`.
-    pub fn from_field(field: &str) -> Option<Param> {
+    pub(crate) fn from_field(field: &str) -> Option<Param> {
         Param::ALL.iter().copied().find(|p| p.field() == field)
     }
 }
@@ -383,7 +383,7 @@ impl Prose {
     }
 
     /// `self` followed by `param`, spelled by the front end.
-    pub fn param(mut self, param: Param) -> Self {
+    pub(crate) fn param(mut self, param: Param) -> Self {
         self.0.push(Piece::Param(param));
         self
     }

@@ -501,7 +501,7 @@ impl Factorization {
     /// The same factors, realizing `A` from the shift of the observability factor
     /// ([`crate::identify::Realizer::Shift`]) instead of `H1`.
     #[must_use]
-    pub fn with_shift(mut self) -> Self {
+    pub(crate) fn with_shift(mut self) -> Self {
         self.shift = true;
         self
     }

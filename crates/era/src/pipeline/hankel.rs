@@ -26,7 +26,7 @@ pub struct HankelShape {
 
 impl HankelShape {
     /// Largest Markov index used, `s + r + c − 2`.
-    pub fn last_sample(&self) -> usize {
+    pub(crate) fn last_sample(&self) -> usize {
         self.first_sample + self.block_rows + self.block_cols - 2
     }
 
@@ -155,7 +155,7 @@ impl ThesisHankel {
 
     /// Markov samples the thesis passes in (`Y_0 … Y_M`, of which `Y_(M-1)`, `Y_M` go
     /// unused): the sequence must have more than `M` samples.
-    pub fn samples_needed(&self) -> usize {
+    pub(crate) fn samples_needed(&self) -> usize {
         self.markov_samples + 1
     }
 }

@@ -681,7 +681,7 @@ impl Refinement {
     /// quantity over `(z − e^(sTs))` for a sampled one (`quantity` is then the data's,
     /// as in [`Refinement::to_state_space`]). Its rank-one part is the mode's shape
     /// times its participation.
-    pub fn model_residue(&self, mode: &RefinedMode, quantity: Quantity) -> Vec<Complex64> {
+    pub(crate) fn model_residue(&self, mode: &RefinedMode, quantity: Quantity) -> Vec<Complex64> {
         match self.sample_time_s {
             Some(_) => mode.residue.clone(),
             None => {

@@ -168,7 +168,7 @@ impl PoleParameters {
             .collect()
     }
     /// `ds/dθ` for the damping parameter and the frequency parameter of pole `s`.
-    pub fn deltas(&self, s: Complex64) -> [Complex64; 2] {
+    pub(crate) fn deltas(&self, s: Complex64) -> [Complex64; 2] {
         let d_sigma = if self.log_damping { s.re } else { -1.0 };
         [Complex64::new(d_sigma, 0.0), Complex64::new(0.0, 1.0)]
     }
@@ -255,7 +255,7 @@ pub(crate) struct Block {
 impl Block {
     /// `√W` for a unit fitted through its weighted mean, 1 otherwise: its coefficients
     /// are divided by this.
-    pub fn unit_scale(&self, u: usize) -> f64 {
+    pub(crate) fn unit_scale(&self, u: usize) -> f64 {
         self.scales[u]
     }
 
@@ -535,7 +535,7 @@ impl Problem {
 
     /// Real observations less unknowns (`parameters` pole parameters and every unit's
     /// linear coefficients), or `None` when there are not more observations.
-    pub fn degrees_of_freedom(&self, parameters: usize) -> Option<usize> {
+    pub(crate) fn degrees_of_freedom(&self, parameters: usize) -> Option<usize> {
         let units: usize = self.blocks.iter().map(|b| b.units.len()).sum();
         let unknowns = parameters + self.layout.columns(parameters / 2) * units;
         self.observations.checked_sub(unknowns).filter(|&d| d > 0)
@@ -543,12 +543,12 @@ impl Problem {
 
     /// Whether the rank-one stage will follow the free fit: asked for, weights
     /// constant per pair, complex modes.
-    pub fn rank_one_follows(&self) -> bool {
+    pub(crate) fn rank_one_follows(&self) -> bool {
         self.rank_one && self.pair_weights.is_some() && self.layout.per_mode == 2
     }
 
     /// Checks that there are more real observations per unit than linear unknowns.
-    pub fn check_size(&self, modes: usize) -> Result<()> {
+    pub(crate) fn check_size(&self, modes: usize) -> Result<()> {
         let cols = self.layout.columns(modes);
         let rows = 2 * self.omega.len();
         if rows <= cols {

@@ -156,7 +156,7 @@ impl Actuator {
         self.stiffness / (w * w)
     }
     /// Viscous coefficient `2ζ√(km)`.
-    pub fn viscous_coefficient(&self) -> f64 {
+    pub(crate) fn viscous_coefficient(&self) -> f64 {
         2.0 * self.viscous_damping_ratio * (self.stiffness * self.mass()).sqrt()
     }
     fn validate(&self, j: usize) -> Result<()> {
