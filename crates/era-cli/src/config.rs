@@ -308,7 +308,7 @@ pub struct Compare {
     pub fit_band: Vec<f64>,
     /// Folder for the files.
     pub out: Option<PathBuf>,
-    /// `era identify` flags to identify both sets with ([`compare_identify_options`]).
+    /// `era identify` flags to identify both sets with ([`compare::compare_identify_options`]).
     pub identify: Option<Vec<String>>,
     /// The output switches.
     pub settings: Settings,

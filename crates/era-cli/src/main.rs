@@ -1,6 +1,8 @@
-//! The `era` command line. One direction: [`args`] (clap) → [`config`] (typed settings)
-//! → [`commands`] (one verb each: read, call the library, hand the result on) →
-//! [`output`] (every file written, the figures, the report, the terminal).
+//! The `era` command line. [`args`] (clap, importing nothing of the crate) →
+//! [`config`] (typed settings, a file per verb) → [`commands`] (one verb each: read
+//! with [`input`], call the library through [`work`], hand the result to [`output`]:
+//! every file written, the figures, the report, the terminal). Nothing imports a
+//! command but `batch`, which runs `identify` and `oma`.
 //!
 //! Exit codes: 0 success, 2 bad input or usage (the message names the file, line,
 //! flag or value), 1 internal failure. No panic reaches the user: one is caught and

@@ -42,7 +42,7 @@ impl Cancel {
     }
 
     /// Whether [`Cancel::cancel`] was called.
-    pub(crate) fn is_cancelled(&self) -> bool {
+    pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::Relaxed)
     }
 

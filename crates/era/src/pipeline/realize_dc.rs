@@ -37,7 +37,7 @@ use std::time::Instant;
 /// The sizes of ERA/DC (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
-pub(crate) struct DcShape {
+pub struct DcShape {
     /// Block rows `α` of the Hankel blocks.
     pub alpha: usize,
     /// Block columns `β`.
@@ -111,10 +111,10 @@ fn hankel_at(markov: &MarkovSequence, k: usize, alpha: usize, beta: usize) -> Ma
 /// `U_Nᵀ R(1) V_N = U_Nᵀ H(s+1) V₀ S₀ Z_N`, and `Q_β = Σ^(−½) U_nᵀ H(0)` gives `B`.
 ///
 /// # Errors
-/// [`EraError::InvalidParameter`] for `ξ ≠ 0` ([`realize_dc_with`] takes any shape);
+/// [`EraError::InvalidParameter`] for `ξ ≠ 0` (the tests' reference `realize_dc_with` takes any shape);
 /// as [`realize_dc`] otherwise, and [`EraError::HankelTooSmall`] when `R(0)` has fewer
 /// singular values than `max_states`.
-pub(crate) fn factor_dc(
+pub fn factor_dc(
     markov: &MarkovSequence,
     sample_time_s: f64,
     shape: &DcShape,
@@ -180,7 +180,7 @@ pub(crate) fn factor_dc(
 /// [`DcShape::reach`];
 /// [`EraError::RankDeficient`] when the correlations have rank below `states`;
 /// [`EraError::Numerical`] when the SVD fails.
-pub(crate) fn realize_dc(
+pub fn realize_dc(
     markov: &MarkovSequence,
     sample_time_s: f64,
     states: usize,

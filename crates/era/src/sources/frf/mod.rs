@@ -202,7 +202,7 @@ pub(crate) fn impulse_responses(frf: &FrfData) -> Result<Vec<Vec<f64>>> {
 /// Naive O(n²) reference of `impulse_responses`: builds the mirrored spectrum
 /// `X = [G_0 … G_(N-1), conj(G_(N-2)) … conj(G_1)]` and evaluates
 /// `h[t] = Re( (1/n) Σ_k X[k] e^(+2πi·kt/n) )` directly.
-pub(crate) fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
+pub fn impulse_responses_naive(frf: &FrfData) -> Vec<Vec<f64>> {
     let lines = frf.lines();
     let n = 2 * (lines - 1);
     let twiddle: Vec<Complex64> = (0..n)
