@@ -1,6 +1,6 @@
-//! `era batch`'s records checked before any work: the shard's records of the manifest,
-//! each distinct list of flags parsed as its verb's, and the fingerprint that says
-//! whether an earlier run's result still holds.
+//! `era batch`'s settings ([`Batch`]), and its records checked before any work: the
+//! shard's records of the manifest, each distinct list of flags parsed as its verb's,
+//! and the fingerprint that says whether an earlier run's result still holds.
 
 use crate::config::Settings;
 use crate::error::UsageError;

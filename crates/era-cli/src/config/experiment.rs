@@ -1,5 +1,5 @@
-//! `era simulate experiment`'s flags checked and turned into the core's
-//! [`ExperimentSpec`]: the structure, the actuators and the analyzer.
+//! `era simulate experiment`'s settings ([`Experiment`]), checked and turned into the
+//! core's [`ExperimentSpec`]: the structure, the actuators and the analyzer.
 
 use crate::args::{ExperimentArgs, OnOff, StructureQuantity};
 use crate::config;

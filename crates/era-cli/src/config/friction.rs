@@ -1,5 +1,5 @@
-//! `era friction simulate|tune`'s flags checked and turned into the core's
-//! [`Oscillator`], [`DecaySpec`] and [`TuneSpec`].
+//! `era friction estimate|simulate|tune`'s settings ([`Friction`]), and their flags
+//! checked and turned into the core's [`Oscillator`], [`DecaySpec`] and [`TuneSpec`].
 
 use crate::args::{DecayMethodArg, FrictionAction, FrictionArgs, OscillatorArgs};
 use crate::config::Settings;

@@ -1,6 +1,8 @@
-//! `era identify`'s settings that depend on the data read ([`Plan`]): the route for
-//! the data's quantity, the window correction, the band and its lines, the scan's
-//! options and the coherence weighting of the refinement.
+//! `era identify`'s settings: its flags checked into an [`Identify`] (ERA's options, the
+//! route asked for, the refinement's options) before anything is read, and what the
+//! data decides once it is ([`Plan`]): the route for the data's quantity, the window
+//! correction, the band and its lines, the scan's options and the coherence weighting
+//! of the refinement.
 
 use crate::args::{IdentifyArgs, StatesArg};
 use crate::config::{parse_band, refine_given, refine_options, Settings, Welch};

@@ -1,4 +1,5 @@
-//! `era simulate shaker`'s flags checked and turned into the core's [`ShakerTest`].
+//! `era simulate shaker`'s settings ([`Shaker`]), checked and turned into the core's
+//! [`ShakerTest`].
 
 use crate::args::{ExcitationArg, ShakerArgs};
 use crate::config;
