@@ -44,22 +44,16 @@ pub fn identify(
         Some(m) => identify_supplied(frf, m, &options, stage, order),
     }
     .map_err(|e| match e {
-        era::EraError::InvalidParameter {
-            name,
-            value,
-            reason,
-        } if name == "orders" || (name == "states" && value == "auto") => anyhow::Error::from(
-            crate::error::UsageError(format!(
-                "--{name} {value}: {}",
-                reason.message(era::params::Naming::Flag)
-            )),
-        ),
         era::EraError::NotEnoughMarkovSamples {
             needed, available, ..
         } if supplied.is_some() => anyhow::Error::from(crate::error::UsageError(format!(
             "--markov-samples {available}: the Hankel matrix needs {needed} Markov samples (states x hankel factor, plus the direct term): raise --markov-samples, or lower --states or --hankel-factor"
         ))),
-        other => anyhow::Error::from(other),
+        // The scan's orders, and the automatic order, under their flags.
+        other => flag_error(other, |name, value| {
+            (name == "orders" || (name == "states" && value == "auto"))
+                .then(|| (format!("--{name}"), ""))
+        }),
     })
     .with_context(|| format!("identifying {}", file.display()));
     spinner.finish_and_clear();
@@ -84,12 +78,10 @@ pub fn refine(
     };
     let refined =
         refine_identification_in(found, frf, options, domain, &mut on_stage, &mut on_step)
-            .map_err(|e| match e {
-                e @ era::EraError::InvalidParameter {
-                    name: "max-iterations",
-                    ..
-                } => flag_error(e, |name| Some((format!("--{name}"), ""))),
-                other => anyhow::Error::from(other),
+            .map_err(|e| {
+                flag_error(e, |name, _| {
+                    (name == "max-iterations").then(|| (format!("--{name}"), ""))
+                })
             })
             .context("refining the model");
     spinner.finish_and_clear();
@@ -188,7 +180,7 @@ fn channels(set: &[Vec<f64>]) -> Vec<&[f64]> {
 /// A core error with the flag the user knows: the lags, blocks and references are
 /// `--time-lags`, `--blocks` and `--references` here.
 fn flagged(e: era::EraError, a: &Oma) -> anyhow::Error {
-    flag_error(e, |name| match name {
+    flag_error(e, |name, _| match name {
         "lags" if a.options.lags.is_none() => {
             Some(("--time-lags".into(), " (the default from the record)"))
         }
@@ -206,11 +198,7 @@ pub fn oma(
     options: &era::OmaOptions,
     spinner: indicatif::ProgressBar,
 ) -> anyhow::Result<era::Oma> {
-    let slices: Vec<Vec<&[f64]>> = records
-        .channels
-        .iter()
-        .map(|r| r.iter().map(Vec::as_slice).collect())
-        .collect();
+    let slices: Vec<Vec<&[f64]>> = records.channels.iter().map(|r| channels(r)).collect();
     let views: Vec<&[&[f64]]> = slices.iter().map(Vec::as_slice).collect();
     spinner.set_message("output correlations");
     let found = {
@@ -228,7 +216,7 @@ pub fn oma(
 
 /// A core error on a parameter of `era simulate fleet`, under its flag's name.
 fn fleet_flagged(e: era::EraError) -> anyhow::Error {
-    flag_error(e, |name| {
+    flag_error(e, |name, _| {
         let flag = match name {
             "index" => "records".to_string(),
             "inputs" => "forces".to_string(),
@@ -248,11 +236,11 @@ pub fn fleet_record(
 }
 
 /// `e` as a usage error worded `FLAG VALUE NOTE: reason` when it is an invalid parameter
-/// that `flag` names (the flag and a note for the core's parameter name, `None` to keep
-/// `e` as it is); any other error as it is.
+/// that `flag` names (the flag and a note for the core's parameter name and value,
+/// `None` to keep `e` as it is); any other error as it is.
 pub fn flag_error(
     e: era::EraError,
-    flag: impl FnOnce(&str) -> Option<(String, &'static str)>,
+    flag: impl FnOnce(&str, &str) -> Option<(String, &'static str)>,
 ) -> anyhow::Error {
     if let era::EraError::InvalidParameter {
         name,
@@ -260,7 +248,7 @@ pub fn flag_error(
         reason,
     } = &e
     {
-        if let Some((flag, note)) = flag(name) {
+        if let Some((flag, note)) = flag(name, value) {
             return crate::error::UsageError(format!(
                 "{flag} {value}{note}: {}",
                 reason.message(era::params::Naming::Flag)

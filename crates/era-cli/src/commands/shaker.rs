@@ -12,7 +12,7 @@ pub fn run(a: &Shaker) -> anyhow::Result<()> {
     let test = crate::config::shaker::test(a)?;
     let clock = Instant::now();
     let record = era::sim::shaker::simulate_shaker_test(&test).map_err(|e| {
-        crate::work::flag_error(e, |name| {
+        crate::work::flag_error(e, |name, _| {
             Some((format!("--{}", name.replace('_', "-")), ""))
         })
     })?;
