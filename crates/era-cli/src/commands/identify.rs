@@ -9,7 +9,7 @@ mod frame_check;
 use crate::config::identify::Plan;
 use crate::config::{Identify, Settings};
 use crate::input::InputFrf;
-use crate::output::identify::{read_lines, refinement_summary, Found};
+use crate::output::identify::{fit_errors, read_lines, refinement_summary, Found};
 use crate::output::report::Human;
 use anyhow::Context;
 use era::identify::route::Route;
@@ -120,14 +120,11 @@ fn refine_route(
     human: &Human,
     settings: &Settings,
 ) -> anyhow::Result<era::Identification> {
-    let fit = &found.fit;
-    let error = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
     human.print(&format!(
-        "\nERA model: {} states, {} modes; fit collocated {}, non-collocated {}\n",
+        "\nERA model: {} states, {} modes; {}\n",
         found.model.states(),
         found.modal.modes.len(),
-        error(fit.collocated_mean_relative_error),
-        error(fit.noncollocated_mean_relative_error)
+        fit_errors(&found.fit)
     ));
     let plan = check.plan;
     let mut found =

@@ -4,6 +4,7 @@
 
 use crate::config::Refine;
 use crate::input::{read_frf_with, shape_line};
+use crate::output::identify::fit_errors;
 use crate::output::prepare_out_dir;
 use crate::output::report::Human;
 use anyhow::Context;
@@ -33,18 +34,10 @@ pub fn run(a: &Refine) -> anyhow::Result<()> {
         input.note
     ));
     let found = crate::input::model::start(a, &model, frf, input.file.channels.as_ref())?;
-    let before = found.fit.clone();
+    let given = fit_errors(&found.fit);
     let found = crate::work::refine(found, frf, &ropts, None, &settings)
         .with_context(|| format!("refining {} on {}", a.model.display(), a.file.display()))?;
-    human.print(&format!(
-        "  the model as given: fit collocated {}, non-collocated {}\n",
-        before
-            .collocated_mean_relative_error
-            .map_or("-".into(), |v| format!("{v:.3e}")),
-        before
-            .noncollocated_mean_relative_error
-            .map_or("-".into(), |v| format!("{v:.3e}"))
-    ));
+    human.print(&format!("  the model as given: {given}\n"));
     human.print(&crate::output::identify::refinement_summary(&found));
     crate::output::refine::hand_on(a, outputs, &model, &input, geometry, &found, &human)
 }

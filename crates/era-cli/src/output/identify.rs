@@ -262,6 +262,18 @@ pub fn write(
     Ok(model)
 }
 
+/// `fit collocated X, non-collocated Y`: `fit`'s mean relative errors over the
+/// collocated and the other pairs (`-` where there are none), as the lines around a
+/// refinement say them.
+pub fn fit_errors(fit: &era::pipeline::fit::FitReport) -> String {
+    let error = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3e}"));
+    format!(
+        "fit collocated {}, non-collocated {}",
+        error(fit.collocated_mean_relative_error),
+        error(fit.noncollocated_mean_relative_error)
+    )
+}
+
 /// What was read: the FRFs' shape and notes, and the file's description.
 pub fn read_lines(input: &InputFrf) -> String {
     format!(
