@@ -23,11 +23,13 @@ fn estimate(a: &FrictionEstimate) -> anyhow::Result<()> {
     check_stiffness(a.stiffness)?;
     let clock = Instant::now();
     let mut estimates = Vec::new();
+    let mut signals = Vec::new();
     for path in &a.files {
         let (e, signal) = estimate_file(path, a.stiffness)?;
-        estimates.push((path.as_path(), e, signal));
+        estimates.push(e);
+        signals.push(signal);
     }
-    let (table, out) = estimate_table(a, &estimates);
+    let (table, out) = estimate_table(a, &estimates, &signals);
     human.print(&table);
     let seconds = clock.elapsed().as_secs_f64();
     finish_output(&human, &a.settings, out, &[("estimate", seconds)])

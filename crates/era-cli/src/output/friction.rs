@@ -17,17 +17,19 @@ fn record_json(path: &Path, e: &DecayEstimate, signal: &str) -> serde_json::Valu
     serde_json::Value::Object(record)
 }
 
-/// `era friction estimate`'s table (one row per record, then the means) and JSON.
+/// `era friction estimate`'s table (one row per record, then the means) and JSON:
+/// `estimates[k]` is of `a.files[k]`, read from its `signals[k]` column.
 pub fn estimate_table(
     a: &FrictionEstimate,
-    estimates: &[(&Path, DecayEstimate, &str)],
+    estimates: &[DecayEstimate],
+    signals: &[&str],
 ) -> (String, serde_json::Value) {
     let mut table = format!(
         "era friction estimate (k = {}; Eq. 3.12: F_C = dy k / (8 pi f_n cycles); combined: friction and viscous damping fitted together)\n{:<28} {:>9} {:>7} {:>12} {:>11} {:>9} {:>9} {:>11} {:>9}\n",
         show(a.stiffness), "record", "f_n (Hz)", "cycles", "drop/cycle", "F_C", "zeta", "model", "F_C comb.", "zeta comb."
     );
     let mut records = Vec::new();
-    for (path, e, signal) in estimates {
+    for ((path, e), signal) in a.files.iter().zip(estimates).zip(signals) {
         let name = path.file_name().map_or_else(
             || path.display().to_string(),
             |n| n.to_string_lossy().into_owned(),
@@ -47,8 +49,7 @@ pub fn estimate_table(
         );
         records.push(record_json(path, e, signal));
     }
-    let all: Vec<DecayEstimate> = estimates.iter().map(|(_, e, _)| e.clone()).collect();
-    let s = summarize(&all);
+    let s = summarize(estimates);
     let _ = writeln!(
         table,
         "\nF_C mean {}, std {} over {} record(s); f_n mean {} Hz",
