@@ -10,38 +10,63 @@ use era_io::uff::UffWriteOptions;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// The coherence as CSV: `frequency_hz`, `coh{i}_{j}` (ordinary), `mcoh{i}` (multiple).
-pub fn write_coherence(path: &Path, est: &FrfEstimate, source: &str) -> anyhow::Result<()> {
-    let (q, p, lines) = (est.frf.outputs(), est.frf.inputs(), est.frf.lines());
+/// A coherence file's text: the `# coherence of SOURCE` and `# NOTE` lines, then
+/// `frequency_hz`, `coh{i}_{j}` (`ordinary(i, j, line)`) for every pair and, when
+/// `multiple` is given, `mcoh{i}` (`multiple(i, line)`) for every output. `era frf`'s
+/// estimate and `era simulate experiment` write it.
+pub fn coherence_csv(
+    source: &str,
+    note: &str,
+    frequency_hz: &[f64],
+    (q, p): (usize, usize),
+    ordinary: impl Fn(usize, usize, usize) -> f64,
+    multiple: Option<&dyn Fn(usize, usize) -> f64>,
+) -> String {
+    let lines = frequency_hz.len();
     let mut out = String::with_capacity(lines * (q * p + q + 1) * 24);
     let _ = writeln!(out, "# coherence of {source}");
-    let _ = writeln!(
-        out,
-        "# coh<i>_<j>: ordinary coherence of output i with input j; mcoh<i>: multiple coherence of output i"
-    );
+    let _ = writeln!(out, "# {note}");
     out.push_str("frequency_hz");
     for i in 1..=q {
         for j in 1..=p {
             let _ = write!(out, ",coh{i}_{j}");
         }
     }
-    for i in 1..=q {
-        let _ = write!(out, ",mcoh{i}");
+    if multiple.is_some() {
+        for i in 1..=q {
+            let _ = write!(out, ",mcoh{i}");
+        }
     }
     out.push('\n');
-    for k in 0..lines {
-        let _ = write!(out, "{}", est.frf.frequency_hz()[k]);
+    for (k, f) in frequency_hz.iter().enumerate() {
+        let _ = write!(out, "{f}");
         for i in 0..q {
             for j in 0..p {
-                let _ = write!(out, ",{}", est.coherence(i, j)[k]);
+                let _ = write!(out, ",{}", ordinary(i, j, k));
             }
         }
-        for i in 0..q {
-            let _ = write!(out, ",{}", est.multiple(i)[k]);
+        if let Some(multiple) = multiple {
+            for i in 0..q {
+                let _ = write!(out, ",{}", multiple(i, k));
+            }
         }
         out.push('\n');
     }
-    era_io::atomic::write_atomic(path, out.as_bytes())?;
+    out
+}
+
+/// The estimate's coherence as CSV ([`coherence_csv`]): ordinary and multiple.
+pub fn write_coherence(path: &Path, est: &FrfEstimate, source: &str) -> anyhow::Result<()> {
+    let shape = (est.frf.outputs(), est.frf.inputs());
+    let text = coherence_csv(
+        source,
+        "coh<i>_<j>: ordinary coherence of output i with input j; mcoh<i>: multiple coherence of output i",
+        est.frf.frequency_hz(),
+        shape,
+        |i, j, k| est.coherence(i, j)[k],
+        Some(&|i, k| est.multiple(i)[k]),
+    );
+    era_io::atomic::write_atomic(path, text.as_bytes())?;
     Ok(())
 }
 

@@ -16,33 +16,18 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The coherence as CSV: `frequency_hz`, `coh{i}_{j}` (the ordinary coherence of output
-/// `i` with input `j`, from the run that excited input `j`).
+/// The coherence as CSV ([`super::estimate::coherence_csv`]): `coh{i}_{j}`, the
+/// ordinary coherence of output `i` with input `j`, from the run that excited input `j`.
 pub fn coherence_csv(e: &Experiment, source: &str) -> String {
-    let (q, p, lines) = (e.frf.outputs(), e.frf.inputs(), e.frf.lines());
-    let mut out = String::with_capacity(lines * (q * p + 1) * 22);
-    let _ = writeln!(out, "# coherence of {source}");
-    let _ = writeln!(
-        out,
-        "# coh<i>_<j>: ordinary coherence of output i with input j (from the run exciting input j)"
-    );
-    out.push_str("frequency_hz");
-    for i in 1..=q {
-        for j in 1..=p {
-            let _ = write!(out, ",coh{i}_{j}");
-        }
-    }
-    out.push('\n');
-    for k in 0..lines {
-        let _ = write!(out, "{}", e.frf.frequency_hz()[k]);
-        for i in 0..q {
-            for j in 0..p {
-                let _ = write!(out, ",{}", e.coherence[(i * p + j) * lines + k]);
-            }
-        }
-        out.push('\n');
-    }
-    out
+    let (p, lines) = (e.frf.inputs(), e.frf.lines());
+    super::estimate::coherence_csv(
+        source,
+        "coh<i>_<j>: ordinary coherence of output i with input j (from the run exciting input j)",
+        e.frf.frequency_hz(),
+        (e.frf.outputs(), p),
+        |i, j, k| e.coherence[(i * p + j) * lines + k],
+        None,
+    )
 }
 
 pub fn frf_file(frf: &era::FrfData, meta: &[(&str, String)]) -> FrfFile {
