@@ -139,7 +139,7 @@ impl FrictionError {
 
     /// [`FrictionError::InvalidParameter`] from a parameter's field name, its value and
     /// the reason.
-    pub fn invalid(name: &'static str, value: f64, reason: impl Into<String>) -> Self {
+    pub(crate) fn invalid(name: &'static str, value: f64, reason: impl Into<String>) -> Self {
         FrictionError::InvalidParameter {
             name,
             value: show(value),

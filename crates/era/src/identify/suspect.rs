@@ -49,7 +49,7 @@ use crate::pipeline::modes::ModalParameters;
 
 impl SuspectResult {
     /// The warning in the words of `naming`'s front end.
-    pub fn message(&self, naming: Naming) -> String {
+    pub(crate) fn message(&self, naming: Naming) -> String {
         match self {
             SuspectResult::ShortHankel {
                 window_s,
@@ -136,7 +136,7 @@ impl std::fmt::Display for SuspectResult {
 
 /// The checks of this module on a model's modes. `hankel_window` is the realization's
 /// `(block rows + block columns, Ts)`, when a Hankel was built.
-pub fn check(
+pub(crate) fn check(
     modal: &ModalParameters,
     quality: &[ModeQuality],
     hankel_window: Option<(usize, f64)>,

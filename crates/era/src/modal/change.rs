@@ -23,10 +23,10 @@
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Records a track needs on each side of a split to have a step there.
-pub const MIN_SIDE: usize = 3;
+pub(crate) const MIN_SIDE: usize = 3;
 
 /// The false-alarm rate of the fleet's test, over all the splits tried.
-pub const ALPHA: f64 = 0.001;
+pub(crate) const ALPHA: f64 = 0.001;
 
 /// A step in one track's frequency at a split.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -42,7 +42,13 @@ pub struct ComparedModels {
 
 /// Relative RMS difference `‖A − B‖ / ‖B‖` over the lines `lo ≤ f < hi` (NaN when B has
 /// no power there).
-pub fn band_difference(a: &[Complex64], b: &[Complex64], f: &[f64], lo: f64, hi: f64) -> f64 {
+pub(crate) fn band_difference(
+    a: &[Complex64],
+    b: &[Complex64],
+    f: &[f64],
+    lo: f64,
+    hi: f64,
+) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for k in 0..f.len() {
         if f[k] >= lo && f[k] < hi {

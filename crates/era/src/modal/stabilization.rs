@@ -139,7 +139,7 @@ impl OrderRange {
     ///
     /// # Errors
     /// As [`OrderRange::parse`].
-    pub fn new(min: usize, max: usize, step: usize) -> Result<Self> {
+    pub(crate) fn new(min: usize, max: usize, step: usize) -> Result<Self> {
         let bad = |reason: String| EraError::InvalidParameter {
             name: "orders",
             value: format!("{min}..{max}:{step}"),
@@ -300,7 +300,7 @@ impl Scan {
 /// [`EraError::InvalidParameter`] when no order of the range can be realized (all above
 /// the factorization's largest order or its rank); numerical failures of the eigen
 /// solver.
-pub fn scan(
+pub(crate) fn scan(
     factorization: &Factorization,
     orders: &OrderRange,
     criteria: &DiagramCriteria,

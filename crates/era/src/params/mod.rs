@@ -33,13 +33,13 @@ pub enum Naming {
 
 impl Naming {
     /// `param` as this front end spells it.
-    pub fn spell(self, param: Param) -> String {
+    pub(crate) fn spell(self, param: Param) -> String {
         self.name(param.field())
     }
 
     /// The name of the parameter `key` (snake case, as in [`crate::EraOptions`]) for this
     /// front end.
-    pub fn name(self, key: &str) -> String {
+    pub(crate) fn name(self, key: &str) -> String {
         match self {
             Naming::Flag => format!("--{}", key.replace('_', "-")),
             Naming::Keyword => match key {
@@ -77,7 +77,7 @@ impl crate::params::limits::LimitError {
 }
 
 /// `Err(EraError::Invalid)` with `message`.
-pub fn invalid<T>(message: impl Into<String>) -> Result<T> {
+pub(crate) fn invalid<T>(message: impl Into<String>) -> Result<T> {
     Err(EraError::Invalid(message.into()))
 }
 

@@ -50,7 +50,7 @@ impl std::error::Error for UnknownName {}
 ///
 /// # Errors
 /// [`UnknownName`] when no value of `T` has that name.
-pub fn parse<T: Named>(text: &str) -> Result<T, UnknownName> {
+pub(crate) fn parse<T: Named>(text: &str) -> Result<T, UnknownName> {
     let key = text.trim().to_ascii_lowercase().replace('_', "-");
     T::from_name(&key).ok_or_else(|| UnknownName {
         what: T::WHAT,
@@ -226,7 +226,7 @@ pub enum Param {
 
 impl Param {
     /// Every parameter, in declaration order.
-    pub const ALL: &'static [Param] = &[
+    pub(crate) const ALL: &'static [Param] = &[
         Param::States,
         Param::HankelFactor,
         Param::Integrations,
@@ -377,7 +377,7 @@ enum Piece {
 
 impl Prose {
     /// `self` followed by `text`.
-    pub fn text(mut self, text: impl Into<String>) -> Self {
+    pub(crate) fn text(mut self, text: impl Into<String>) -> Self {
         self.0.push(Piece::Text(text.into()));
         self
     }

@@ -74,7 +74,7 @@ pub enum RealizeWarning {
 impl RealizeWarning {
     /// The warning, with the options its remedy names spelled as `naming` spells them
     /// (`Display` uses the option fields, [`crate::params::Naming::Keyword`]).
-    pub fn message(&self, naming: crate::params::Naming) -> String {
+    pub(crate) fn message(&self, naming: crate::params::Naming) -> String {
         let n = |key: &str| naming.name(key);
         match self {
             RealizeWarning::FewSingularValues { available, states } => format!(

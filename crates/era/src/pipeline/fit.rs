@@ -102,7 +102,8 @@ impl HessenbergForm {
     }
 
     /// The Hessenberg matrix `H` (of the balanced `A`).
-    pub fn h(&self) -> &Mat<f64> {
+    #[cfg(test)]
+    pub(crate) fn h(&self) -> &Mat<f64> {
         &self.h
     }
 
@@ -370,7 +371,7 @@ pub(crate) fn frequency_response_modal(
 }
 
 /// Reference: a dense complex LU solve `(zI − A) X = B` at every line.
-pub fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
+pub(crate) fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
     let (n, q, p, lines) = (
         model.states(),
         model.outputs(),

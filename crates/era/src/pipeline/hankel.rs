@@ -56,7 +56,7 @@ impl HankelShape {
 ///
 /// # Errors
 /// As [`build`].
-pub fn check_shape(markov: &MarkovSequence, shape: HankelShape) -> Result<()> {
+pub(crate) fn check_shape(markov: &MarkovSequence, shape: HankelShape) -> Result<()> {
     shape.check(markov)
 }
 

@@ -129,7 +129,7 @@ pub struct ModalParameters {
 }
 
 /// Continuous pole of an eigenvalue of a model in `domain`.
-pub fn continuous_pole(eigenvalue: Complex64, domain: TimeDomain) -> Complex64 {
+pub(crate) fn continuous_pole(eigenvalue: Complex64, domain: TimeDomain) -> Complex64 {
     match domain {
         TimeDomain::Discrete { sample_time_s } => eigenvalue.ln() / sample_time_s,
         TimeDomain::Continuous => eigenvalue,

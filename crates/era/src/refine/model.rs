@@ -64,7 +64,7 @@ pub(crate) struct Layout {
 }
 
 impl Layout {
-    pub fn new(quantity: Quantity, options: &RefineOptions) -> Self {
+    pub(crate) fn new(quantity: Quantity, options: &RefineOptions) -> Self {
         let kappa = order(quantity);
         let lower = (ResidualKind::Lower, kappa - 2);
         let upper = (ResidualKind::Upper, 0);
@@ -83,7 +83,7 @@ impl Layout {
             residuals,
         }
     }
-    pub fn columns(&self, modes: usize) -> usize {
+    pub(crate) fn columns(&self, modes: usize) -> usize {
         modes * self.per_mode + self.residuals.len()
     }
 }
@@ -149,16 +149,16 @@ pub(crate) struct PoleParameters {
 }
 
 impl PoleParameters {
-    pub fn pole(&self, theta: &[f64], r: usize) -> Complex64 {
+    pub(crate) fn pole(&self, theta: &[f64], r: usize) -> Complex64 {
         let x = theta[2 * r];
         let sigma = if self.log_damping { x.exp() } else { x };
         Complex64::new(-sigma, theta[2 * r + 1])
     }
-    pub fn poles(&self, theta: &[f64]) -> Vec<Complex64> {
+    pub(crate) fn poles(&self, theta: &[f64]) -> Vec<Complex64> {
         (0..theta.len() / 2).map(|r| self.pole(theta, r)).collect()
     }
     /// `θ` of poles (which must have `Re s < 0` when the damping is logarithmic).
-    pub fn theta(&self, poles: &[Complex64]) -> Vec<f64> {
+    pub(crate) fn theta(&self, poles: &[Complex64]) -> Vec<f64> {
         poles
             .iter()
             .flat_map(|s| {
@@ -260,7 +260,7 @@ impl Block {
     }
 
     /// The basis (or its derivative columns) stacked and weighted per segment.
-    pub fn stack(&self, unweighted: &Mat<f64>) -> Mat<f64> {
+    pub(crate) fn stack(&self, unweighted: &Mat<f64>) -> Mat<f64> {
         let rows = unweighted.nrows();
         let lines = rows / 2;
         let segments = self.segment_weights.len();
@@ -475,7 +475,7 @@ fn weighted_block(unit: &[usize], w: &[Vec<f64>], data: &[Vec<Complex64>], nl: u
 
 impl Problem {
     /// Validates the options against the data and arranges the blocks.
-    pub fn new(frf: &FrfData, options: &RefineOptions) -> Result<Self> {
+    pub(crate) fn new(frf: &FrfData, options: &RefineOptions) -> Result<Self> {
         let (q, p, lines) = (frf.outputs(), frf.inputs(), frf.lines());
         let freq = frf.frequency_hz();
         let band = fit_band(freq, options)?;

@@ -90,7 +90,7 @@ impl MarkovSequence {
     /// # Panics
     /// If the number of series is not `outputs·inputs` or their lengths differ.
     #[track_caller]
-    pub fn from_pair_series(outputs: usize, inputs: usize, series: &[Vec<f64>]) -> Self {
+    pub(crate) fn from_pair_series(outputs: usize, inputs: usize, series: &[Vec<f64>]) -> Self {
         assert_eq!(series.len(), outputs * inputs, "one series per pair");
         let samples = series.first().map_or(0, Vec::len);
         let mut m = Self::zeros(outputs, inputs, samples);
@@ -407,7 +407,11 @@ impl LagWindow {
     ///
     /// # Errors
     /// [`EraError::InvalidParameter`] for a frame below 2 samples or a bad rate.
-    pub fn new(window: crate::estimate::Window, frame: usize, sample_rate_hz: f64) -> Result<Self> {
+    pub(crate) fn new(
+        window: crate::estimate::Window,
+        frame: usize,
+        sample_rate_hz: f64,
+    ) -> Result<Self> {
         if frame < 2 || !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return Err(EraError::InvalidParameter {
                 name: "frame",
@@ -437,7 +441,7 @@ impl LagWindow {
     }
 
     /// `c(t)` at `t` seconds (linear between the frame's lags; 0 past the frame).
-    pub fn at(&self, t: f64) -> f64 {
+    pub(crate) fn at(&self, t: f64) -> f64 {
         let x = t.abs() * self.sample_rate_hz;
         let k = x.floor() as usize;
         if k + 1 >= self.c.len() {

@@ -47,7 +47,7 @@ pub fn integrate(frf: &FrfData, times: usize) -> Result<FrfData> {
 
 /// Pads with zero lines up to `pad_to + 1` lines (docs/src/design.md §1.2; thesis `ndpts`).
 /// `pad_to = 0`, or `pad_to + 1 ≤ L`, leaves the data as it is.
-pub fn pad(frf: &FrfData, pad_to: usize) -> FrfData {
+pub(crate) fn pad(frf: &FrfData, pad_to: usize) -> FrfData {
     let lines = frf.lines();
     if pad_to == 0 || pad_to < lines {
         return frf.clone();
