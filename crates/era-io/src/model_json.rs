@@ -67,6 +67,31 @@ pub struct ModeJson {
     /// Standard deviation of the damping ratio (refined models).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub damping_ratio_std: Option<f64>,
+    /// Output-only runs (`era oma`): the standard deviation of each shape entry over the
+    /// record's blocks, null when the blocks did not give one.
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "present"
+    )]
+    pub shape_std: Option<Option<Vec<f64>>>,
+    /// Output-only runs: the blocks in which the mode was found again, null as above.
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "present"
+    )]
+    pub blocks_found: Option<Option<usize>>,
+}
+
+/// A key that is present, null or not: `Some(None)` for null, where a missing key is
+/// `None` (the field's default).
+fn present<'de, T, D>(d: D) -> Result<Option<Option<T>>, D::Error>
+where
+    T: Deserialize<'de>,
+    D: serde::Deserializer<'de>,
+{
+    Option::<T>::deserialize(d).map(Some)
 }
 
 /// A mode's quality indicators as stored.
@@ -110,6 +135,8 @@ impl ModeJson {
             stable_orders: None,
             frequency_std_hz: None,
             damping_ratio_std: None,
+            shape_std: None,
+            blocks_found: None,
         }
     }
 
@@ -208,6 +235,33 @@ pub struct ModelJson {
     /// The lines of the FRF the model was identified from (absent in older files).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub frf_lines: Option<FrfLinesJson>,
+    /// What an output-only run (`era oma`) adds: its method, channels, lags, blocks and
+    /// records, at the top level of the file.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub output_only: Option<OutputOnlyJson>,
+}
+
+/// The facts of an output-only run (`era oma`) that `model.json` holds beside the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutputOnlyJson {
+    /// `next-era` or `ssi-cov`.
+    pub method: String,
+    /// The outputs' columns in the files, 1-based.
+    pub outputs_columns: Vec<usize>,
+    /// The references' columns in the files, 1-based.
+    pub references: Vec<usize>,
+    /// Correlation lags.
+    pub lags: usize,
+    /// Blocks the records were cut into for the spread.
+    pub blocks: usize,
+    /// Samples per record.
+    pub samples: usize,
+    /// Hz.
+    pub sample_rate_hz: f64,
+    /// The record files.
+    pub records: Vec<std::path::PathBuf>,
+    /// `unscaled`: with no measured input there is no modal mass.
+    pub shapes: String,
 }
 
 /// The lines of an FRF: enough to tell whether another file has the same ones.
@@ -593,6 +647,7 @@ impl ModelJson {
             stabilization: found.stabilization.as_ref().map(stabilization_json),
             refinement: found.refinement.as_ref().map(RefinementJson::of),
             frf_lines: Some(FrfLinesJson::of(&found.processed)),
+            output_only: None,
         }
     }
 
@@ -856,6 +911,47 @@ mod tests {
         assert_eq!(back.singular_values.len(), 45);
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(!text.contains("timings_s"));
+    }
+
+    #[test]
+    fn an_output_only_model_round_trips_its_facts_and_spreads() {
+        let found = identify(
+            &truth_model_frf(None).unwrap(),
+            &EraOptions::thesis_truth_model(),
+        )
+        .unwrap();
+        let mut json = ModelJson::from_identification(
+            &found,
+            ModelParameters::refining(BTreeMap::new()),
+            None,
+        );
+        json.modes[0].shape_std = Some(Some(vec![0.01, 0.02]));
+        json.modes[0].blocks_found = Some(Some(7));
+        json.modes[1].shape_std = Some(None);
+        json.modes[1].blocks_found = Some(None);
+        json.output_only = Some(OutputOnlyJson {
+            method: "ssi-cov".into(),
+            outputs_columns: vec![2, 3],
+            references: vec![3],
+            lags: 64,
+            blocks: 8,
+            samples: 4096,
+            sample_rate_hz: 256.0,
+            records: vec!["a.csv".into()],
+            shapes: "unscaled".into(),
+        });
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.json");
+        json.write(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        // The facts sit at the top level; a mode without a spread says null.
+        let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(value["method"], "ssi-cov");
+        assert_eq!(value["references"], serde_json::json!([3]));
+        assert!(value["modes"][1]["shape_std"].is_null());
+        assert!(value["modes"][1].get("shape_std").is_some());
+        assert!(value["modes"][2].get("shape_std").is_none());
+        assert_eq!(ModelJson::read(&path).unwrap(), json);
     }
 
     #[test]

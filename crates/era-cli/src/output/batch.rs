@@ -8,6 +8,7 @@ use crate::error::UsageError;
 use crate::input::manifest::Record;
 use anyhow::Context as _;
 use era_io::fleet::ModeRow;
+use era_io::model_json::ModeJson;
 use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::path::Path;
@@ -24,9 +25,9 @@ pub struct Outcome {
     pub message: String,
     /// Its seconds.
     pub seconds: f64,
-    /// The verb's modes (its JSON's `modes`) and the channels of their shapes, until
-    /// they are saved in the record's state (then only counted).
-    pub found: Option<(Vec<Value>, Vec<String>)>,
+    /// The verb's modes (its model.json's) and the channels of their shapes, until they
+    /// are saved in the record's state (then only counted).
+    pub found: Option<(Vec<ModeJson>, Vec<String>)>,
     /// Modes.
     pub modes: usize,
     /// Modes called physical.
@@ -81,7 +82,12 @@ pub fn skipped(state: &Value) -> Outcome {
         seconds: state["seconds"].as_f64().unwrap_or(0.0),
         found: None,
         modes: state["modes"].as_array().map_or(0, Vec::len),
-        physical: physical_count(state["modes"].as_array().map_or(&[][..], Vec::as_slice)),
+        physical: state["modes"].as_array().map_or(0, |modes| {
+            modes
+                .iter()
+                .filter(|m| m["physical"].as_bool().unwrap_or(true))
+                .count()
+        }),
         code: 0,
     }
 }
@@ -98,26 +104,39 @@ pub fn strings(v: &Value) -> Vec<String> {
 
 /// Saves a finished record's state (atomically: a record half saved is not saved).
 pub fn save_state(states: &Path, p: &Planned, o: &Outcome) -> anyhow::Result<()> {
-    let state = json!({
-        "id": p.record.id,
-        "status": o.status,
-        "message": o.message,
-        "seconds": o.seconds,
-        "fingerprint": p.fingerprint,
-        "channels": o.found.as_ref().map(|f| &f.1),
-        "modes": o.found.as_ref().map(|f| &f.0),
-    });
+    let state = RecordState {
+        id: &p.record.id,
+        status: o.status,
+        message: &o.message,
+        seconds: o.seconds,
+        fingerprint: &p.fingerprint,
+        channels: o.found.as_ref().map(|f| f.1.as_slice()),
+        modes: o.found.as_ref().map(|f| f.0.as_slice()),
+    };
+    // Through a `Value`: its keys in alphabetical order, as the states have always been.
+    let text = serde_json::to_value(&state)?.to_string();
     let path = states.join(format!("{}.json", p.record.id));
-    era_io::atomic::write_atomic(&path, state.to_string().as_bytes())?;
+    era_io::atomic::write_atomic(&path, text.as_bytes())?;
     Ok(())
 }
 
+/// A record's state in `.era-batch/<id>.json`, as saved. It is read back as a JSON value
+/// (by `--resume` and for the tables), so that a number written as null (a NaN) reads
+/// as a missing value rather than failing the record.
+#[derive(serde::Serialize)]
+struct RecordState<'a> {
+    id: &'a str,
+    status: &'a str,
+    message: &'a str,
+    seconds: f64,
+    fingerprint: &'a str,
+    channels: Option<&'a [String]>,
+    modes: Option<&'a [ModeJson]>,
+}
+
 /// Modes called physical (a mode without the flag counts as physical).
-pub fn physical_count(modes: &[Value]) -> usize {
-    modes
-        .iter()
-        .filter(|m| m["physical"].as_bool().unwrap_or(true))
-        .count()
+pub fn physical_count(modes: &[ModeJson]) -> usize {
+    modes.iter().filter(|m| m.physical.unwrap_or(true)).count()
 }
 
 /// The modes table's rows of one `ok` (or skipped) record, from its saved state; none

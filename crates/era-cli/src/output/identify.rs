@@ -105,7 +105,7 @@ pub fn hand_on(
         print_json(&model)?;
     }
     Ok(super::Done {
-        json: serde_json::to_value(&model)?,
+        model,
         channels: (1..=frf.outputs()).map(|o| o.to_string()).collect(),
     })
 }

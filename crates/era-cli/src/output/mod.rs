@@ -392,8 +392,8 @@ pub fn pair_fit_table(fit: &era::pipeline::fit::FitReport, q: usize, p: usize) -
 /// it prints with `--json` and the name of each output channel (the entries of a shape),
 /// for `era batch`'s tables.
 pub struct Done {
-    /// The model JSON.
-    pub json: serde_json::Value,
+    /// model.json as written (and printed with `--json`).
+    pub model: era_io::model_json::ModelJson,
     /// One name per output channel: the file's channel name, else its 1-based number.
     pub channels: Vec<String>,
 }

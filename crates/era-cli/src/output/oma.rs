@@ -10,11 +10,10 @@ use super::{stamped, write_output, RunInput};
 use crate::input::oma::Records;
 use era::identify::oma::Oma;
 use era_io::atomic::{write_atomic, OutputSet};
-use era_io::model_json::{FitJson, ModelJson, ModelParameters};
+use era_io::model_json::{FitJson, ModelJson, ModelParameters, OutputOnlyJson};
 use era_plot::oma::{mac_png, mac_svg, spectral_png, spectral_svg, MacPlot, SpectralPlot};
 use era_plot::report::{report_html, InputSection, ReportInput, ReportSection};
 use era_plot::{singular_value_figure, FrfUnits, FrfView, PhaseView};
-use serde_json::json;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -165,11 +164,11 @@ pub fn oma_table(o: &Oma) -> String {
     s
 }
 
-/// The run's JSON (and model.json's): model.json's fields, each mode's `shape_std`,
-/// and the output-only facts: `method`, `outputs` and `references` (the files' 1-based
-/// columns), `lags`, `blocks`, `samples`, `sample_rate_hz`, `records` and
-/// `"shapes": "unscaled"`.
-pub fn oma_json(run: &OmaRun) -> serde_json::Value {
+/// The run's model.json: the model's fields, each mode's `shape_std` and `blocks_found`,
+/// and the output-only facts ([`era_io::model_json::OutputOnlyJson`]): `method`,
+/// `outputs_columns` and `references` (the files' 1-based columns), `lags`, `blocks`,
+/// `samples`, `sample_rate_hz`, `records` and `"shapes": "unscaled"`.
+pub fn oma_json(run: &OmaRun) -> ModelJson {
     let o = run.oma;
     let found = &o.identification;
     let mut era_options = run.options.era.clone();
@@ -185,36 +184,32 @@ pub fn oma_json(run: &OmaRun) -> serde_json::Value {
     params.automatic_order = run.auto;
     params.model_states = Some(found.model.states());
     params.orders = found.stabilization.as_ref().map(|st| st.range.to_string());
-    let model = ModelJson::from_run(found, &params);
-    let mut value = serde_json::to_value(&model).unwrap_or_else(|_| json!({}));
-    if let Some(modes) = value["modes"].as_array_mut() {
-        for (mode, spread) in modes.iter_mut().zip(&o.spread) {
-            mode["shape_std"] = json!(spread.as_ref().map(|s| &s.shape_std));
-            mode["blocks_found"] = json!(spread.as_ref().map(|s| s.blocks_found));
-        }
+    let mut model = ModelJson::from_run(found, &params);
+    for (mode, spread) in model.modes.iter_mut().zip(&o.spread) {
+        mode.shape_std = Some(spread.as_ref().map(|s| s.shape_std.clone()));
+        mode.blocks_found = Some(spread.as_ref().map(|s| s.blocks_found));
     }
     let columns = &run.records.columns;
-    value["method"] = json!(o.method.to_string());
-    value["outputs_columns"] = json!(columns.iter().map(|c| c + 1).collect::<Vec<_>>());
-    value["references"] = json!(o
-        .references
-        .iter()
-        .map(|&k| columns[k] + 1)
-        .collect::<Vec<_>>());
-    value["lags"] = json!(o.lags);
-    value["blocks"] = json!(o.blocks);
-    value["samples"] = json!(o.samples);
-    value["sample_rate_hz"] = json!(run.records.rate);
-    value["records"] = json!(run.files);
-    value["shapes"] = json!("unscaled");
-    value
+    model.output_only = Some(OutputOnlyJson {
+        method: o.method.to_string(),
+        outputs_columns: columns.iter().map(|c| c + 1).collect(),
+        references: o.references.iter().map(|&k| columns[k] + 1).collect(),
+        lags: o.lags,
+        blocks: o.blocks,
+        samples: o.samples,
+        sample_rate_hz: run.records.rate,
+        records: run.files.to_vec(),
+        shapes: "unscaled".into(),
+    });
+    model
 }
 
-/// model.json (the run's JSON, [`oma_json`]) into `set`: written last, with the
-/// timings when they were asked for, as `era identify` writes it.
-pub fn write_model_json(set: &mut OutputSet, json: &serde_json::Value) -> anyhow::Result<()> {
+/// model.json ([`oma_json`]) into `set`: written last, with the timings when they were
+/// asked for. Its keys are in alphabetical order, as `era oma` has always written them.
+pub fn write_model_json(set: &mut OutputSet, model: &ModelJson) -> anyhow::Result<()> {
+    let json = serde_json::to_value(model)?;
     write_output(set, "model.json", |p| {
-        Ok(era_io::model_json::write_json(p, json)?)
+        Ok(era_io::model_json::write_json(p, &json)?)
     })
 }
 
@@ -455,7 +450,7 @@ pub fn hand_on(
         found.correlation_seconds,
     );
     timings.insert("uncertainty".into(), found.uncertainty_seconds);
-    let mut json = oma_json(run);
+    let mut model = oma_json(run);
     if let Some(set) = outputs.as_mut() {
         let clock = std::time::Instant::now();
         write_oma(set, run, !a.no_figures, settings)?;
@@ -466,10 +461,10 @@ pub fn hand_on(
             timings.insert(WALL.into(), wall);
         }
         human.print(&timings_table(&timings));
-        json["timings_s"] = json!(timings);
+        model.timings_s = Some(timings);
     }
     if let Some(set) = outputs.as_mut() {
-        write_model_json(set, &json)?;
+        write_model_json(set, &model)?;
     }
     if let (Some(dir), Some(set)) = (&a.out, outputs) {
         set.commit()?;
@@ -479,10 +474,10 @@ pub fn hand_on(
         ));
     }
     if settings.json {
-        print_json(&json)?;
+        print_json(&serde_json::to_value(&model)?)?;
     }
     Ok(super::Done {
-        json,
+        model,
         channels: run.records.names.clone(),
     })
 }

@@ -89,10 +89,7 @@ fn run_one(p: &Planned, verb: &str, a: &Batch) -> Outcome {
             status: "ok",
             message: String::new(),
             seconds,
-            found: Some((
-                done.json["modes"].as_array().cloned().unwrap_or_default(),
-                done.channels,
-            )),
+            found: Some((done.model.modes, done.channels)),
             modes: 0,
             physical: 0,
             code: 0,
