@@ -351,6 +351,10 @@ impl Spectra {
         let at = (i * self.inputs + j) * l;
         &self.gyx[at..at + l]
     }
+    /// `G_{y_i y_i}` over the lines (real, stored as complex).
+    pub fn gyy_auto(&self, i: usize) -> Vec<f64> {
+        (0..self.lines()).map(|k| self.gyy_at(i, i, k).re).collect()
+    }
     /// `G_{y_i y_k}` over the lines, when the full output matrix was computed.
     pub fn gyy(&self, i: usize, k: usize) -> Option<&[Complex64]> {
         if !self.gyy_full {

@@ -83,10 +83,7 @@ pub fn skipped(state: &Value) -> Outcome {
         found: None,
         modes: state["modes"].as_array().map_or(0, Vec::len),
         physical: state["modes"].as_array().map_or(0, |modes| {
-            modes
-                .iter()
-                .filter(|m| m["physical"].as_bool().unwrap_or(true))
-                .count()
+            physical_count(modes.iter().map(|m| m["physical"].as_bool()))
         }),
         code: 0,
     }
@@ -134,9 +131,9 @@ struct RecordState<'a> {
     modes: Option<&'a [ModeJson]>,
 }
 
-/// Modes called physical (a mode without the flag counts as physical).
-pub fn physical_count(modes: &[ModeJson]) -> usize {
-    modes.iter().filter(|m| m.physical.unwrap_or(true)).count()
+/// Modes called physical, from each mode's flag (a mode without one counts as physical).
+pub fn physical_count(flags: impl Iterator<Item = Option<bool>>) -> usize {
+    flags.filter(|f| f.unwrap_or(true)).count()
 }
 
 /// The modes table's rows of one `ok` (or skipped) record, from its saved state; none

@@ -139,7 +139,7 @@ impl OrderRange {
     ///
     /// # Errors
     /// As [`OrderRange::parse`].
-    pub(crate) fn new(min: usize, max: usize, step: usize) -> Result<Self> {
+    pub fn new(min: usize, max: usize, step: usize) -> Result<Self> {
         let bad = |reason: String| EraError::InvalidParameter {
             name: "orders",
             value: format!("{min}..{max}:{step}"),

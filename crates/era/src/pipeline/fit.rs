@@ -371,7 +371,7 @@ pub(crate) fn frequency_response_modal(
 }
 
 /// Reference: a dense complex LU solve `(zI − A) X = B` at every line.
-pub(crate) fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
+pub fn frequency_response_naive(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
     let (n, q, p, lines) = (
         model.states(),
         model.outputs(),

@@ -97,6 +97,11 @@ impl HankelOperator {
         })
     }
 
+    /// FFT length used.
+    pub fn fft_len(&self) -> usize {
+        self.fft_len
+    }
+
     fn scratch(&self, channels: usize) -> Scratch {
         Scratch {
             column: Vec::new(),

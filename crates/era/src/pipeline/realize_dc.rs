@@ -37,7 +37,7 @@ use std::time::Instant;
 /// The sizes of ERA/DC (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
-pub(crate) struct DcShape {
+pub struct DcShape {
     /// Block rows `α` of the Hankel blocks.
     pub alpha: usize,
     /// Block columns `β`.
@@ -52,7 +52,7 @@ pub(crate) struct DcShape {
 
 impl DcShape {
     /// The default sizes for `states` at `hankel_factor` with `outputs` outputs.
-    pub(crate) fn new(states: usize, hankel_factor: usize, outputs: usize) -> Self {
+    pub fn new(states: usize, hankel_factor: usize, outputs: usize) -> Self {
         let q = outputs.max(1);
         let era_blocks = (states * hankel_factor.max(1) / 2).saturating_sub(1);
         let alpha = era_blocks.max((states + q).div_ceil(q)).max(2);
@@ -67,7 +67,7 @@ impl DcShape {
 
     /// The last Markov index it reads: `H(s + k)` for `k ≤ 2ξτ + 1` reaches
     /// `Y_(s + k + α + β − 1)`.
-    pub(crate) fn reach(&self) -> usize {
+    pub fn reach(&self) -> usize {
         self.shift + 2 * self.xi * self.tau + self.alpha + self.beta
     }
 
@@ -114,7 +114,7 @@ fn hankel_at(markov: &MarkovSequence, k: usize, alpha: usize, beta: usize) -> Ma
 /// [`EraError::InvalidParameter`] for `ξ ≠ 0` (the tests' reference `realize_dc_with` takes any shape);
 /// as [`realize_dc`] otherwise, and [`EraError::HankelTooSmall`] when `R(0)` has fewer
 /// singular values than `max_states`.
-pub(crate) fn factor_dc(
+pub fn factor_dc(
     markov: &MarkovSequence,
     sample_time_s: f64,
     shape: &DcShape,
@@ -180,7 +180,7 @@ pub(crate) fn factor_dc(
 /// [`DcShape::reach`];
 /// [`EraError::RankDeficient`] when the correlations have rank below `states`;
 /// [`EraError::Numerical`] when the SVD fails.
-pub(crate) fn realize_dc(
+pub fn realize_dc(
     markov: &MarkovSequence,
     sample_time_s: f64,
     states: usize,

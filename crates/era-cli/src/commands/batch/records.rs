@@ -53,7 +53,7 @@ pub fn run_records(
             let mut outcome = outcome;
             if let Some((modes, _)) = outcome.found.take() {
                 outcome.modes = modes.len();
-                outcome.physical = physical_count(&modes);
+                outcome.physical = physical_count(modes.iter().map(|m| m.physical));
             }
             outcomes[k] = Some(outcome);
             bar.set_message(format!("{failed} failed"));

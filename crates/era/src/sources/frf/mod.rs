@@ -90,7 +90,7 @@ impl MarkovSequence {
     /// # Panics
     /// If the number of series is not `outputs·inputs` or their lengths differ.
     #[track_caller]
-    pub(crate) fn from_pair_series(outputs: usize, inputs: usize, series: &[Vec<f64>]) -> Self {
+    pub fn from_pair_series(outputs: usize, inputs: usize, series: &[Vec<f64>]) -> Self {
         assert_eq!(series.len(), outputs * inputs, "one series per pair");
         let samples = series.first().map_or(0, Vec::len);
         let mut m = Self::zeros(outputs, inputs, samples);
@@ -388,7 +388,7 @@ impl LagWindow {
     /// (the lag window is H1's bias, an output-noise estimator's).
     ///
     /// # Errors
-    /// As `LagWindow::new`.
+    /// As [`LagWindow::new`].
     pub fn of_estimate(
         estimator: crate::estimate::Estimator,
         window: crate::estimate::Window,
@@ -407,11 +407,7 @@ impl LagWindow {
     ///
     /// # Errors
     /// [`EraError::InvalidParameter`] for a frame below 2 samples or a bad rate.
-    pub(crate) fn new(
-        window: crate::estimate::Window,
-        frame: usize,
-        sample_rate_hz: f64,
-    ) -> Result<Self> {
+    pub fn new(window: crate::estimate::Window, frame: usize, sample_rate_hz: f64) -> Result<Self> {
         if frame < 2 || !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
             return Err(EraError::InvalidParameter {
                 name: "frame",
@@ -441,7 +437,7 @@ impl LagWindow {
     }
 
     /// `c(t)` at `t` seconds (linear between the frame's lags; 0 past the frame).
-    pub(crate) fn at(&self, t: f64) -> f64 {
+    pub fn at(&self, t: f64) -> f64 {
         let x = t.abs() * self.sample_rate_hz;
         let k = x.floor() as usize;
         if k + 1 >= self.c.len() {
