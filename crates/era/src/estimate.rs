@@ -435,12 +435,29 @@ fn check_channels(inputs: &[&[f64]], outputs: &[&[f64]]) -> Result<usize> {
             got: inputs.len().min(outputs.len()),
         });
     }
+    check_record(inputs, outputs, None)
+}
+
+/// One record's channels (at least one input): every channel as long as input 1 and
+/// every sample finite. Returns the samples per channel. `record` (1-based) is named in
+/// the message when the caller has several.
+pub(crate) fn check_record(
+    inputs: &[&[f64]],
+    outputs: &[&[f64]],
+    record: Option<usize>,
+) -> Result<usize> {
     let samples = inputs[0].len();
+    let of_record = record
+        .map(|n| format!(" of record {n}"))
+        .unwrap_or_default();
     for (role, set) in [("input", inputs), ("output", outputs)] {
         for (c, channel) in set.iter().enumerate() {
             if channel.len() != samples {
                 return Err(EraError::ShapeMismatch {
-                    what: format!("samples in {role} {} (input 1 has {samples})", c + 1),
+                    what: format!(
+                        "samples in {role} {}{of_record} (input 1 has {samples})",
+                        c + 1
+                    ),
                     expected: samples,
                     got: channel.len(),
                 });

@@ -241,30 +241,11 @@ fn check_records(records: &[Record]) -> Result<(usize, usize, Vec<usize>)> {
                 });
             }
         }
-        let samples = rec.inputs[0].len();
-        for (role, set) in [("input", rec.inputs), ("output", rec.outputs)] {
-            for (c, channel) in set.iter().enumerate() {
-                if channel.len() != samples {
-                    return Err(EraError::ShapeMismatch {
-                        what: format!(
-                            "samples in {role} {} of record {} (input 1 has {samples})",
-                            c + 1,
-                            n + 1
-                        ),
-                        expected: samples,
-                        got: channel.len(),
-                    });
-                }
-                if let Some(sample) = channel.iter().position(|v| !v.is_finite()) {
-                    return Err(EraError::NonFiniteSample {
-                        role,
-                        channel: c + 1,
-                        sample,
-                    });
-                }
-            }
-        }
-        lengths.push(samples);
+        lengths.push(crate::estimate::check_record(
+            rec.inputs,
+            rec.outputs,
+            Some(n + 1),
+        )?);
     }
     Ok((r, q, lengths))
 }
