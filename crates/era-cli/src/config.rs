@@ -399,6 +399,33 @@ impl From<&ModalArgs> for Modal {
     }
 }
 
+impl Modal {
+    /// The structure the flags describe: the noise and the damping range checked, and
+    /// the sizes against their limits under the flags' names, before anything is
+    /// allocated.
+    pub fn spec(&self) -> anyhow::Result<era::sim::ModalSpec> {
+        check_noise(self.sim.noise)?;
+        let (damping_min, damping_max) = parse_range(&self.damping)?;
+        let request = era::sim::ModalRequest::new(
+            era::sim::ModalSpec {
+                outputs: self.outputs,
+                inputs: self.inputs,
+                modes: self.modes,
+                fmin_hz: self.fmin,
+                fmax_hz: self.fmax,
+                damping_min,
+                damping_max,
+                collocated: self.collocated,
+                seed: self.sim.seed,
+            },
+            self.lines,
+            self.df,
+        );
+        request.check(era::params::Naming::Flag)?;
+        Ok(request.spec)
+    }
+}
+
 /// `era simulate truth-model|modal|experiment|shaker`.
 #[derive(Debug, Clone)]
 pub enum Simulate {

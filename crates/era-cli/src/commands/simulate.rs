@@ -4,8 +4,7 @@
 use crate::config::{Modal, SimOutput, Simulate};
 use crate::output::report::Human;
 use crate::output::simulate::finish;
-use era::params::Naming;
-use era::sim::{add_noise, truth_model_frf, ModalRequest, ModalSpec, ModalStructure};
+use era::sim::{add_noise, truth_model_frf, ModalStructure};
 use era::Quantity;
 use serde_json::json;
 use std::time::Instant;
@@ -38,26 +37,7 @@ fn truth(sim: &SimOutput) -> anyhow::Result<()> {
 }
 
 fn modal(a: &Modal) -> anyhow::Result<()> {
-    crate::config::check_noise(a.sim.noise)?;
-    let (damping_min, damping_max) = crate::config::parse_range(&a.damping)?;
-    let request = ModalRequest::new(
-        ModalSpec {
-            outputs: a.outputs,
-            inputs: a.inputs,
-            modes: a.modes,
-            fmin_hz: a.fmin,
-            fmax_hz: a.fmax,
-            damping_min,
-            damping_max,
-            collocated: a.collocated,
-            seed: a.sim.seed,
-        },
-        a.lines,
-        a.df,
-    );
-    // Sizes against their limits, under the flag's name, before anything is allocated.
-    request.check(Naming::Flag)?;
-    let spec = request.spec;
+    let spec = a.spec()?;
     let clock = Instant::now();
     let structure = ModalStructure::random(&spec)?;
     let quantity: Quantity = a.quantity;
