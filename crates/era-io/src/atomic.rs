@@ -1267,6 +1267,7 @@ mod tests {
         let replaced = d.join("other").join(LOCK_NAME);
         std::fs::create_dir(d.join("other")).unwrap();
         std::fs::write(&replaced, "2\n").unwrap();
+        let other = std::fs::metadata(&replaced).unwrap();
         let mut private = Live {
             next: 0,
             entries: BTreeMap::new(),
@@ -1275,10 +1276,12 @@ mod tests {
             Registration::under(&mut private, &tmp, Kind::File),
             Registration::under(&mut private, &staging, Kind::Folder),
             Registration::under(&mut private, &lock, Kind::Lock(meta.dev(), meta.ino())),
+            // An inode the file at the path does not have (`meta.ino() + 1` could be it:
+            // a file system may give the next file the next inode).
             Registration::under(
                 &mut private,
                 &replaced,
-                Kind::Lock(meta.dev(), meta.ino() + 1),
+                Kind::Lock(other.dev(), other.ino() ^ 1),
             ),
         ];
         // Their drops would settle ids of the process's registry: these are the private
