@@ -36,6 +36,9 @@ fn main() -> era::Result<()> {
         });
     let (mut df_ratios, mut dz_ratios) = (Vec::new(), Vec::new());
     let (mut t_off, mut t_on) = (Vec::new(), Vec::new());
+    // Sums of squared errors against the truth over the modes found by both runs, in
+    // units of each mode's spread: frequency off, on; damping off, on.
+    let mut truth_errors = [0.0f64; 4];
     for &seed in &structures {
         let spec = ModalSpec {
             seed,
@@ -90,9 +93,15 @@ fn main() -> era::Result<()> {
             if !(sf > 0.0 && sz > 0.0) {
                 continue;
             }
+            let (tf, tz) = (structure.frequencies_hz[i], structure.damping_ratios[i]);
             for (a, b) in &both {
                 df_ratios.push((a.0 - b.0).abs() / sf);
                 dz_ratios.push((a.1 - b.1).abs() / sz);
+                // Errors against the truth, in units of the mode's noise spread.
+                truth_errors[0] += ((a.0 - tf) / sf).powi(2);
+                truth_errors[1] += ((b.0 - tf) / sf).powi(2);
+                truth_errors[2] += ((a.1 - tz) / sz).powi(2);
+                truth_errors[3] += ((b.1 - tz) / sz).powi(2);
             }
         }
     }
@@ -111,6 +120,15 @@ fn main() -> era::Result<()> {
     println!(
         "shift / noise spread over {} mode estimates: frequency median {fm:.3} p95 {f95:.3} max {fx:.3}; damping median {zm:.3} p95 {z95:.3} max {zx:.3}",
         df_ratios.len()
+    );
+    let count = df_ratios.len() as f64;
+    let rms = |k: usize| (truth_errors[k] / count).sqrt();
+    println!(
+        "error against the truth / noise spread, RMS over the same estimates: frequency off {:.3} on {:.3}; damping off {:.3} on {:.3}",
+        rms(0),
+        rms(1),
+        rms(2),
+        rms(3)
     );
     println!("identify --states auto: off median {om:.3} s (worst {ox:.3}), on median {nm:.3} s (worst {nx:.3})");
     Ok(())

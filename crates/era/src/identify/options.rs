@@ -221,7 +221,7 @@ impl EraOptions {
 }
 
 /// The default [`ScanOptions::svd_floor_fraction`].
-pub(crate) const SCAN_FLOOR_FRACTION: f64 = 0.03;
+pub(crate) const SCAN_FLOOR_FRACTION: f64 = 0.3;
 
 /// Settings of a scan across orders.
 #[derive(Debug, Clone, PartialEq)]
@@ -237,8 +237,9 @@ pub struct ScanOptions {
     /// smallest singular value it keeps. Used only by a default scan whose top order is
     /// at least 1.5 times the order the probe found, so that this value lies in the
     /// noise floor: the triplets are then exact for the data plus a perturbation this fraction
-    /// of the noise's own, and more passes would move the poles by a small part of their
-    /// noise spread ([`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0:
+    /// of the noise's own, and more passes would move the poles by less than their noise
+    /// spread without bringing them nearer the truth (the book's performance chapter
+    /// measures both; [`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0:
     /// the tolerance alone; explicit orders and the output-only scan use the tolerance
     /// alone).
     pub svd_floor_fraction: f64,

@@ -84,10 +84,13 @@
 //! largest residual `ρσ₁`. When the wanted rank reaches into the noise floor (the order
 //! scan asks for twice the signal's order and more), its smallest wanted singular value
 //! `σ_rank` is of the order of the noise's own perturbation of `H`. Stopping once
-//! `ρσ₁ ≤ f·σ_rank` then adds a perturbation a fraction `f` of the noise's, which moves
-//! the poles by about that fraction of their scatter over noise realizations; more passes
+//! `ρσ₁ ≤ f·σ_rank` then adds a perturbation a fraction `f` of the noise's. The triplets
+//! far above the floor (the signal's) converge faster than the rest, and what stays
+//! unsettled is mostly which directions of the noise floor the trailing triplets take,
+//! which no exact SVD of noisy data makes a better estimate of anything; more passes
 //! buy nothing a user could see. On exact data `σ_rank` is at rounding and the tolerance
-//! alone applies. `cargo run --release -p era --example scan_floor` measures the shift.
+//! alone applies. `cargo run --release -p era --example scan_floor` measures the poles'
+//! shift and their error against the truth (the scan's `f` is 0.3).
 //!
 //! **Restarts.** The basis grows by `b` columns a pass on each side, and the small SVD
 //! costs `O((s b)³)`. Once the basis holds `depth` blocks (fewer when it would pass a
