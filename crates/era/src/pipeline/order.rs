@@ -647,8 +647,9 @@ fn judge_significance(
         let r = match domain {
             Some(ts) => fit(ts),
             None => {
-                // The domain that fits better, decided once on the full set.
-                let (c, z) = (fit(None), fit(Some(sample_time_s)));
+                // The domain that fits better, decided once on the full set (the two
+                // fits side by side: neither reads the other).
+                let (c, z) = rayon::join(|| fit(None), || fit(Some(sample_time_s)));
                 match (c, z) {
                     (_, Err(EraError::Interrupted)) => Err(EraError::Interrupted),
                     (Ok(c), Ok(z)) => {
