@@ -4,10 +4,11 @@
 //! order runs once with the stop off (the tolerance alone, 1e-6 of `σ₁`) and once with it
 //! on. For every true mode found by both, the shift of its frequency and damping between
 //! the two runs is compared with the spread of that mode over the noise realizations
-//! (the run with the stop off), and the modes found, spurious ones and times are printed.
+//! (the run with the stop off), and so is each run's error against the true mode (RMS
+//! over the same estimates); the modes found, spurious ones and times are printed.
 //!
 //! `cargo run --release -p era --example scan_floor -- [STRUCTURES] [REALIZATIONS] [NOISE] [FRACTION]`,
-//! e.g. `-- 205,206,207,208 6 0.05 0.03` (the fraction defaults to the scan's).
+//! e.g. `-- 405,406,407 4 0.05 0.3` (the fraction defaults to the scan's).
 
 use era::identify::{identify, ScanOptions};
 use era::sim::{add_noise, ModalSpec, ModalStructure};

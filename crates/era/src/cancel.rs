@@ -90,6 +90,15 @@ pub fn check() -> Result<()> {
     })
 }
 
+/// Runs `work` under `token` (captured with [`current`] before the work left its
+/// thread), so that the checks inside it see the caller's token on any worker.
+pub(crate) fn under<R>(token: &Option<Cancel>, work: impl FnOnce() -> R) -> R {
+    match token {
+        Some(t) => t.run(work),
+        None => work(),
+    }
+}
+
 /// [`check`] for a token captured before a parallel loop.
 ///
 /// # Errors
@@ -148,5 +157,23 @@ mod tests {
             check()
         });
         assert_eq!(seen, Err(EraError::Interrupted));
+    }
+
+    #[test]
+    fn work_handed_to_another_thread_sees_the_token_under_it() {
+        let token = Cancel::new();
+        token.cancel();
+        let (bare, carried) = token.run(|| {
+            let captured = current();
+            std::thread::scope(|s| {
+                let bare = s.spawn(check).join().unwrap();
+                let carried = s.spawn(|| under(&captured, check)).join().unwrap();
+                (bare, carried)
+            })
+        });
+        // A thread of its own has no token; `under` brings the caller's.
+        assert!(bare.is_ok());
+        assert_eq!(carried, Err(EraError::Interrupted));
+        assert!(under(&None, check).is_ok());
     }
 }

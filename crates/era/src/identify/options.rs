@@ -238,8 +238,9 @@ pub struct ScanOptions {
     /// at least 1.5 times the order the probe found, so that this value lies in the
     /// noise floor: the triplets are then exact for the data plus a perturbation this fraction
     /// of the noise's own, and more passes would move the poles by less than their noise
-    /// spread without bringing them nearer the truth (the book's performance chapter
-    /// measures both; [`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0:
+    /// spread without bringing them nearer the truth, though past the signal's order more
+    /// noise poles then look stable in the diagram (the book's performance chapter
+    /// measures all three; [`crate::linalg::tsvd::TruncatedSvdOptions::floor_fraction`]; 0:
     /// the tolerance alone; explicit orders and the output-only scan use the tolerance
     /// alone).
     pub svd_floor_fraction: f64,

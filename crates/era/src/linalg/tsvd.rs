@@ -81,16 +81,19 @@
 //!
 //! **Stopping on noisy data** ([`TruncatedSvdOptions::floor_fraction`]). The computed
 //! triplets are the exact ones of `H + E` for some `E` with `‖E‖` of the order of the
-//! largest residual `ρσ₁`. When the wanted rank reaches into the noise floor (the order
-//! scan asks for twice the signal's order and more), its smallest wanted singular value
+//! largest residual `ρσ₁`. When the wanted rank reaches into the noise floor (a default
+//! order scan reaches 1.5 times the signal's order and more), its smallest wanted singular value
 //! `σ_rank` is of the order of the noise's own perturbation of `H`. Stopping once
 //! `ρσ₁ ≤ f·σ_rank` then adds a perturbation a fraction `f` of the noise's. The triplets
 //! far above the floor (the signal's) converge faster than the rest, and what stays
 //! unsettled is mostly which directions of the noise floor the trailing triplets take,
-//! which no exact SVD of noisy data makes a better estimate of anything; more passes
-//! buy nothing a user could see. On exact data `σ_rank` is at rounding and the tolerance
-//! alone applies. `cargo run --release -p era --example scan_floor` measures the poles'
-//! shift and their error against the truth (the scan's `f` is 0.3).
+//! which no exact SVD of noisy data makes a better estimate of anything: more passes
+//! leave the poles' error against the truth as it was. What a user can see is the
+//! stabilization diagram past the signal's order, where noise poles of consecutive
+//! orders, drawn from the same few Krylov directions, agree more often. On exact data
+//! `σ_rank` is at rounding and the tolerance alone applies. `cargo run --release -p era
+//! --example scan_floor` measures the poles' shift and their error against the truth
+//! (the scan's `f` is 0.3).
 //!
 //! **Restarts.** The basis grows by `b` columns a pass on each side, and the small SVD
 //! costs `O((s b)³)`. Once the basis holds `depth` blocks (fewer when it would pass a

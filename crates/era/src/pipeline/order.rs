@@ -648,8 +648,13 @@ fn judge_significance(
             Some(ts) => fit(ts),
             None => {
                 // The domain that fits better, decided once on the full set (the two
-                // fits side by side: neither reads the other).
-                let (c, z) = rayon::join(|| fit(None), || fit(Some(sample_time_s)));
+                // fits side by side: neither reads the other; each under the caller's
+                // cancel token, on whichever thread runs it).
+                let token = crate::cancel::current();
+                let (c, z) = rayon::join(
+                    || crate::cancel::under(&token, || fit(None)),
+                    || crate::cancel::under(&token, || fit(Some(sample_time_s))),
+                );
                 match (c, z) {
                     (_, Err(EraError::Interrupted)) => Err(EraError::Interrupted),
                     (Ok(c), Ok(z)) => {
