@@ -58,10 +58,7 @@ pub fn with_threads<R: Send>(
         .map_err(|e| EraError::Numerical(format!("cannot start {n} threads: {e}")))?;
     // The call's cancel token follows it into the pool's thread.
     let token = crate::cancel::current();
-    Ok(pool.install(|| match token {
-        Some(t) => t.run(work),
-        None => work(),
-    }))
+    Ok(pool.install(|| crate::cancel::under(&token, work)))
 }
 
 #[cfg(test)]
