@@ -859,13 +859,23 @@ impl Refinement {
                     continue;
                 }
                 let root = sk.sqrt();
-                let u = (0..q).map(|i| svd.U()[(i, k)] * root).collect();
+                // The SVD's phase of a singular pair is arbitrary (round-off can turn
+                // it): the term's own phase makes `(A, B, C)` one function of the fit.
+                let (top, turn) = canonical_phase((0..q).map(|i| {
+                    let z = svd.U()[(i, k)];
+                    Complex64::new(z.re, z.im)
+                }));
+                let mut u: Vec<faer::c64> = (0..q)
+                    .map(|i| svd.U()[(i, k)] * root * turn.conj())
+                    .collect();
+                // Real to the last bit, not to round-off.
+                u[top] = faer::c64::new(u[top].norm(), 0.0);
                 // z-domain: B_c = A_c (A_d − I)⁻¹ B_d, which for the 2 × 2 block of a
                 // complex number is multiplication by μ = s/(e^(sTs) − 1).
                 let mu = match self.sample_time_s {
                     Some(ts) => s / ((s * ts).exp() - 1.0),
                     None => Complex64::new(1.0, 0.0),
-                };
+                } * turn;
                 let v = (0..p).map(|j| svd.V()[(j, k)].conj() * root * mu).collect();
                 terms.push((s, u, v));
             }
@@ -930,6 +940,18 @@ impl Refinement {
         }
         Ok(StateSpace::new(a, b, c, d, TimeDomain::Continuous))
     }
+}
+
+/// The largest entry of a state-space term's output vector `u` (the first of those
+/// within 1e-9 of the largest, so that a symmetric structure's equal entries do not let
+/// round-off choose) and its unit phase `e^(iφ)`: `u e^(−iφ)` has that entry real and
+/// positive. `(0, 1)` for a zero vector.
+fn canonical_phase(u: impl Iterator<Item = Complex64>) -> (usize, Complex64) {
+    let u: Vec<Complex64> = u.collect();
+    let largest = u.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    u.iter()
+        .position(|z| z.norm() >= (1.0 - 1e-9) * largest && largest > 0.0)
+        .map_or((0, Complex64::new(1.0, 0.0)), |i| (i, u[i] / u[i].norm()))
 }
 
 crate::params::names::named!(display Residuals, "residuals", [

@@ -151,10 +151,20 @@ fn dta_with_5_percent_noise_reaches_the_noise_floor() {
     assert!(r.modes.iter().all(|m| m.pole.re < 0.0));
     // Rank-one residues: two states per mode (free ones gave up to 16 here).
     assert!(r.rank_one);
-    assert_eq!(
-        r.to_state_space(Quantity::Acceleration).unwrap().states(),
-        2 * r.modes.len()
-    );
+    let model = r.to_state_space(Quantity::Acceleration).unwrap();
+    assert_eq!(model.states(), 2 * r.modes.len());
+    // Each mode's phase in (B, C) is its own, not the SVD's: its largest output entry is
+    // real and positive, so round-off in the fit cannot turn a mode's states around.
+    let c = &model.c;
+    for x in (0..model.states()).step_by(2) {
+        let entry = |i: usize| Complex64::new(c[(i, x)], c[(i, x + 1)]);
+        let largest = (0..c.nrows()).map(|i| entry(i).norm()).fold(0.0, f64::max);
+        let first = (0..c.nrows())
+            .find(|&i| entry(i).norm() >= (1.0 - 1e-9) * largest)
+            .unwrap();
+        let z = entry(first);
+        assert!(z.re > 0.0 && z.im == 0.0, "states {x}: {z}");
+    }
     let sse = state_space_error(&frf, &r);
     assert!(
         (sse - r.fit_after).abs() <= 1e-9,
