@@ -1177,9 +1177,11 @@ fn apply(x: &Parameters, ix: &Indices, step: &[f64], log_damping: bool) -> (Para
 /// (a linear least-squares problem per output), in place; a reciprocal model has no
 /// linear part apart from its residual terms and is left as it is.
 ///
-/// For fixed poles every pair's cost is `w²(c − ĉ)ᵀH(c − ĉ)` plus a constant (`ĉ` the
-/// pair's free coefficients, `H = ΦᵀΦ`), and output `i`'s coefficients are linear in
-/// `(u_i, K_i·)`: one normal system of `2N + p·n_res` unknowns per output.
+/// For fixed poles every pair's cost is `w²(cᵀHc − 2cᵀΦᵀy)` plus a constant
+/// (`H = ΦᵀΦ`, `y` the pair's data), and output `i`'s coefficients are linear in
+/// `(u_i, K_i·)`: one normal system of `2N + p·n_res` unknowns per output, from `H` and
+/// `ΦᵀY` alone (two GEMMs; no factorisation of `Φ`, whose own conditioning the normal
+/// system squares anyway).
 fn solve_linear(
     problem: &Problem,
     x: &mut Parameters,
@@ -1192,14 +1194,9 @@ fn solve_linear(
         return true;
     }
     let (n, q, p, n_res) = (ix.n, ix.q, ix.p, ix.n_res);
-    let qr = phi.qr();
-    let r = qr.thin_R().to_owned();
-    let qm = qr.compute_thin_Q();
-    let h = r.transpose() * &r;
-    let mut c = qm.transpose() * y;
-    r.solve_upper_triangular_in_place(&mut c);
-    // `H ĉ` of every pair.
-    let hc = &h * &c;
+    let h = phi.transpose() * phi;
+    // `Φᵀy` of every pair.
+    let phi_y = phi.transpose() * y;
     let size = 2 * n + p * n_res;
     for i in 0..q {
         let mut a = Mat::<f64>::zeros(size, size);
@@ -1215,7 +1212,10 @@ fn solve_linear(
             for ra in 0..n {
                 for (sa, ca) in m(ra).iter().enumerate() {
                     let row = 2 * ra + sa;
-                    b[(row, 0)] += w2 * (0..2).map(|t| ca[t] * hc[(2 * ra + t, pair)]).sum::<f64>();
+                    b[(row, 0)] += w2
+                        * (0..2)
+                            .map(|t| ca[t] * phi_y[(2 * ra + t, pair)])
+                            .sum::<f64>();
                     for rb in 0..n {
                         for (sb, cb) in m(rb).iter().enumerate() {
                             let mut v = 0.0;
@@ -1237,7 +1237,7 @@ fn solve_linear(
             }
             for e in 0..n_res {
                 let row = 2 * n + j * n_res + e;
-                b[(row, 0)] += w2 * hc[(2 * n + e, pair)];
+                b[(row, 0)] += w2 * phi_y[(2 * n + e, pair)];
                 for e2 in 0..n_res {
                     a[(row, 2 * n + j * n_res + e2)] += w2 * h[(2 * n + e, 2 * n + e2)];
                 }
