@@ -21,7 +21,7 @@
 //! or residual parameter is `Φ a` with `a` two entries of a 2 × 2 complex-product block
 //! (or one entry for a residual term); a derivative by a pole parameter is `D b_k`, `D`
 //! the basis derivatives and `b_k` the pair's residue entries. So with
-//! `H = ΦᵀΦ`, `E = DᵀΦ`, `M = DᵀD` and the projections `Φᵀr_k`, `Dᵀr_k` of the residuals,
+//! `H = ΦᵀΦ`, `E = DᵀΦ` (kept as `Eᵀ`), `M = DᵀD` and the projections `Φᵀr_k`, `Dᵀr_k` of the residuals,
 //! every entry of `JᵀWJ` and `JᵀWr` is a short sum over a pair's few nonzeros:
 //! `O(q·p·(4N)²)` per iteration, not `O(L·q·p·(4N)²)`.
 //!
@@ -252,7 +252,8 @@ fn cost(
 /// The projections every entry of `JᵀWJ` and `JᵀWr` is a short sum of (module doc).
 struct Grams {
     h: Mat<f64>,
-    e: Mat<f64>,
+    /// `Eᵀ = ΦᵀD`: a pole parameter's two columns lie down its columns.
+    e_t: Mat<f64>,
     m: Mat<f64>,
     phi_r: Mat<f64>,
     d_r: Mat<f64>,
@@ -264,7 +265,7 @@ impl Grams {
         let d = basis_derivatives(&problem.layout, problem.parameters, &problem.omega, &poles);
         Grams {
             h: phi.transpose() * phi,
-            e: d.transpose() * phi,
+            e_t: phi.transpose() * &d,
             m: d.transpose() * &d,
             phi_r: phi.transpose() * residual,
             d_r: d.transpose() * residual,
@@ -294,7 +295,7 @@ fn output_entries(
     let (n, p, n_res) = (ix.n, ix.p, ix.n_res);
     let Grams {
         h,
-        e,
+        e_t,
         m,
         phi_r,
         d_r,
@@ -371,7 +372,7 @@ fn output_entries(
                 let mut s = 0.0;
                 for &(ct, at) in &et {
                     for &(cx, ax) in &ex[..nx] {
-                        s += at * ax * e[(ct, cx)];
+                        s += at * ax * e_t[(cx, ct)];
                     }
                 }
                 entry(ft, fx, w2 * s, true);
@@ -426,9 +427,13 @@ fn dense_normal(
 /// derivative columns with `(Re R, Im R)`:
 /// `N_uu = Bvᵀ H Bv`, `N_uv = Bvᵀ H Bu`, `N_vv = Buᵀ H Bu`, `N_θθ = Pᵀ M P`,
 /// `N_θu = Pᵀ E Bv`, `N_θv = Pᵀ E Bu`, and the residual terms' rows of `H` and `E`.
+/// `H Bv` depends on the input alone and `H Bu` on the output alone: `h_bv` holds the
+/// former per input, and the latter is formed once here. `N_θθ` is not summed here but
+/// once over every pair ([`add_pole_block`]).
 #[allow(clippy::too_many_arguments)]
 fn add_output_blocks(
     grams: &Grams,
+    h_bv: &[Mat<f64>],
     x: &Parameters,
     ix: &Indices,
     part: &Partition,
@@ -438,6 +443,7 @@ fn add_output_blocks(
     (nii, niz, gi): (&mut Mat<f64>, &mut Mat<f64>, &mut [f64]),
 ) {
     let m2 = 2 * ix.n;
+    let n = ix.n;
     let mut sums = OutputSums {
         theta_z: (0..m2)
             .map(|t| shared_slot(part, Some(t)).expect("the poles are shared"))
@@ -451,18 +457,61 @@ fn add_output_blocks(
         niz,
         gi,
     };
+    let bu: Vec<_> = (0..n).map(|r| complex_map(x.u[i * n + r])).collect();
     let mut scratch = Scratch {
-        yv: Mat::<f64>::zeros(m2, m2),
-        yu: Mat::<f64>::zeros(m2, m2),
-        mp: Mat::<f64>::zeros(2 * m2, m2),
-        pe: Mat::<f64>::zeros(m2, grams.h.ncols()),
+        h_bu: times_blocks(&grams.h, &bu),
+        pe_column: vec![0.0; grams.h.ncols()],
+        column: vec![0.0; m2],
     };
-    for j in 0..ix.p {
+    for (j, yv) in h_bv.iter().enumerate() {
         let maps = PairMaps::new(x, ix, part, weights, i, j);
-        sums.add_shapes(grams, &maps, &mut scratch);
+        sums.add_shapes(yv, &maps, &mut scratch);
         sums.add_residual_terms(grams, &maps);
         sums.add_poles(grams, &maps, &mut scratch);
         sums.add_gradient(grams, &maps);
+    }
+}
+
+/// `N_θθ = Σ_pairs w Pᵀ M P` ([`add_output_blocks`]) at once: entry `(k, l)` is
+/// `Σ_αβ M[2k+α, 2l+β] G[2(k/2)+α, 2(l/2)+β]` with `G = Zᵀ W Z`, `Z` the residues
+/// `(Re R_r, Im R_r)` of every pair by row and `W` the pairs' weights: one GEMM over the
+/// pairs instead of a `4N × 2N` product per pair.
+fn add_pole_block(
+    grams: &Grams,
+    x: &Parameters,
+    ix: &Indices,
+    part: &Partition,
+    weights: &[f64],
+    nzz: &mut Mat<f64>,
+) {
+    let (n, p) = (ix.n, ix.p);
+    let m2 = 2 * n;
+    let pairs = ix.q * p;
+    let z = Mat::from_fn(pairs, m2, |pair, k| {
+        let (i, j, r) = (pair / p, pair % p, k / 2);
+        let zr = x.u[i * n + r] * x.v[j * n + r];
+        if k % 2 == 0 {
+            zr.re
+        } else {
+            zr.im
+        }
+    });
+    let weighted = Mat::from_fn(pairs, m2, |pair, k| {
+        weights[pair] * weights[pair] * z[(pair, k)]
+    });
+    let g = z.transpose() * &weighted;
+    let m = &grams.m;
+    let theta_z: Vec<usize> = (0..m2)
+        .map(|t| shared_slot(part, Some(t)).expect("the poles are shared"))
+        .collect();
+    for l in 0..m2 {
+        let (l0, l1) = (m.col_as_slice(2 * l), m.col_as_slice(2 * l + 1));
+        let (g0, g1) = (g.col_as_slice(2 * (l / 2)), g.col_as_slice(2 * (l / 2) + 1));
+        for k in 0..m2 {
+            let (a, b) = (2 * k, 2 * (k / 2));
+            nzz[(theta_z[k], theta_z[l])] +=
+                l0[a] * g0[b] + l0[a + 1] * g0[b + 1] + l1[a] * g1[b] + l1[a + 1] * g1[b + 1];
+        }
     }
 }
 
@@ -526,12 +575,35 @@ impl PairMaps {
     }
 }
 
-/// Work matrices of [`add_output_blocks`], reused from pair to pair.
+/// Work space of [`add_output_blocks`]: the output's `H Bu`, and a column of `(Pᵀ E)ᵀ`
+/// and one of the shapes' blocks, reused from pair to pair.
 struct Scratch {
-    yv: Mat<f64>,
-    yu: Mat<f64>,
-    mp: Mat<f64>,
-    pe: Mat<f64>,
+    h_bu: Mat<f64>,
+    pe_column: Vec<f64>,
+    column: Vec<f64>,
+}
+
+/// `H B` over the modes' columns of `H` (`2N × 2N`), `B` block-diagonal with the 2 × 2
+/// blocks `b`.
+fn times_blocks(h: &Mat<f64>, b: &[[[f64; 2]; 2]]) -> Mat<f64> {
+    let m2 = 2 * b.len();
+    let mut y = Mat::<f64>::zeros(m2, m2);
+    for (r, br) in b.iter().enumerate() {
+        let (h0, h1) = (
+            &h.col_as_slice(2 * r)[..m2],
+            &h.col_as_slice(2 * r + 1)[..m2],
+        );
+        for (c, (&a0, &a1)) in br[0].iter().zip(&br[1]).enumerate() {
+            for (out, (x0, x1)) in y
+                .col_as_slice_mut(2 * r + c)
+                .iter_mut()
+                .zip(h0.iter().zip(h1))
+            {
+                *out = x0 * a0 + x1 * a1;
+            }
+        }
+    }
+    y
 }
 
 /// Output `i`'s sums in [`Blocks`] (shared–shared `nzz`, `gz`; own–own `nii`, own–shared
@@ -547,33 +619,13 @@ struct OutputSums<'a> {
 }
 
 impl OutputSums<'_> {
-    /// `N_uu = Bvᵀ H Bv`, `N_uv = Bvᵀ H Bu`, `N_vv = Buᵀ H Bu`.
-    fn add_shapes(&mut self, grams: &Grams, maps: &PairMaps, scratch: &mut Scratch) {
-        let h = &grams.h;
-        let m2 = self.u_local.len();
-        let n = m2 / 2;
+    /// `N_uu = Bvᵀ H Bv`, `N_uv = Bvᵀ H Bu`, `N_vv = Buᵀ H Bu`, from the pair's input's
+    /// `H Bv` (`yv`) and its output's `H Bu`.
+    /// Column by column, each written where it belongs.
+    fn add_shapes(&mut self, yv: &Mat<f64>, maps: &PairMaps, scratch: &mut Scratch) {
         let PairMaps { w, bv, bu, v_z, .. } = maps;
         let w = *w;
-        let Scratch { yv, yu, .. } = scratch;
-        // Y = H Bv and H Bu over the modes' columns.
-        for r in 0..n {
-            let (h0, h1) = (
-                &h.col_as_slice(2 * r)[..m2],
-                &h.col_as_slice(2 * r + 1)[..m2],
-            );
-            for c in 0..2 {
-                for (y, b) in [(&mut *yv, bv), (&mut *yu, bu)] {
-                    let (a0, a1) = (b[r][0][c], b[r][1][c]);
-                    for (out, (x0, x1)) in y
-                        .col_as_slice_mut(2 * r + c)
-                        .iter_mut()
-                        .zip(h0.iter().zip(h1))
-                    {
-                        *out = x0 * a0 + x1 * a1;
-                    }
-                }
-            }
-        }
+        let Scratch { h_bu, column, .. } = scratch;
         let OutputSums {
             nzz,
             nii,
@@ -581,19 +633,26 @@ impl OutputSums<'_> {
             u_local,
             ..
         } = self;
-        left(bv, yv, |row, col, val| {
-            nii[(u_local[row], u_local[col])] += w * val
-        });
-        left(bv, yu, |row, col, val| {
-            if let Some(c) = v_z[col] {
-                niz[(u_local[row], c)] += w * val;
+        for col in 0..u_local.len() {
+            left_column(bv, yv.col_as_slice(col), column);
+            let out = nii.col_as_slice_mut(u_local[col]);
+            for (&row, v) in u_local.iter().zip(column.iter()) {
+                out[row] += w * v;
             }
-        });
-        left(bu, yu, |row, col, val| {
-            if let (Some(a), Some(c)) = (v_z[row], v_z[col]) {
-                nzz[(a, c)] += w * val;
+            let Some(c) = v_z[col] else { continue };
+            left_column(bv, h_bu.col_as_slice(col), column);
+            let out = niz.col_as_slice_mut(c);
+            for (&row, v) in u_local.iter().zip(column.iter()) {
+                out[row] += w * v;
             }
-        });
+            left_column(bu, h_bu.col_as_slice(col), column);
+            let out = nzz.col_as_slice_mut(c);
+            for (row, v) in v_z.iter().zip(column.iter()) {
+                if let Some(a) = *row {
+                    out[a] += w * v;
+                }
+            }
+        }
     }
 
     /// The residual terms: their columns of H against the shapes, and each other, and
@@ -644,12 +703,13 @@ impl OutputSums<'_> {
         }
     }
 
-    /// The poles: `mp = M P`, then `N_θθ = Pᵀ mp`; `pe = Pᵀ E`, then `N_θu = pe Bv`,
-    /// `N_θv = pe Bu` and the residual terms' rows.
+    /// The poles' coupling with the rest, one pole parameter `k` at a time: its column
+    /// `(Pᵀ E)ᵀ` from `Eᵀ`, then `N_θu = Pᵀ E Bv`, `N_θv = Pᵀ E Bu` and the residual terms'
+    /// rows, each written down column `k` (`N_vθ`, which [`Blocks::new`] mirrors;
+    /// `N_θθ` is [`add_pole_block`]'s).
     fn add_poles(&mut self, grams: &Grams, maps: &PairMaps, scratch: &mut Scratch) {
-        let Grams { e, m, .. } = grams;
+        let e_t = &grams.e_t;
         let m2 = self.u_local.len();
-        let n = m2 / 2;
         let PairMaps {
             w,
             bv,
@@ -660,7 +720,7 @@ impl OutputSums<'_> {
             ..
         } = maps;
         let w = *w;
-        let Scratch { mp, pe, .. } = scratch;
+        let pe = &mut scratch.pe_column;
         let OutputSums {
             nzz,
             niz,
@@ -668,48 +728,26 @@ impl OutputSums<'_> {
             theta_z,
             ..
         } = self;
-        for k in 0..m2 {
+        for (k, &tz) in theta_z.iter().enumerate() {
             let zk = z[k / 2];
-            let (m0, m1) = (m.col_as_slice(2 * k), m.col_as_slice(2 * k + 1));
-            for (out, (x0, x1)) in mp.col_as_slice_mut(k).iter_mut().zip(m0.iter().zip(m1)) {
-                *out = x0 * zk.re + x1 * zk.im;
+            let (e0, e1) = (e_t.col_as_slice(2 * k), e_t.col_as_slice(2 * k + 1));
+            for (out, (x0, x1)) in pe.iter_mut().zip(e0.iter().zip(e1)) {
+                *out = zk.re * x0 + zk.im * x1;
             }
-        }
-        for col in 0..pe.ncols() {
-            let ec = e.col_as_slice(col);
-            let out = pe.col_as_slice_mut(col);
-            for k in 0..m2 {
-                let zk = z[k / 2];
-                out[k] = zk.re * ec[2 * k] + zk.im * ec[2 * k + 1];
-            }
-        }
-        for kc in 0..m2 {
-            let qc = mp.col_as_slice(kc);
-            for k in 0..m2 {
-                let zk = z[k / 2];
-                nzz[(theta_z[k], theta_z[kc])] += w * (zk.re * qc[2 * k] + zk.im * qc[2 * k + 1]);
-            }
-        }
-        for r in 0..n {
-            let (p0, p1) = (pe.col_as_slice(2 * r), pe.col_as_slice(2 * r + 1));
-            for c in 0..2 {
-                let col = 2 * r + c;
-                let ul = u_local[col];
-                for k in 0..m2 {
-                    let tz = theta_z[k];
-                    niz[(ul, tz)] += w * (p0[k] * bv[r][0][c] + p1[k] * bv[r][1][c]);
+            let own = niz.col_as_slice_mut(tz);
+            let shared = nzz.col_as_slice_mut(tz);
+            for (r, (br, ur)) in bv.iter().zip(bu).enumerate() {
+                let (p0, p1) = (pe[2 * r], pe[2 * r + 1]);
+                for c in 0..2 {
+                    let col = 2 * r + c;
+                    own[u_local[col]] += w * (p0 * br[0][c] + p1 * br[1][c]);
                     if let Some(vz) = v_z[col] {
-                        let val = w * (p0[k] * bu[r][0][c] + p1[k] * bu[r][1][c]);
-                        nzz[(tz, vz)] += val;
-                        nzz[(vz, tz)] += val;
+                        shared[vz] += w * (p0 * ur[0][c] + p1 * ur[1][c]);
                     }
                 }
             }
-        }
-        for (res, &kl) in k_local.iter().enumerate() {
-            let pc = pe.col_as_slice(m2 + res);
-            for k in 0..m2 {
-                niz[(kl, theta_z[k])] += w * pc[k];
+            for (res, &kl) in k_local.iter().enumerate() {
+                own[kl] += w * pe[m2 + res];
             }
         }
     }
@@ -753,16 +791,11 @@ impl OutputSums<'_> {
     }
 }
 
-/// `Bᵀ Y` for `B` block-diagonal with the 2 × 2 blocks `b`: entry `(2r + a, col)` goes
-/// to `put(2r + a, col, value)`.
-fn left(b: &[[[f64; 2]; 2]], y: &Mat<f64>, mut put: impl FnMut(usize, usize, f64)) {
-    for col in 0..y.ncols() {
-        let yc = y.col_as_slice(col);
-        for (r, br) in b.iter().enumerate() {
-            for (a, (b0, b1)) in br[0].iter().zip(&br[1]).enumerate() {
-                put(2 * r + a, col, b0 * yc[2 * r] + b1 * yc[2 * r + 1]);
-            }
-        }
+/// `out = Bᵀ y` for `B` block-diagonal with the 2 × 2 blocks `b`.
+fn left_column(b: &[[[f64; 2]; 2]], y: &[f64], out: &mut [f64]) {
+    for ((br, yr), o) in b.iter().zip(y.chunks_exact(2)).zip(out.chunks_exact_mut(2)) {
+        o[0] = br[0][0] * yr[0] + br[1][0] * yr[1];
+        o[1] = br[0][1] * yr[0] + br[1][1] * yr[1];
     }
 }
 
@@ -867,6 +900,13 @@ impl<'a> Blocks<'a> {
         // Per output: (N_ii, N_iz, g_i); N_zz and g_z summed per thread.
         type Own = (Mat<f64>, Mat<f64>, Vec<f64>);
         type Acc = (Mat<f64>, Vec<f64>, Vec<(usize, Own)>);
+        let n = ix.n;
+        let h_bv: Vec<Mat<f64>> = (0..ix.p)
+            .map(|j| {
+                let bv: Vec<_> = (0..n).map(|r| complex_map(x.v[j * n + r])).collect();
+                times_blocks(&grams.h, &bv)
+            })
+            .collect();
         let add_output = |(mut nzz, mut gz, mut own): Acc, i: usize| {
             let m = part.blocks[i].len();
             let mut nii = Mat::<f64>::zeros(m, m);
@@ -874,6 +914,7 @@ impl<'a> Blocks<'a> {
             let mut gi = vec![0.0; m];
             add_output_blocks(
                 &grams,
+                &h_bv,
                 x,
                 ix,
                 part,
@@ -887,7 +928,7 @@ impl<'a> Blocks<'a> {
         };
         let per_thread = ix.q.div_ceil(rayon::current_num_threads().max(1));
         let empty = || (Mat::<f64>::zeros(nz, nz), vec![0.0; nz], Vec::new());
-        let (nzz, gz, mut own) = (0..ix.q)
+        let (mut nzz, gz, mut own) = (0..ix.q)
             .into_par_iter()
             .with_min_len(per_thread)
             .fold(empty, add_output)
@@ -899,6 +940,15 @@ impl<'a> Blocks<'a> {
                 oa.extend(ob);
                 (a, ga, oa)
             });
+        add_pole_block(&grams, x, ix, part, weights, &mut nzz);
+        // `add_poles` wrote the poles' coupling with the participations below the
+        // diagonal only (the poles are the first of `z`).
+        let m2 = 2 * n;
+        for c in m2..nz {
+            for k in 0..m2 {
+                nzz[(k, c)] = nzz[(c, k)];
+            }
+        }
         own.sort_unstable_by_key(|(i, _)| *i);
         let mut niz = Mat::<f64>::zeros(part.local(), nz);
         let mut gi = vec![0.0; part.local()];
