@@ -133,7 +133,20 @@
 //! starts the modes it already had from the earlier fit's rank-one poles and residues,
 //! not from the projection of its free fit (whose poles suit free residues): on the
 //! DTA-like sets that start's cost is 2–30 % above the optimum, where the projection's
-//! was up to ten times above it. The added poles are [`Refinement::added`]. A pole added on
+//! was up to ten times above it. The added poles are [`Refinement::added`].
+//!
+//! A fit that a scan follows stops after [`LOOK_AFTER`] iterations: where a pole stands
+//! for two modes it creeps between them for tens of iterations, each lowering the cost a
+//! little, and the mode the scan then adds ends that at once. A fit so cut short that
+//! the scan finds nothing in runs on from where it stopped, with every iteration the
+//! options allow, and the scan looks again at the converged fit; so every fit returned
+//! has run to its tolerance, as without the early look. On 16 DTA-like sets with 5 %
+//! noise the refinement's median time went from 0.90 to 0.69 s and its worst from 3.8
+//! to 1.7 s, with the same modes found (640 of 640) and the same median errors; on 12
+//! with 15 % noise from 1.52 to 1.33 s (worst 2.18 to 1.69 s), 476 of 480 found both
+//! ways. A look after 10 iterations was faster still (0.67 s, worst 1.3 s) but moved the
+//! damping of a leaky Welch estimate (the window-correction test) by more than its
+//! correction does. A pole added on
 //! noise ends with little weight: [`RefinedMode::significance`], its weighted energy
 //! over the noise variance per parameter, tells it (Schwarz's criterion,
 //! [`Refinement::significance_minimum`]), and the pipeline marks such a mode not
@@ -439,8 +452,14 @@ const START_TOLERANCE: f64 = 1e-4;
 /// Rounds of the scan for missed modes and a refit, at most.
 pub const MISSED_ROUNDS: usize = 6;
 
+/// Iterations of a fit that a scan for missed modes follows (module doc, "Missed
+/// modes"); a fit so cut short runs on if the scan finds nothing.
+pub const LOOK_AFTER: usize = 20;
+
 /// The fit ([`run_once`]), then while the residual shows a mode the start missed, the
-/// fit again from its poles and the missed ones (module doc, "Missed modes").
+/// fit again from its poles and the missed ones; each fit a scan follows stops after
+/// [`LOOK_AFTER`] iterations, and runs on when the scan finds nothing (module doc,
+/// "Missed modes").
 fn run(
     frf: &FrfData,
     start_poles: &[Complex64],
@@ -450,11 +469,21 @@ fn run(
     rounds: &mut Vec<f64>,
 ) -> Result<Refinement> {
     let clock = std::time::Instant::now();
-    let mut result = run_once(frf, start_poles, &[], options, progress, evaluate)?;
-    rounds.push(clock.elapsed().as_secs_f64());
     if !options.add_missed {
+        let result = run_once(frf, start_poles, &[], options, progress, evaluate)?;
+        rounds.push(clock.elapsed().as_secs_f64());
         return Ok(result);
     }
+    let looked = RefineOptions {
+        max_iterations: options.max_iterations.min(LOOK_AFTER),
+        ..options.clone()
+    };
+    // Whether a fit stopped at the look's limit before its tolerance.
+    let cut_short = |r: &Refinement| !r.converged && looked.max_iterations < options.max_iterations;
+    let mut result = run_once(frf, start_poles, &[], &looked, progress, evaluate)?;
+    let mut short = cut_short(&result);
+    rounds.push(clock.elapsed().as_secs_f64());
+    let mut looks_left = MISSED_ROUNDS;
     let n_start = start_poles.len();
     // Each round's seconds, however it ends.
     struct Round<'a>(&'a mut Vec<f64>, std::time::Instant);
@@ -463,18 +492,26 @@ fn run(
             self.0.push(self.1.elapsed().as_secs_f64());
         }
     }
-    for _ in 0..MISSED_ROUNDS {
+    loop {
         let _round = Round(rounds, std::time::Instant::now());
-        let missed = scan::missed_modes(frf, &result);
-        if missed.is_empty() {
+        let missed = if looks_left > 0 {
+            looks_left -= 1;
+            scan::missed_modes(frf, &result)
+        } else {
+            Vec::new()
+        };
+        if missed.is_empty() && !short {
             break;
         }
+        // Nothing missed in a fit cut short: it runs on from where it stopped, to its
+        // tolerance, and is looked at again.
+        let finishing = missed.is_empty();
         let kept = result.modes.len();
         let mut poles: Vec<Complex64> = result.modes.iter().map(|m| m.pole).collect();
         poles.extend(missed.iter().map(|m| m.pole));
         let again = RefineOptions {
             band: Some(result.band),
-            ..options.clone()
+            ..(if finishing { options } else { &looked }).clone()
         };
         // The rank-one stage starts the modes it had where the last one left them.
         let warm: Vec<Option<fit::Warm>> = result
@@ -490,15 +527,21 @@ fn run(
         // A refit that fails (more poles than a narrow band can fit, a limit), that
         // does not lower the error, or that lost the rank-one stage (too many
         // parameters with the added poles) leaves the fit as it was.
-        let Ok(mut next) = run_once(frf, &poles, &warm, &again, progress, evaluate) else {
-            break;
+        let refit = run_once(frf, &poles, &warm, &again, progress, evaluate);
+        let kept_refit = refit.ok().filter(|next| {
+            !next.fit_after.is_nan()
+                && (finishing || next.fit_after < result.fit_after)
+                && (next.rank_one || !result.rank_one)
+        });
+        let Some(mut next) = kept_refit else {
+            if finishing {
+                break;
+            }
+            // No more looks; a fit cut short still runs on.
+            looks_left = 0;
+            continue;
         };
-        if next.fit_after.is_nan()
-            || next.fit_after >= result.fit_after
-            || (result.rank_one && !next.rank_one)
-        {
-            break;
-        }
+        short = !finishing && cut_short(&next);
         // Indices into `poles` → indices into the caller's start poles and `added`.
         let added_before = result.added.len();
         let origin = |k: usize| {

@@ -397,3 +397,46 @@ fn a_free_fit_the_rank_one_stage_steps_aside_from_runs_to_the_tolerance() {
     assert_eq!(stepped_aside.iterations, free.iterations);
     assert_eq!(stepped_aside.cost_after, free.cost_after);
 }
+
+/// A fit that the scan for missed modes follows stops after `LOOK_AFTER` iterations; one
+/// the scan then finds nothing in runs on from there. From a start far enough off to
+/// need more iterations than that, the default fit (scan on) still ends converged, with
+/// the same modes as the fit that runs without a scan and so without a stop.
+#[test]
+fn a_fit_cut_short_for_the_look_runs_on_to_its_tolerance() {
+    let (s, frf) = dta(0.05);
+    let start: Vec<Complex64> = (0..s.frequencies_hz.len())
+        .map(|r| {
+            let sign = if r % 2 == 0 { 1.0 } else { -1.0 };
+            pole(
+                s.frequencies_hz[r] * (1.0 + 0.006 * sign),
+                s.damping_ratios[r] * (1.0 - 0.4 * sign),
+            )
+        })
+        .collect();
+    let options = RefineOptions::default();
+    let r = refine(&frf, &start, &options, &mut |_, _| {}).unwrap();
+    let mut no_scan = options.clone();
+    no_scan.add_missed = false;
+    let without = refine(&frf, &start, &no_scan, &mut |_, _| {}).unwrap();
+    assert!(without.iterations > era::refine::LOOK_AFTER);
+    assert!(
+        r.converged && without.converged,
+        "converged {} (iterations {}), without the scan {}",
+        r.converged,
+        r.iterations,
+        without.converged
+    );
+    assert!(r.added.is_empty(), "{:?}", r.added);
+    assert_eq!(r.modes.len(), without.modes.len());
+    for m in &without.modes {
+        let other = nearest(&r, m.frequency_hz);
+        let sigma = m.pole.re.abs();
+        assert!(
+            (other.pole - m.pole).norm() <= 0.01 * sigma,
+            "{} vs {}",
+            other.pole,
+            m.pole
+        );
+    }
+}
