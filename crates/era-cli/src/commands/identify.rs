@@ -47,7 +47,7 @@ pub fn run(a: &Identify) -> anyhow::Result<super::Done> {
     let coherence = source.coherence.as_ref();
     let mut plan = Plan::new(a, &mut source.input, coherence, &human, describe)?;
     let supplied = observed.as_ref().map(|o| o.supplied());
-    let (found, states, zero_start_s) =
+    let (found, states, checks) =
         identified(a, &source.input, source.frame, supplied, &mut plan, &human)?;
     let found = Found {
         found,
@@ -55,7 +55,8 @@ pub fn run(a: &Identify) -> anyhow::Result<super::Done> {
         plan: &plan,
         echo,
         read_s,
-        zero_start_s,
+        zero_start_s: checks.zero_start_s,
+        frame_check_s: checks.frame_check_s,
         observed: observed.as_ref(),
     };
     crate::output::identify::hand_on(a, outputs, geometry, source, found, &human)
@@ -64,7 +65,7 @@ pub fn run(a: &Identify) -> anyhow::Result<super::Done> {
 /// ERA on the plan (the automatic order's states set in `plan.options`), the zero-start
 /// check, the refinement when the route refines (with the frame check), and the
 /// suspects of the zeroed start and the band's edges. Returns the identification,
-/// ERA's states and the zero-start check's seconds.
+/// ERA's states and the checks' seconds.
 fn identified(
     a: &Identify,
     input: &InputFrf,
@@ -72,7 +73,7 @@ fn identified(
     supplied: Option<&MarkovSequence>,
     plan: &mut Plan,
     human: &Human,
-) -> anyhow::Result<(era::Identification, usize, f64)> {
+) -> anyhow::Result<(era::Identification, usize, Checks)> {
     let frf = &input.file.frf;
     let mut found = crate::work::identify(
         &a.file,
@@ -94,24 +95,40 @@ fn identified(
     let clock = Instant::now();
     let zero_start = era::identify::zero_start(&found, &plan.era, plan.route.refine);
     let zero_start_s = clock.elapsed().as_secs_f64();
+    let mut frame_check_s = None;
     if plan.route.refine {
         let check = frame_check::Check {
             plan,
             supplied,
             frame,
         };
-        found = refine_route(a, found, frf, &check, human, &a.settings)?;
+        (found, frame_check_s) = refine_route(a, found, frf, &check, human, &a.settings)?;
     }
     found.suspects.extend(zero_start);
     found.suspects.extend(era::identify::suspect::band_edges(
         &found,
         plan.fit.fitted_hz,
     ));
-    Ok((found, states, zero_start_s))
+    Ok((
+        found,
+        states,
+        Checks {
+            zero_start_s,
+            frame_check_s,
+        },
+    ))
+}
+
+/// Seconds of the checks that are stages of their own in `--timings`.
+struct Checks {
+    zero_start_s: f64,
+    /// The frame check's, when it ran.
+    frame_check_s: Option<f64>,
 }
 
 /// The refinement of ERA's model on the route, and with `--from-time` and the automatic
-/// order the frame check.
+/// order the frame check (and its seconds: a second identification, a stage of its
+/// own).
 fn refine_route(
     a: &Identify,
     found: era::Identification,
@@ -119,7 +136,7 @@ fn refine_route(
     check: &frame_check::Check,
     human: &Human,
     settings: &Settings,
-) -> anyhow::Result<era::Identification> {
+) -> anyhow::Result<(era::Identification, Option<f64>)> {
     human.print(&format!(
         "\nERA model: {} states, {} modes; {}\n",
         found.model.states(),
@@ -131,8 +148,11 @@ fn refine_route(
         crate::work::refine(found, frf, &plan.refine, Some(plan.route.domain), settings)
             .with_context(|| format!("refining the model of {}", a.file.display()))?;
     human.print(&refinement_summary(&found));
+    let mut seconds = None;
     if a.from_time && plan.auto && !a.no_frame_check {
+        let clock = Instant::now();
         human.print(&frame_check::frame_check(a, &mut found, check)?);
+        seconds = Some(clock.elapsed().as_secs_f64());
     }
-    Ok(found)
+    Ok((found, seconds))
 }

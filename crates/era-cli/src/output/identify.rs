@@ -35,6 +35,8 @@ pub struct Found<'a> {
     pub read_s: f64,
     /// Seconds of the zero-start check.
     pub zero_start_s: f64,
+    /// Seconds of the frame check, when it ran.
+    pub frame_check_s: Option<f64>,
     /// OKID's Markov parameters, when they were the source.
     pub observed: Option<&'a Observed>,
 }
@@ -56,6 +58,7 @@ pub fn hand_on(
         echo,
         read_s,
         zero_start_s,
+        frame_check_s,
         observed,
     } = f;
     let input = &source.input;
@@ -71,6 +74,9 @@ pub fn hand_on(
     );
     let mut timings = timings(&found, read_s, source.estimate_s, plan.route.refine);
     timings.insert("zero_start".into(), zero_start_s);
+    if let Some(seconds) = frame_check_s {
+        timings.insert("frame_check".into(), seconds);
+    }
     if let Some(o) = observed {
         okid_json(o, &mut model);
         timings.insert("okid".into(), o.seconds);

@@ -332,6 +332,7 @@ pub fn timings_table(t: &BTreeMap<String, f64>) -> String {
         "fit",
         "zero_start",
         "refine",
+        "frame_check",
         "write",
     ];
     let mut s = String::from("\ntimings (s)\n");

@@ -132,8 +132,11 @@ fn the_window_correction_is_said_and_can_be_turned_off() {
     );
     let damping_error = |extra: &[&'static str]| {
         let mut a = args(extra);
-        a.extend(["--json", "-q"]);
+        a.extend(["--json", "-q", "--timings"]);
         let v = json_of(&a);
+        // The frame check, a second identification, is a stage of its own.
+        let check = v["timings_s"]["frame_check"].as_f64();
+        assert!(check.is_some_and(|t| t > 0.0), "{}", v["timings_s"]);
         let found = physical(&v);
         let tf: Vec<f64> = truth.iter().map(|t| t.0).collect();
         let ff: Vec<f64> = found.iter().map(|f| f.0).collect();
