@@ -149,7 +149,8 @@ pub struct Refined {
     /// The domain of the fit, chosen for the data, and why.
     pub fit_domain: FitDomain,
     /// Seconds of the fit's rounds (`crate::refine::refine_rounds`): the first fit,
-    /// then each look for missed modes with its refit. The rest of
+    /// then each look for missed modes with what follows it (a refit, or the run-on of a
+    /// fit stopped for the look). The rest of
     /// [`StageTimings::refine`] is the choice of domain and the judgement of the modes.
     pub round_seconds: Vec<f64>,
 }

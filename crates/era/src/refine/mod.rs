@@ -133,26 +133,23 @@
 //! starts the modes it already had from the earlier fit's rank-one poles and residues,
 //! not from the projection of its free fit (whose poles suit free residues): on the
 //! DTA-like sets that start's cost is 2–30 % above the optimum, where the projection's
-//! was up to ten times above it. The added poles are [`Refinement::added`].
-//!
-//! A fit that a scan follows stops after [`LOOK_AFTER`] iterations: where a pole stands
-//! for two modes it creeps between them for tens of iterations, each lowering the cost a
-//! little, and the mode the scan then adds ends that at once. A fit so cut short that
-//! the scan finds nothing in runs on from where it stopped, with every iteration the
-//! options allow, and the scan looks again at the converged fit; so every fit returned
-//! has run to its tolerance, as without the early look. On 16 DTA-like sets with 5 %
-//! noise the refinement's median time went from 0.90 to 0.69 s and its worst from 3.8
-//! to 1.7 s, with the same modes found (640 of 640) and the same median errors; on 12
-//! with 15 % noise from 1.52 to 1.33 s (worst 2.18 to 1.69 s), 476 of 480 found both
-//! ways. A look after 10 iterations was faster still (0.67 s, worst 1.3 s) but moved the
-//! damping of a leaky Welch estimate (the window-correction test) by more than its
-//! correction does. A pole added on
+//! was up to ten times above it. The added poles are [`Refinement::added`]. A pole added on
 //! noise ends with little weight: [`RefinedMode::significance`], its weighted energy
 //! over the noise variance per parameter, tells it (Schwarz's criterion,
 //! [`Refinement::significance_minimum`]), and the pipeline marks such a mode not
 //! physical. On the DTA-like sets with 5 % noise (seeds 11–18) this took the modes
 //! found from 36–40 to 39–40 of 40 and the spurious modes from two to none; each round
 //! costs a refit.
+//!
+//! The scan does not wait for a fit's convergence: the final stage of a fit that a scan
+//! follows (the weighted one under [`Weighting::PairNoise`]) stops after [`LOOK_AFTER`]
+//! iterations. Where a pole stands for two modes it creeps between them for tens of
+//! iterations, each lowering the cost a little, and the mode the scan then adds ends
+//! that at once. A fit so cut short runs on from where it stopped, with every iteration
+//! the options allow, when the scan finds nothing in it (and the scan then looks at it
+//! again), and before it is judged when it was a refit that did not yet beat the fit it
+//! would replace. The fit returned has therefore run to its tolerance as before, unless
+//! a run-on fails, which [`Refinement::converged`] then says.
 //!
 //! # Sampled data: the z-domain model
 //!
@@ -181,7 +178,11 @@
 //! A = [ Re s  Im s ; −Im s  Re s ],  B = √2 [ Re vᵀ ; −Im vᵀ ],  C = √2 [ Re u  Im u ]
 //! ```
 //!
-//! so that `C (jωI − A)⁻¹ B = u vᵀ/(jω − s) + ū v̄ᵀ/(jω − s̄)`. Rank-one residues (the
+//! so that `C (jωI − A)⁻¹ B = u vᵀ/(jω − s) + ū v̄ᵀ/(jω − s̄)`. The SVD leaves each
+//! term's phase free (`u e^(iφ)`, `v e^(−iφ)`); the term's largest entry of `u` is made
+//! real and positive, so that round-off in the fit cannot turn a mode's states around
+//! (a free residue whose singular values are nearly equal can still turn its two terms
+//! into each other). Rank-one residues (the
 //! default, and any noise-free fit of a structure) give two states per mode; free
 //! residues of a noisy fit up to `2 min(q, p)`. The residual terms: a term `K (jω)^0`
 //! goes into `D`; a term `K/(jω)^m` (`m` = 1, 2) is `m·p` states at `s = 0`, an
@@ -422,8 +423,8 @@ pub fn refine(
 }
 
 /// [`refine`], and the seconds of each of its rounds: the first fit, then each look
-/// for modes the start missed with its refit (the last look, which found none or whose
-/// refit was not kept, included).
+/// for modes the start missed with what follows it (a refit, the run-on of a fit stopped
+/// for the look, or nothing: the last look, which found none, included).
 ///
 /// # Errors
 /// As [`refine`].
@@ -449,17 +450,19 @@ pub(crate) fn refine_rounds(
 /// first pass of [`Weighting::PairNoise`], and the free fit before the rank-one stage.
 const START_TOLERANCE: f64 = 1e-4;
 
-/// Rounds of the scan for missed modes and a refit, at most.
+/// Refits with modes the scan for missed modes found, at most.
 pub const MISSED_ROUNDS: usize = 6;
 
 /// Iterations of a fit that a scan for missed modes follows (module doc, "Missed
-/// modes"); a fit so cut short runs on if the scan finds nothing.
+/// modes"): its final stage stops there, and runs on if the scan finds nothing.
 pub const LOOK_AFTER: usize = 20;
 
 /// The fit ([`run_once`]), then while the residual shows a mode the start missed, the
 /// fit again from its poles and the missed ones; each fit a scan follows stops after
-/// [`LOOK_AFTER`] iterations, and runs on when the scan finds nothing (module doc,
-/// "Missed modes").
+/// [`LOOK_AFTER`] iterations, and runs on ([`run_on`]) when the scan finds nothing in it,
+/// or when it stopped there without beating the fit it would replace (module doc,
+/// "Missed modes"). `rounds` gets the seconds of the first fit, then of each look with
+/// what follows it (a refit, a run-on, or nothing).
 fn run(
     frf: &FrfData,
     start_poles: &[Complex64],
@@ -469,21 +472,20 @@ fn run(
     rounds: &mut Vec<f64>,
 ) -> Result<Refinement> {
     let clock = std::time::Instant::now();
-    if !options.add_missed {
-        let result = run_once(frf, start_poles, &[], options, progress, evaluate)?;
-        rounds.push(clock.elapsed().as_secs_f64());
-        return Ok(result);
-    }
-    let looked = RefineOptions {
-        max_iterations: options.max_iterations.min(LOOK_AFTER),
-        ..options.clone()
+    let full = options.max_iterations;
+    let cap = if options.add_missed {
+        full.min(LOOK_AFTER)
+    } else {
+        full
     };
     // Whether a fit stopped at the look's limit before its tolerance.
-    let cut_short = |r: &Refinement| !r.converged && looked.max_iterations < options.max_iterations;
-    let mut result = run_once(frf, start_poles, &[], &looked, progress, evaluate)?;
-    let mut short = cut_short(&result);
+    let cut_short = |r: &Refinement| !r.converged && cap < full;
+    let mut result = run_once(frf, start_poles, &[], options, cap, progress, evaluate)?;
     rounds.push(clock.elapsed().as_secs_f64());
-    let mut looks_left = MISSED_ROUNDS;
+    if !options.add_missed {
+        return Ok(result);
+    }
+    let mut refits_left = MISSED_ROUNDS;
     let n_start = start_poles.len();
     // Each round's seconds, however it ends.
     struct Round<'a>(&'a mut Vec<f64>, std::time::Instant);
@@ -494,24 +496,30 @@ fn run(
     }
     loop {
         let _round = Round(rounds, std::time::Instant::now());
-        let missed = if looks_left > 0 {
-            looks_left -= 1;
+        let missed = if refits_left > 0 {
             scan::missed_modes(frf, &result)
         } else {
             Vec::new()
         };
-        if missed.is_empty() && !short {
-            break;
+        if missed.is_empty() {
+            if !cut_short(&result) {
+                break;
+            }
+            // Nothing missed in a fit cut short: it runs on to its tolerance, and is
+            // looked at again (unless the run-on failed, which its `converged` says).
+            result = run_on(frf, result, options, progress, evaluate)?;
+            if cut_short(&result) || refits_left == 0 {
+                break;
+            }
+            continue;
         }
-        // Nothing missed in a fit cut short: it runs on from where it stopped, to its
-        // tolerance, and is looked at again.
-        let finishing = missed.is_empty();
+        refits_left -= 1;
         let kept = result.modes.len();
         let mut poles: Vec<Complex64> = result.modes.iter().map(|m| m.pole).collect();
         poles.extend(missed.iter().map(|m| m.pole));
         let again = RefineOptions {
             band: Some(result.band),
-            ..(if finishing { options } else { &looked }).clone()
+            ..options.clone()
         };
         // The rank-one stage starts the modes it had where the last one left them.
         let warm: Vec<Option<fit::Warm>> = result
@@ -524,24 +532,35 @@ fn run(
                 })
             })
             .collect();
+        let refit = match run_once(frf, &poles, &warm, &again, cap, progress, evaluate) {
+            Ok(next) => Some(next),
+            Err(EraError::Interrupted) => return Err(EraError::Interrupted),
+            Err(_) => None,
+        };
+        // A refit stopped at the look's limit is judged once it has run on, unless it
+        // already beats the fit it would replace.
+        let refit = match refit {
+            Some(next)
+                if cut_short(&next)
+                    && next.fit_after.partial_cmp(&result.fit_after)
+                        != Some(std::cmp::Ordering::Less) =>
+            {
+                Some(run_on(frf, next, options, progress, evaluate)?)
+            }
+            other => other,
+        };
         // A refit that fails (more poles than a narrow band can fit, a limit), that
         // does not lower the error, or that lost the rank-one stage (too many
-        // parameters with the added poles) leaves the fit as it was.
-        let refit = run_once(frf, &poles, &warm, &again, progress, evaluate);
-        let kept_refit = refit.ok().filter(|next| {
-            !next.fit_after.is_nan()
-                && (finishing || next.fit_after < result.fit_after)
-                && (next.rank_one || !result.rank_one)
-        });
-        let Some(mut next) = kept_refit else {
-            if finishing {
-                break;
+        // parameters with the added poles) leaves the fit as it was, and ends the
+        // looks; a fit cut short then runs on.
+        let Some(mut next) = refit.filter(|next| {
+            next.fit_after < result.fit_after && (next.rank_one || !result.rank_one)
+        }) else {
+            if cut_short(&result) {
+                result = run_on(frf, result, options, progress, evaluate)?;
             }
-            // No more looks; a fit cut short still runs on.
-            looks_left = 0;
-            continue;
+            break;
         };
-        short = !finishing && cut_short(&next);
         // Indices into `poles` → indices into the caller's start poles and `added`.
         let added_before = result.added.len();
         let origin = |k: usize| {
@@ -560,17 +579,63 @@ fn run(
     Ok(result)
 }
 
-/// The fit, or for [`Weighting::PairNoise`] a uniform fit and a reweighted one.
+/// `fit`, stopped at the look's limit ([`LOOK_AFTER`]), run on from its own poles (the
+/// rank-one ones with their residues) with every iteration `options` allow, in `fit`'s
+/// numbering; `fit` as it is when the run-on fails or loses the rank-one stage (its
+/// `converged` then says that it stopped short). An interruption is passed on.
+fn run_on(
+    frf: &FrfData,
+    fit: Refinement,
+    options: &RefineOptions,
+    progress: &mut dyn FnMut(usize, f64),
+    evaluate: varpro::Evaluator,
+) -> Result<Refinement> {
+    let poles: Vec<Complex64> = fit.modes.iter().map(|m| m.pole).collect();
+    let warm: Vec<Option<fit::Warm>> = fit
+        .modes
+        .iter()
+        .map(|m| {
+            fit.rank_one.then_some(fit::Warm {
+                pole: m.pole,
+                residue: &m.residue,
+            })
+        })
+        .collect();
+    let again = RefineOptions {
+        band: Some(fit.band),
+        ..options.clone()
+    };
+    let full = options.max_iterations;
+    match run_once(frf, &poles, &warm, &again, full, progress, evaluate) {
+        Ok(mut next) if !next.fit_after.is_nan() && (next.rank_one || !fit.rank_one) => {
+            continue_from(&mut next, &fit, |k| fit.modes[k].start);
+            next.added = fit.added.clone();
+            Ok(next)
+        }
+        Err(EraError::Interrupted) => Err(EraError::Interrupted),
+        _ => Ok(fit),
+    }
+}
+
+/// The fit, or for [`Weighting::PairNoise`] a uniform fit and a reweighted one; the
+/// fit returned (the reweighted one) takes at most `cap` iterations, the uniform fit
+/// that sets its weights every one `options` allow.
+#[allow(clippy::too_many_arguments)]
 fn run_once(
     frf: &FrfData,
     start_poles: &[Complex64],
     warm: &[Option<fit::Warm>],
     options: &RefineOptions,
+    cap: usize,
     progress: &mut dyn FnMut(usize, f64),
     evaluate: varpro::Evaluator,
 ) -> Result<Refinement> {
     if options.weighting != Weighting::PairNoise {
-        return fit::run(frf, start_poles, warm, false, options, progress, evaluate);
+        let capped = RefineOptions {
+            max_iterations: options.max_iterations.min(cap),
+            ..options.clone()
+        };
+        return fit::run(frf, start_poles, warm, false, &capped, progress, evaluate);
     }
     // The first fit only has to be good enough to estimate each pair's noise, which
     // small moves of the poles hardly change: a looser tolerance, and free residues (the
@@ -621,6 +686,7 @@ fn run_once(
     let weighted = RefineOptions {
         weighting: Weighting::InverseVariance(pair_noise_variance(frf, &first)),
         band: Some(first.band),
+        max_iterations: options.max_iterations.min(cap),
         ..options.clone()
     };
     let poles: Vec<Complex64> = first.modes.iter().map(|m| m.pole).collect();
@@ -1080,6 +1146,7 @@ mod tests {
             &poles,
             &warm,
             &again,
+            again.max_iterations,
             &mut |_, _| {},
             varpro::evaluate,
         )
@@ -1099,7 +1166,16 @@ mod tests {
             );
         }
         // Without the warm entries the same refit stays on its start poles.
-        let cold = run_once(&frf, &poles, &[], &again, &mut |_, _| {}, varpro::evaluate).unwrap();
+        let cold = run_once(
+            &frf,
+            &poles,
+            &[],
+            &again,
+            again.max_iterations,
+            &mut |_, _| {},
+            varpro::evaluate,
+        )
+        .unwrap();
         for m in &cold.modes {
             let want = poles[m.start];
             assert!(

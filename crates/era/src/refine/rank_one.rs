@@ -944,6 +944,7 @@ impl<'a> Blocks<'a> {
         // `add_poles` wrote the poles' coupling with the participations below the
         // diagonal only (the poles are the first of `z`).
         let m2 = 2 * n;
+        debug_assert!((0..m2).all(|k| shared_slot(part, Some(k)) == Some(k)));
         for c in m2..nz {
             for k in 0..m2 {
                 nzz[(k, c)] = nzz[(c, k)];
