@@ -521,17 +521,7 @@ fn run(
             band: Some(result.band),
             ..options.clone()
         };
-        // The rank-one stage starts the modes it had where the last one left them.
-        let warm: Vec<Option<fit::Warm>> = result
-            .modes
-            .iter()
-            .map(|m| {
-                result.rank_one.then_some(fit::Warm {
-                    pole: m.pole,
-                    residue: &m.residue,
-                })
-            })
-            .collect();
+        let warm = warm_modes(&result);
         let refit = match run_once(frf, &poles, &warm, &again, cap, progress, evaluate) {
             Ok(next) => Some(next),
             Err(EraError::Interrupted) => return Err(EraError::Interrupted),
@@ -579,6 +569,20 @@ fn run(
     Ok(result)
 }
 
+/// The warm starts of a refit from `fit`'s modes: the rank-one stage starts them where
+/// `fit`'s left them (none when `fit`'s residues were free).
+fn warm_modes(fit: &Refinement) -> Vec<Option<fit::Warm<'_>>> {
+    fit.modes
+        .iter()
+        .map(|m| {
+            fit.rank_one.then_some(fit::Warm {
+                pole: m.pole,
+                residue: &m.residue,
+            })
+        })
+        .collect()
+}
+
 /// `fit`, stopped at the look's limit ([`LOOK_AFTER`]), run on from its own poles (the
 /// rank-one ones with their residues) with every iteration `options` allow, in `fit`'s
 /// numbering; `fit` as it is when the run-on fails or loses the rank-one stage (its
@@ -591,16 +595,7 @@ fn run_on(
     evaluate: varpro::Evaluator,
 ) -> Result<Refinement> {
     let poles: Vec<Complex64> = fit.modes.iter().map(|m| m.pole).collect();
-    let warm: Vec<Option<fit::Warm>> = fit
-        .modes
-        .iter()
-        .map(|m| {
-            fit.rank_one.then_some(fit::Warm {
-                pole: m.pole,
-                residue: &m.residue,
-            })
-        })
-        .collect();
+    let warm = warm_modes(&fit);
     let again = RefineOptions {
         band: Some(fit.band),
         ..options.clone()
