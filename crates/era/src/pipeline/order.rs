@@ -670,8 +670,13 @@ fn judge_significance(
                 }
             }
         };
-        // A fit the data cannot support (too few lines for the modes) judges nothing.
-        let Ok(r) = r else { return Ok(()) };
+        // A fit the data cannot support (too few lines for the modes) judges nothing; an
+        // interruption is passed on.
+        let r = match r {
+            Ok(r) => r,
+            Err(EraError::Interrupted) => return Err(EraError::Interrupted),
+            Err(_) => return Ok(()),
+        };
         let least = r.significance_minimum();
         // Start poles the fit dropped (coalesced with another, real) go first, with
         // the fit's reason.
