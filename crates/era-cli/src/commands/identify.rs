@@ -150,9 +150,9 @@ fn refine_route(
     human.print(&refinement_summary(&found));
     let mut seconds = None;
     if a.from_time && plan.auto && !a.no_frame_check {
-        let clock = Instant::now();
-        human.print(&frame_check::frame_check(a, &mut found, check)?);
-        seconds = Some(clock.elapsed().as_secs_f64());
+        let (lines, spent) = frame_check::frame_check(a, &mut found, check)?;
+        human.print(&lines);
+        seconds = Some(spent);
     }
     Ok((found, seconds))
 }

@@ -965,15 +965,12 @@ impl Refinement {
                 let root = sk.sqrt();
                 // The SVD's phase of a singular pair is arbitrary (round-off can turn
                 // it): the term's own phase makes `(A, B, C)` one function of the fit.
-                let (top, turn) = canonical_phase((0..q).map(|i| {
-                    let z = svd.U()[(i, k)];
-                    Complex64::new(z.re, z.im)
-                }));
-                let mut u: Vec<faer::c64> = (0..q)
+                let (top, turn) = canonical_phase((0..q).map(|i| svd.U()[(i, k)]));
+                let mut u: Vec<Complex64> = (0..q)
                     .map(|i| svd.U()[(i, k)] * root * turn.conj())
                     .collect();
                 // Real to the last bit, not to round-off.
-                u[top] = faer::c64::new(u[top].norm(), 0.0);
+                u[top] = Complex64::new(u[top].norm(), 0.0);
                 // z-domain: B_c = A_c (A_d − I)⁻¹ B_d, which for the 2 × 2 block of a
                 // complex number is multiplication by μ = s/(e^(sTs) − 1).
                 let mu = match self.sample_time_s {

@@ -445,9 +445,7 @@ fn add_output_blocks(
     let m2 = 2 * ix.n;
     let n = ix.n;
     let mut sums = OutputSums {
-        theta_z: (0..m2)
-            .map(|t| shared_slot(part, Some(t)).expect("the poles are shared"))
-            .collect(),
+        theta_z: part.pole_slots(n),
         u_local: (0..m2)
             .map(|k| local_slot(part, ix.reduced[ix.u(i, k / 2, k % 2)]))
             .collect(),
@@ -473,9 +471,9 @@ fn add_output_blocks(
 }
 
 /// `N_θθ = Σ_pairs w Pᵀ M P` ([`add_output_blocks`]) at once: entry `(k, l)` is
-/// `Σ_αβ M[2k+α, 2l+β] G[2(k/2)+α, 2(l/2)+β]` with `G = Zᵀ W Z`, `Z` the residues
-/// `(Re R_r, Im R_r)` of every pair by row and `W` the pairs' weights: one GEMM over the
-/// pairs instead of a `4N × 2N` product per pair.
+/// `Σ_αβ M[2k+α, 2l+β] G[2(k/2)+α, 2(l/2)+β]` with `G = Zᵀ W Z`, `Zᵀ` the residues
+/// `(Re R_r, Im R_r)` of every pair by column ([`coefficients`]' modes' rows) and `W` the
+/// pairs' weights: one GEMM over the pairs instead of a `4N × 2N` product per pair.
 fn add_pole_block(
     grams: &Grams,
     x: &Parameters,
@@ -484,26 +482,14 @@ fn add_pole_block(
     weights: &[f64],
     nzz: &mut Mat<f64>,
 ) {
-    let (n, p) = (ix.n, ix.p);
-    let m2 = 2 * n;
-    let pairs = ix.q * p;
-    let z = Mat::from_fn(pairs, m2, |pair, k| {
-        let (i, j, r) = (pair / p, pair % p, k / 2);
-        let zr = x.u[i * n + r] * x.v[j * n + r];
-        if k % 2 == 0 {
-            zr.re
-        } else {
-            zr.im
-        }
+    let m2 = 2 * ix.n;
+    let z_t = coefficients(x, ix, m2);
+    let weighted = Mat::from_fn(m2, ix.q * ix.p, |k, pair| {
+        weights[pair] * weights[pair] * z_t[(k, pair)]
     });
-    let weighted = Mat::from_fn(pairs, m2, |pair, k| {
-        weights[pair] * weights[pair] * z[(pair, k)]
-    });
-    let g = z.transpose() * &weighted;
+    let g = &z_t * weighted.transpose();
     let m = &grams.m;
-    let theta_z: Vec<usize> = (0..m2)
-        .map(|t| shared_slot(part, Some(t)).expect("the poles are shared"))
-        .collect();
+    let theta_z = part.pole_slots(ix.n);
     for l in 0..m2 {
         let (l0, l1) = (m.col_as_slice(2 * l), m.col_as_slice(2 * l + 1));
         let (g0, g1) = (g.col_as_slice(2 * (l / 2)), g.col_as_slice(2 * (l / 2) + 1));
@@ -864,6 +850,13 @@ impl Partition {
         }
     }
 
+    /// Where the `2N` pole parameters sit among the shared ones.
+    fn pole_slots(&self, n: usize) -> Vec<usize> {
+        (0..2 * n)
+            .map(|t| shared_slot(self, Some(t)).expect("the poles are shared"))
+            .collect()
+    }
+
     fn local(&self) -> usize {
         self.blocks.iter().map(Vec::len).sum()
     }
@@ -944,7 +937,7 @@ impl<'a> Blocks<'a> {
         // `add_poles` wrote the poles' coupling with the participations below the
         // diagonal only (the poles are the first of `z`).
         let m2 = 2 * n;
-        debug_assert!((0..m2).all(|k| shared_slot(part, Some(k)) == Some(k)));
+        debug_assert!(part.pole_slots(n).into_iter().eq(0..m2));
         for c in m2..nz {
             for k in 0..m2 {
                 nzz[(k, c)] = nzz[(c, k)];

@@ -26,12 +26,13 @@ pub struct Check<'a> {
 /// again there are not physical ([`era::refine::identification::confirm_modes`]): a structure's
 /// modes stay where they are, the poles a fit adds for leakage, a short frame's bias
 /// or one estimate's noise do not. Skipped, and said, when the records give fewer than
-/// [`CHECK_AVERAGES`] averages at either frame. Returns the lines to print.
+/// [`CHECK_AVERAGES`] averages at either frame. Returns the lines to print and the
+/// check's seconds (a stage of `--timings`).
 pub fn frame_check(
     a: &Identify,
     found: &mut era::Identification,
     check: &Check,
-) -> anyhow::Result<String> {
+) -> anyhow::Result<(String, f64)> {
     let quiet = Settings::silent();
     let clock = Instant::now();
     // Twice the frame (finer lines, the modes better resolved); half of it when the
@@ -67,24 +68,26 @@ pub fn frame_check(
         tried.push(format!("{other} samples give {averages}"));
     }
     let Some((second, other, averages)) = second else {
-        return Ok(format!(
+        let lines = format!(
             "  frame check: skipped: at frames of {}, these records give no estimate with at least {CHECK_AVERAGES} averages (--no-frame-check: off)\n",
             if tried.is_empty() { "twice or half the frame".to_string() } else { tried.join(" and ") }
-        ));
+        );
+        return Ok((lines, clock.elapsed().as_secs_f64()));
     };
-    match second_identification(a, second, other, check, &quiet) {
+    let lines = match second_identification(a, second, other, check, &quiet) {
         Ok(again) => {
             let unconfirmed = era::refine::identification::confirm_modes(found, &again, other);
-            Ok(format!(
+            format!(
                 "  frame check: identified again from frames of {other} samples ({averages} averages, {:.2} s): {unconfirmed} physical mode(s) not found again, so not physical (--no-frame-check: off)\n",
                 clock.elapsed().as_secs_f64()
-            ))
+            )
         }
         // The check vouches for modes; when it cannot be made, the run stands as it is.
-        Err(e) => Ok(format!(
+        Err(e) => format!(
             "  frame check: skipped: the second estimate (frames of {other} samples) could not be identified: {e:#}\n"
-        )),
-    }
+        ),
+    };
+    Ok((lines, clock.elapsed().as_secs_f64()))
 }
 
 /// The frame check's second identification: the estimate at `other` samples per frame,
