@@ -51,7 +51,7 @@
 
 use crate::data::statespace::TimeDomain;
 use crate::pipeline::modes::ModalForm;
-use crate::pipeline::realize::HankelTails;
+use crate::pipeline::realize::{HankelTails, Tails};
 use num_complex::Complex64;
 
 /// Modal phase collinearity of a shape, in [0, 1] (0 for a zero shape).
@@ -118,8 +118,20 @@ pub(crate) fn emac_block(lambda: Complex64, blocks: usize) -> usize {
 /// observability and controllability matrices (module doc). The model must be the
 /// discrete one whose basis they are in.
 pub fn emac(form: &ModalForm, tails: &HankelTails) -> Vec<(f64, f64)> {
+    emac_of(form, tails)
+}
+
+/// [`emac`] of tails formed or read in place. Each block row (column) an eigenvalue
+/// compares at is gathered once, contiguous in the states, for every eigenvalue that
+/// compares there (lightly damped poles mostly share the last).
+pub(crate) fn emac_of(form: &ModalForm, tails: &impl Tails) -> Vec<(f64, f64)> {
     let n = form.eigenvalues.len();
-    let (q, p) = (tails.outputs, tails.inputs);
+    let (q, p) = (tails.outputs(), tails.inputs());
+    debug_assert_eq!(tails.states(), n);
+    // Block `k` of the observability matrix as `q` runs of `n`, and of the
+    // controllability matrix as `p` runs of `n` (one per column).
+    let mut out_blocks: Vec<Option<Vec<f64>>> = vec![None; tails.block_rows()];
+    let mut in_blocks: Vec<Option<Vec<f64>>> = vec![None; tails.block_cols()];
     (0..n)
         .map(|k| {
             let lambda = form.eigenvalues[k];
@@ -127,19 +139,33 @@ pub fn emac(form: &ModalForm, tails: &HankelTails) -> Vec<(f64, f64)> {
             let ki = emac_block(lambda, tails.block_cols());
             let rise_out = power(lambda, ko);
             let rise_in = power(lambda, ki);
-            let identified_out: Vec<Complex64> = (0..q)
-                .map(|i| {
-                    (0..n)
-                        .map(|r| form.right[(r, k)] * tails.observability[(ko * q + i, r)])
-                        .sum()
-                })
+            let right = form.right.col(k);
+            let out_block = out_blocks[ko].get_or_insert_with(|| {
+                (0..q)
+                    .flat_map(|i| (0..n).map(move |r| (i, r)))
+                    .map(|(i, r)| tails.observability(ko * q + i, r))
+                    .collect()
+            });
+            let identified_out: Vec<Complex64> = out_block
+                .chunks_exact(n.max(1))
+                .take(q)
+                .map(|row| row.iter().enumerate().map(|(r, o)| right[r] * o).sum())
                 .collect();
             let predicted_out: Vec<Complex64> =
                 form.shapes[k].iter().map(|c| c * rise_out).collect();
-            let identified_in: Vec<Complex64> = (0..p)
-                .map(|j| {
-                    (0..n)
-                        .map(|r| form.left[(k, r)] * tails.controllability[(r, ki * p + j)])
+            let in_block = in_blocks[ki].get_or_insert_with(|| {
+                (0..p)
+                    .flat_map(|j| (0..n).map(move |r| (j, r)))
+                    .map(|(j, r)| tails.controllability(r, ki * p + j))
+                    .collect()
+            });
+            let identified_in: Vec<Complex64> = in_block
+                .chunks_exact(n.max(1))
+                .take(p)
+                .map(|col| {
+                    col.iter()
+                        .enumerate()
+                        .map(|(r, c)| form.left[(k, r)] * c)
                         .sum()
                 })
                 .collect();
@@ -364,6 +390,46 @@ mod tests {
                 e[k].1
             );
         }
+    }
+
+    #[test]
+    fn tails_read_in_place_give_the_formed_tails_emac_bit_for_bit() {
+        // A scan reads each order's tails from the factors instead of forming them:
+        // the model and every EMAC must be the same numbers, for ERA and for ERA/DC
+        // (whose controllability tail comes from U_nᵀ H(0)).
+        use crate::pipeline::factor::{FactorOptions, Factorization};
+        use crate::pipeline::realize::DirectTerm;
+        use crate::pipeline::realize_dc::{factor_dc, DcShape};
+        let truth = real_mode_model();
+        let mut markov = markov_of(&truth, 400);
+        let mut rng = crate::linalg::rng::Minstd::new(7);
+        for k in 1..400 {
+            for i in 0..3 {
+                for j in 0..3 {
+                    let v = markov.get(k, i, j);
+                    markov.set(k, i, j, v + 1e-4 * rng.normal());
+                }
+            }
+        }
+        let era = Factorization::thesis(&markov, 0.01, &FactorOptions::new(20, 10)).unwrap();
+        let dc = factor_dc(&markov, 0.01, &DcShape::new(20, 10, 3), 20, 10).unwrap();
+        for f in [&era, &dc] {
+            for n in [6, 12, 20] {
+                let formed = f.realize(n, DirectTerm::Zero).unwrap();
+                let (model, view) = f.realize_in_place(n, DirectTerm::Zero).unwrap();
+                assert_eq!(model.a, formed.model.a);
+                assert_eq!(model.b, formed.model.b);
+                assert_eq!(model.c, formed.model.c);
+                let form = ModalForm::new(&model).unwrap();
+                let (a, b) = (emac(&form, &formed.tails), emac_of(&form, &view));
+                assert_eq!(a, b, "EMAC at {n} states");
+                assert!(a.iter().any(|&(o, i)| o > 0.5 && i > 0.5));
+            }
+        }
+        assert!(
+            dc.realize(6, DirectTerm::Zero).unwrap().model.b
+                != era.realize(6, DirectTerm::Zero).unwrap().model.b
+        );
     }
 
     #[test]

@@ -52,7 +52,7 @@
 
 use crate::error::{EraError, Result};
 use crate::modal::indicators::mac;
-use crate::modal::indicators::{emac, mpc};
+use crate::modal::indicators::{emac_of, mpc};
 use crate::pipeline::modes::{continuous_pole, ModalForm};
 use crate::pipeline::realize::{DirectTerm, Factorization};
 use num_complex::Complex64;
@@ -376,16 +376,16 @@ pub(crate) fn scan(
 /// The poles of the realization at `n` states (status [`PoleStatus::New`]), by
 /// frequency.
 fn order_poles(factorization: &Factorization, n: usize) -> Result<Vec<ScanPole>> {
-    let r = factorization.realize(n, DirectTerm::Zero)?;
-    let form = ModalForm::new(&r.model)?;
-    let e = emac(&form, &r.tails);
+    let (model, tails) = factorization.realize_in_place(n, DirectTerm::Zero)?;
+    let form = ModalForm::new(&model)?;
+    let e = emac_of(&form, &tails);
     let mut here: Vec<ScanPole> = form
         .eigenvalues
         .iter()
         .enumerate()
         .filter(|(_, z)| z.im > 0.0)
         .map(|(i, z)| {
-            let s = continuous_pole(*z, r.model.domain);
+            let s = continuous_pole(*z, model.domain);
             ScanPole {
                 order: n,
                 frequency_hz: s.norm() / (2.0 * std::f64::consts::PI),

@@ -140,6 +140,50 @@ impl HankelTails {
     }
 }
 
+/// What EMAC reads of the identified observability and controllability matrices
+/// ([`crate::modal::indicators::emac`]): formed ([`HankelTails`]) or read from the
+/// factors in place ([`FactorTails`]).
+pub(crate) trait Tails {
+    /// States `n` (columns of the observability matrix).
+    fn states(&self) -> usize;
+    /// Outputs `q`.
+    fn outputs(&self) -> usize;
+    /// Inputs `p`.
+    fn inputs(&self) -> usize;
+    /// Block rows `R` of the observability matrix.
+    fn block_rows(&self) -> usize;
+    /// Block columns `C` of the controllability matrix.
+    fn block_cols(&self) -> usize;
+    /// Entry `(row, r)` of the observability matrix.
+    fn observability(&self, row: usize, r: usize) -> f64;
+    /// Entry `(r, col)` of the controllability matrix.
+    fn controllability(&self, r: usize, col: usize) -> f64;
+}
+
+impl Tails for HankelTails {
+    fn states(&self) -> usize {
+        self.observability.ncols()
+    }
+    fn outputs(&self) -> usize {
+        self.outputs
+    }
+    fn inputs(&self) -> usize {
+        self.inputs
+    }
+    fn block_rows(&self) -> usize {
+        HankelTails::block_rows(self)
+    }
+    fn block_cols(&self) -> usize {
+        HankelTails::block_cols(self)
+    }
+    fn observability(&self, row: usize, r: usize) -> f64 {
+        self.observability[(row, r)]
+    }
+    fn controllability(&self, r: usize, col: usize) -> f64 {
+        self.controllability[(r, col)]
+    }
+}
+
 fn direct_term(markov: &MarkovSequence, which: DirectTerm) -> Mat<f64> {
     let (q, p) = (markov.outputs(), markov.inputs());
     match which {
@@ -365,12 +409,9 @@ fn shift_a(singular_values: &[f64], un: faer::MatRef<'_, f64>, q: usize) -> Resu
 }
 
 impl Factorization {
-    /// The balanced realization at `states` (docs/src/design.md §1.9) from the kept factors.
-    ///
-    /// # Errors
-    /// [`EraError::InvalidParameter`] for 0 states or more than [`Self::max_states`];
-    /// [`EraError::RankDeficient`] above the numerical rank of `H0`.
-    pub fn realize(&self, states: usize, direct: DirectTerm) -> Result<Realization> {
+    /// `states` checked against the factorization: 1 to [`Self::max_states`], within
+    /// the numerical rank of `H0`.
+    fn check_states(&self, states: usize) -> Result<()> {
         if states == 0 || states > self.max_states {
             return Err(EraError::InvalidParameter {
                 name: "states",
@@ -388,8 +429,11 @@ impl Factorization {
                     * f64::EPSILON,
             });
         }
-        let clock = Instant::now();
-        let n = states;
+        Ok(())
+    }
+
+    /// The discrete model at `n` states (checked) from the kept factors.
+    fn model_at(&self, n: usize, direct: DirectTerm) -> Result<StateSpace> {
         let (q, p) = (self.y0.nrows(), self.y0.ncols());
         let sv = &self.singular_values[..n];
         let (un, vn) = (self.u.subcols(0, n), self.v.subcols(0, n));
@@ -397,18 +441,36 @@ impl Factorization {
         if self.shift {
             a = shift_a(sv, un, q)?;
         }
-        let mut tails = HankelTails::of(sv, un, vn, q, p);
         if let Some(ut_h0) = &self.ut_h0 {
-            // ERA/DC: Q_β = Σ^(−½) U_nᵀ H(0), and B its first p columns.
-            let controllability =
-                Mat::from_fn(n, ut_h0.ncols(), |r, j| ut_h0[(r, j)] / sv[r].sqrt());
-            b = controllability.get(.., ..p).to_owned();
-            tails.controllability = controllability;
+            // ERA/DC: B is the first p columns of Q_β = Σ^(−½) U_nᵀ H(0).
+            b = Mat::from_fn(n, p, |r, j| ut_h0[(r, j)] / sv[r].sqrt());
         }
         let d = match direct {
             DirectTerm::Zero => Mat::zeros(q, p),
             DirectTerm::FirstMarkov => self.y0.clone(),
         };
+        Ok(StateSpace::new(
+            a,
+            b,
+            c,
+            d,
+            TimeDomain::Discrete {
+                sample_time_s: self.sample_time_s,
+            },
+        ))
+    }
+
+    /// The balanced realization at `states` (docs/src/design.md §1.9) from the kept factors.
+    ///
+    /// # Errors
+    /// [`EraError::InvalidParameter`] for 0 states or more than [`Self::max_states`];
+    /// [`EraError::RankDeficient`] above the numerical rank of `H0`.
+    pub fn realize(&self, states: usize, direct: DirectTerm) -> Result<Realization> {
+        self.check_states(states)?;
+        let clock = Instant::now();
+        let n = states;
+        let model = self.model_at(n, direct)?;
+        let tails = self.tails(n).to_owned();
         let mut warnings = self.warnings.clone();
         let available = self.hankel_size.0.min(self.hankel_size.1);
         if available < 2 * n {
@@ -418,15 +480,7 @@ impl Factorization {
             });
         }
         Ok(Realization {
-            model: StateSpace::new(
-                a,
-                b,
-                c,
-                d,
-                TimeDomain::Discrete {
-                    sample_time_s: self.sample_time_s,
-                },
-            ),
+            model,
             singular_values: self.singular_values.clone(),
             hankel_size: self.hankel_size,
             warnings,
@@ -436,6 +490,90 @@ impl Factorization {
             svd_iterations: self.svd_iterations,
             tails,
         })
+    }
+
+    /// The discrete model at `states` and its tails read in place: what a scan needs of
+    /// each order, without copying the `(R·q) × n` and `n × (C·p)` tails out of the
+    /// factors (a fifth of a scan's time on a thesis-size Hankel).
+    ///
+    /// # Errors
+    /// As [`Self::realize`].
+    pub(crate) fn realize_in_place(
+        &self,
+        states: usize,
+        direct: DirectTerm,
+    ) -> Result<(StateSpace, FactorTails<'_>)> {
+        self.check_states(states)?;
+        Ok((self.model_at(states, direct)?, self.tails(states)))
+    }
+
+    /// The tails at `n` states, as views of the factors.
+    fn tails(&self, n: usize) -> FactorTails<'_> {
+        FactorTails {
+            root: self.singular_values[..n].iter().map(|s| s.sqrt()).collect(),
+            un: self.u.subcols(0, n),
+            vn: self.v.subcols(0, n),
+            ut_h0: self.ut_h0.as_ref().map(|m| m.get(..n, ..)),
+            outputs: self.y0.nrows(),
+            inputs: self.y0.ncols(),
+        }
+    }
+}
+
+/// [`HankelTails`] read from a factorization's `U_n`, `V_n` and `σ` without forming
+/// them: `observability[(i, r)] = U[(i, r)]·√σ_r`, and `controllability[(r, j)] =
+/// √σ_r·V[(j, r)]` (ERA) or `U_nᵀH(0)[(r, j)]/√σ_r` (ERA/DC), the same products as
+/// [`HankelTails`] holds.
+pub(crate) struct FactorTails<'a> {
+    root: Vec<f64>,
+    un: faer::MatRef<'a, f64>,
+    vn: faer::MatRef<'a, f64>,
+    ut_h0: Option<faer::MatRef<'a, f64>>,
+    outputs: usize,
+    inputs: usize,
+}
+
+impl FactorTails<'_> {
+    /// The tails formed: what [`Realization::tails`] holds.
+    fn to_owned(&self) -> HankelTails {
+        let n = self.root.len();
+        let cols = self.block_cols() * self.inputs;
+        HankelTails {
+            observability: Mat::from_fn(self.un.nrows(), n, |i, r| self.observability(i, r)),
+            controllability: Mat::from_fn(n, cols, |r, j| self.controllability(r, j)),
+            outputs: self.outputs,
+            inputs: self.inputs,
+        }
+    }
+}
+
+impl Tails for FactorTails<'_> {
+    fn states(&self) -> usize {
+        self.root.len()
+    }
+    fn outputs(&self) -> usize {
+        self.outputs
+    }
+    fn inputs(&self) -> usize {
+        self.inputs
+    }
+    fn block_rows(&self) -> usize {
+        self.un.nrows() / self.outputs.max(1)
+    }
+    fn block_cols(&self) -> usize {
+        match self.ut_h0 {
+            Some(m) => m.ncols() / self.inputs.max(1),
+            None => self.vn.nrows() / self.inputs.max(1),
+        }
+    }
+    fn observability(&self, row: usize, r: usize) -> f64 {
+        self.un[(row, r)] * self.root[r]
+    }
+    fn controllability(&self, r: usize, col: usize) -> f64 {
+        match self.ut_h0 {
+            Some(m) => m[(r, col)] / self.root[r],
+            None => self.root[r] * self.vn[(col, r)],
+        }
     }
 }
 
