@@ -628,6 +628,7 @@ fn judge_significance(
         rank_one: false,
         band: Some((first, end)),
         weighting: crate::refine::Weighting::Uniform,
+        standard_deviations: false,
         ..Default::default()
     };
     let mut alive: Vec<usize> = (0..selection.clusters.len())

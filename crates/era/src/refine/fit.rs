@@ -136,7 +136,9 @@ pub(crate) fn run(
         .iter()
         .map(|b| b.rhs.squared_norm_l2() + b.cost_offset)
         .sum();
-    let current = settle(&problem, &mut state, evaluate, &mut dropped)?;
+    // A fit of no iterations needs the Jacobian only for the standard deviations.
+    let jacobian = options.max_iterations > 0 || options.standard_deviations;
+    let current = settle(&problem, &mut state, evaluate, &mut dropped, jacobian)?;
     let cost_before = current.cost;
     let fit_before = fit_of(&problem, &state.theta, &current.coefficients);
     progress(0, current.cost);
@@ -248,6 +250,7 @@ impl LeastSquares for FreeStage<'_, '_> {
                     accepted,
                     evaluate,
                     &mut self.dropped,
+                    true,
                 )?;
                 (self.progress)(iteration, self.current.cost);
                 // The free stage's rule takes no gain ratio.
@@ -282,7 +285,7 @@ impl LeastSquares for FreeStage<'_, '_> {
                     ),
                     &mut self.dropped,
                 );
-                self.current = settle(problem, &mut self.state, evaluate, &mut self.dropped)?;
+                self.current = settle(problem, &mut self.state, evaluate, &mut self.dropped, true)?;
                 Ok(Trial::Restart)
             }
             _ => Ok(Trial::Higher),
@@ -306,6 +309,7 @@ fn settle(
     state: &mut State,
     evaluate: Evaluator,
     dropped: &mut Vec<(usize, String)>,
+    jacobian: bool,
 ) -> Result<Evaluation> {
     loop {
         crate::cancel::check()?;
@@ -323,8 +327,11 @@ fn settle(
                 ),
             ));
         }
-        match evaluate(problem, &state.theta, Need::Jacobian)? {
-            Outcome::Ready(e) => return settle_ready(problem, state, e, evaluate, dropped),
+        let need = if jacobian { Need::Jacobian } else { Need::Cost };
+        match evaluate(problem, &state.theta, need)? {
+            Outcome::Ready(e) => {
+                return settle_ready(problem, state, e, evaluate, dropped, jacobian)
+            }
             Outcome::Deficient { mode: Some(m), .. } => {
                 let s = problem.parameters.pole(&state.theta, m);
                 state.drop_mode(
@@ -352,6 +359,7 @@ fn settle_ready(
     e: Evaluation,
     evaluate: Evaluator,
     dropped: &mut Vec<(usize, String)>,
+    jacobian: bool,
 ) -> Result<Evaluation> {
     let poles = problem.parameters.poles(&state.theta);
     let contributions: Vec<f64> = contributions(problem, &poles, &e.coefficients)
@@ -395,7 +403,7 @@ fn settle_ready(
         None => Ok(e),
         Some((m, why)) => {
             state.drop_mode(m, why, dropped);
-            settle(problem, state, evaluate, dropped)
+            settle(problem, state, evaluate, dropped, jacobian)
         }
     }
 }
@@ -508,7 +516,10 @@ fn finish(
             let noise_variance = problem
                 .degrees_of_freedom(state.theta.len())
                 .map_or(f64::NAN, |dof| e.cost / dof as f64);
-            (noise_variance, covariance(&e.jtj, noise_variance))
+            // Without the Jacobian (a fit read for its cost alone), no deviations.
+            let formed = e.jtj.nrows() == state.theta.len();
+            let covariance = formed.then(|| covariance(&e.jtj, noise_variance)).flatten();
+            (noise_variance, covariance)
         }
     };
     let poles = problem.parameters.poles(&state.theta);

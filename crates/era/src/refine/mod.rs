@@ -303,6 +303,11 @@ pub struct RefineOptions {
     /// Look for modes the start missed in the residual of the fit, add their poles and
     /// fit again (module doc, "Missed modes"); default true.
     pub add_missed: bool,
+    /// The poles' standard deviations (default true). Off only for a fit of no
+    /// iterations read for its cost and significances alone (the automatic order's
+    /// judge, [`crate::pipeline`]): its Jacobian is then never formed, and the
+    /// deviations are NaN.
+    pub(crate) standard_deviations: bool,
 }
 
 impl Default for RefineOptions {
@@ -319,6 +324,7 @@ impl Default for RefineOptions {
             sample_time_s: None,
             rank_one: true,
             add_missed: true,
+            standard_deviations: true,
         }
     }
 }
@@ -1093,6 +1099,44 @@ crate::params::names::named!(display Weighting, "weighting", [
 mod tests {
     use super::*;
     use crate::sim::{add_noise, ModalSpec, ModalStructure};
+
+    /// The automatic order's judge reads a fit of no iterations for its cost and
+    /// significances alone, without forming the Jacobian: everything it reads is the
+    /// same as with the Jacobian, and the deviations it does not read are NaN.
+    #[test]
+    fn a_judged_fit_without_deviations_has_the_same_cost_and_significances() {
+        let spec = ModalSpec {
+            fmin_hz: 2.0,
+            fmax_hz: 9.0,
+            ..ModalSpec::new(3, 4, 6)
+        };
+        let s = ModalStructure::random(&spec).unwrap();
+        let frf = add_noise(&s.frf(401, 0.025, Quantity::Velocity).unwrap(), 0.05, 9).unwrap();
+        let judged = RefineOptions {
+            max_iterations: 0,
+            add_missed: false,
+            rank_one: false,
+            weighting: Weighting::Uniform,
+            ..RefineOptions::default()
+        };
+        let start: Vec<Complex64> = s.poles().iter().map(|s| 1.001 * s).collect();
+        let with = refine(&frf, &start, &judged, &mut |_, _| {}).unwrap();
+        let without = RefineOptions {
+            standard_deviations: false,
+            ..judged.clone()
+        };
+        let without = refine(&frf, &start, &without, &mut |_, _| {}).unwrap();
+        assert_eq!(with.cost_after, without.cost_after);
+        assert_eq!(with.noise_variance, without.noise_variance);
+        assert_eq!(with.modes.len(), 6);
+        for (a, b) in with.modes.iter().zip(&without.modes) {
+            assert_eq!((a.pole, a.start), (b.pole, b.start));
+            assert_eq!(a.residue, b.residue);
+            assert_eq!(a.significance, b.significance);
+            assert!(a.frequency_std_hz.is_finite() && a.frequency_std_hz > 0.0);
+            assert!(b.frequency_std_hz.is_nan() && b.damping_ratio_std.is_nan());
+        }
+    }
 
     /// A refit handed an earlier rank-one fit's modes as warm starts, in reverse order
     /// after a start pole it drops, from start poles a little off theirs, starts each
