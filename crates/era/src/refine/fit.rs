@@ -136,8 +136,13 @@ pub(crate) fn run(
         .iter()
         .map(|b| b.rhs.squared_norm_l2() + b.cost_offset)
         .sum();
-    // A fit of no iterations needs the Jacobian only for the standard deviations.
-    let jacobian = options.max_iterations > 0 || options.standard_deviations;
+    // A fit of no iterations needs the Jacobian only for the standard deviations, and a
+    // fit whose poles are placed and that the rank-one stage follows not at all: it
+    // takes no free iteration, and the rank-one stage gives the deviations (a fit with
+    // fewer modes after the settling is still within its size).
+    let placed_for_rank_one = placed && super::rank_one::will_run(&problem, state.ids.len());
+    let jacobian =
+        (options.max_iterations > 0 || options.standard_deviations) && !placed_for_rank_one;
     let current = settle(&problem, &mut state, evaluate, &mut dropped, jacobian)?;
     let cost_before = current.cost;
     let fit_before = fit_of(&problem, &state.theta, &current.coefficients);
