@@ -48,8 +48,8 @@ impl ModalForm {
         let cv = complex(&model.c) * &v;
         let vib = &v_inv * complex(&model.b);
         let (q, p) = (model.outputs(), model.inputs());
-        let mut right = v.clone();
-        let mut left = v_inv.clone();
+        let eigenvector_condition = v.norm_l2() * v_inv.norm_l2();
+        let (mut right, mut left) = (v, v_inv);
         let mut eigenvalues = Vec::with_capacity(n);
         let mut shapes = Vec::with_capacity(n);
         let mut participations = Vec::with_capacity(n);
@@ -78,7 +78,6 @@ impl ModalForm {
             shapes.push(shape);
             participations.push(part);
         }
-        let eigenvector_condition = v.norm_l2() * v_inv.norm_l2();
         Ok(ModalForm {
             eigenvalues,
             shapes,
