@@ -1242,7 +1242,8 @@ fn solve_linear(
     // `Φᵀy` of every pair.
     let phi_y = phi.transpose() * y;
     let size = 2 * n + p * n_res;
-    for i in 0..q {
+    // Each output's shapes and residual terms are its own system: solved side by side.
+    let solve_output = |i: usize| -> Option<Mat<f64>> {
         let mut a = Mat::<f64>::zeros(size, size);
         let mut b = Mat::<f64>::zeros(size, 1);
         for j in 0..p {
@@ -1287,13 +1288,20 @@ fn solve_linear(
                 }
             }
         }
-        let Ok(llt) = a.llt(faer::Side::Lower) else {
-            return false;
-        };
-        let solution = llt.solve(&b);
-        if (0..size).any(|k| !solution[(k, 0)].is_finite()) {
-            return false;
-        }
+        let solution = a.llt(faer::Side::Lower).ok()?.solve(&b);
+        (0..size)
+            .all(|k| solution[(k, 0)].is_finite())
+            .then_some(solution)
+    };
+    use rayon::prelude::*;
+    let Some(solutions) = (0..q)
+        .into_par_iter()
+        .map(solve_output)
+        .collect::<Option<Vec<_>>>()
+    else {
+        return false;
+    };
+    for (i, solution) in solutions.iter().enumerate() {
         for r in 0..n {
             x.u[i * n + r] = Complex64::new(solution[(2 * r, 0)], solution[(2 * r + 1, 0)]);
         }
