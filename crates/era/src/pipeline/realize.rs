@@ -144,8 +144,6 @@ impl HankelTails {
 /// ([`crate::modal::indicators::emac`]): formed ([`HankelTails`]) or read from the
 /// factors in place ([`FactorTails`]).
 pub(crate) trait Tails {
-    /// States `n` (columns of the observability matrix).
-    fn states(&self) -> usize;
     /// Outputs `q`.
     fn outputs(&self) -> usize;
     /// Inputs `p`.
@@ -161,9 +159,6 @@ pub(crate) trait Tails {
 }
 
 impl Tails for HankelTails {
-    fn states(&self) -> usize {
-        self.observability.ncols()
-    }
     fn outputs(&self) -> usize {
         self.outputs
     }
@@ -548,9 +543,6 @@ impl FactorTails<'_> {
 }
 
 impl Tails for FactorTails<'_> {
-    fn states(&self) -> usize {
-        self.root.len()
-    }
     fn outputs(&self) -> usize {
         self.outputs
     }
@@ -581,3 +573,52 @@ crate::params::names::named!(display DirectTerm, "direct term", [
     DirectTerm::Zero => "zero",
     DirectTerm::FirstMarkov => "markov0",
 ]);
+
+#[cfg(test)]
+mod tails_tests {
+    use super::*;
+    use crate::pipeline::factor::FactorOptions;
+    use crate::pipeline::realize_dc::{factor_dc, DcShape};
+
+    /// A decaying random Markov sequence of 3 outputs and 2 inputs.
+    fn markov() -> MarkovSequence {
+        let mut rng = crate::linalg::rng::Minstd::new(3);
+        let mut m = MarkovSequence::zeros(3, 2, 300);
+        for k in 1..300 {
+            let decay = (-0.01 * k as f64).exp();
+            for i in 0..3 {
+                for j in 0..2 {
+                    m.set(k, i, j, decay * rng.normal());
+                }
+            }
+        }
+        m
+    }
+
+    /// The tails a realization forms are the factors' products as they were formed
+    /// before the scan read them in place: `U·√σ`, and `√σ·Vᵀ` (ERA) or
+    /// `U_nᵀH(0)/√σ` (ERA/DC, whose `B` is its first columns), bit for bit.
+    #[test]
+    fn the_formed_tails_are_the_factors_products() {
+        let markov = markov();
+        let era = Factorization::thesis(&markov, 0.01, &FactorOptions::new(16, 6)).unwrap();
+        let dc = factor_dc(&markov, 0.01, &DcShape::new(16, 6, 3), 16, 6).unwrap();
+        for f in [&era, &dc] {
+            for n in [4, 9, 16] {
+                let r = f.realize(n, DirectTerm::Zero).unwrap();
+                let sv = &f.singular_values[..n];
+                let root: Vec<f64> = sv.iter().map(|s| s.sqrt()).collect();
+                let obs = Mat::from_fn(f.u.nrows(), n, |i, k| f.u[(i, k)] * root[k]);
+                let ctrl = match &f.ut_h0 {
+                    Some(m) => Mat::from_fn(n, m.ncols(), |k, j| m[(k, j)] / sv[k].sqrt()),
+                    None => Mat::from_fn(n, f.v.nrows(), |k, j| root[k] * f.v[(j, k)]),
+                };
+                assert_eq!(r.tails.observability, obs, "observability at {n}");
+                assert_eq!(r.tails.controllability, ctrl, "controllability at {n}");
+                assert_eq!(r.model.b, ctrl.get(.., ..2).to_owned(), "B at {n}");
+                assert_eq!(r.model.c, obs.get(..3, ..).to_owned(), "C at {n}");
+            }
+        }
+        assert!(era.ut_h0.is_none() && dc.ut_h0.is_some());
+    }
+}

@@ -172,10 +172,12 @@ pub(crate) fn run(
     };
     let FreeStage {
         state,
-        current,
+        mut current,
         dropped,
         ..
     } = stage;
+    // The factors a cost-only evaluation keeps serve an accepted step, and no step follows.
+    current.kept = None;
     finish(
         &problem,
         state,

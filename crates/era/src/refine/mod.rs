@@ -303,10 +303,11 @@ pub struct RefineOptions {
     /// Look for modes the start missed in the residual of the fit, add their poles and
     /// fit again (module doc, "Missed modes"); default true.
     pub add_missed: bool,
-    /// The poles' standard deviations (default true). Off only for a fit of no
+    /// The poles' standard deviations (default true). Turned off only for a fit of no
     /// iterations read for its cost and significances alone (the automatic order's
-    /// judge, [`crate::pipeline`]): its Jacobian is then never formed, and the
-    /// deviations are NaN.
+    /// judge, [`crate::pipeline`]): with `max_iterations` 0 its Jacobian is then never
+    /// formed, and the deviations are NaN. With iterations allowed it has no effect
+    /// (the descent needs the Jacobian, and the deviations come with it).
     pub(crate) standard_deviations: bool,
 }
 
