@@ -356,32 +356,20 @@ pub fn realize_naive(
     })
 }
 
-/// `A`, `B`, `C` of §1.9 from the kept singular values `σ`, `U_n`, `V_n` and
-/// `U_nᵀ H1 V_n`: `A = S^(−½) (U_nᵀ H1 V_n) S^(−½)`, `B` = first p columns of
-/// `S^(½) V_nᵀ`, `C` = first q rows of `U_n S^(½)`. `ut_h1_v` may be larger than
-/// `n × n` (a factorization's), only its leading block is read.
-fn balanced_abc(
-    singular_values: &[f64],
-    un: faer::MatRef<'_, f64>,
-    vn: faer::MatRef<'_, f64>,
-    ut_h1_v: faer::MatRef<'_, f64>,
-    q: usize,
-    p: usize,
-) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
-    let n = singular_values.len();
-    let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
-    let a = Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]));
-    let b = Mat::from_fn(n, p, |r, j| root[r] * vn[(j, r)]);
-    let c = Mat::from_fn(q, n, |i, r| un[(i, r)] * root[r]);
-    (a, b, c)
+/// `A = S^(−½) (U_nᵀ H1 V_n) S^(−½)` of §1.9, `root` the kept `√σ`. `ut_h1_v` may be
+/// larger than `n × n` (a factorization's), only its leading block is read.
+fn balanced_a(root: &[f64], ut_h1_v: faer::MatRef<'_, f64>) -> Mat<f64> {
+    let n = root.len();
+    Mat::from_fn(n, n, |r, c| ut_h1_v[(r, c)] / (root[r] * root[c]))
 }
 
 /// `A` of the shift structure: the least-squares solution of `O↑ A = O↓`, where
-/// `O = U_n S^(½)` and `O↑`, `O↓` are `O` without its last and its first `q` rows.
-fn shift_a(singular_values: &[f64], un: faer::MatRef<'_, f64>, q: usize) -> Result<Mat<f64>> {
+/// `O = U_n S^(½)` (`tails`' observability) and `O↑`, `O↓` are `O` without its last and
+/// its first `q` rows.
+fn shift_a(tails: &FactorTails<'_>) -> Result<Mat<f64>> {
     use faer::linalg::solvers::SolveLstsq;
-    let n = singular_values.len();
-    let rows = un.nrows();
+    let (n, q) = (tails.root.len(), tails.outputs);
+    let rows = tails.un.nrows();
     if rows < q + n {
         return Err(EraError::HankelTooSmall {
             rows: rows.saturating_sub(q),
@@ -390,10 +378,8 @@ fn shift_a(singular_values: &[f64], un: faer::MatRef<'_, f64>, q: usize) -> Resu
             states: n,
         });
     }
-    let root: Vec<f64> = singular_values.iter().map(|s| s.sqrt()).collect();
-    let o = Mat::from_fn(rows, n, |i, r| un[(i, r)] * root[r]);
-    let up = o.get(..rows - q, ..).to_owned();
-    let down = o.get(q.., ..).to_owned();
+    let up = Mat::from_fn(rows - q, n, |i, r| tails.observability(i, r));
+    let down = Mat::from_fn(rows - q, n, |i, r| tails.observability(i + q, r));
     let a = up.qr().solve_lstsq(down);
     if a.col_iter().flat_map(|c| c.iter()).any(|v| !v.is_finite()) {
         return Err(EraError::Numerical(
@@ -427,19 +413,20 @@ impl Factorization {
         Ok(())
     }
 
-    /// The discrete model at `n` states (checked) from the kept factors.
-    fn model_at(&self, n: usize, direct: DirectTerm) -> Result<StateSpace> {
-        let (q, p) = (self.y0.nrows(), self.y0.ncols());
-        let sv = &self.singular_values[..n];
-        let (un, vn) = (self.u.subcols(0, n), self.v.subcols(0, n));
-        let (mut a, mut b, c) = balanced_abc(sv, un, vn, self.ut_h1_v.as_ref(), q, p);
-        if self.shift {
-            a = shift_a(sv, un, q)?;
-        }
-        if let Some(ut_h0) = &self.ut_h0 {
-            // ERA/DC: B is the first p columns of Q_β = Σ^(−½) U_nᵀ H(0).
-            b = Mat::from_fn(n, p, |r, j| ut_h0[(r, j)] / sv[r].sqrt());
-        }
+    /// The discrete model of `tails`' states (checked) from the kept factors: `A`
+    /// balanced (§1.9) or from the shift, `B` the first `p` columns of the
+    /// controllability tail (`S^(½) V_nᵀ`, or ERA/DC's `Σ^(−½) U_nᵀ H(0)`) and `C` the
+    /// first `q` rows of the observability tail `U_n S^(½)`.
+    fn model_at(&self, tails: &FactorTails<'_>, direct: DirectTerm) -> Result<StateSpace> {
+        let (q, p) = (tails.outputs, tails.inputs);
+        let n = tails.root.len();
+        let a = if self.shift {
+            shift_a(tails)?
+        } else {
+            balanced_a(&tails.root, self.ut_h1_v.as_ref())
+        };
+        let b = Mat::from_fn(n, p, |r, j| tails.controllability(r, j));
+        let c = Mat::from_fn(q, n, |i, r| tails.observability(i, r));
         let d = match direct {
             DirectTerm::Zero => Mat::zeros(q, p),
             DirectTerm::FirstMarkov => self.y0.clone(),
@@ -464,8 +451,9 @@ impl Factorization {
         self.check_states(states)?;
         let clock = Instant::now();
         let n = states;
-        let model = self.model_at(n, direct)?;
-        let tails = self.tails(n).to_owned();
+        let view = self.tails(n);
+        let model = self.model_at(&view, direct)?;
+        let tails = view.to_owned();
         let mut warnings = self.warnings.clone();
         let available = self.hankel_size.0.min(self.hankel_size.1);
         if available < 2 * n {
@@ -499,7 +487,8 @@ impl Factorization {
         direct: DirectTerm,
     ) -> Result<(StateSpace, FactorTails<'_>)> {
         self.check_states(states)?;
-        Ok((self.model_at(states, direct)?, self.tails(states)))
+        let tails = self.tails(states);
+        Ok((self.model_at(&tails, direct)?, tails))
     }
 
     /// The tails at `n` states, as views of the factors.
