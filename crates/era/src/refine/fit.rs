@@ -446,10 +446,13 @@ fn contributions(
                     e
                 }
             };
-            let total: f64 = (0..coef.ncols()).map(energy).sum();
+            let energies: Vec<f64> = (0..coef.ncols()).map(energy).collect();
+            let total: f64 = energies.iter().sum();
             let weighted = problem.pair_weights.as_ref().map_or(f64::NAN, |w| {
-                (0..coef.ncols())
-                    .map(|pair| w[pair] * w[pair] * energy(pair))
+                energies
+                    .iter()
+                    .enumerate()
+                    .map(|(pair, e)| w[pair] * w[pair] * e)
                     .sum()
             });
             (total.sqrt() / norm, weighted)
