@@ -97,17 +97,23 @@ pub(crate) fn default_orders(
 /// ([`signal_order`]).
 pub(crate) const PROBE_STATES: usize = 100;
 
-/// The most rows and columns of the probe Hankel on both sides: a probe of more outputs
-/// and inputs keeps its span of samples but takes fewer block rows, so that its SVD
-/// stays a fraction of the scan's (an 8 x 8 probe of 1992 x 1992 took 1.0–1.4 s, as
-/// 800 x 3184 it takes 0.1 s and finds the same order or one nearer the truth).
-pub(crate) const PROBE_SIDE: usize = 800;
+/// The rows of the probe Hankel of many outputs and inputs, first (one whose square
+/// form has more than [`PROBE_SIDE_MAX`] rows and columns): it keeps its span of
+/// samples but takes fewer block rows, so that its cost stays a fraction of the scan's.
+/// Its median singular value measures the noise while the signal has at most a third
+/// of its 400 values (133 states); a noisy probe that finds more is taken again at
+/// [`PROBE_SIDE_MAX`].
+pub(crate) const PROBE_SIDE: usize = 400;
+
+/// The probe's side when the first probe found too many singular values above its
+/// noise floor to tell the order (more than a third of them).
+pub(crate) const PROBE_SIDE_MAX: usize = 800;
 
 /// The probe's `H0` over the span of a thesis Hankel of [`PROBE_STATES`] states at
-/// `hankel_factor`: square in blocks, unless both sides would exceed [`PROBE_SIDE`],
-/// when it has `PROBE_SIDE / outputs` block rows and the rest of the span in columns.
-/// `None` when the samples support fewer than 8 states.
-fn probe_shape(markov: &MarkovSequence, hankel_factor: usize) -> Option<HankelShape> {
+/// `hankel_factor`: square in blocks, unless both sides would exceed
+/// [`PROBE_SIDE_MAX`], when it has `side / outputs` block rows and the rest of the span
+/// in columns. `None` when the samples support fewer than 8 states.
+fn probe_shape(markov: &MarkovSequence, hankel_factor: usize, side: usize) -> Option<HankelShape> {
     let states = supported_hankel_states(markov.samples(), hankel_factor).min(PROBE_STATES);
     if states < 8 {
         return None;
@@ -117,10 +123,10 @@ fn probe_shape(markov: &MarkovSequence, hankel_factor: usize) -> Option<HankelSh
         .h0;
     let blocks = square.block_rows;
     let (q, p) = (markov.outputs(), markov.inputs());
-    if q * blocks <= PROBE_SIDE || p * blocks <= PROBE_SIDE {
+    if q * blocks <= PROBE_SIDE_MAX || p * blocks <= PROBE_SIDE_MAX {
         return Some(square);
     }
-    let rows = PROBE_SIDE.div_ceil(q).min(blocks);
+    let rows = side.div_ceil(q).min(blocks);
     Some(HankelShape {
         block_rows: rows,
         block_cols: 2 * blocks - rows,
@@ -133,23 +139,54 @@ fn probe_shape(markov: &MarkovSequence, hankel_factor: usize) -> Option<HankelSh
 /// are known to a few 1e-5 of themselves. Below it the probe takes the SVD as well.
 const GRAM_PROBE_FLOOR: f64 = 1e-4;
 
+/// What one probe Hankel tells of the order ([`signal_order`]).
+enum ProbeCount {
+    /// The number of singular values above the noise floor.
+    Order(usize),
+    /// More than a third of the values stand above the floor, so that the median is
+    /// not noise; `noisy` when the floor is the noise's (not rounding's, exact data).
+    TooMany { noisy: bool },
+    /// The values cannot tell (too few, or none).
+    Undecided,
+}
+
 /// The order the data supports: the number of singular values of a small Hankel of
 /// the Markov sequence ([`probe_shape`], its singular values only) above the noise
 /// floor. The floor is Gavish & Donoho's (2014) optimal hard threshold for a matrix of
 /// unknown white noise, `ω(β)·σ_med` with `β` the aspect ratio and
 /// `ω(β) ≈ 0.56β³ − 0.95β² + 1.82β + 1.43`: the median singular value measures the
-/// noise when most singular values are noise. `None` when the probe cannot tell (too
-/// few samples, or more than a third of its singular values above the floor, so that
-/// the median is not noise).
+/// noise when most singular values are noise. The probe is [`PROBE_SIDE`] rows or
+/// columns at most, and [`PROBE_SIDE_MAX`] when that one finds more than a third of its
+/// values above the floor of noisy data. `None` when the probe cannot tell (too few
+/// samples, or more than a third of its singular values above the floor).
 ///
 /// # Errors
 /// [`EraError::Interrupted`] when the call is cancelled while the probe runs.
 pub(crate) fn signal_order(markov: &MarkovSequence, hankel_factor: usize) -> Result<Option<usize>> {
-    let Some(shape) = probe_shape(markov, hankel_factor) else {
+    let Some(shape) = probe_shape(markov, hankel_factor, PROBE_SIDE) else {
         return Ok(None);
     };
+    match probe_count(markov, shape)? {
+        ProbeCount::Order(rank) => Ok(Some(rank)),
+        ProbeCount::TooMany { noisy: true } => {
+            match probe_shape(markov, hankel_factor, PROBE_SIDE_MAX) {
+                Some(larger) if larger.block_rows > shape.block_rows => {
+                    match probe_count(markov, larger)? {
+                        ProbeCount::Order(rank) => Ok(Some(rank)),
+                        _ => Ok(None),
+                    }
+                }
+                _ => Ok(None),
+            }
+        }
+        ProbeCount::TooMany { noisy: false } | ProbeCount::Undecided => Ok(None),
+    }
+}
+
+/// What the probe Hankel of `shape` tells of the order ([`signal_order`]).
+fn probe_count(markov: &MarkovSequence, shape: HankelShape) -> Result<ProbeCount> {
     let Ok(h) = crate::pipeline::hankel::build(markov, shape) else {
-        return Ok(None);
+        return Ok(ProbeCount::Undecided);
     };
     let (rows, cols) = h.shape();
     let beta = rows.min(cols) as f64 / rows.max(cols) as f64;
@@ -172,19 +209,20 @@ pub(crate) fn signal_order(markov: &MarkovSequence, hankel_factor: usize) -> Res
             .map(|f| (sv, f)),
         Err(_) => None,
     };
+    let noisy = gram.is_some();
     let (sv, floor) = match gram {
         Some(found) => found,
         None => {
             let Ok(h) = crate::pipeline::hankel::build(markov, shape) else {
-                return Ok(None);
+                return Ok(ProbeCount::Undecided);
             };
             let sv = match crate::linalg::dense::singular_values(h, "the probe Hankel") {
                 Ok(sv) => sv,
                 Err(EraError::Interrupted) => return Err(EraError::Interrupted),
-                Err(_) => return Ok(None),
+                Err(_) => return Ok(ProbeCount::Undecided),
             };
             let Some(floor) = floor_of(&sv) else {
-                return Ok(None);
+                return Ok(ProbeCount::Undecided);
             };
             (sv, floor)
         }
@@ -192,7 +230,11 @@ pub(crate) fn signal_order(markov: &MarkovSequence, hankel_factor: usize) -> Res
     // Exact data: the floor is rounding, far below the signal.
     let floor = floor.max(1e-13 * sv[0]);
     let rank = sv.iter().take_while(|&&v| v > floor).count();
-    Ok((rank * 3 <= sv.len()).then_some(rank))
+    Ok(if rank * 3 <= sv.len() {
+        ProbeCount::Order(rank)
+    } else {
+        ProbeCount::TooMany { noisy }
+    })
 }
 
 /// The default scan bounded by the data's order `rank` ([`signal_order`]): from half of
@@ -910,10 +952,12 @@ mod probe_tests {
             ..ModalSpec::default()
         });
         let markov = markov_of(&add_noise(&clean, 0.05, 7).unwrap());
-        let shape = probe_shape(&markov, 5).unwrap();
+        let shape = probe_shape(&markov, 5, PROBE_SIDE).unwrap();
         // The square probe would be 249 x 249 blocks (1992 x 1992): the same span of
-        // samples in 100 block rows.
-        assert_eq!((shape.block_rows, shape.block_cols), (100, 398));
+        // samples in 50 block rows (100 at the larger side).
+        assert_eq!((shape.block_rows, shape.block_cols), (50, 448));
+        let larger = probe_shape(&markov, 5, PROBE_SIDE_MAX).unwrap();
+        assert_eq!((larger.block_rows, larger.block_cols), (100, 398));
         let rank = signal_order(&markov, 5).unwrap().unwrap();
         assert!(
             (78..=90).contains(&rank),
@@ -937,7 +981,29 @@ mod probe_tests {
             modes: 6,
             ..ModalSpec::default()
         });
-        let shape = probe_shape(&markov_of(&frf), 5).unwrap();
+        let shape = probe_shape(&markov_of(&frf), 5, PROBE_SIDE).unwrap();
         assert_eq!(shape.block_rows, shape.block_cols);
+    }
+
+    #[test]
+    fn a_noisy_order_beyond_the_first_probe_is_found_by_the_larger_one() {
+        // 8 x 8 with 80 modes (160 states) and 5 % noise: more than a third of the first
+        // probe's 400 singular values are signal, so its median is not the noise.
+        let clean = modal_frf(ModalSpec {
+            seed: 11,
+            modes: 80,
+            ..ModalSpec::default()
+        });
+        let markov = markov_of(&add_noise(&clean, 0.05, 11).unwrap());
+        let first = probe_shape(&markov, 5, PROBE_SIDE).unwrap();
+        assert!(matches!(
+            probe_count(&markov, first).unwrap(),
+            ProbeCount::TooMany { noisy: true }
+        ));
+        let rank = signal_order(&markov, 5).unwrap().unwrap();
+        assert!(
+            (150..=190).contains(&rank),
+            "order {rank}, 160 states in truth"
+        );
     }
 }
