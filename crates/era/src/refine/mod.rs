@@ -93,7 +93,11 @@
 //! parameter by a tenth of its standard deviation or less: with noise, the rest is
 //! noise. An exact fit has `σ̂² ≈ 0` and runs to the relative tolerance (or to
 //! round-off). Trial steps are evaluated without their Jacobian; only an accepted
-//! one pays for it.
+//! one pays for it. The rank-one stage also stops one step sooner where it can tell:
+//! after a step that took less than one noise variance off the cost, as its linear
+//! model predicted (gain ratio within 0.1 of 1), it solves for the undamped step from
+//! there, and when that step is predicted to take less than the hundredth of a noise
+//! variance, the fit has converged without taking it.
 //!
 //! The weighted pass of [`Weighting::PairNoise`] fits with one weight per pair, so every
 //! pair still shares one basis and one QR (see `model::Block::scales`); its uniform first

@@ -1177,21 +1177,34 @@ fn damped_step(normal: &Mat<f64>, gradient: &[f64], lambda: f64) -> Option<Vec<f
     finite_column(&step)
 }
 
+/// The factor that keeps the poles' part of `step` from `x` within each resonance's
+/// width ([`limit_step`]): 1 when it already is.
+fn step_factor(x: &Parameters, ix: &Indices, step: &[f64], log_damping: bool) -> f64 {
+    let theta_raw: Vec<f64> = (0..x.theta.len())
+        .map(|index| ix.reduced[index].map_or(0.0, |f| step[f]))
+        .collect();
+    let limited = limit_step(theta_raw.clone(), &x.theta, log_damping);
+    theta_raw
+        .iter()
+        .zip(&limited)
+        .filter(|(a, _)| **a != 0.0)
+        .map(|(a, b)| b / a)
+        .fold(1.0, f64::min)
+}
+
+/// The linear model's decrease of the cost for `factor · step` from the point whose
+/// normal equations are `normal`: `2fδᵀg − f²δᵀNδ`.
+fn model_decrease(normal: &Normal<'_>, step: &[f64], factor: f64) -> f64 {
+    let (dg, dnd) = normal.gradient_and_curvature(step);
+    2.0 * factor * dg - factor * factor * dnd
+}
+
 /// The parameters after `step` (shortened as below), and the factor it was shortened by.
 fn apply(x: &Parameters, ix: &Indices, step: &[f64], log_damping: bool) -> (Parameters, f64) {
     // The poles' part of the step is kept within each resonance's width (as in the
     // free fit); the whole step is shortened by the same factor, so that the shapes
     // move with the poles they were computed for.
-    let theta_raw: Vec<f64> = (0..x.theta.len())
-        .map(|index| ix.reduced[index].map_or(0.0, |f| step[f]))
-        .collect();
-    let limited = limit_step(theta_raw.clone(), &x.theta, log_damping);
-    let factor = theta_raw
-        .iter()
-        .zip(&limited)
-        .filter(|(a, _)| **a != 0.0)
-        .map(|(a, b)| b / a)
-        .fold(1.0, f64::min);
+    let factor = step_factor(x, ix, step, log_damping);
     let raw = |index: usize| ix.reduced[index].map_or(0.0, |f| factor * step[f]);
     let mut next = x.clone();
     for (k, t) in next.theta.iter_mut().enumerate() {
@@ -1534,11 +1547,7 @@ impl<'a> Stage<'a> {
     ) -> (Option<(Parameters, Mat<f64>, f64, Mat<f64>)>, f64, f64) {
         let (mut trial, factor) =
             apply(&point.x, self.ix, step, self.problem.parameters.log_damping);
-        // The linear model's decrease, `2fδᵀg − f²δᵀNδ`.
-        let predicted = {
-            let (dg, dnd) = point.normal.gradient_and_curvature(step);
-            2.0 * factor * dg - factor * factor * dnd
-        };
+        let predicted = model_decrease(&point.normal, step, factor);
         // The step's poles and participations, with the shapes that fit them best
         // (variable projection: the bilinear product makes the linearised shape step
         // poor far from the optimum).
@@ -1615,9 +1624,16 @@ impl LeastSquares for Descent<'_, '_> {
                 point.reduced = None;
                 let noise_unit = self.stage.dof.map_or(0.0, |d| point.cost / d as f64);
                 // A step shortened by one mode's limit says nothing about convergence.
-                let converged = factor == 1.0
+                let mut converged = factor == 1.0
                     && (decrease <= self.tolerance * (point.cost + decrease)
                         || decrease <= STATISTICAL_STOP * noise_unit);
+                if !converged
+                    && factor == 1.0
+                    && decrease <= FINAL_STEP_CHECK * noise_unit
+                    && (rho - 1.0).abs() <= FINAL_STEP_RHO
+                {
+                    converged = self.nothing_left(noise_unit);
+                }
                 Ok(Trial::Lower {
                     rho,
                     restart: false,
@@ -1626,6 +1642,33 @@ impl LeastSquares for Descent<'_, '_> {
             }
             _ => Ok(Trial::Higher),
         }
+    }
+}
+
+/// An accepted step that took less than this many noise variances off the cost, as its
+/// linear model predicted (within [`FINAL_STEP_RHO`]), is followed by a look at the
+/// next full step's predicted decrease ([`Descent::nothing_left`]).
+const FINAL_STEP_CHECK: f64 = 1.0;
+/// How far the gain ratio of such a step may be from 1.
+const FINAL_STEP_RHO: f64 = 0.1;
+
+impl Descent<'_, '_> {
+    /// Whether the Gauss–Newton step from the current point (undamped, within the
+    /// poles' limit) is predicted to take less than [`STATISTICAL_STOP`] noise
+    /// variances off the cost: the fit has then converged as surely as after taking
+    /// that step, which it skips (its trial, its normal equations and their
+    /// elimination). The elimination formed here serves the next step or the
+    /// covariance.
+    fn nothing_left(&mut self, noise_unit: f64) -> bool {
+        let Some(next) = self.step(0.0) else {
+            return false;
+        };
+        let log_damping = self.stage.problem.parameters.log_damping;
+        if step_factor(&self.point.x, self.stage.ix, &next, log_damping) < 1.0 {
+            return false;
+        }
+        let predicted = model_decrease(&self.point.normal, &next, 1.0);
+        predicted.is_finite() && predicted <= STATISTICAL_STOP * noise_unit
     }
 }
 
@@ -1784,6 +1827,56 @@ mod tests {
                 (product(&cold, 1, 0) - product(&started, 1, 0)).norm() > 1e-3 * free_one.norm()
             );
         }
+    }
+
+    #[test]
+    fn a_fit_stopped_before_its_last_step_has_nothing_statistical_left() {
+        let (problem, x, ix, .., weights) =
+            case((3, 4), Quantity::Acceleration, Residuals::Upper, false);
+        let part = Partition::new(&ix);
+        let dof = problem.observations - ix.free;
+        let stage = Stage {
+            problem: &problem,
+            ix: &ix,
+            part: Some(&part),
+            y: stacked_data(&problem),
+            weights: &weights,
+            dof: Some(dof),
+        };
+        fn look<'a>(stage: &Stage<'a>, point: &mut Point<'a>, dof: usize) -> bool {
+            let noise_unit = point.cost / dof as f64;
+            let mut descent = Descent {
+                stage,
+                point,
+                tolerance: 0.0,
+                data_norm2: 1.0,
+            };
+            descent.nothing_left(noise_unit)
+        }
+        // Off the optimum the next step has much to take.
+        let mut point = stage.first_point(x);
+        assert!(!look(&stage, &mut point, dof));
+        let (_, converged) = stage.descend(&mut point, 200, 0.0).unwrap();
+        assert!(converged);
+        // Where the fit stopped, the full Gauss–Newton step, taken, lowers the cost by
+        // less than the statistical stop; and the look says so.
+        let noise_unit = point.cost / dof as f64;
+        let mut descent = Descent {
+            stage: &stage,
+            point: &mut point,
+            tolerance: 0.0,
+            data_norm2: 1.0,
+        };
+        let step = descent.step(0.0).unwrap();
+        let (trial, factor, _) = stage.trial(&point, &step);
+        assert_eq!(factor, 1.0);
+        let after = trial.unwrap().2;
+        assert!(
+            point.cost - after <= STATISTICAL_STOP * noise_unit,
+            "{} noise units left",
+            (point.cost - after) / noise_unit
+        );
+        assert!(look(&stage, &mut point, dof));
     }
 
     #[test]
