@@ -100,9 +100,8 @@ pub(crate) const PROBE_STATES: usize = 100;
 /// The rows of the probe Hankel of many outputs and inputs, first (one whose square
 /// form has more than [`PROBE_SIDE_MAX`] rows and columns): it keeps its span of
 /// samples but takes fewer block rows, so that its cost stays a fraction of the scan's.
-/// Its median singular value measures the noise while the signal has at most a third
-/// of its 400 values (133 states); a noisy probe that finds more is taken again at
-/// [`PROBE_SIDE_MAX`].
+/// Its order is taken while the signal has at most a third of its 400 values (133
+/// states); a probe of noisy data that finds more is taken again at [`PROBE_SIDE_MAX`].
 pub(crate) const PROBE_SIDE: usize = 400;
 
 /// The probe's side when the first probe found too many singular values above its
@@ -134,6 +133,11 @@ fn probe_shape(markov: &MarkovSequence, hankel_factor: usize, side: usize) -> Op
     })
 }
 
+/// A probe's noise floor below this fraction of `σ₁` is rounding or the truncation of
+/// exact FRFs (1.5e-12 on the exact DTA-like set), not a measurement's noise: a larger
+/// probe would count more of the same, so it is not taken.
+const EXACT_FLOOR: f64 = 1e-10;
+
 /// The lowest noise floor, relative to `σ₁`, that the probe takes from the Gram
 /// matrix's eigenvalues ([`crate::linalg::dense::gram_singular_values`]): values there
 /// are known to a few 1e-5 of themselves. Below it the probe takes the SVD as well.
@@ -143,8 +147,9 @@ const GRAM_PROBE_FLOOR: f64 = 1e-4;
 enum ProbeCount {
     /// The number of singular values above the noise floor.
     Order(usize),
-    /// More than a third of the values stand above the floor, so that the median is
-    /// not noise; `noisy` when the floor is the noise's (not rounding's, exact data).
+    /// More than a third of the values stand above the floor, too many to trust the
+    /// median as the noise; `noisy` when the floor lies above [`EXACT_FLOOR`] (the
+    /// data's noise, not rounding or the truncation of exact FRFs).
     TooMany { noisy: bool },
     /// The values cannot tell (too few, or none).
     Undecided,
@@ -155,9 +160,9 @@ enum ProbeCount {
 /// floor. The floor is Gavish & Donoho's (2014) optimal hard threshold for a matrix of
 /// unknown white noise, `ω(β)·σ_med` with `β` the aspect ratio and
 /// `ω(β) ≈ 0.56β³ − 0.95β² + 1.82β + 1.43`: the median singular value measures the
-/// noise when most singular values are noise. The probe is [`PROBE_SIDE`] rows or
-/// columns at most, and [`PROBE_SIDE_MAX`] when that one finds more than a third of its
-/// values above the floor of noisy data. `None` when the probe cannot tell (too few
+/// noise when most singular values are noise. A probe of many channels takes
+/// [`PROBE_SIDE`] rows first, and [`PROBE_SIDE_MAX`] when that one finds more than a
+/// third of its values above the floor of noisy data. `None` when the probe cannot tell (too few
 /// samples, or more than a third of its singular values above the floor).
 ///
 /// # Errors
@@ -209,7 +214,6 @@ fn probe_count(markov: &MarkovSequence, shape: HankelShape) -> Result<ProbeCount
             .map(|f| (sv, f)),
         Err(_) => None,
     };
-    let noisy = gram.is_some();
     let (sv, floor) = match gram {
         Some(found) => found,
         None => {
@@ -227,6 +231,7 @@ fn probe_count(markov: &MarkovSequence, shape: HankelShape) -> Result<ProbeCount
             (sv, floor)
         }
     };
+    let noisy = floor >= EXACT_FLOOR * sv[0];
     // Exact data: the floor is rounding, far below the signal.
     let floor = floor.max(1e-13 * sv[0]);
     let rank = sv.iter().take_while(|&&v| v > floor).count();
@@ -966,6 +971,13 @@ mod probe_tests {
         // Exact data: the sampled FRFs' truncation stands above rounding in many more
         // singular values, and the scan keeps its default range.
         let exact = markov_of(&clean);
+        // The first probe's floor is then at the FRFs' truncation, under
+        // `EXACT_FLOOR`: no larger probe is taken.
+        let first = probe_shape(&exact, 5, PROBE_SIDE).unwrap();
+        assert!(matches!(
+            probe_count(&exact, first).unwrap(),
+            ProbeCount::TooMany { noisy: false }
+        ));
         let default = default_orders(exact.samples(), 5, 8, 8).unwrap();
         if let Some(r) = signal_order(&exact, 5).unwrap() {
             assert!(orders_for_rank(r, &default).is_none(), "order {r}");
@@ -987,23 +999,33 @@ mod probe_tests {
 
     #[test]
     fn a_noisy_order_beyond_the_first_probe_is_found_by_the_larger_one() {
-        // 8 x 8 with 80 modes (160 states) and 5 % noise: more than a third of the first
-        // probe's 400 singular values are signal, so its median is not the noise.
+        // 8 x 8 with 80 modes (160 states): more than a third of the first probe's 400
+        // singular values stand above its floor, too many to trust. At 5 % noise the
+        // floor comes from the Gram matrix; at 1e-6 it lies below what the Gram matrix
+        // resolves and comes from the SVD, and is still the noise's.
         let clean = modal_frf(ModalSpec {
             seed: 11,
             modes: 80,
             ..ModalSpec::default()
         });
-        let markov = markov_of(&add_noise(&clean, 0.05, 11).unwrap());
-        let first = probe_shape(&markov, 5, PROBE_SIDE).unwrap();
-        assert!(matches!(
-            probe_count(&markov, first).unwrap(),
-            ProbeCount::TooMany { noisy: true }
-        ));
-        let rank = signal_order(&markov, 5).unwrap().unwrap();
-        assert!(
-            (150..=190).contains(&rank),
-            "order {rank}, 160 states in truth"
-        );
+        for noise in [0.05, 1e-6] {
+            let markov = markov_of(&add_noise(&clean, noise, 11).unwrap());
+            let first = probe_shape(&markov, 5, PROBE_SIDE).unwrap();
+            assert!(
+                matches!(
+                    probe_count(&markov, first).unwrap(),
+                    ProbeCount::TooMany { noisy: true }
+                ),
+                "noise {noise}"
+            );
+            let rank = signal_order(&markov, 5).unwrap().unwrap();
+            // At 1e-6 the sampled FRFs' truncation stands above the noise in more
+            // values (as on exact data, below): an order above the truth's.
+            let plausible = if noise > 1e-3 { 150..=190 } else { 160..=266 };
+            assert!(
+                plausible.contains(&rank),
+                "noise {noise}: order {rank}, 160 states in truth"
+            );
+        }
     }
 }

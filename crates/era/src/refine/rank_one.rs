@@ -1532,6 +1532,7 @@ impl<'a> Stage<'a> {
             point,
             tolerance,
             data_norm2,
+            look_ahead: true,
         };
         descend(&mut problem, &mut Nielsen::new(), max_iterations)
     }
@@ -1585,6 +1586,9 @@ struct Descent<'s, 'a> {
     tolerance: f64,
     /// The weighted data's squared norm.
     data_norm2: f64,
+    /// Whether a small, well-predicted step is followed by a look at the next one
+    /// ([`Descent::nothing_left`]); always, but for the test that compares.
+    look_ahead: bool,
 }
 
 impl LeastSquares for Descent<'_, '_> {
@@ -1628,7 +1632,9 @@ impl LeastSquares for Descent<'_, '_> {
                     && (decrease <= self.tolerance * (point.cost + decrease)
                         || decrease <= STATISTICAL_STOP * noise_unit);
                 if !converged
+                    && self.look_ahead
                     && factor == 1.0
+                    && predicted > 0.0
                     && decrease <= FINAL_STEP_CHECK * noise_unit
                     && (rho - 1.0).abs() <= FINAL_STEP_RHO
                 {
@@ -1657,8 +1663,8 @@ impl Descent<'_, '_> {
     /// poles' limit) is predicted to take less than [`STATISTICAL_STOP`] noise
     /// variances off the cost: the fit has then converged as surely as after taking
     /// that step, which it skips (its trial, its normal equations and their
-    /// elimination). The elimination formed here serves the next step or the
-    /// covariance.
+    /// elimination). In a fit by blocks the elimination formed here serves the next
+    /// step or the covariance.
     fn nothing_left(&mut self, noise_unit: f64) -> bool {
         let Some(next) = self.step(0.0) else {
             return false;
@@ -1850,6 +1856,7 @@ mod tests {
                 point,
                 tolerance: 0.0,
                 data_norm2: 1.0,
+                look_ahead: true,
             };
             descent.nothing_left(noise_unit)
         }
@@ -1866,6 +1873,7 @@ mod tests {
             point: &mut point,
             tolerance: 0.0,
             data_norm2: 1.0,
+            look_ahead: true,
         };
         let step = descent.step(0.0).unwrap();
         let (trial, factor, _) = stage.trial(&point, &step);
@@ -1877,6 +1885,48 @@ mod tests {
             (point.cost - after) / noise_unit
         );
         assert!(look(&stage, &mut point, dof));
+    }
+
+    #[test]
+    fn the_look_ahead_saves_the_last_step_and_moves_the_poles_by_a_sliver_of_their_spread() {
+        let (problem, x, ix, .., weights) =
+            case((3, 4), Quantity::Acceleration, Residuals::Upper, false);
+        let part = Partition::new(&ix);
+        let dof = problem.observations - ix.free;
+        let stage = Stage {
+            problem: &problem,
+            ix: &ix,
+            part: Some(&part),
+            y: stacked_data(&problem),
+            weights: &weights,
+            dof: Some(dof),
+        };
+        fn run<'a>(stage: &Stage<'a>, x: &Parameters, look_ahead: bool) -> (Point<'a>, usize) {
+            let mut point = stage.first_point(x.clone());
+            let mut descent = Descent {
+                stage,
+                point: &mut point,
+                tolerance: 0.0,
+                data_norm2: 1.0,
+                look_ahead,
+            };
+            let (iterations, converged) = descend(&mut descent, &mut Nielsen::new(), 200).unwrap();
+            assert!(converged, "look ahead {look_ahead}");
+            (point, iterations)
+        }
+        let (ahead, fewer) = run(&stage, &x, true);
+        let (full, more) = run(&stage, &x, false);
+        assert!(fewer < more, "{fewer} against {more} iterations");
+        // The elimination the look formed is kept for the covariance.
+        assert!(ahead.reduced.is_some());
+        let covariance = pole_covariance(&full, ix.n, full.cost / dof as f64).unwrap();
+        for (k, (a, b)) in ahead.x.theta.iter().zip(&full.x.theta).enumerate() {
+            let spread = covariance[(k, k)].sqrt();
+            assert!(
+                (a - b).abs() <= 0.02 * spread,
+                "pole parameter {k}: {a} against {b}, σ {spread}"
+            );
+        }
     }
 
     #[test]
