@@ -439,7 +439,7 @@ fn add_output_blocks(
     part: &Partition,
     weights: &[f64],
     i: usize,
-    (nzz, gz): (&mut Mat<f64>, &mut [f64]),
+    (shared, gz): (&mut [Shared], &mut [f64]),
     (nii, niz, gi): (&mut Mat<f64>, &mut Mat<f64>, &mut [f64]),
 ) {
     let m2 = 2 * ix.n;
@@ -449,7 +449,7 @@ fn add_output_blocks(
         u_local: (0..m2)
             .map(|k| local_slot(part, ix.reduced[ix.u(i, k / 2, k % 2)]))
             .collect(),
-        nzz,
+        shared,
         gz,
         nii,
         niz,
@@ -463,9 +463,9 @@ fn add_output_blocks(
     };
     for (j, yv) in h_bv.iter().enumerate() {
         let maps = PairMaps::new(x, ix, part, weights, i, j);
-        sums.add_shapes(yv, &maps, &mut scratch);
+        sums.add_shapes(yv, &maps, j, &mut scratch);
         sums.add_residual_terms(grams, &maps);
-        sums.add_poles(grams, &maps, &mut scratch);
+        sums.add_poles(grams, &maps, j, &mut scratch);
         sums.add_gradient(grams, &maps);
     }
 }
@@ -592,10 +592,59 @@ fn times_blocks(h: &Mat<f64>, b: &[[[f64; 2]; 2]]) -> Mat<f64> {
     y
 }
 
-/// Output `i`'s sums in [`Blocks`] (shared–shared `nzz`, `gz`; own–own `nii`, own–shared
-/// `niz`, `gi`), and where the output's shapes (`u_local`) and the poles (`theta_z`) sit.
+/// One input's part of `N_zz` that the outputs add to, by the input's own participation
+/// entries `(mode, Re/Im)` (`2N`, the held one included, dropped when placed): `N_vv`
+/// (`2N × 2N`) and `N_vθ` (`2N` × the `2N` pole parameters). Per thread a few of these
+/// instead of all of `N_zz` (0.8 against 3.3 MB on 8 × 8 with 40 modes).
+struct Shared {
+    vv: Mat<f64>,
+    vt: Mat<f64>,
+}
+
+impl Shared {
+    fn zeros(m2: usize) -> Self {
+        Shared {
+            vv: Mat::zeros(m2, m2),
+            vt: Mat::zeros(m2, m2),
+        }
+    }
+
+    /// Adds `other`, entry by entry.
+    fn add(&mut self, other: &Shared) {
+        self.vv += &other.vv;
+        self.vt += &other.vt;
+    }
+
+    /// Adds these sums into `N_zz` where input `j`'s free participation entries sit.
+    fn place(&self, ix: &Indices, part: &Partition, j: usize, nzz: &mut Mat<f64>) {
+        let m2 = 2 * ix.n;
+        let v_z: Vec<Option<usize>> = (0..m2)
+            .map(|k| shared_slot(part, ix.reduced[ix.v(j, k / 2, k % 2)]))
+            .collect();
+        let theta_z = part.pole_slots(ix.n);
+        for (col, &c) in v_z.iter().enumerate() {
+            let Some(c) = c else { continue };
+            for (row, &r) in v_z.iter().enumerate() {
+                if let Some(r) = r {
+                    nzz[(r, c)] += self.vv[(row, col)];
+                }
+            }
+        }
+        for (t, &tz) in theta_z.iter().enumerate() {
+            for (row, &r) in v_z.iter().enumerate() {
+                if let Some(r) = r {
+                    nzz[(r, tz)] += self.vt[(row, t)];
+                }
+            }
+        }
+    }
+}
+
+/// Output `i`'s sums in [`Blocks`] (shared–shared `shared` per input and `gz`; own–own
+/// `nii`, own–shared `niz`, `gi`), and where the output's shapes (`u_local`) and the
+/// poles (`theta_z`) sit.
 struct OutputSums<'a> {
-    nzz: &'a mut Mat<f64>,
+    shared: &'a mut [Shared],
     gz: &'a mut [f64],
     nii: &'a mut Mat<f64>,
     niz: &'a mut Mat<f64>,
@@ -608,17 +657,18 @@ impl OutputSums<'_> {
     /// `N_uu = Bvᵀ H Bv`, `N_uv = Bvᵀ H Bu`, `N_vv = Buᵀ H Bu`, from the pair's input's
     /// `H Bv` (`yv`) and its output's `H Bu`.
     /// Column by column, each written where it belongs.
-    fn add_shapes(&mut self, yv: &Mat<f64>, maps: &PairMaps, scratch: &mut Scratch) {
+    fn add_shapes(&mut self, yv: &Mat<f64>, maps: &PairMaps, j: usize, scratch: &mut Scratch) {
         let PairMaps { w, bv, bu, v_z, .. } = maps;
         let w = *w;
         let Scratch { h_bu, column, .. } = scratch;
         let OutputSums {
-            nzz,
+            shared,
             nii,
             niz,
             u_local,
             ..
         } = self;
+        let vv = &mut shared[j].vv;
         for col in 0..u_local.len() {
             left_column(bv, yv.col_as_slice(col), column);
             let out = nii.col_as_slice_mut(u_local[col]);
@@ -632,11 +682,8 @@ impl OutputSums<'_> {
                 out[row] += w * v;
             }
             left_column(bu, h_bu.col_as_slice(col), column);
-            let out = nzz.col_as_slice_mut(c);
-            for (row, v) in v_z.iter().zip(column.iter()) {
-                if let Some(a) = *row {
-                    out[a] += w * v;
-                }
+            for (out, v) in vv.col_as_slice_mut(col).iter_mut().zip(column.iter()) {
+                *out += w * v;
             }
         }
     }
@@ -693,7 +740,7 @@ impl OutputSums<'_> {
     /// `(Pᵀ E)ᵀ` from `Eᵀ`, then `N_θu = Pᵀ E Bv`, `N_θv = Pᵀ E Bu` and the residual terms'
     /// rows, each written down column `k` (`N_vθ`, which [`Blocks::new`] mirrors;
     /// `N_θθ` is [`add_pole_block`]'s).
-    fn add_poles(&mut self, grams: &Grams, maps: &PairMaps, scratch: &mut Scratch) {
+    fn add_poles(&mut self, grams: &Grams, maps: &PairMaps, j: usize, scratch: &mut Scratch) {
         let e_t = &grams.e_t;
         let m2 = self.u_local.len();
         let PairMaps {
@@ -701,19 +748,19 @@ impl OutputSums<'_> {
             bv,
             bu,
             z,
-            v_z,
             k_local,
             ..
         } = maps;
         let w = *w;
         let pe = &mut scratch.pe_column;
         let OutputSums {
-            nzz,
+            shared,
             niz,
             u_local,
             theta_z,
             ..
         } = self;
+        let vt = &mut shared[j].vt;
         for (k, &tz) in theta_z.iter().enumerate() {
             let zk = z[k / 2];
             let (e0, e1) = (e_t.col_as_slice(2 * k), e_t.col_as_slice(2 * k + 1));
@@ -721,15 +768,13 @@ impl OutputSums<'_> {
                 *out = zk.re * x0 + zk.im * x1;
             }
             let own = niz.col_as_slice_mut(tz);
-            let shared = nzz.col_as_slice_mut(tz);
+            let shared = vt.col_as_slice_mut(k);
             for (r, (br, ur)) in bv.iter().zip(bu).enumerate() {
                 let (p0, p1) = (pe[2 * r], pe[2 * r + 1]);
                 for c in 0..2 {
                     let col = 2 * r + c;
                     own[u_local[col]] += w * (p0 * br[0][c] + p1 * br[1][c]);
-                    if let Some(vz) = v_z[col] {
-                        shared[vz] += w * (p0 * ur[0][c] + p1 * ur[1][c]);
-                    }
+                    shared[col] += w * (p0 * ur[0][c] + p1 * ur[1][c]);
                 }
             }
             for (res, &kl) in k_local.iter().enumerate() {
@@ -892,7 +937,7 @@ impl<'a> Blocks<'a> {
         let nz = part.z.len();
         // Per output: (N_ii, N_iz, g_i); N_zz and g_z summed per thread.
         type Own = (Mat<f64>, Mat<f64>, Vec<f64>);
-        type Acc = (Mat<f64>, Vec<f64>, Vec<(usize, Own)>);
+        type Acc = (Vec<Shared>, Vec<f64>, Vec<(usize, Own)>);
         let n = ix.n;
         let h_bv: Vec<Mat<f64>> = (0..ix.p)
             .map(|j| {
@@ -900,7 +945,7 @@ impl<'a> Blocks<'a> {
                 times_blocks(&grams.h, &bv)
             })
             .collect();
-        let add_output = |(mut nzz, mut gz, mut own): Acc, i: usize| {
+        let add_output = |(mut shared, mut gz, mut own): Acc, i: usize| {
             let m = part.blocks[i].len();
             let mut nii = Mat::<f64>::zeros(m, m);
             let mut niz = Mat::<f64>::zeros(m, nz);
@@ -913,26 +958,35 @@ impl<'a> Blocks<'a> {
                 part,
                 weights,
                 i,
-                (&mut nzz, &mut gz),
+                (&mut shared, &mut gz),
                 (&mut nii, &mut niz, &mut gi),
             );
             own.push((i, (nii, niz, gi)));
-            (nzz, gz, own)
+            (shared, gz, own)
         };
         let per_thread = ix.q.div_ceil(rayon::current_num_threads().max(1));
-        let empty = || (Mat::<f64>::zeros(nz, nz), vec![0.0; nz], Vec::new());
-        let (mut nzz, gz, mut own) = (0..ix.q)
+        let empty = || {
+            let shared = (0..ix.p).map(|_| Shared::zeros(2 * n)).collect();
+            (shared, vec![0.0; nz], Vec::new())
+        };
+        let (shared, gz, mut own) = (0..ix.q)
             .into_par_iter()
             .with_min_len(per_thread)
             .fold(empty, add_output)
             .reduce(empty, |(mut a, mut ga, mut oa), (b, gb, ob)| {
-                a += &b;
+                for (a, b) in a.iter_mut().zip(&b) {
+                    a.add(b);
+                }
                 for (x, y) in ga.iter_mut().zip(&gb) {
                     *x += y;
                 }
                 oa.extend(ob);
                 (a, ga, oa)
             });
+        let mut nzz = Mat::<f64>::zeros(nz, nz);
+        for (j, sums) in shared.iter().enumerate() {
+            sums.place(ix, part, j, &mut nzz);
+        }
         add_pole_block(&grams, x, ix, part, weights, &mut nzz);
         // `add_poles` wrote the poles' coupling with the participations below the
         // diagonal only (the poles are the first of `z`).
