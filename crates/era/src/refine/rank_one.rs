@@ -1889,8 +1889,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_fit_stopped_before_its_last_step_has_nothing_statistical_left() {
+    /// Runs `test` on the stage of `case((3, 4), …)` by blocks, with its start and its
+    /// degrees of freedom.
+    fn on_stage(test: impl for<'a> FnOnce(&Stage<'a>, Parameters, usize)) {
         let (problem, x, ix, .., weights) =
             case((3, 4), Quantity::Acceleration, Residuals::Upper, false);
         let part = Partition::new(&ix);
@@ -1903,84 +1904,82 @@ mod tests {
             weights: &weights,
             dof: Some(dof),
         };
-        fn look<'a>(stage: &Stage<'a>, point: &mut Point<'a>, dof: usize) -> bool {
-            let noise_unit = point.cost / dof as f64;
-            let mut descent = Descent {
-                stage,
-                point,
-                tolerance: 0.0,
-                data_norm2: 1.0,
-                look_ahead: true,
-            };
-            descent.nothing_left(noise_unit)
-        }
-        // Off the optimum the next step has much to take.
-        let mut point = stage.first_point(x);
-        assert!(!look(&stage, &mut point, dof));
-        let (_, converged) = stage.descend(&mut point, 200, 0.0).unwrap();
-        assert!(converged);
-        // Where the fit stopped, the full Gauss–Newton step, taken, lowers the cost by
-        // less than the statistical stop; and the look says so.
-        let noise_unit = point.cost / dof as f64;
-        let mut descent = Descent {
-            stage: &stage,
-            point: &mut point,
-            tolerance: 0.0,
-            data_norm2: 1.0,
-            look_ahead: true,
-        };
-        let step = descent.step(0.0).unwrap();
-        let (trial, factor, _) = stage.trial(&point, &step);
-        assert_eq!(factor, 1.0);
-        let after = trial.unwrap().2;
-        assert!(
-            point.cost - after <= STATISTICAL_STOP * noise_unit,
-            "{} noise units left",
-            (point.cost - after) / noise_unit
-        );
-        assert!(look(&stage, &mut point, dof));
+        test(&stage, x, dof);
     }
 
     #[test]
-    fn the_look_ahead_saves_the_last_step_and_moves_the_poles_by_a_sliver_of_their_spread() {
-        let (problem, x, ix, .., weights) =
-            case((3, 4), Quantity::Acceleration, Residuals::Upper, false);
-        let part = Partition::new(&ix);
-        let dof = problem.observations - ix.free;
-        let stage = Stage {
-            problem: &problem,
-            ix: &ix,
-            part: Some(&part),
-            y: stacked_data(&problem),
-            weights: &weights,
-            dof: Some(dof),
-        };
-        fn run<'a>(stage: &Stage<'a>, x: &Parameters, look_ahead: bool) -> (Point<'a>, usize) {
-            let mut point = stage.first_point(x.clone());
+    fn a_fit_stopped_before_its_last_step_has_nothing_statistical_left() {
+        on_stage(|stage, x, dof| {
+            fn look<'a>(stage: &Stage<'a>, point: &mut Point<'a>, dof: usize) -> bool {
+                let noise_unit = point.cost / dof as f64;
+                let mut descent = Descent {
+                    stage,
+                    point,
+                    tolerance: 0.0,
+                    data_norm2: 1.0,
+                    look_ahead: true,
+                };
+                descent.nothing_left(noise_unit)
+            }
+            // Off the optimum the next step has much to take.
+            let mut point = stage.first_point(x);
+            assert!(!look(stage, &mut point, dof));
+            let (_, converged) = stage.descend(&mut point, 200, 0.0).unwrap();
+            assert!(converged);
+            // Where the fit stopped, the full Gauss–Newton step, taken, lowers the cost by
+            // less than the statistical stop; and the look says so.
+            let noise_unit = point.cost / dof as f64;
             let mut descent = Descent {
                 stage,
                 point: &mut point,
                 tolerance: 0.0,
                 data_norm2: 1.0,
-                look_ahead,
+                look_ahead: true,
             };
-            let (iterations, converged) = descend(&mut descent, &mut Nielsen::new(), 200).unwrap();
-            assert!(converged, "look ahead {look_ahead}");
-            (point, iterations)
-        }
-        let (ahead, fewer) = run(&stage, &x, true);
-        let (full, more) = run(&stage, &x, false);
-        assert!(fewer < more, "{fewer} against {more} iterations");
-        // The elimination the look formed is kept for the covariance.
-        assert!(ahead.reduced.is_some());
-        let covariance = pole_covariance(&full, ix.n, full.cost / dof as f64).unwrap();
-        for (k, (a, b)) in ahead.x.theta.iter().zip(&full.x.theta).enumerate() {
-            let spread = covariance[(k, k)].sqrt();
+            let step = descent.step(0.0).unwrap();
+            let (trial, factor, _) = stage.trial(&point, &step);
+            assert_eq!(factor, 1.0);
+            let after = trial.unwrap().2;
             assert!(
-                (a - b).abs() <= 0.02 * spread,
-                "pole parameter {k}: {a} against {b}, σ {spread}"
+                point.cost - after <= STATISTICAL_STOP * noise_unit,
+                "{} noise units left",
+                (point.cost - after) / noise_unit
             );
-        }
+            assert!(look(stage, &mut point, dof));
+        });
+    }
+
+    #[test]
+    fn the_look_ahead_saves_the_last_step_and_moves_the_poles_by_a_sliver_of_their_spread() {
+        on_stage(|stage, x, dof| {
+            fn run<'a>(stage: &Stage<'a>, x: &Parameters, look_ahead: bool) -> (Point<'a>, usize) {
+                let mut point = stage.first_point(x.clone());
+                let mut descent = Descent {
+                    stage,
+                    point: &mut point,
+                    tolerance: 0.0,
+                    data_norm2: 1.0,
+                    look_ahead,
+                };
+                let (iterations, converged) =
+                    descend(&mut descent, &mut Nielsen::new(), 200).unwrap();
+                assert!(converged, "look ahead {look_ahead}");
+                (point, iterations)
+            }
+            let (ahead, fewer) = run(stage, &x, true);
+            let (full, more) = run(stage, &x, false);
+            assert!(fewer < more, "{fewer} against {more} iterations");
+            // The elimination the look formed is kept for the covariance.
+            assert!(ahead.reduced.is_some());
+            let covariance = pole_covariance(&full, stage.ix.n, full.cost / dof as f64).unwrap();
+            for (k, (a, b)) in ahead.x.theta.iter().zip(&full.x.theta).enumerate() {
+                let spread = covariance[(k, k)].sqrt();
+                assert!(
+                    (a - b).abs() <= 0.02 * spread,
+                    "pole parameter {k}: {a} against {b}, σ {spread}"
+                );
+            }
+        });
     }
 
     #[test]
