@@ -517,6 +517,14 @@ fn shared_slot(part: &Partition, f: Option<usize>) -> Option<usize> {
     }
 }
 
+/// Where input `j`'s participation entries `(mode, Re/Im)` sit among the shared
+/// parameters (`None` for the held one).
+fn participation_slots(ix: &Indices, part: &Partition, j: usize) -> Vec<Option<usize>> {
+    (0..2 * ix.n)
+        .map(|k| shared_slot(part, ix.reduced[ix.v(j, k / 2, k % 2)]))
+        .collect()
+}
+
 /// The 2 × 2 map of a complex factor c: (Re w, Im w) ↦ (Re cw, Im cw), as [row][col].
 fn complex_map(c: Complex64) -> [[f64; 2]; 2] {
     [[c.re, -c.im], [c.im, c.re]]
@@ -551,9 +559,7 @@ impl PairMaps {
             bv: (0..n).map(|r| complex_map(x.v[j * n + r])).collect(),
             bu: (0..n).map(|r| complex_map(x.u[i * n + r])).collect(),
             z: (0..n).map(|r| x.u[i * n + r] * x.v[j * n + r]).collect(),
-            v_z: (0..2 * n)
-                .map(|k| shared_slot(part, ix.reduced[ix.v(j, k / 2, k % 2)]))
-                .collect(),
+            v_z: participation_slots(ix, part, j),
             k_local: (0..n_res)
                 .map(|res| local_slot(part, ix.reduced[ix.k(pair, res)]))
                 .collect(),
@@ -617,10 +623,7 @@ impl Shared {
 
     /// Adds these sums into `N_zz` where input `j`'s free participation entries sit.
     fn place(&self, ix: &Indices, part: &Partition, j: usize, nzz: &mut Mat<f64>) {
-        let m2 = 2 * ix.n;
-        let v_z: Vec<Option<usize>> = (0..m2)
-            .map(|k| shared_slot(part, ix.reduced[ix.v(j, k / 2, k % 2)]))
-            .collect();
+        let v_z = participation_slots(ix, part, j);
         let theta_z = part.pole_slots(ix.n);
         for (col, &c) in v_z.iter().enumerate() {
             let Some(c) = c else { continue };
