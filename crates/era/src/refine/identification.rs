@@ -593,10 +593,21 @@ fn choose_fit_domain(
     probe.add_missed = false;
     probe.rank_one = false;
     probe.weighting = crate::refine::Weighting::Uniform;
-    probe.sample_time_s = None;
-    let continuous = crate::refine::refine(&found.processed, start_poles, &probe, &mut |_, _| {})?;
-    probe.sample_time_s = Some(found.sample_time_s);
-    let zoh = crate::refine::refine(&found.processed, start_poles, &probe, &mut |_, _| {})?;
+    // Only the two costs and the noise variance are read: no standard deviations.
+    probe.standard_deviations = false;
+    let fit = |ts: Option<f64>| {
+        let mut o = probe.clone();
+        o.sample_time_s = ts;
+        crate::refine::refine(&found.processed, start_poles, &o, &mut |_, _| {})
+    };
+    // The two fits side by side (neither reads the other), each under the caller's
+    // cancel token on whichever thread runs it.
+    let token = crate::cancel::current();
+    let (continuous, zoh) = rayon::join(
+        || crate::cancel::under(&token, || fit(None)),
+        || crate::cancel::under(&token, || fit(Some(found.sample_time_s))),
+    );
+    let (continuous, zoh) = (continuous?, zoh?);
     let (c, z) = (continuous.fit_before, zoh.fit_before);
     let (band_lines, pairs) = (zoh.band.1 - zoh.band.0, zoh.outputs * zoh.inputs);
     let observations = (2 * band_lines * pairs) as f64;
