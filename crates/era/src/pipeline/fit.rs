@@ -260,7 +260,8 @@ pub(crate) fn diagonal_blocks(a: &Mat<f64>) -> Vec<Vec<usize>> {
 /// backward-stable solves as one [`HessenbergForm`] of the whole model, at
 /// O(Σ n_b²·p) per line instead of O(n²·p): a model in real modal block form (the
 /// refinement's, with 2 × 2 blocks and integrator chains) costs O(n·p) per line.
-/// Blocks run in parallel.
+/// Chunks of lines run in parallel, each summing the blocks in their order, so that the
+/// sum is the same whatever the chunking and no block's whole response is held.
 pub fn frequency_response_blocks(model: &StateSpace, frequency_hz: &[f64]) -> Vec<Complex64> {
     let blocks = diagonal_blocks(&model.a);
     if blocks.len() <= 1 {
@@ -268,31 +269,39 @@ pub fn frequency_response_blocks(model: &StateSpace, frequency_hz: &[f64]) -> Ve
     }
     let (q, p, lines) = (model.outputs(), model.inputs(), frequency_hz.len());
     let zero = Complex64::new(0.0, 0.0);
-    let parts: Vec<Vec<Complex64>> = blocks
-        .par_iter()
+    let forms: Vec<HessenbergForm> = blocks
+        .iter()
         .map(|states| {
             let m = states.len();
-            let sub = StateSpace::new(
+            HessenbergForm::new(&StateSpace::new(
                 Mat::from_fn(m, m, |i, j| model.a[(states[i], states[j])]),
                 Mat::from_fn(m, p, |i, j| model.b[(states[i], j)]),
                 Mat::from_fn(q, m, |i, j| model.c[(i, states[j])]),
                 Mat::zeros(q, p),
                 model.domain,
-            );
-            HessenbergForm::new(&sub).response(frequency_hz)
+            ))
         })
         .collect();
-    let mut out = vec![zero; q * p * lines];
-    for part in &parts {
-        for (o, v) in out.iter_mut().zip(part) {
-            *o += v;
+    // Line-major `[line][pair]` sums, scattered afterwards.
+    let mut by_line = vec![zero; lines * q * p];
+    let sum_lines = |f: &[f64], out: &mut [Complex64]| {
+        let mut part = vec![zero; out.len()];
+        for form in &forms {
+            form.response_lines(f, &mut part);
+            for (o, v) in out.iter_mut().zip(&part) {
+                *o += v;
+            }
         }
-    }
-    for i in 0..q {
-        for j in 0..p {
-            let d = model.d[(i, j)];
-            for v in &mut out[(i * p + j) * lines..(i * p + j + 1) * lines] {
-                *v += d;
+    };
+    by_line
+        .par_chunks_mut(LINES_PER_TASK * q * p)
+        .zip(frequency_hz.par_chunks(LINES_PER_TASK))
+        .for_each(|(out, f)| sum_lines(f, out));
+    let mut out = vec![zero; q * p * lines];
+    for (k, row) in by_line.chunks_exact(q * p).enumerate() {
+        for (i, row) in row.chunks_exact(p).enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                out[(i * p + j) * lines + k] = v + model.d[(i, j)];
             }
         }
     }
