@@ -224,13 +224,23 @@ fn coefficients(x: &Parameters, ix: &Indices, n_col: usize) -> Mat<f64> {
     })
 }
 
-/// The free fit's basis `Φ` at the poles of `theta`.
-fn basis_at(problem: &Problem, theta: &[f64]) -> Mat<f64> {
-    basis(
+/// The free fit's basis `Φ` at some poles, with its Gram matrix `H = ΦᵀΦ`, which the
+/// best shapes for a trial ([`solve_linear`]) and, once the trial is accepted, the
+/// normal equations ([`Grams`]) both read.
+struct Basis {
+    phi: Mat<f64>,
+    h: Mat<f64>,
+}
+
+/// The free fit's basis `Φ` at the poles of `theta`, and its Gram matrix.
+fn basis_at(problem: &Problem, theta: &[f64]) -> Basis {
+    let phi = basis(
         &problem.layout,
         &problem.omega,
         &problem.parameters.poles(theta),
-    )
+    );
+    let h = phi.transpose() * &phi;
+    Basis { phi, h }
 }
 
 /// Weighted cost and the residual `Y − ΦC`, `phi` the basis at `x`'s poles.
@@ -260,11 +270,12 @@ struct Grams {
 }
 
 impl Grams {
-    fn new(problem: &Problem, x: &Parameters, phi: &Mat<f64>, residual: &Mat<f64>) -> Self {
+    fn new(problem: &Problem, x: &Parameters, basis: &Basis, residual: &Mat<f64>) -> Self {
         let poles = problem.parameters.poles(&x.theta);
         let d = basis_derivatives(&problem.layout, problem.parameters, &problem.omega, &poles);
+        let phi = &basis.phi;
         Grams {
-            h: phi.transpose() * phi,
+            h: basis.h.clone(),
             e_t: phi.transpose() * &d,
             m: d.transpose() * &d,
             phi_r: phi.transpose() * residual,
@@ -388,11 +399,11 @@ fn dense_normal(
     problem: &Problem,
     x: &Parameters,
     ix: &Indices,
-    phi: &Mat<f64>,
+    basis: &Basis,
     residual: &Mat<f64>,
     weights: &[f64],
 ) -> (Mat<f64>, Vec<f64>) {
-    let grams = Grams::new(problem, x, phi, residual);
+    let grams = Grams::new(problem, x, basis, residual);
     let free = ix.free;
     let add_output = |(mut normal, mut gradient): (Mat<f64>, Vec<f64>), i: usize| {
         output_entries(&grams, x, ix, weights, i, &mut normal, &mut gradient);
@@ -931,12 +942,12 @@ impl<'a> Blocks<'a> {
         x: &Parameters,
         ix: &Indices,
         part: &'a Partition,
-        phi: &Mat<f64>,
+        basis: &Basis,
         residual: &Mat<f64>,
         weights: &[f64],
     ) -> Self {
         use rayon::prelude::*;
-        let grams = Grams::new(problem, x, phi, residual);
+        let grams = Grams::new(problem, x, basis, residual);
         let nz = part.z.len();
         // Per output: (N_ii, N_iz, g_i); N_zz and g_z summed per thread.
         type Own = (Mat<f64>, Mat<f64>, Vec<f64>);
@@ -1086,14 +1097,16 @@ impl<'a> Normal<'a> {
         x: &Parameters,
         ix: &Indices,
         part: Option<&'a Partition>,
-        phi: &Mat<f64>,
+        basis: &Basis,
         residual: &Mat<f64>,
         weights: &[f64],
     ) -> Self {
         match part {
-            Some(part) => Normal::Blocks(Blocks::new(problem, x, ix, part, phi, residual, weights)),
+            Some(part) => {
+                Normal::Blocks(Blocks::new(problem, x, ix, part, basis, residual, weights))
+            }
             None => {
-                let (normal, gradient) = dense_normal(problem, x, ix, phi, residual, weights);
+                let (normal, gradient) = dense_normal(problem, x, ix, basis, residual, weights);
                 Normal::Dense(normal, gradient)
             }
         }
@@ -1300,7 +1313,7 @@ fn solve_linear(
     problem: &Problem,
     x: &mut Parameters,
     ix: &Indices,
-    phi: &Mat<f64>,
+    basis: &Basis,
     y: &Mat<f64>,
     weights: &[f64],
 ) -> bool {
@@ -1308,9 +1321,9 @@ fn solve_linear(
         return true;
     }
     let (n, q, p, n_res) = (ix.n, ix.q, ix.p, ix.n_res);
-    let h = phi.transpose() * phi;
+    let h = &basis.h;
     // `Φᵀy` of every pair.
-    let phi_y = phi.transpose() * y;
+    let phi_y = basis.phi.transpose() * y;
     let size = 2 * n + p * n_res;
     // Each output's shapes and residual terms are its own system: solved side by side.
     let solve_output = |i: usize| -> Option<Mat<f64>> {
@@ -1500,7 +1513,7 @@ pub(crate) fn fit(
     let noise_variance = stage.dof.map_or(f64::NAN, |d| point.cost / d as f64);
     let covariance = pole_covariance(&point, n, noise_variance);
     Ok(Some(Joint {
-        coefficients: coefficients(&point.x, &ix, point.phi.ncols()),
+        coefficients: coefficients(&point.x, &ix, point.basis.phi.ncols()),
         theta: point.x.theta,
         cost: point.cost,
         covariance,
@@ -1525,7 +1538,7 @@ struct Stage<'a> {
 /// A point of the rank-one fit with its basis, cost, residual and normal equations.
 struct Point<'a> {
     x: Parameters,
-    phi: Mat<f64>,
+    basis: Basis,
     cost: f64,
     residual: Mat<f64>,
     normal: Normal<'a>,
@@ -1536,23 +1549,23 @@ struct Point<'a> {
 impl<'a> Stage<'a> {
     /// The start point: `x` with the best shapes for its participations.
     fn first_point(&self, mut x: Parameters) -> Point<'a> {
-        let phi = basis_at(self.problem, &x.theta);
+        let basis = basis_at(self.problem, &x.theta);
         let mut solved = x.clone();
         if solve_linear(
             self.problem,
             &mut solved,
             self.ix,
-            &phi,
+            &basis,
             &self.y,
             self.weights,
         ) {
             x = solved;
         }
-        let (cost, residual) = cost(&x, self.ix, &phi, &self.y, self.weights);
-        let normal = self.normal(&x, &phi, &residual);
+        let (cost, residual) = cost(&x, self.ix, &basis.phi, &self.y, self.weights);
+        let normal = self.normal(&x, &basis, &residual);
         Point {
             x,
-            phi,
+            basis,
             cost,
             residual,
             normal,
@@ -1560,13 +1573,13 @@ impl<'a> Stage<'a> {
         }
     }
 
-    fn normal(&self, x: &Parameters, phi: &Mat<f64>, residual: &Mat<f64>) -> Normal<'a> {
+    fn normal(&self, x: &Parameters, basis: &Basis, residual: &Mat<f64>) -> Normal<'a> {
         Normal::new(
             self.problem,
             x,
             self.ix,
             self.part,
-            phi,
+            basis,
             residual,
             self.weights,
         )
@@ -1602,20 +1615,20 @@ impl<'a> Stage<'a> {
         &self,
         point: &Point<'a>,
         step: &[f64],
-    ) -> (Option<(Parameters, Mat<f64>, f64, Mat<f64>)>, f64, f64) {
+    ) -> (Option<(Parameters, Basis, f64, Mat<f64>)>, f64, f64) {
         let (mut trial, factor) =
             apply(&point.x, self.ix, step, self.problem.parameters.log_damping);
         let predicted = model_decrease(&point.normal, step, factor);
         // The step's poles and participations, with the shapes that fit them best
         // (variable projection: the bilinear product makes the linearised shape step
         // poor far from the optimum).
-        let trial_phi = basis_at(self.problem, &trial.theta);
+        let trial_basis = basis_at(self.problem, &trial.theta);
         let mut solved = trial.clone();
         if solve_linear(
             self.problem,
             &mut solved,
             self.ix,
-            &trial_phi,
+            &trial_basis,
             &self.y,
             self.weights,
         ) {
@@ -1628,8 +1641,8 @@ impl<'a> Stage<'a> {
                 .chain(&trial.v)
                 .all(|z| z.re.is_finite() && z.im.is_finite());
         let evaluated = finite.then(|| {
-            let (c, r) = cost(&trial, self.ix, &trial_phi, &self.y, self.weights);
-            (trial, trial_phi, c, r)
+            let (c, r) = cost(&trial, self.ix, &trial_basis.phi, &self.y, self.weights);
+            (trial, trial_basis, c, r)
         });
         (evaluated, factor, predicted)
     }
@@ -1670,18 +1683,18 @@ impl LeastSquares for Descent<'_, '_> {
         let (trial, factor, predicted) = self.stage.trial(self.point, &step);
         let point = &mut *self.point;
         match trial {
-            Some((next, trial_phi, next_cost, next_residual)) if next_cost < point.cost => {
+            Some((next, trial_basis, next_cost, next_residual)) if next_cost < point.cost => {
                 let decrease = point.cost - next_cost;
                 point.x = next;
                 point.cost = next_cost;
                 point.residual = next_residual;
-                point.phi = trial_phi;
+                point.basis = trial_basis;
                 let rho = if predicted > 0.0 {
                     decrease / predicted
                 } else {
                     1.0
                 };
-                point.normal = self.stage.normal(&point.x, &point.phi, &point.residual);
+                point.normal = self.stage.normal(&point.x, &point.basis, &point.residual);
                 point.reduced = None;
                 let noise_unit = self.stage.dof.map_or(0.0, |d| point.cost / d as f64);
                 // A step shortened by one mode's limit says nothing about convergence.
@@ -1784,7 +1797,7 @@ mod tests {
         quantity: Quantity,
         residuals: Residuals,
         reciprocal: bool,
-    ) -> (Problem, Parameters, Indices, Mat<f64>, Mat<f64>, Vec<f64>) {
+    ) -> (Problem, Parameters, Indices, Basis, Mat<f64>, Vec<f64>) {
         let spec = ModalSpec {
             fmin_hz: 2.0,
             fmax_hz: 9.0,
@@ -1826,11 +1839,11 @@ mod tests {
         let ix = Indices::new(n, q, p, n_res, reciprocal, &fixed);
         // The count the free fit decides its tolerance by.
         assert_eq!(parameters(&problem, n), ix.free);
-        let phi = basis_at(&problem, &x.theta);
+        let basis = basis_at(&problem, &x.theta);
         let y = stacked_data(&problem);
         let weights: Vec<f64> = (0..q * p).map(|k| 1.0 + 0.1 * k as f64).collect();
-        let (_, residual) = cost(&x, &ix, &phi, &y, &weights);
-        (problem, x, ix, phi, residual, weights)
+        let (_, residual) = cost(&x, &ix, &basis.phi, &y, &weights);
+        (problem, x, ix, basis, residual, weights)
     }
 
     #[test]
@@ -1993,18 +2006,18 @@ mod tests {
     }
 
     fn blocks_agree(
-        (problem, x, ix, phi, residual, weights): (
+        (problem, x, ix, basis, residual, weights): (
             Problem,
             Parameters,
             Indices,
-            Mat<f64>,
+            Basis,
             Mat<f64>,
             Vec<f64>,
         ),
     ) {
-        let (normal, gradient) = dense_normal(&problem, &x, &ix, &phi, &residual, &weights);
+        let (normal, gradient) = dense_normal(&problem, &x, &ix, &basis, &residual, &weights);
         let part = Partition::new(&ix);
-        let blocks = Blocks::new(&problem, &x, &ix, &part, &phi, &residual, &weights);
+        let blocks = Blocks::new(&problem, &x, &ix, &part, &basis, &residual, &weights);
         // Every entry of N and g, including the zeros between outputs.
         let (rebuilt, g) = blocks.dense();
         // Sums over the 600 stacked lines in another order. Their rounding bound,
@@ -2023,7 +2036,7 @@ mod tests {
         assert_matches_naive("δᵀNδ by blocks", &[bnd], &[dnd], Scale::Entry, 1e-12);
         // Without damping, eliminating the shapes gives the dense solution.
         let Normal::Blocks(blocks) =
-            Normal::new(&problem, &x, &ix, Some(&part), &phi, &residual, &weights)
+            Normal::new(&problem, &x, &ix, Some(&part), &basis, &residual, &weights)
         else {
             unreachable!()
         };
