@@ -125,6 +125,16 @@ pub fn emac(form: &ModalForm, tails: &HankelTails) -> Vec<(f64, f64)> {
 /// compares at is gathered once, contiguous in the states, for every eigenvalue that
 /// compares there (lightly damped poles mostly share the last).
 pub(crate) fn emac_of(form: &ModalForm, tails: &impl Tails) -> Vec<(f64, f64)> {
+    emac_at(form, tails, 0..form.eigenvalues.len())
+}
+
+/// [`emac_of`] of the eigenvalues `which` only, in that order (the order scan keeps one
+/// of each conjugate pair).
+pub(crate) fn emac_at(
+    form: &ModalForm,
+    tails: &impl Tails,
+    which: impl Iterator<Item = usize>,
+) -> Vec<(f64, f64)> {
     let n = form.eigenvalues.len();
     let (q, p) = (tails.outputs(), tails.inputs());
     // Block `k` of the observability matrix as `q` runs of `n`, and of the
@@ -132,7 +142,7 @@ pub(crate) fn emac_of(form: &ModalForm, tails: &impl Tails) -> Vec<(f64, f64)> {
     // empty, for tails without outputs or inputs (whose block index is 0).
     let mut out_blocks: Vec<Option<Vec<f64>>> = vec![None; tails.block_rows().max(1)];
     let mut in_blocks: Vec<Option<Vec<f64>>> = vec![None; tails.block_cols().max(1)];
-    (0..n)
+    which
         .map(|k| {
             let lambda = form.eigenvalues[k];
             let ko = emac_block(lambda, tails.block_rows());
@@ -464,6 +474,12 @@ mod tests {
                 let form = ModalForm::new(&model).unwrap();
                 let reference = emac_reference(&form, &formed.tails);
                 assert_eq!(emac_of(&form, &view), reference, "EMAC at {n} states");
+                // The scan's: one of each conjugate pair, the same numbers.
+                let upper: Vec<usize> = (0..n).filter(|&k| form.eigenvalues[k].im > 0.0).collect();
+                let some = emac_at(&form, &view, upper.iter().copied());
+                let expected: Vec<(f64, f64)> = upper.iter().map(|&k| reference[k]).collect();
+                assert!(!upper.is_empty());
+                assert_eq!(some, expected, "EMAC of the upper poles at {n} states");
                 assert_eq!(emac(&form, &formed.tails), reference);
                 assert!(reference.iter().any(|&(o, i)| o > 0.5 && i > 0.5));
             }

@@ -52,7 +52,7 @@
 
 use crate::error::{EraError, Result};
 use crate::modal::indicators::mac;
-use crate::modal::indicators::{emac_of, mpc};
+use crate::modal::indicators::{emac_at, mpc};
 use crate::pipeline::modes::{continuous_pole, ModalForm};
 use crate::pipeline::realize::{DirectTerm, Factorization};
 use num_complex::Complex64;
@@ -378,13 +378,16 @@ pub(crate) fn scan(
 fn order_poles(factorization: &Factorization, n: usize) -> Result<Vec<ScanPole>> {
     let (model, tails) = factorization.realize_in_place(n, DirectTerm::Zero)?;
     let form = ModalForm::new(&model)?;
-    let e = emac_of(&form, &tails);
-    let mut here: Vec<ScanPole> = form
-        .eigenvalues
+    // One pole of each conjugate pair, and its EMAC alone.
+    let upper: Vec<usize> = (0..form.eigenvalues.len())
+        .filter(|&i| form.eigenvalues[i].im > 0.0)
+        .collect();
+    let e = emac_at(&form, &tails, upper.iter().copied());
+    let mut here: Vec<ScanPole> = upper
         .iter()
-        .enumerate()
-        .filter(|(_, z)| z.im > 0.0)
-        .map(|(i, z)| {
+        .zip(&e)
+        .map(|(&i, e)| {
+            let z = &form.eigenvalues[i];
             let s = continuous_pole(*z, model.domain);
             ScanPole {
                 order: n,
@@ -395,7 +398,7 @@ fn order_poles(factorization: &Factorization, n: usize) -> Result<Vec<ScanPole>>
                 shape: form.shapes[i].clone(),
                 participation: form.participations[i].clone(),
                 mpc: mpc(&form.shapes[i]),
-                emac: e[i].0 * e[i].1,
+                emac: e.0 * e.1,
                 status: PoleStatus::New,
             }
         })
