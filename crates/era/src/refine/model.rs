@@ -172,6 +172,17 @@ impl PoleParameters {
         let d_sigma = if self.log_damping { s.re } else { -1.0 };
         [Complex64::new(d_sigma, 0.0), Complex64::new(0.0, 1.0)]
     }
+    /// `∂²s/∂θ_t∂θ_t'` for the couples [`PARAMETER_COUPLES`] of pole `s`: only the
+    /// logarithmic damping's own, `∂²(−e^x)/∂x² = Re s`.
+    pub(crate) fn second_deltas(&self, s: Complex64) -> [Complex64; 3] {
+        let zero = Complex64::new(0.0, 0.0);
+        let own = if self.log_damping {
+            Complex64::new(s.re, 0.0)
+        } else {
+            zero
+        };
+        [own, zero, zero]
+    }
 }
 
 /// Real basis, `2L × columns`: rows `0..L` the real parts, `L..2L` the imaginary parts.
@@ -220,6 +231,80 @@ pub(crate) fn basis_derivatives(
                 for local in 0..pm {
                     let v = c[local + 2 - pm];
                     let col = (2 * r + t) * pm + local;
+                    out[(k, col)] = v.re;
+                    out[(lines + k, col)] = v.im;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `g''(s)` of [`partial_fraction`]: `κ(κ−1) s^(κ−2)/(jω − s) + 2κ s^(κ−1)/(jω − s)² +
+/// 2 s^κ/(jω − s)³`; in the z-domain `Ts² λ (z − λ + 2λ)/(z − λ)³` with `λ = e^(sTs)`.
+fn partial_fraction_second(
+    s: Complex64,
+    omega: f64,
+    kappa: i32,
+    sample_time_s: Option<f64>,
+) -> Complex64 {
+    if let Some(ts) = sample_time_s {
+        let z = Complex64::from_polar(1.0, omega * ts);
+        let lambda = (s * ts).exp();
+        let inv = 1.0 / (z - lambda);
+        return ts * ts * lambda * inv * inv * (1.0 + 2.0 * lambda * inv);
+    }
+    let inv = 1.0 / (Complex64::new(0.0, omega) - s);
+    let k = f64::from(kappa);
+    let mut out = 2.0 * power(s, kappa) * inv * inv * inv;
+    if kappa != 0 {
+        out += 2.0 * k * power(s, kappa - 1) * inv * inv;
+        if kappa != 1 {
+            out += k * (k - 1.0) * power(s, kappa - 2) * inv;
+        }
+    }
+    out
+}
+
+/// The couples `(t, t')` of a mode's two parameters whose second derivatives
+/// [`basis_second_derivatives`] holds, in its column order.
+pub(crate) const PARAMETER_COUPLES: [(usize, usize); 3] = [(0, 0), (0, 1), (1, 1)];
+
+/// Second derivative columns, `2L × (3N·per_mode)`: column `(3r + c)·per_mode + l` is
+/// the second derivative of mode `r`'s column `l` with respect to its parameters
+/// [`PARAMETER_COUPLES`]`[c]` (a mode's columns depend on its own pole only, so no
+/// other second derivative is nonzero). With `ds/dθ_t = δ_t` and
+/// `∂²s/∂θ_t∂θ_t' = κ_tt'`, `∂²g(s)/∂θ_t∂θ_t' = g''(s) δ_t δ_t' + g'(s) κ_tt'`.
+pub(crate) fn basis_second_derivatives(
+    layout: &Layout,
+    parameters: PoleParameters,
+    omega: &[f64],
+    poles: &[Complex64],
+) -> Mat<f64> {
+    let lines = omega.len();
+    let pm = layout.per_mode;
+    let (kappa, ts) = (layout.kappa, layout.sample_time_s);
+    let j = Complex64::new(0.0, 1.0);
+    let mut out = Mat::<f64>::zeros(2 * lines, 3 * poles.len() * pm);
+    for (r, &s) in poles.iter().enumerate() {
+        let delta = parameters.deltas(s);
+        let curvature = parameters.second_deltas(s);
+        let couples = PARAMETER_COUPLES.map(|(t, t2)| delta[t] * delta[t2]);
+        for (k, &w) in omega.iter().enumerate() {
+            // g' and g'' at s and at s̄, once per line for the three couples.
+            let (_, d1) = partial_fraction(s, w, kappa, ts);
+            let (_, d2) = partial_fraction(s.conj(), w, kappa, ts);
+            let (e1, e2) = (
+                partial_fraction_second(s, w, kappa, ts),
+                partial_fraction_second(s.conj(), w, kappa, ts),
+            );
+            for (c, (&dd, &kk)) in couples.iter().zip(&curvature).enumerate() {
+                let a = e1 * dd + d1 * kk;
+                let b = e2 * dd.conj() + d2 * kk.conj();
+                let columns = [a + b, j * (a - b)];
+                for local in 0..pm {
+                    let v = columns[local + 2 - pm];
+                    let col = (3 * r + c) * pm + local;
                     out[(k, col)] = v.re;
                     out[(lines + k, col)] = v.im;
                 }
@@ -621,4 +706,65 @@ fn square_root_weights(
         out.push(w);
     }
     Ok(Some(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The second derivative columns against central differences of the first ones, in
+    /// both time domains, for each quantity's `κ` and both damping parameters.
+    #[test]
+    fn second_derivatives_match_differences_of_the_first() {
+        let omega: Vec<f64> = (0..40).map(|k| 2.0 * PI * (0.5 + 0.3 * k as f64)).collect();
+        let poles = [
+            Complex64::new(-0.3, 2.0 * PI * 4.1),
+            Complex64::new(-0.05, 2.0 * PI * 9.7),
+        ];
+        for (kappa, ts) in [(0, None), (1, None), (2, None), (0, Some(0.01))] {
+            for log_damping in [true, false] {
+                let layout = Layout {
+                    kappa,
+                    sample_time_s: ts,
+                    per_mode: 2,
+                    residuals: Vec::new(),
+                };
+                let parameters = PoleParameters { log_damping };
+                let theta = parameters.theta(&poles);
+                let second = basis_second_derivatives(&layout, parameters, &omega, &poles);
+                for r in 0..poles.len() {
+                    for (c, &(t, t2)) in PARAMETER_COUPLES.iter().enumerate() {
+                        // Differences of ∂/∂θ_t along θ_t2.
+                        let h = 1e-6 * theta[2 * r + t2].abs().max(1.0);
+                        let at = |sign: f64| {
+                            let mut moved = theta.clone();
+                            moved[2 * r + t2] += sign * h;
+                            basis_derivatives(
+                                &layout,
+                                parameters,
+                                &omega,
+                                &parameters.poles(&moved),
+                            )
+                        };
+                        let (up, down) = (at(1.0), at(-1.0));
+                        let mut worst: f64 = 0.0;
+                        let mut scale: f64 = 0.0;
+                        for local in 0..2 {
+                            let col = (3 * r + c) * 2 + local;
+                            let first = (2 * r + t) * 2 + local;
+                            for row in 0..second.nrows() {
+                                let fd = (up[(row, first)] - down[(row, first)]) / (2.0 * h);
+                                worst = worst.max((fd - second[(row, col)]).abs());
+                                scale = scale.max(second[(row, col)].abs());
+                            }
+                        }
+                        assert!(
+                            worst <= 1e-5 * scale,
+                            "κ {kappa}, Ts {ts:?}, log {log_damping}, mode {r}, couple {c}: {worst:e} of {scale:e}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
