@@ -324,7 +324,9 @@ impl Grams {
 
 /// Output `i`'s part of `Q = Σ_k w_k² Σ_l r_kl ∇²m_kl`, the residuals' curvature that
 /// Gauss–Newton leaves out of the cost's Hessian `N − Q` (`N = JᵀWJ`), as
-/// `(f, g, value)` over free parameters, each unordered couple once. A pair's model is
+/// `(f, g, value)` over free parameters: each unordered couple once per pair, so that a
+/// couple of pole parameters, or a pole's with a shape entry, comes once for every
+/// input and the consumer sums them. A pair's model is
 /// `Σ_r Φ_r (Re z_r, Im z_r)` with `z_r = u_ir v_jr`: its second derivatives are nonzero
 /// only within one mode, between its two pole parameters (`D₂`), between a pole
 /// parameter and a shape or participation entry (`D`), and between a shape and a
@@ -1696,6 +1698,7 @@ pub(crate) fn fit(
         weights,
         dof: problem.observations.checked_sub(ix.free).filter(|&d| d > 0),
         newton: NEWTON,
+        turned_away: std::cell::Cell::new(0),
     };
     let mut point = stage.first_point(x);
     let (iterations, converged) = stage.descend(&mut point, max_iterations, tolerance)?;
@@ -1724,8 +1727,12 @@ struct Stage<'a> {
     dof: Option<usize>,
     /// Whether a descent that creeps turns to Newton's steps, with the residuals'
     /// curvature ([`curvature_entries`], [`CREEP_RHO`]); Gauss–Newton's otherwise, and
-    /// where Newton's damped equations are not positive definite.
+    /// where the undamped reduced `N − Q` is not positive definite. Fits by blocks only
+    /// (a reciprocal fit's dense equations take Gauss–Newton's steps).
     newton: bool,
+    /// Points where Newton's equations were turned away because the cost is not convex
+    /// there (a count for the tests).
+    turned_away: std::cell::Cell<usize>,
 }
 
 /// A point of the rank-one fit with its basis, cost, residual and normal equations.
@@ -1738,9 +1745,6 @@ struct Point<'a> {
     /// The shapes eliminated from the equations the steps solve (Newton's where
     /// `normal` holds the curvature), once computed.
     reduced: Option<Reduced<'a>>,
-    /// The shapes eliminated from Gauss–Newton's `normal` itself, where `reduced` is
-    /// Newton's: the fallback step, and the covariance.
-    reduced_gn: Option<Reduced<'a>>,
 }
 
 impl<'a> Stage<'a> {
@@ -1767,7 +1771,6 @@ impl<'a> Stage<'a> {
             residual,
             normal,
             reduced: None,
-            reduced_gn: None,
         }
     }
 
@@ -1817,7 +1820,8 @@ impl<'a> Stage<'a> {
 
     /// The point `step` leads to from `point`, with the shapes that fit its poles and
     /// participations best, its basis, cost and residual (`None` when not finite); the
-    /// factor the step was shortened by; the linear model's predicted decrease.
+    /// factor the step was shortened by; the quadratic model's predicted decrease
+    /// ([`model_decrease`]).
     #[allow(clippy::type_complexity)]
     fn trial(
         &self,
@@ -1869,7 +1873,7 @@ struct Descent<'s, 'a> {
     look_ahead: bool,
     /// Whether the normal equations hold the residuals' curvature (Newton's steps):
     /// from the [`CREEP_STEPS`]-th step in a row whose gain ratio passed [`CREEP_RHO`]
-    /// on, until Newton's damped equations are not positive definite.
+    /// on, until a point where the undamped reduced `N − Q` is not positive definite.
     curvature: bool,
     /// Accepted Gauss–Newton steps in a row whose gain ratio passed [`CREEP_RHO`].
     creeping: usize,
@@ -1885,33 +1889,43 @@ impl LeastSquares for Descent<'_, '_> {
         let Normal::Blocks(blocks) = &mut point.normal else {
             return point.normal.dense_step(lambda);
         };
+        // Whether this point falls back from Newton's equations to Gauss–Newton's.
+        let mut gauss_newton = false;
         if point.reduced.is_none() {
-            // Newton's equations only where the cost is convex (its undamped reduced
-            // Hessian positive definite): elsewhere Newton's step heads for a saddle as
-            // readily as for a minimum, and Gauss–Newton's does not. There the point's
-            // equations are Gauss–Newton's, as are the next points', until the next creep.
+            // Newton's equations only where the cost is convex (the undamped reduced
+            // `N − Q` positive definite): elsewhere Newton's step heads for a saddle as
+            // readily as for a minimum, and Gauss–Newton's does not.
             if let Some(newton) = blocks.newton() {
                 point.reduced = Reduced::new(&newton).filter(|r| r.step(0.0).is_some());
-                if point.reduced.is_none() {
-                    blocks.curvature.clear();
-                    self.curvature = false;
-                    self.creeping = 0;
+                gauss_newton = point.reduced.is_none();
+                if gauss_newton {
+                    let away = &self.stage.turned_away;
+                    away.set(away.get() + 1);
                 }
             }
             if point.reduced.is_none() {
                 point.reduced = Reduced::new(blocks);
             }
         }
-        let step = point.reduced.as_ref()?.step(lambda);
-        if step.is_some() || blocks.curvature.iter().all(Vec::is_empty) {
-            return step;
+        let mut step = point.reduced.as_ref().and_then(|r| r.step(lambda));
+        if step.is_none() && !blocks.curvature.iter().all(Vec::is_empty) {
+            // Newton's damped equations failed where the undamped ones did not.
+            gauss_newton = true;
+            point.reduced = Reduced::new(blocks);
+            step = point.reduced.as_ref().and_then(|r| r.step(lambda));
         }
-        // Newton's damped equations failed where the undamped ones did not (rounding):
-        // Gauss–Newton's step.
-        if point.reduced_gn.is_none() {
-            point.reduced_gn = Reduced::new(blocks);
+        if gauss_newton {
+            // The point's equations, and its model of the step, are Gauss–Newton's, as
+            // are the next points', until the next creep.
+            blocks.curvature.clear();
+            self.curvature = false;
+            self.creeping = 0;
         }
-        point.reduced_gn.as_ref()?.step(lambda)
+        if point.reduced.is_none() {
+            // An output's block is singular: the dense (Gauss–Newton) equations.
+            return point.normal.dense_step(lambda);
+        }
+        step
     }
 
     fn attempt(&mut self, step: Vec<f64>, _iteration: usize) -> Result<Trial> {
@@ -1943,7 +1957,6 @@ impl LeastSquares for Descent<'_, '_> {
                     self.stage
                         .normal(&point.x, &point.basis, &point.residual, self.curvature);
                 point.reduced = None;
-                point.reduced_gn = None;
                 let noise_unit = self.stage.dof.map_or(0.0, |d| point.cost / d as f64);
                 // A step shortened by one mode's limit says nothing about convergence.
                 let mut converged = factor == 1.0
@@ -1985,19 +1998,20 @@ const CREEP_RHO: f64 = 1.2;
 const CREEP_STEPS: usize = 2;
 
 /// An accepted step that took less than this many noise variances off the cost, as its
-/// linear model predicted (within [`FINAL_STEP_RHO`]), is followed by a look at the
+/// model predicted (within [`FINAL_STEP_RHO`]), is followed by a look at the
 /// next full step's predicted decrease ([`Descent::nothing_left`]).
 const FINAL_STEP_CHECK: f64 = 1.0;
 /// How far the gain ratio of such a step may be from 1.
 const FINAL_STEP_RHO: f64 = 0.1;
 
 impl Descent<'_, '_> {
-    /// Whether the Gauss–Newton step from the current point (undamped, within the
-    /// poles' limit) is predicted to take less than [`STATISTICAL_STOP`] noise
-    /// variances off the cost: the fit has then converged as surely as after taking
-    /// that step, which it skips (its trial, its normal equations and their
-    /// elimination). In a fit by blocks the elimination formed here serves the next
-    /// step or the covariance.
+    /// Whether the undamped step from the current point (Gauss–Newton's, or Newton's
+    /// where the fit took to them; within the poles' limit) is predicted, by the same
+    /// equations' model, to take less than [`STATISTICAL_STOP`] noise variances off the
+    /// cost: the fit has then converged as surely as after taking that step, which it
+    /// skips (its trial, its normal equations and their elimination). In a fit by blocks
+    /// the elimination formed here serves the next step or, when it is Gauss–Newton's,
+    /// the covariance.
     fn nothing_left(&mut self, noise_unit: f64) -> bool {
         let Some(next) = self.step(0.0) else {
             return false;
@@ -2030,11 +2044,7 @@ fn pole_covariance(point: &Point<'_>, n: usize, noise_variance: f64) -> Option<M
             Normal::Blocks(b) => !b.curvature.iter().all(Vec::is_empty),
             Normal::Dense(..) => false,
         };
-        let kept = if newton {
-            &point.reduced_gn
-        } else {
-            &point.reduced
-        };
+        let kept = if newton { None } else { point.reduced.as_ref() };
         let reduced = match kept {
             Some(r) => Some(r),
             None => {
@@ -2193,6 +2203,7 @@ mod tests {
             weights: &weights,
             dof: Some(dof),
             newton: NEWTON,
+            turned_away: std::cell::Cell::new(0),
         };
         test(&stage, x, dof);
     }
@@ -2280,9 +2291,10 @@ mod tests {
 
     /// A 3 × 4 set with 3 modes in 4–6 Hz and 5 % noise, fitted with the second mode
     /// left out of the start: the residual keeps a mode's structure. Returns the
-    /// iterations, whether converged, and the cost of a descent from there with and
-    /// without Newton's steps, and the noise variance.
-    fn descend_without_a_mode(seed: u64) -> [(usize, bool, f64, f64); 2] {
+    /// iterations, whether converged, and the cost of a descent from there, the noise
+    /// variance and the points where Newton's equations were turned away: with
+    /// Gauss–Newton's steps only, and with Newton's where it creeps.
+    fn descend_without_a_mode(seed: u64) -> [(usize, bool, f64, f64, usize); 2] {
         let spec = ModalSpec {
             fmin_hz: 4.0,
             fmax_hz: 6.0,
@@ -2327,10 +2339,17 @@ mod tests {
                 weights: &weights,
                 dof: Some(dof),
                 newton,
+                turned_away: std::cell::Cell::new(0),
             };
             let mut point = stage.first_point(x.clone());
             let (iterations, converged) = stage.descend(&mut point, 500, 0.0).unwrap();
-            (iterations, converged, point.cost, point.cost / dof as f64)
+            (
+                iterations,
+                converged,
+                point.cost,
+                point.cost / dof as f64,
+                stage.turned_away.get(),
+            )
         })
     }
 
@@ -2356,13 +2375,15 @@ mod tests {
     }
 
     #[test]
-    fn newton_steps_do_not_stop_at_a_saddle() {
+    fn newton_steps_are_turned_away_where_the_cost_is_not_convex() {
         // Gauss–Newton crosses a plateau (its gain ratios past 1.2 there) to a minimum
-        // of a third of the plateau's cost. Newton's steps from the plateau, where the
-        // cost is not convex, would stop at its saddle point: they are only taken where
-        // the cost is convex, and the descent reaches the same minimum.
+        // of a third of the plateau's cost. On the plateau the cost is not convex, and
+        // Newton's step would head for its saddle point: its equations are turned away
+        // there, and the descent reaches the same minimum.
         let [gn, newton] = descend_without_a_mode(1);
         assert!(gn.1 && newton.1);
+        assert_eq!(gn.4, 0);
+        assert!(newton.4 >= 1, "Newton's equations were never turned away");
         assert!(
             newton.2 <= gn.2 + 0.1 * gn.3,
             "Newton's descent stopped at {} where Gauss–Newton's reached {}",
