@@ -185,6 +185,24 @@ impl PoleParameters {
     }
 }
 
+/// Writes a mode's columns at line `k` (the last `pm` of `columns`: both, or the real
+/// mode's one) into `out` from column `first` on: real parts in row `k`, imaginary parts
+/// in row `L + k`.
+fn put_mode_columns(
+    out: &mut Mat<f64>,
+    k: usize,
+    columns: [Complex64; 2],
+    pm: usize,
+    first: usize,
+) {
+    let lines = out.nrows() / 2;
+    for local in 0..pm {
+        let v = columns[local + 2 - pm];
+        out[(k, first + local)] = v.re;
+        out[(lines + k, first + local)] = v.im;
+    }
+}
+
 /// Real basis, `2L × columns`: rows `0..L` the real parts, `L..2L` the imaginary parts.
 pub(crate) fn basis(layout: &Layout, omega: &[f64], poles: &[Complex64]) -> Mat<f64> {
     let lines = omega.len();
@@ -194,11 +212,7 @@ pub(crate) fn basis(layout: &Layout, omega: &[f64], poles: &[Complex64]) -> Mat<
     for (r, &s) in poles.iter().enumerate() {
         for (k, &w) in omega.iter().enumerate() {
             let c = mode_columns(s, w, layout.kappa, layout.sample_time_s);
-            for local in 0..pm {
-                let v = c[local + 2 - pm];
-                out[(k, r * pm + local)] = v.re;
-                out[(lines + k, r * pm + local)] = v.im;
-            }
+            put_mode_columns(&mut out, k, c, pm, r * pm);
         }
     }
     for (m, &(_, e)) in layout.residuals.iter().enumerate() {
@@ -228,12 +242,7 @@ pub(crate) fn basis_derivatives(
         for (t, delta) in parameters.deltas(s).into_iter().enumerate() {
             for (k, &w) in omega.iter().enumerate() {
                 let c = mode_column_derivatives(s, w, layout, delta);
-                for local in 0..pm {
-                    let v = c[local + 2 - pm];
-                    let col = (2 * r + t) * pm + local;
-                    out[(k, col)] = v.re;
-                    out[(lines + k, col)] = v.im;
-                }
+                put_mode_columns(&mut out, k, c, pm, (2 * r + t) * pm);
             }
         }
     }
@@ -301,13 +310,7 @@ pub(crate) fn basis_second_derivatives(
             for (c, (&dd, &kk)) in couples.iter().zip(&curvature).enumerate() {
                 let a = e1 * dd + d1 * kk;
                 let b = e2 * dd.conj() + d2 * kk.conj();
-                let columns = [a + b, j * (a - b)];
-                for local in 0..pm {
-                    let v = columns[local + 2 - pm];
-                    let col = (3 * r + c) * pm + local;
-                    out[(k, col)] = v.re;
-                    out[(lines + k, col)] = v.im;
-                }
+                put_mode_columns(&mut out, k, [a + b, j * (a - b)], pm, (3 * r + c) * pm);
             }
         }
     }

@@ -2188,6 +2188,26 @@ mod tests {
         }
     }
 
+    /// The stage of a fit by blocks, with its degrees of freedom.
+    fn stage_of<'a>(
+        problem: &'a Problem,
+        ix: &'a Indices,
+        part: &'a Partition,
+        weights: &'a [f64],
+        newton: bool,
+    ) -> Stage<'a> {
+        Stage {
+            problem,
+            ix,
+            part: Some(part),
+            y: stacked_data(problem),
+            weights,
+            dof: Some(problem.observations - ix.free),
+            newton,
+            turned_away: std::cell::Cell::new(0),
+        }
+    }
+
     /// Runs `test` on the stage of `case((3, 4), …)` by blocks, with its start and its
     /// degrees of freedom.
     fn on_stage(test: impl for<'a> FnOnce(&Stage<'a>, Parameters, usize)) {
@@ -2195,16 +2215,7 @@ mod tests {
             case((3, 4), Quantity::Acceleration, Residuals::Upper, false);
         let part = Partition::new(&ix);
         let dof = problem.observations - ix.free;
-        let stage = Stage {
-            problem: &problem,
-            ix: &ix,
-            part: Some(&part),
-            y: stacked_data(&problem),
-            weights: &weights,
-            dof: Some(dof),
-            newton: NEWTON,
-            turned_away: std::cell::Cell::new(0),
-        };
+        let stage = stage_of(&problem, &ix, &part, &weights, NEWTON);
         test(&stage, x, dof);
     }
 
@@ -2331,16 +2342,7 @@ mod tests {
         let weights = vec![1.0; q * p];
         let dof = problem.observations - ix.free;
         [false, true].map(|newton| {
-            let stage = Stage {
-                problem: &problem,
-                ix: &ix,
-                part: Some(&part),
-                y: stacked_data(&problem),
-                weights: &weights,
-                dof: Some(dof),
-                newton,
-                turned_away: std::cell::Cell::new(0),
-            };
+            let stage = stage_of(&problem, &ix, &part, &weights, newton);
             let mut point = stage.first_point(x.clone());
             let (iterations, converged) = stage.descend(&mut point, 500, 0.0).unwrap();
             (
