@@ -695,13 +695,12 @@ fn judge_significance(
         let r = match domain {
             Some(ts) => fit(ts),
             None => {
-                // The domain that fits better, decided once on the full set (the two
-                // fits side by side: neither reads the other; each under the caller's
-                // cancel token, on whichever thread runs it).
-                let token = crate::cancel::current();
-                let (c, z) = rayon::join(
-                    || crate::cancel::under(&token, || fit(None)),
-                    || crate::cancel::under(&token, || fit(Some(sample_time_s))),
+                // The domain that fits better, decided once on the full set.
+                let (c, z) = crate::refine::refine_in_both_domains(
+                    &processed,
+                    &poles,
+                    &probe,
+                    sample_time_s,
                 );
                 match (c, z) {
                     (_, Err(EraError::Interrupted)) => Err(EraError::Interrupted),

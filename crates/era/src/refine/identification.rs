@@ -595,17 +595,11 @@ fn choose_fit_domain(
     probe.weighting = crate::refine::Weighting::Uniform;
     // Only the two costs and the noise variance are read: no standard deviations.
     probe.standard_deviations = false;
-    let fit = |ts: Option<f64>| {
-        let mut o = probe.clone();
-        o.sample_time_s = ts;
-        crate::refine::refine(&found.processed, start_poles, &o, &mut |_, _| {})
-    };
-    // The two fits side by side (neither reads the other), each under the caller's
-    // cancel token on whichever thread runs it.
-    let token = crate::cancel::current();
-    let (continuous, zoh) = rayon::join(
-        || crate::cancel::under(&token, || fit(None)),
-        || crate::cancel::under(&token, || fit(Some(found.sample_time_s))),
+    let (continuous, zoh) = crate::refine::refine_in_both_domains(
+        &found.processed,
+        start_poles,
+        &probe,
+        found.sample_time_s,
     );
     let (continuous, zoh) = (continuous?, zoh?);
     let (c, z) = (continuous.fit_before, zoh.fit_before);

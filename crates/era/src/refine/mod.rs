@@ -94,8 +94,8 @@
 //! noise. An exact fit has `σ̂² ≈ 0` and runs to the relative tolerance (or to
 //! round-off). Trial steps are evaluated without their Jacobian; only an accepted
 //! one pays for it. The rank-one stage also stops one step sooner where it can tell:
-//! after a step that took less than one noise variance off the cost, as its linear
-//! model predicted (gain ratio within 0.1 of 1), it solves for the undamped step from
+//! after a step that took less than one noise variance off the cost, as its model
+//! predicted (gain ratio within 0.1 of 1), it solves for the undamped step from
 //! there, and when that step is predicted to take less than the hundredth of a noise
 //! variance, the fit has converged without taking it.
 //!
@@ -431,6 +431,29 @@ pub fn refine(
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Refinement> {
     refine_rounds(frf, start_poles, options, progress).map(|(refinement, _)| refinement)
+}
+
+/// [`refine`] with `options` at the same start poles in the continuous domain and in the
+/// zero-order-hold domain of `sample_time_s`, side by side (neither reads the other),
+/// each under the caller's cancel token on whichever thread runs it: continuous first.
+pub(crate) fn refine_in_both_domains(
+    frf: &FrfData,
+    start_poles: &[Complex64],
+    options: &RefineOptions,
+    sample_time_s: f64,
+) -> (Result<Refinement>, Result<Refinement>) {
+    let fit = |ts: Option<f64>| {
+        let options = RefineOptions {
+            sample_time_s: ts,
+            ..options.clone()
+        };
+        refine(frf, start_poles, &options, &mut |_, _| {})
+    };
+    let token = crate::cancel::current();
+    rayon::join(
+        || crate::cancel::under(&token, || fit(None)),
+        || crate::cancel::under(&token, || fit(Some(sample_time_s))),
+    )
 }
 
 /// [`refine`], and the seconds of each of its rounds: the first fit, then each look

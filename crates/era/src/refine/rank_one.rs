@@ -363,18 +363,12 @@ fn curvature_entries(
                 }
             }
             // Pole with a shape or participation entry: ∂(Re z, Im z) of each entry.
-            let (a, b) = (u, v);
-            let linear = [
-                (ix.reduced[ix.u(i, r, 0)], [b.re, b.im]),
-                (ix.reduced[ix.u(i, r, 1)], [-b.im, b.re]),
-                (ix.reduced[ix.v(j, r, 0)], [a.re, a.im]),
-                (ix.reduced[ix.v(j, r, 1)], [-a.im, a.re]),
-            ];
+            let linear = product_derivatives(ix, (i, j, r), u, v);
             for t in 0..2 {
                 let Some(f) = pole(t) else { continue };
                 let col = (2 * r + t) * 2;
-                for &(g, [alpha, beta]) in &linear {
-                    if let Some(g) = g {
+                for &(raw, [alpha, beta]) in &linear {
+                    if let Some(g) = ix.reduced[raw] {
                         let value = w2 * (alpha * d_r[(col, pair)] + beta * d_r[(col + 1, pair)]);
                         out.push((f, g, value));
                     }
@@ -391,6 +385,22 @@ fn curvature_entries(
         }
     }
     out
+}
+
+/// The shape and participation entries of mode `r` in pair `(i, j)`, by raw index, with
+/// the derivatives of the pair's residue `z = u_ir v_jr` by each, `∂(Re z, Im z)`.
+fn product_derivatives(
+    ix: &Indices,
+    (i, j, r): (usize, usize, usize),
+    u: Complex64,
+    v: Complex64,
+) -> [(usize, [f64; 2]); 4] {
+    [
+        (ix.u(i, r, 0), [v.re, v.im]),
+        (ix.u(i, r, 1), [-v.im, v.re]),
+        (ix.v(j, r, 0), [u.re, u.im]),
+        (ix.v(j, r, 1), [-u.im, u.re]),
+    ]
 }
 
 /// `δᵀQδ` of the entries of [`curvature_entries`].
@@ -447,14 +457,9 @@ fn output_entries(
             let (u, v) = (x.u[i * n + r], x.v[j * n + r]);
             let (a, b) = (2 * r, 2 * r + 1);
             // R = u v: ∂(Re R, Im R)/∂(Re u) = (Re v, Im v), /∂(Im u) = (−Im v, Re v).
-            for (raw, entries) in [
-                (ix.u(i, r, 0), [(a, v.re), (b, v.im)]),
-                (ix.u(i, r, 1), [(a, -v.im), (b, v.re)]),
-                (ix.v(j, r, 0), [(a, u.re), (b, u.im)]),
-                (ix.v(j, r, 1), [(a, -u.im), (b, u.re)]),
-            ] {
+            for (raw, [dre, dim]) in product_derivatives(ix, (i, j, r), u, v) {
                 if let Some(f) = ix.reduced[raw] {
-                    linear.push((f, entries, 2));
+                    linear.push((f, [(a, dre), (b, dim)], 2));
                 }
             }
             let z = u * v;
@@ -1172,7 +1177,7 @@ impl<'a> Blocks<'a> {
     /// was formed: `Q` touches `N_zz` (a pole with a pole or a participation) and
     /// `N_iz` (a shape with a pole or a participation), not `N_ii`.
     fn newton(&self) -> Option<Blocks<'a>> {
-        if self.curvature.iter().all(Vec::is_empty) {
+        if !self.has_curvature() {
             return None;
         }
         let part = self.part;
@@ -1205,6 +1210,11 @@ impl<'a> Blocks<'a> {
             gi: self.gi.clone(),
             curvature: Vec::new(),
         })
+    }
+
+    /// Whether the residuals' curvature was formed (and not dropped).
+    fn has_curvature(&self) -> bool {
+        self.curvature.iter().any(|entries| !entries.is_empty())
     }
 
     /// `δᵀQδ` of the curvature held (0 without).
@@ -1806,15 +1816,7 @@ impl<'a> Stage<'a> {
         let data_norm2: f64 = (0..self.y.ncols())
             .map(|pair| weights[pair] * weights[pair] * self.y.col(pair).squared_norm_l2())
             .sum();
-        let mut problem = Descent {
-            stage: self,
-            point,
-            tolerance,
-            data_norm2,
-            look_ahead: true,
-            curvature: false,
-            creeping: 0,
-        };
+        let mut problem = Descent::new(self, point, tolerance, data_norm2);
         descend(&mut problem, &mut Nielsen::new(), max_iterations)
     }
 
@@ -1889,18 +1891,24 @@ impl LeastSquares for Descent<'_, '_> {
         let Normal::Blocks(blocks) = &mut point.normal else {
             return point.normal.dense_step(lambda);
         };
-        // Whether this point falls back from Newton's equations to Gauss–Newton's.
-        let mut gauss_newton = false;
+        // Where this point falls back from Newton's equations, its equations and its
+        // model of the step are Gauss–Newton's, as are the next points', until the next
+        // creep.
+        let mut to_gauss_newton = |blocks: &mut Blocks| {
+            blocks.curvature.clear();
+            self.curvature = false;
+            self.creeping = 0;
+        };
         if point.reduced.is_none() {
             // Newton's equations only where the cost is convex (the undamped reduced
             // `N − Q` positive definite): elsewhere Newton's step heads for a saddle as
             // readily as for a minimum, and Gauss–Newton's does not.
             if let Some(newton) = blocks.newton() {
                 point.reduced = Reduced::new(&newton).filter(|r| r.step(0.0).is_some());
-                gauss_newton = point.reduced.is_none();
-                if gauss_newton {
+                if point.reduced.is_none() {
                     let away = &self.stage.turned_away;
                     away.set(away.get() + 1);
+                    to_gauss_newton(blocks);
                 }
             }
             if point.reduced.is_none() {
@@ -1908,18 +1916,11 @@ impl LeastSquares for Descent<'_, '_> {
             }
         }
         let mut step = point.reduced.as_ref().and_then(|r| r.step(lambda));
-        if step.is_none() && !blocks.curvature.iter().all(Vec::is_empty) {
+        if step.is_none() && blocks.has_curvature() {
             // Newton's damped equations failed where the undamped ones did not.
-            gauss_newton = true;
+            to_gauss_newton(blocks);
             point.reduced = Reduced::new(blocks);
             step = point.reduced.as_ref().and_then(|r| r.step(lambda));
-        }
-        if gauss_newton {
-            // The point's equations, and its model of the step, are Gauss–Newton's, as
-            // are the next points', until the next creep.
-            blocks.curvature.clear();
-            self.curvature = false;
-            self.creeping = 0;
         }
         if point.reduced.is_none() {
             // An output's block is singular: the dense (Gauss–Newton) equations.
@@ -2004,7 +2005,25 @@ const FINAL_STEP_CHECK: f64 = 1.0;
 /// How far the gain ratio of such a step may be from 1.
 const FINAL_STEP_RHO: f64 = 0.1;
 
-impl Descent<'_, '_> {
+impl<'s, 'a> Descent<'s, 'a> {
+    /// A descent from `point` with Gauss–Newton's equations, that looks ahead.
+    fn new(
+        stage: &'s Stage<'a>,
+        point: &'s mut Point<'a>,
+        tolerance: f64,
+        data_norm2: f64,
+    ) -> Self {
+        Descent {
+            stage,
+            point,
+            tolerance,
+            data_norm2,
+            look_ahead: true,
+            curvature: false,
+            creeping: 0,
+        }
+    }
+
     /// Whether the undamped step from the current point (Gauss–Newton's, or Newton's
     /// where the fit took to them; within the poles' limit) is predicted, by the same
     /// equations' model, to take less than [`STATISTICAL_STOP`] noise variances off the
@@ -2040,10 +2059,7 @@ fn pole_covariance(point: &Point<'_>, n: usize, noise_variance: f64) -> Option<M
         };
         let fresh;
         // Gauss–Newton's elimination: the covariance is that of `N = JᵀWJ`.
-        let newton = match &point.normal {
-            Normal::Blocks(b) => !b.curvature.iter().all(Vec::is_empty),
-            Normal::Dense(..) => false,
-        };
+        let newton = matches!(&point.normal, Normal::Blocks(b) if b.has_curvature());
         let kept = if newton { None } else { point.reduced.as_ref() };
         let reduced = match kept {
             Some(r) => Some(r),
@@ -2224,16 +2240,7 @@ mod tests {
         on_stage(|stage, x, dof| {
             fn look<'a>(stage: &Stage<'a>, point: &mut Point<'a>, dof: usize) -> bool {
                 let noise_unit = point.cost / dof as f64;
-                let mut descent = Descent {
-                    stage,
-                    point,
-                    tolerance: 0.0,
-                    data_norm2: 1.0,
-                    look_ahead: true,
-                    curvature: false,
-                    creeping: 0,
-                };
-                descent.nothing_left(noise_unit)
+                Descent::new(stage, point, 0.0, 1.0).nothing_left(noise_unit)
             }
             // Off the optimum the next step has much to take.
             let mut point = stage.first_point(x);
@@ -2243,16 +2250,7 @@ mod tests {
             // Where the fit stopped, the full Gauss–Newton step, taken, lowers the cost by
             // less than the statistical stop; and the look says so.
             let noise_unit = point.cost / dof as f64;
-            let mut descent = Descent {
-                stage,
-                point: &mut point,
-                tolerance: 0.0,
-                data_norm2: 1.0,
-                look_ahead: true,
-                curvature: false,
-                creeping: 0,
-            };
-            let step = descent.step(0.0).unwrap();
+            let step = Descent::new(stage, &mut point, 0.0, 1.0).step(0.0).unwrap();
             let (trial, factor, _) = stage.trial(&point, &step);
             assert_eq!(factor, 1.0);
             let after = trial.unwrap().2;
@@ -2271,13 +2269,8 @@ mod tests {
             fn run<'a>(stage: &Stage<'a>, x: &Parameters, look_ahead: bool) -> (Point<'a>, usize) {
                 let mut point = stage.first_point(x.clone());
                 let mut descent = Descent {
-                    stage,
-                    point: &mut point,
-                    tolerance: 0.0,
-                    data_norm2: 1.0,
                     look_ahead,
-                    curvature: false,
-                    creeping: 0,
+                    ..Descent::new(stage, &mut point, 0.0, 1.0)
                 };
                 let (iterations, converged) =
                     descend(&mut descent, &mut Nielsen::new(), 200).unwrap();
