@@ -10,6 +10,10 @@
 //! from the physical modes of the automatic order, refining the whole identification
 //! (`refine_identification`: the fit, its residual scan, the model and its FRF).
 //!
+//! The group `refine_iteration_floor` times the dense kernels one iteration of the
+//! rank-one stage cannot do without at that size (faer alone, on matrices of the
+//! problem's shapes): what an iteration would cost if nothing but those kernels ran.
+//!
 //! `cargo bench -p era --bench refine`. Setup happens outside the timed closures.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -150,5 +154,83 @@ fn bench_from_era(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_from_era);
+/// The dense kernels of one rank-one iteration at the DTA size (8 × 8, 40 modes, 801
+/// lines, the upper residual): the Gram products of the basis `Φ` (1602 × 81) and its
+/// pole derivatives `D` (1602 × 160) with each other and with the residuals (64 pairs);
+/// the elimination of each output's shapes (8 blocks of 81², each solved for the 640
+/// shared unknowns and the gradient); the Schur complement `S = N_zz − N_Izᵀ X` (the
+/// lower half of a 640 × 648 × 640 product); and the Cholesky factorisation of `S` that
+/// each trial step takes.
+fn bench_iteration_floor(c: &mut Criterion) {
+    use faer::linalg::matmul::triangular::{matmul, BlockStructure};
+    use faer::prelude::Solve;
+    use faer::{Accum, Mat, Side};
+    let (rows, basis, derivatives, pairs) = (1602, 81, 160, 64);
+    let (shared, outputs) = (640, 8);
+    let local = outputs * basis;
+    let filled = |r: usize, c: usize, k: usize| {
+        Mat::<f64>::from_fn(r, c, |i, j| {
+            (((i * 7 + j * 13 + k) % 29) as f64 - 14.0) / 29.0
+        })
+    };
+    let phi = filled(rows, basis, 1);
+    let d = filled(rows, derivatives, 2);
+    let residual = filled(rows, pairs, 3);
+    // A symmetric positive definite block and the shared system, as the fit has them.
+    let spd = |n: usize, k: usize| {
+        let a = filled(n, n, k);
+        let mut g = a.transpose() * &a;
+        for i in 0..n {
+            g[(i, i)] += n as f64;
+        }
+        g
+    };
+    let block = spd(basis, 4);
+    let coupling = filled(basis, shared + 1, 5);
+    let n_iz = filled(local, shared, 6);
+    let x = filled(local, shared, 7);
+    let s = spd(shared, 8);
+    let mut g = c.benchmark_group("refine_iteration_floor");
+    g.sample_size(30);
+    g.bench_function("gram_products", |b| {
+        b.iter(|| {
+            (
+                phi.transpose() * &d,
+                d.transpose() * &d,
+                phi.transpose() * &residual,
+                d.transpose() * &residual,
+            )
+        })
+    });
+    g.bench_function("shape_blocks_solved", |b| {
+        b.iter(|| {
+            (0..outputs)
+                .map(|_| block.llt(Side::Lower).unwrap().solve(&coupling))
+                .collect::<Vec<_>>()
+        })
+    });
+    g.bench_function("schur_complement", |b| {
+        b.iter(|| {
+            let mut out = s.clone();
+            matmul(
+                out.as_mut(),
+                BlockStructure::TriangularLower,
+                Accum::Add,
+                n_iz.transpose(),
+                BlockStructure::Rectangular,
+                x.as_ref(),
+                BlockStructure::Rectangular,
+                -1.0,
+                faer::get_global_parallelism(),
+            );
+            out
+        })
+    });
+    g.bench_function("step_cholesky", |b| {
+        b.iter(|| black_box(&s).llt(Side::Lower).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_from_era, bench_iteration_floor);
 criterion_main!(benches);
