@@ -157,17 +157,24 @@ fn bench_from_era(c: &mut Criterion) {
 /// The dense kernels of one rank-one iteration at the DTA size (8 × 8, 40 modes, 801
 /// lines, the upper residual): the Gram products of the basis `Φ` (1602 × 81) and its
 /// pole derivatives `D` (1602 × 160) with each other and with the residuals (64 pairs);
-/// the elimination of each output's shapes (8 blocks of 81², each solved for the 640
-/// shared unknowns and the gradient); the Schur complement `S = N_zz − N_Izᵀ X` (the
-/// lower half of a 640 × 648 × 640 product); and the Cholesky factorisation of `S` that
+/// the elimination of each output's own parameters (8 blocks of 88²: its 80 shape
+/// entries and 8 residual terms), each solved for the 640 shared unknowns (the poles
+/// and participations) and the gradient; the Schur complement `S = N_zz − N_Izᵀ X` (the
+/// lower half of a 640 × 704 × 640 product); and the Cholesky factorisation of `S` that
 /// each trial step takes.
 fn bench_iteration_floor(c: &mut Criterion) {
     use faer::linalg::matmul::triangular::{matmul, BlockStructure};
     use faer::prelude::Solve;
     use faer::{Accum, Mat, Side};
-    let (rows, basis, derivatives, pairs) = (1602, 81, 160, 64);
-    let (shared, outputs) = (640, 8);
-    let local = outputs * basis;
+    let (modes, outputs, inputs, lines) = (40, 8, 8, 801);
+    let (rows, pairs) = (2 * lines, outputs * inputs);
+    // Two columns per mode and the upper residual; two derivatives per column pair.
+    let (basis, derivatives) = (2 * modes + 1, 4 * modes);
+    // Per mode: its pole (2) and participation (2p, one complex entry held).
+    let shared = modes * (2 + 2 * inputs - 2);
+    // Per output: its shapes (2 per mode) and one residual term per input.
+    let own = 2 * modes + inputs;
+    let local = outputs * own;
     let filled = |r: usize, c: usize, k: usize| {
         Mat::<f64>::from_fn(r, c, |i, j| {
             (((i * 7 + j * 13 + k) % 29) as f64 - 14.0) / 29.0
@@ -185,8 +192,8 @@ fn bench_iteration_floor(c: &mut Criterion) {
         }
         g
     };
-    let block = spd(basis, 4);
-    let coupling = filled(basis, shared + 1, 5);
+    let block = spd(own, 4);
+    let coupling = filled(own, shared + 1, 5);
     let n_iz = filled(local, shared, 6);
     let x = filled(local, shared, 7);
     let s = spd(shared, 8);
