@@ -121,10 +121,18 @@ pub(crate) fn mode_columns(
     kappa: i32,
     sample_time_s: Option<f64>,
 ) -> [Complex64; 2] {
-    let j = Complex64::new(0.0, 1.0);
     let (g1, _) = partial_fraction(s, omega, kappa, sample_time_s);
     let (g2, _) = partial_fraction(s.conj(), omega, kappa, sample_time_s);
-    [g1 + g2, j * (g1 - g2)]
+    conjugate_columns(g1, g2)
+}
+
+/// A mode's two real columns from a function of its pole at `s` (`at_s`) and at `s̄`
+/// (`at_conj`): `Re R` multiplies `at_s + at_conj` and `Im R` multiplies
+/// `j(at_s − at_conj)`. The basis, its derivatives and its second derivatives all take
+/// this form.
+fn conjugate_columns(at_s: Complex64, at_conj: Complex64) -> [Complex64; 2] {
+    let j = Complex64::new(0.0, 1.0);
+    [at_s + at_conj, j * (at_s - at_conj)]
 }
 
 /// Derivatives of the two mode columns for `ds/dθ = delta` (and `ds̄/dθ = conj(delta)`).
@@ -134,11 +142,9 @@ fn mode_column_derivatives(
     layout: &Layout,
     delta: Complex64,
 ) -> [Complex64; 2] {
-    let j = Complex64::new(0.0, 1.0);
     let (_, d1) = partial_fraction(s, omega, layout.kappa, layout.sample_time_s);
     let (_, d2) = partial_fraction(s.conj(), omega, layout.kappa, layout.sample_time_s);
-    let (a, b) = (d1 * delta, d2 * delta.conj());
-    [a + b, j * (a - b)]
+    conjugate_columns(d1 * delta, d2 * delta.conj())
 }
 
 /// The nonlinear parameters of one mode: `s = −σ + jω_d` with `x = ln σ` (stability
@@ -293,7 +299,6 @@ pub(crate) fn basis_second_derivatives(
     let lines = omega.len();
     let pm = layout.per_mode;
     let (kappa, ts) = (layout.kappa, layout.sample_time_s);
-    let j = Complex64::new(0.0, 1.0);
     let mut out = Mat::<f64>::zeros(2 * lines, 3 * poles.len() * pm);
     for (r, &s) in poles.iter().enumerate() {
         let delta = parameters.deltas(s);
@@ -310,7 +315,7 @@ pub(crate) fn basis_second_derivatives(
             for (c, (&dd, &kk)) in couples.iter().zip(&curvature).enumerate() {
                 let a = e1 * dd + d1 * kk;
                 let b = e2 * dd.conj() + d2 * kk.conj();
-                put_mode_columns(&mut out, k, [a + b, j * (a - b)], pm, (3 * r + c) * pm);
+                put_mode_columns(&mut out, k, conjugate_columns(a, b), pm, (3 * r + c) * pm);
             }
         }
     }
